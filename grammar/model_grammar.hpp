@@ -1,0 +1,191 @@
+#pragma once
+// The momentid model language as PEGTL rules. grammar/README.md has the same grammar in EBNF
+// and an annotated example; grammar/error_messages.hpp says what is reported when a `must<>`
+// rule fails. Only src/model/parser.cpp includes this header.
+
+#include <tao/pegtl.hpp>
+
+namespace momentid::grammar {
+
+namespace pegtl = tao::pegtl;
+using pegtl::alnum;
+using pegtl::alpha;
+using pegtl::blank;
+using pegtl::digit;
+using pegtl::eof;
+using pegtl::eol;
+using pegtl::list;
+using pegtl::must;
+using pegtl::not_at;
+using pegtl::not_one;
+using pegtl::one;
+using pegtl::opt;
+using pegtl::plus;
+using pegtl::seq;
+using pegtl::sor;
+using pegtl::star;
+using pegtl::string;
+using pegtl::until;
+
+// --- Layout ---------------------------------------------------------------------------------
+
+// '#' and the rest of the line
+struct comment : seq<one<'#'>, star<not_one<'\n', '\r'>>> {};
+// blanks inside a line
+struct sp : star<blank> {};
+// blanks, comments and line breaks: allowed wherever an expression continues on the next line
+struct ws : star<sor<pegtl::space, comment>> {};
+// the end of a statement: optional comment, then a line break or the end of the file
+struct line_end : seq<sp, opt<comment>, sor<eol, eof>> {};
+
+// --- Words ----------------------------------------------------------------------------------
+
+// a letter or underscore, then letters, digits and underscores
+struct name : seq<sor<alpha, one<'_'>>, star<sor<alnum, one<'_'>>>> {};
+// a keyword: the word itself, not the start of a longer name
+template <char... Cs>
+struct keyword : seq<string<Cs...>, not_at<sor<alnum, one<'_'>>>> {};
+
+struct kw_model : keyword<'m', 'o', 'd', 'e', 'l'> {};
+// `state` or `states`
+struct kw_state : sor<keyword<'s', 't', 'a', 't', 'e', 's'>, keyword<'s', 't', 'a', 't', 'e'>> {};
+// `input` or `inputs`
+struct kw_input : sor<keyword<'i', 'n', 'p', 'u', 't', 's'>, keyword<'i', 'n', 'p', 'u', 't'>> {};
+// `param`, `params`, `parameter` or `parameters`
+struct kw_param : sor<keyword<'p', 'a', 'r', 'a', 'm', 'e', 't', 'e', 'r', 's'>,
+                      keyword<'p', 'a', 'r', 'a', 'm', 'e', 't', 'e', 'r'>,
+                      keyword<'p', 'a', 'r', 'a', 'm', 's'>, keyword<'p', 'a', 'r', 'a', 'm'>> {};
+// `const`, `consts`, `constant` or `constants`
+struct kw_const : sor<keyword<'c', 'o', 'n', 's', 't', 'a', 'n', 't', 's'>,
+                      keyword<'c', 'o', 'n', 's', 't', 'a', 'n', 't'>,
+                      keyword<'c', 'o', 'n', 's', 't', 's'>, keyword<'c', 'o', 'n', 's', 't'>> {};
+// `multipliers` or `multiplier`
+struct kw_multipliers
+    : sor<keyword<'m', 'u', 'l', 't', 'i', 'p', 'l', 'i', 'e', 'r', 's'>,
+          keyword<'m', 'u', 'l', 't', 'i', 'p', 'l', 'i', 'e', 'r'>> {};
+struct kw_dot : keyword<'d', 'o', 't'> {};
+
+// --- Numbers and strings --------------------------------------------------------------------
+
+// digits of an exponent
+struct exponent_digits : plus<digit> {};
+// e or E, optional sign, digits: the power of ten of a number
+struct decimal_exponent
+    : seq<one<'e', 'E'>, opt<one<'+', '-'>>, must<exponent_digits>> {};
+// 4, 4., .5, 0.25, 1e-3, 2.5E+2
+struct number : seq<sor<seq<plus<digit>, opt<one<'.'>, star<digit>>>, seq<one<'.'>, plus<digit>>>,
+                    opt<decimal_exponent>> {};
+// a number with an optional sign, as in a declared value
+struct signed_number : seq<opt<one<'+', '-'>>, sp, must<number>> {};
+// the characters between double quotes
+struct string_body : star<not_one<'"', '\n', '\r'>> {};
+struct string_close : one<'"'> {};
+// a double-quoted title on one line
+struct quoted : seq<one<'"'>, string_body, must<string_close>> {};
+
+// --- Expressions ----------------------------------------------------------------------------
+
+struct expression;
+struct close_paren : one<')'> {};
+struct open_paren : one<'('> {};
+// one or more primes after a name: its time derivative
+struct primes : plus<one<'\''>> {};
+// a state name inside dot( )
+struct dot_argument : name {};
+// dot(y): the time derivative of y
+struct dot_call : seq<kw_dot, sp, must<open_paren>, sp, must<dot_argument>, sp, must<close_paren>> {};
+// the expressions inside a call's parentheses
+struct call_arguments : opt<list<expression, one<','>, pegtl::space>> {};
+// name(args): a function call, accepted by the grammar and rejected by the meaning checks
+struct call : seq<name, sp, one<'('>, ws, call_arguments, ws, must<close_paren>> {};
+// a name, optionally followed by primes
+struct variable : seq<name, opt<primes>> {};
+// a parenthesised expression
+struct parenthesized : seq<one<'('>, ws, must<expression>, ws, must<close_paren>> {};
+// the smallest piece of an expression
+struct primary : sor<number, dot_call, call, variable, parenthesized> {};
+// a leading minus sign
+struct minus_sign : one<'-'> {};
+// a leading plus sign
+struct plus_sign : one<'+'> {};
+// the operand of a power: optional sign, then a primary
+struct exponent_operand : seq<opt<sor<minus_sign, plus_sign>>, sp, primary> {};
+// `^` or `**`
+struct power_operator : sor<one<'^'>, string<'*', '*'>> {};
+// a primary raised to a power
+struct power : seq<primary, opt<sp, power_operator, ws, must<exponent_operand>>> {};
+// signs in front of a power
+struct unary : seq<star<sor<minus_sign, plus_sign>, sp>, power> {};
+// what must follow a binary operator
+struct operand : unary {};
+struct times : seq<one<'*'>, not_at<one<'*'>>> {};
+struct divide : one<'/'> {};
+// a product or quotient of signed powers; a line break may come before or after the operator
+struct product : seq<unary, star<seq<ws, sor<times, divide>, ws, must<operand>>>> {};
+// what must follow a `+` or `-` between terms
+struct term_operand : product {};
+struct add : one<'+'> {};
+struct subtract : one<'-'> {};
+// a sum or difference of products; a line break may come before or after the operator
+struct sum : seq<product, star<seq<ws, sor<add, subtract>, ws, must<term_operand>>>> {};
+struct expression : sum {};
+
+// --- Statements -----------------------------------------------------------------------------
+
+// `model NAME "title"`
+struct model_name : name {};
+struct model_statement : seq<kw_model, sp, must<model_name>, sp, opt<quoted>> {};
+
+// a declared name
+struct declared_name : name {};
+// `= value` after a declared name
+struct declared_value : seq<one<'='>, sp, must<signed_number>> {};
+// a declared value that may not be left out
+struct required_value : seq<one<'='>, sp, must<signed_number>> {};
+struct comma : one<','> {};
+// `state y, v` and `input x`: names only
+struct name_list : list<declared_name, comma, blank> {};
+// `param c = 0.5, k` : names with optional nominal values
+struct param_item : seq<declared_name, sp, opt<declared_value>> {};
+struct param_list : list<param_item, comma, blank> {};
+// `const m = 1`: names with values
+struct const_item : seq<declared_name, sp, must<required_value>> {};
+struct const_list : list<const_item, comma, blank> {};
+struct state_declaration : seq<kw_state, sp, must<name_list>> {};
+struct input_declaration : seq<kw_input, sp, must<name_list>> {};
+struct param_declaration : seq<kw_param, sp, must<param_list>> {};
+struct const_declaration : seq<kw_const, sp, must<const_list>> {};
+
+// `label:` in front of an equation or inside a multipliers statement
+struct label : name {};
+struct label_prefix : seq<label, sp, one<':'>, not_at<one<'='>>> {};
+// the left side of an equation
+struct lhs : expression {};
+// the right side of an equation
+struct rhs : expression {};
+struct equals : one<'='> {};
+// `[label:] lhs = rhs`
+struct equation : seq<opt<label_prefix>, sp, lhs, sp, must<equals>, ws, must<rhs>> {};
+
+// one multiplier: a monomial in the states
+struct multiplier : expression {};
+struct multiplier_list : list<multiplier, comma, blank> {};
+// `multipliers [label:] m1, m2, ...`
+struct multipliers_statement
+    : seq<kw_multipliers, sp, opt<label_prefix>, sp, must<multiplier_list>> {};
+
+struct statement : sor<model_statement, state_declaration, input_declaration, param_declaration,
+                       const_declaration, multipliers_statement, equation> {};
+// what may follow a complete statement on its line
+struct statement_end : line_end {};
+// a line: blank, a comment, or one statement
+struct line : seq<sp, sor<line_end, seq<statement, must<statement_end>>>> {};
+// a whole model file
+struct model_file : until<eof, must<line>> {};
+
+// A multiplier list given on the command line (`--multipliers "y, v^2"`).
+// the end of a command-line multiplier list
+struct list_end : eof {};
+struct multiplier_option : seq<ws, must<multiplier_list>, ws, must<list_end>> {};
+
+}  // namespace momentid::grammar

@@ -1,0 +1,67 @@
+#pragma once
+
+#include <stdexcept>
+#include <string>
+
+namespace momentid {
+
+// Where something is in a source: a model file, a command-line option or a data file.
+// Lines and columns count from 1; a column counts bytes. `text` is the whole source line, so
+// that a message can show it with a caret under `column`.
+struct SourceLocation {
+  std::string file;
+  int line = 0;
+  int column = 0;
+  std::string text;
+};
+
+// The root of every error momentid reports. `exit_code()` is the process exit status the
+// command-line tool returns for it (see README, "Exit status").
+class Error : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+  virtual int exit_code() const { return 2; }
+};
+
+// A wrong command line: unknown option, bad option value. Exit status 1.
+class UsageError : public Error {
+ public:
+  using Error::Error;
+  int exit_code() const override { return 1; }
+};
+
+// An error located in a source text. `what()` is "file:line:col: message"; `message()` is the
+// bare message and `location()` the place, for callers that render the line with a caret.
+class LocatedError : public Error {
+ public:
+  LocatedError(SourceLocation where, const std::string& message)
+      : Error(where.file + ":" + std::to_string(where.line) + ":" + std::to_string(where.column) +
+              ": " + message),
+        where_(std::move(where)),
+        message_(message) {}
+  const SourceLocation& location() const { return where_; }
+  const std::string& message() const { return message_; }
+
+ private:
+  SourceLocation where_;
+  std::string message_;
+};
+
+// The model text does not follow the grammar (grammar/README.md).
+class ParseError : public LocatedError {
+ public:
+  using LocatedError::LocatedError;
+};
+
+// The model parses but does not mean anything momentid can use: an undeclared name, a term
+// that is not affine in the parameters, a state without an equation, ...
+class ModelError : public LocatedError {
+ public:
+  using LocatedError::LocatedError;
+};
+
+// Renders a located error as the command-line tool prints it: the `what()` line, then the
+// source line and a caret under the column.
+std::string render_with_caret(const LocatedError& error);
+
+}  // namespace momentid

@@ -1,0 +1,550 @@
+// The dynamical moment technique, symbolically: multiply each equation by monomials in the
+// states, take expectations, and reduce every derivative moment E[y^a * yj'] with kinematic
+// equations and the stationarity identities E[d/dt y^b] = 0.
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <random>
+#include <set>
+
+#include "derive/moment_system.hpp"
+
+namespace momentid {
+namespace {
+
+using GiNaC::numeric;
+
+// E[monomial * state_j'], a moment with one derivative factor.
+struct DerivativeMoment {
+  Monomial monomial;
+  int state = 0;
+  bool operator<(const DerivativeMoment& o) const {
+    if (state != o.state) return state < o.state;
+    return MomentOrder()(monomial, o.monomial);
+  }
+};
+
+// A linear combination of observable and derivative moments.
+struct Linear {
+  MomentCombination moments;
+  std::map<DerivativeMoment, numeric> derivatives;
+};
+
+// One moment equation while it is being reduced: component 0 is the parameter-free part,
+// component p + 1 the coefficient of parameter p; the equation is sum = 0.
+struct Row {
+  std::vector<RowSource> sources;
+  std::vector<Linear> parts;
+};
+
+template <typename Key>
+void add_to(std::map<Key, numeric>& into, const Key& key, const numeric& value) {
+  if (value.is_zero()) return;
+  auto [it, inserted] = into.emplace(key, value);
+  if (!inserted) {
+    it->second += value;
+    if (it->second.is_zero()) into.erase(it);
+  }
+}
+
+template <typename Key>
+void add_scaled(std::map<Key, numeric>& into, const std::map<Key, numeric>& from,
+                const numeric& factor) {
+  for (const auto& [key, value] : from) add_to(into, key, value * factor);
+}
+
+Monomial operator+(const Monomial& a, const Monomial& b) {
+  Monomial out(a);
+  for (std::size_t i = 0; i < b.size(); ++i) out[i] += b[i];
+  return out;
+}
+
+int degree(const Monomial& m) {
+  int d = 0;
+  for (int e : m) d += e;
+  return d;
+}
+
+class Deriver {
+ public:
+  explicit Deriver(const Model& model)
+      : model_(model),
+        states_(static_cast<int>(model.states().size())),
+        variables_(static_cast<int>(model.variables().size())),
+        parameters_(static_cast<int>(model.parameters().size())),
+        kinematic_(model.states().size()) {
+    classify_equations();
+  }
+
+  // The equations that have parameters and are therefore multiplied.
+  const std::vector<int>& dynamic_equations() const { return dynamic_; }
+
+  MomentSystem run(const std::vector<std::vector<Monomial>>& multipliers) {
+    MomentSystem system;
+    system.model = &model_;
+    system.notes = notes_;
+    std::vector<Row> rows;
+    for (int e : dynamic_) {
+      for (const Monomial& m : multipliers[e]) rows.push_back(multiply(e, m));
+    }
+    for (Row& row : rows) reduce_derivatives(row);
+    std::vector<Row> usable = eliminate_unreduced(rows, system.skipped);
+    apply_identities(usable, system);
+    for (Row& row : usable) {
+      MomentEquation eq;
+      eq.sources = row.sources;
+      bool any = false;
+      for (int p = 0; p < parameters_; ++p) {
+        eq.coefficients.push_back(row.parts[p + 1].moments);
+        any = any || !row.parts[p + 1].moments.empty();
+      }
+      for (const auto& [m, c] : row.parts[0].moments) eq.rhs[m] = -c;
+      if (!any) {
+        if (!eq.rhs.empty()) {
+          system.skipped.push_back({row.sources[0].equation, row.sources[0].multiplier,
+                                    "no parameter remains: the equation says only 0 = " +
+                                        format_combination(model_, eq.rhs)});
+        }
+        continue;
+      }
+      normalize_sign(eq);
+      system.equations.push_back(std::move(eq));
+    }
+    std::set<Monomial, MomentOrder> needed;
+    for (const MomentEquation& eq : system.equations) {
+      for (const auto& c : eq.coefficients) {
+        for (const auto& [m, v] : c) needed.insert(m);
+      }
+      for (const auto& [m, v] : eq.rhs) needed.insert(m);
+    }
+    needed.erase(Monomial(variables_, 0));
+    system.moments.assign(needed.begin(), needed.end());
+    system.generic_rank = generic_rank(system);
+    return system;
+  }
+
+ private:
+  // A kinematic equation is parameter-free with one derivative term c*yj' (c a number) and no
+  // other derivative: it gives yj' = f(y, u) exactly.
+  void classify_equations() {
+    const auto& eqs = model_.equations();
+    for (std::size_t e = 0; e < eqs.size(); ++e) {
+      bool has_parameter = false;
+      int derivative_terms = 0;
+      const Term* lead = nullptr;
+      for (const Term& t : eqs[e].terms) {
+        has_parameter = has_parameter || t.parameter >= 0;
+        if (t.derivative >= 0) {
+          ++derivative_terms;
+          lead = &t;
+        }
+      }
+      if (has_parameter) {
+        dynamic_.push_back(static_cast<int>(e));
+        continue;
+      }
+      const bool explicit_in_one =
+          derivative_terms == 1 && degree(lead->monomial) == 0 && !kinematic_[lead->derivative];
+      if (!explicit_in_one) {
+        notes_.push_back("equation " + eqs[e].name() +
+                         " has no unknown parameters and is not of the form y' = f(y, u): "
+                         "it gives no moment equations");
+        continue;
+      }
+      MomentCombination f;
+      for (const Term& t : eqs[e].terms) {
+        if (&t != lead) add_to(f, t.monomial, -t.coefficient / lead->coefficient);
+      }
+      kinematic_[lead->derivative] = std::move(f);
+    }
+  }
+
+  Row multiply(int e, const Monomial& multiplier) {
+    Row row;
+    row.sources.push_back({e, multiplier, 1});
+    row.parts.resize(parameters_ + 1);
+    Monomial m = multiplier;
+    m.resize(variables_, 0);
+    for (const Term& t : model_.equations()[e].terms) {
+      Linear& part = row.parts[t.parameter + 1];
+      if (t.derivative >= 0) {
+        add_to(part.derivatives, DerivativeMoment{t.monomial + m, t.derivative}, t.coefficient);
+      } else {
+        add_to(part.moments, t.monomial + m, t.coefficient);
+      }
+    }
+    return row;
+  }
+
+  bool has_input(const Monomial& m) const {
+    for (int i = states_; i < variables_; ++i) {
+      if (m[i] != 0) return true;
+    }
+    return false;
+  }
+
+  // E[monomial * f_j] for a kinematic state j.
+  void add_kinematic(MomentCombination& into, const Monomial& monomial, int j,
+                     const numeric& factor) const {
+    for (const auto& [nu, c] : *kinematic_[j]) add_to(into, monomial + nu, c * factor);
+  }
+
+  // The states whose derivatives appear, unknown, in the stationarity identity of E[y^beta]:
+  // sum over j of beta_j * E[y^(beta - e_j) * yj'] = 0.
+  std::vector<int> dynamic_in(const Monomial& beta) const {
+    std::vector<int> out;
+    for (int j = 0; j < states_; ++j) {
+      if (beta[j] > 0 && !kinematic_[j]) out.push_back(j);
+    }
+    return out;
+  }
+
+  // Replaces every derivative moment that kinematics or a stationarity identity determine.
+  // Within one identity with several unknown derivative moments, the one of the highest state is
+  // expressed through the others, so what remains is in a canonical set of free moments.
+  void reduce_derivatives(Row& row) const {
+    for (Linear& part : row.parts) {
+      std::map<DerivativeMoment, numeric> pending;
+      pending.swap(part.derivatives);
+      for (const auto& [d, c] : pending) {
+        if (kinematic_[d.state]) {
+          add_kinematic(part.moments, d.monomial, d.state, c);
+          continue;
+        }
+        if (has_input(d.monomial)) {
+          add_to(part.derivatives, d, c);
+          continue;
+        }
+        Monomial beta = d.monomial;
+        beta[d.state] += 1;
+        const std::vector<int> unknown = dynamic_in(beta);
+        if (unknown.back() != d.state) {
+          add_to(part.derivatives, d, c);
+          continue;
+        }
+        // beta_j * D_j = -(sum over the other states j' of beta_j' * D_j')
+        const numeric scale = -c / beta[d.state];
+        for (int j = 0; j < states_; ++j) {
+          if (j == d.state || beta[j] == 0) continue;
+          Monomial alpha = beta;
+          alpha[j] -= 1;
+          if (kinematic_[j]) {
+            add_kinematic(part.moments, alpha, j, scale * beta[j]);
+          } else {
+            add_to(part.derivatives, DerivativeMoment{alpha, j}, scale * beta[j]);
+          }
+        }
+      }
+    }
+  }
+
+  // Rows that still hold derivative moments are added together, with numeric factors, so that
+  // those moments cancel in every parameter's coefficient; rows that cannot be part of such a
+  // combination are skipped.
+  std::vector<Row> eliminate_unreduced(const std::vector<Row>& rows,
+                                       std::vector<SkippedMultiplier>& skipped) const {
+    using Key = std::pair<int, DerivativeMoment>;
+    struct Pivot {
+      Key key;
+      std::map<Key, numeric> residual;
+      std::map<int, numeric> combination;
+    };
+    std::vector<Row> out;
+    std::vector<Pivot> pivots;
+    std::vector<bool> used(rows.size(), false);
+    std::vector<std::map<int, numeric>> combinations;
+    for (std::size_t r = 0; r < rows.size(); ++r) {
+      std::map<Key, numeric> residual;
+      for (std::size_t p = 0; p < rows[r].parts.size(); ++p) {
+        for (const auto& [d, c] : rows[r].parts[p].derivatives) {
+          residual[{static_cast<int>(p), d}] = c;
+        }
+      }
+      if (residual.empty()) {
+        used[r] = true;
+        out.push_back(rows[r]);
+        continue;
+      }
+      std::map<int, numeric> combination{{static_cast<int>(r), 1}};
+      for (const Pivot& pivot : pivots) {
+        auto it = residual.find(pivot.key);
+        if (it == residual.end()) continue;
+        const numeric factor = -it->second / pivot.residual.at(pivot.key);
+        add_scaled(residual, pivot.residual, factor);
+        add_scaled(combination, pivot.combination, factor);
+      }
+      if (residual.empty()) {
+        combinations.push_back(combination);
+      } else {
+        const Key key = residual.begin()->first;
+        pivots.push_back({key, std::move(residual), std::move(combination)});
+      }
+    }
+    for (const auto& combination : combinations) {
+      Row sum;
+      sum.parts.resize(parameters_ + 1);
+      for (const auto& [r, factor] : combination) {
+        used[r] = true;
+        for (const RowSource& s : rows[r].sources) sum.sources.push_back({s.equation, s.multiplier, s.factor * factor});
+        for (std::size_t p = 0; p < sum.parts.size(); ++p) {
+          add_scaled(sum.parts[p].moments, rows[r].parts[p].moments, factor);
+        }
+      }
+      out.push_back(std::move(sum));
+    }
+    for (std::size_t r = 0; r < rows.size(); ++r) {
+      if (used[r]) continue;
+      skipped.push_back({rows[r].sources[0].equation, rows[r].sources[0].multiplier,
+                         unreduced_reason(rows[r])});
+    }
+    return out;
+  }
+
+  std::string derivative_name(const DerivativeMoment& d) const {
+    const std::string m = format_monomial(model_, d.monomial);
+    const std::string y = model_.states()[d.state].name + "'";
+    return "E[" + (m == "1" ? y : m + "*" + y) + "]";
+  }
+
+  std::string unreduced_reason(const Row& row) const {
+    for (const Linear& part : row.parts) {
+      if (part.derivatives.empty()) continue;
+      const DerivativeMoment& d = part.derivatives.begin()->first;
+      if (has_input(d.monomial)) {
+        return derivative_name(d) +
+               " multiplies an input by a derivative: no stationarity identity reduces it";
+      }
+      Monomial beta = d.monomial;
+      beta[d.state] += 1;
+      std::string sum;
+      for (int j : dynamic_in(beta)) {
+        Monomial alpha = beta;
+        alpha[j] -= 1;
+        if (!sum.empty()) sum += " + ";
+        if (beta[j] > 1) sum += std::to_string(beta[j]) + "*";
+        sum += derivative_name({alpha, j});
+      }
+      return derivative_name(d) + " is known only in the sum " + sum + " (from E[d/dt " +
+             format_monomial(model_, beta) +
+             "] = 0), and no combination of the chosen equations eliminates it";
+    }
+    return "";
+  }
+
+  // --- Pure-data identities -------------------------------------------------------------------
+
+  // The identity of E[y^beta] when every state in it is kinematic: a relation among observable
+  // moments, sum over j of beta_j * E[y^(beta - e_j) * f_j] = 0.
+  std::optional<MomentCombination> data_identity(const Monomial& beta) const {
+    if (has_input(beta) || !dynamic_in(beta).empty()) return std::nullopt;
+    MomentCombination out;
+    for (int j = 0; j < states_; ++j) {
+      if (beta[j] == 0) continue;
+      Monomial alpha = beta;
+      alpha[j] -= 1;
+      add_kinematic(out, alpha, j, beta[j]);
+    }
+    return out;
+  }
+
+  // Finds the identities that touch the equations' moments (and those they bring in), solves
+  // them for one moment each, and substitutes.
+  void apply_identities(std::vector<Row>& rows, MomentSystem& system) const {
+    std::set<Monomial, MomentOrder> seen, done;
+    std::vector<Monomial> work;
+    auto visit = [&](const MomentCombination& c) {
+      for (const auto& [m, v] : c) {
+        if (seen.insert(m).second) work.push_back(m);
+      }
+    };
+    for (const Row& row : rows) {
+      for (const Linear& part : row.parts) visit(part.moments);
+    }
+    std::vector<MomentCombination> relations;
+    while (!work.empty()) {
+      const Monomial mu = work.back();
+      work.pop_back();
+      for (int j = 0; j < states_; ++j) {
+        if (!kinematic_[j]) continue;
+        for (const auto& [nu, c] : *kinematic_[j]) {
+          Monomial beta = mu;
+          bool divides = true;
+          for (int i = 0; i < variables_; ++i) {
+            beta[i] -= nu[i];
+            divides = divides && beta[i] >= 0;
+          }
+          if (!divides) continue;
+          beta[j] += 1;
+          if (!done.insert(beta).second) continue;
+          std::optional<MomentCombination> identity = data_identity(beta);
+          if (!identity || identity->empty()) continue;
+          visit(*identity);
+          relations.push_back(std::move(*identity));
+        }
+      }
+    }
+    // Gauss-Jordan elimination over moments: each solved moment is written in the others.
+    std::sort(relations.begin(), relations.end(), [](const auto& a, const auto& b) {
+      return MomentOrder()(a.rbegin()->first, b.rbegin()->first);
+    });
+    std::map<Monomial, MomentCombination, MomentOrder> solved;
+    const Monomial one(variables_, 0);
+    for (MomentCombination relation : relations) {
+      substitute(relation, solved);
+      std::optional<Monomial> pivot;
+      for (const auto& [m, v] : relation) {
+        if (m == one) continue;
+        if (!pivot || degree(m) > degree(*pivot) ||
+            (degree(m) == degree(*pivot) && m < *pivot)) {
+          pivot = m;
+        }
+      }
+      if (!pivot) continue;
+      MomentCombination value;
+      const numeric lead = relation.at(*pivot);
+      for (const auto& [m, v] : relation) {
+        if (m != *pivot) value[m] = -v / lead;
+      }
+      for (auto& [m, other] : solved) {
+        auto it = other.find(*pivot);
+        if (it == other.end()) continue;
+        const numeric factor = it->second;
+        other.erase(it);
+        add_scaled(other, value, factor);
+      }
+      solved[*pivot] = std::move(value);
+    }
+    for (Row& row : rows) {
+      for (Linear& part : row.parts) substitute(part.moments, solved);
+    }
+    for (auto& [m, value] : solved) system.identities.push_back({m, value});
+  }
+
+  static void substitute(MomentCombination& c,
+                         const std::map<Monomial, MomentCombination, MomentOrder>& solved) {
+    for (const auto& [m, value] : solved) {
+      auto it = c.find(m);
+      if (it == c.end()) continue;
+      const numeric factor = it->second;
+      c.erase(it);
+      add_scaled(c, value, factor);
+    }
+  }
+
+  // The sign is fixed so that the first parameter with a coefficient has a positive leading
+  // weight: the same equation then always prints the same way.
+  static void normalize_sign(MomentEquation& eq) {
+    for (const MomentCombination& c : eq.coefficients) {
+      if (c.empty()) continue;
+      if (c.begin()->second.is_negative()) {
+        for (auto& x : eq.coefficients) {
+          for (auto& [m, v] : x) v = -v;
+        }
+        for (auto& [m, v] : eq.rhs) v = -v;
+        for (auto& s : eq.sources) s.factor = -s.factor;
+      }
+      return;
+    }
+  }
+
+  int generic_rank(const MomentSystem& system) const {
+    if (system.equations.empty() || parameters_ == 0) return 0;
+    std::mt19937_64 engine(20260101);
+    std::uniform_real_distribution<double> draw(0.5, 2.0);
+    std::map<Monomial, double> value;
+    for (const Monomial& m : system.moments) value[m] = draw(engine);
+    value[Monomial(variables_, 0)] = 1.0;
+    Eigen::MatrixXd a(system.equations.size(), parameters_);
+    for (std::size_t r = 0; r < system.equations.size(); ++r) {
+      for (int p = 0; p < parameters_; ++p) {
+        double sum = 0;
+        for (const auto& [m, c] : system.equations[r].coefficients[p]) {
+          sum += c.to_double() * value[m];
+        }
+        a(static_cast<Eigen::Index>(r), p) = sum;
+      }
+    }
+    for (int p = 0; p < parameters_; ++p) {
+      const double norm = a.col(p).norm();
+      if (norm > 0) a.col(p) /= norm;
+    }
+    Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(a);
+    qr.setThreshold(1e-9);
+    return static_cast<int>(qr.rank());
+  }
+
+  const Model& model_;
+  int states_, variables_, parameters_;
+  std::vector<std::optional<MomentCombination>> kinematic_;
+  std::vector<int> dynamic_;
+  std::vector<std::string> notes_;
+};
+
+}  // namespace
+
+bool MomentOrder::operator()(const Monomial& a, const Monomial& b) const {
+  const int da = degree(a), db = degree(b);
+  if (da != db) return da < db;
+  return a > b;
+}
+
+std::vector<Monomial> monomials_up_to(int states, int max_degree) {
+  std::vector<Monomial> out;
+  std::vector<Monomial> level{Monomial(states, 0)};
+  for (int d = 1; d <= max_degree; ++d) {
+    std::set<Monomial, MomentOrder> next;
+    for (const Monomial& m : level) {
+      for (int i = 0; i < states; ++i) {
+        Monomial n = m;
+        ++n[i];
+        next.insert(n);
+      }
+    }
+    level.assign(next.begin(), next.end());
+    out.insert(out.end(), level.begin(), level.end());
+  }
+  return out;
+}
+
+MomentSystem derive(const Model& model, const DeriveOptions& options) {
+  Deriver deriver(model);
+  const int states = static_cast<int>(model.states().size());
+  const auto& equations = model.equations();
+  std::vector<std::vector<Monomial>> multipliers(equations.size());
+  auto all = [&](const std::vector<Monomial>& list) {
+    for (auto& m : multipliers) m = list;
+  };
+  if (options.multipliers) {
+    all(*options.multipliers);
+  } else if (options.degree > 0) {
+    all(monomials_up_to(states, options.degree));
+  } else if (!model.multipliers().empty()) {
+    std::vector<bool> given(equations.size(), false);
+    for (const MultiplierSet& set : model.multipliers()) {
+      for (std::size_t e = 0; e < equations.size(); ++e) {
+        if (!set.equation.empty() && equations[e].label != set.equation) continue;
+        if (!set.equation.empty() || !given[e]) multipliers[e] = set.monomials;
+        given[e] = given[e] || !set.equation.empty();
+      }
+    }
+    MomentSystem system = deriver.run(multipliers);
+    for (int e : deriver.dynamic_equations()) {
+      if (multipliers[e].empty()) {
+        system.notes.push_back("equation " + equations[e].name() +
+                               " has no multipliers: no multipliers statement covers it");
+      }
+    }
+    return system;
+  } else {
+    MomentSystem best;
+    for (int d = 1; d <= kMaxAutomaticDegree; ++d) {
+      all(monomials_up_to(states, d));
+      best = deriver.run(multipliers);
+      if (best.generic_rank == static_cast<int>(model.parameters().size())) break;
+    }
+    return best;
+  }
+  return deriver.run(multipliers);
+}
+
+}  // namespace momentid

@@ -1,0 +1,328 @@
+// Text, LaTeX and JSON forms of a MomentSystem, and its equations as GiNaC expressions.
+
+#include <algorithm>
+#include <sstream>
+
+#include "derive/moment_system.hpp"
+
+namespace momentid {
+
+DECLARE_FUNCTION_1P(expectation)
+REGISTER_FUNCTION(expectation, set_name("E", "\\operatorname{E}"))
+
+namespace {
+
+using GiNaC::numeric;
+
+std::string number_text(const numeric& q) {
+  std::ostringstream out;
+  out << q;
+  return out.str();
+}
+
+bool is_one(const Monomial& m) {
+  return std::all_of(m.begin(), m.end(), [](int e) { return e == 0; });
+}
+
+// How names look in one output format.
+struct Notation {
+  std::function<std::string(const Model&, const Monomial&)> moment;
+  std::function<std::string(const std::string&)> name;
+  std::function<std::string(const numeric&)> number;
+  std::string times;
+};
+
+// "c*E[y^2]", "-2*E[y*v]", "3": one weighted term without its sign.
+std::string weighted(const Notation& n, const numeric& weight, const std::string& what) {
+  const numeric a = GiNaC::abs(weight);
+  if (what.empty()) return n.number(a);
+  if (a == 1) return what;
+  return n.number(a) + n.times + what;
+}
+
+std::string combination(const Notation& n, const Model& model, const MomentCombination& c) {
+  if (c.empty()) return "0";
+  std::string out;
+  for (const auto& [m, w] : c) {
+    const std::string term = weighted(n, w, is_one(m) ? "" : n.moment(model, m));
+    if (out.empty()) {
+      out = (w.is_negative() ? "-" : "") + term;
+    } else {
+      out += (w.is_negative() ? " - " : " + ") + term;
+    }
+  }
+  return out;
+}
+
+// sum over p of coefficient_p * p, grouped by parameter in declaration order.
+std::string left_side(const Notation& n, const Model& model, const MomentEquation& eq) {
+  std::string out;
+  for (std::size_t p = 0; p < eq.coefficients.size(); ++p) {
+    const MomentCombination& c = eq.coefficients[p];
+    if (c.empty()) continue;
+    const std::string name = n.name(model.parameters()[p].name);
+    std::string term;
+    bool negative = false;
+    if (c.size() == 1) {
+      const auto& [m, w] = *c.begin();
+      negative = w.is_negative();
+      term = weighted(n, w, is_one(m) ? name : name + n.times + n.moment(model, m));
+    } else {
+      term = name + n.times + "(" + combination(n, model, c) + ")";
+    }
+    if (out.empty()) {
+      out = (negative ? "-" : "") + term;
+    } else {
+      out += (negative ? " - " : " + ") + term;
+    }
+  }
+  return out;
+}
+
+std::string source_text(const Model& model, const MomentEquation& eq) {
+  std::string out;
+  for (const RowSource& s : eq.sources) {
+    std::string one =
+        "[" + model.equations()[s.equation].name() + "]*" + format_monomial(model, s.multiplier);
+    const numeric a = GiNaC::abs(s.factor);
+    if (a != 1) one = number_text(a) + "*" + one;
+    if (out.empty()) {
+      out = (s.factor.is_negative() ? "-" : "") + one;
+    } else {
+      out += (s.factor.is_negative() ? " - " : " + ") + one;
+    }
+  }
+  return out;
+}
+
+const Notation& plain() {
+  static const Notation n{
+      [](const Model& model, const Monomial& m) { return format_moment(model, m); },
+      [](const std::string& s) { return s; }, number_text, "*"};
+  return n;
+}
+
+// Greek letter names and names ending in digits get their usual mathematical form.
+std::string latex_name(const std::string& name) {
+  static const std::map<std::string, std::string> greek{
+      {"alpha", "\\alpha"},   {"beta", "\\beta"},   {"gamma", "\\gamma"}, {"delta", "\\delta"},
+      {"eps", "\\varepsilon"}, {"epsilon", "\\varepsilon"}, {"zeta", "\\zeta"}, {"eta", "\\eta"},
+      {"theta", "\\theta"},   {"kappa", "\\kappa"}, {"lambda", "\\lambda"}, {"mu", "\\mu"},
+      {"nu", "\\nu"},         {"xi", "\\xi"},       {"rho", "\\rho"},     {"sigma", "\\sigma"},
+      {"tau", "\\tau"},       {"phi", "\\phi"},     {"chi", "\\chi"},     {"psi", "\\psi"},
+      {"omega", "\\omega"},   {"Omega", "\\Omega"}, {"Delta", "\\Delta"}, {"Gamma", "\\Gamma"}};
+  std::size_t split = name.size();
+  while (split > 0 && std::isdigit(static_cast<unsigned char>(name[split - 1]))) --split;
+  if (split == 0) split = name.size();
+  std::string base = name.substr(0, split);
+  const std::string digits = name.substr(split);
+  std::string escaped;
+  for (char ch : base) escaped += ch == '_' ? std::string("\\_") : std::string(1, ch);
+  if (auto it = greek.find(base); it != greek.end()) {
+    base = it->second;
+  } else if (base.size() > 1) {
+    base = "\\mathit{" + escaped + "}";
+  } else {
+    base = escaped;
+  }
+  return digits.empty() ? base : base + "_{" + digits + "}";
+}
+
+std::string latex_number(const numeric& q) {
+  if (q.is_integer()) return number_text(q);
+  return "\\tfrac{" + number_text(q.numer()) + "}{" + number_text(q.denom()) + "}";
+}
+
+const Notation& latex() {
+  static const Notation n{[](const Model& model, const Monomial& m) {
+                            std::string inside;
+                            for (std::size_t i = 0; i < m.size(); ++i) {
+                              if (m[i] == 0) continue;
+                              if (!inside.empty()) inside += "\\,";
+                              inside += latex_name(model.variables()[i]);
+                              if (m[i] > 1) inside += "^{" + std::to_string(m[i]) + "}";
+                            }
+                            return "\\operatorname{E}[" + inside + "]";
+                          },
+                          latex_name, latex_number, "\\,"};
+  return n;
+}
+
+std::string json_string(const std::string& s) {
+  std::string out = "\"";
+  for (char ch : s) {
+    switch (ch) {
+      case '"': out += "\\\""; break;
+      case '\\': out += "\\\\"; break;
+      case '\n': out += "\\n"; break;
+      case '\t': out += "\\t"; break;
+      default:
+        if (static_cast<unsigned char>(ch) < 0x20) {
+          char buffer[8];
+          std::snprintf(buffer, sizeof buffer, "\\u%04x", ch);
+          out += buffer;
+        } else {
+          out += ch;
+        }
+    }
+  }
+  return out + "\"";
+}
+
+std::string json_equation_name(const Equation& eq) {
+  return eq.label.empty() ? std::to_string(eq.number) : json_string(eq.label);
+}
+
+}  // namespace
+
+std::string format_moment(const Model& model, const Monomial& moment) {
+  return "E[" + format_monomial(model, moment) + "]";
+}
+
+std::string format_combination(const Model& model, const MomentCombination& c) {
+  return combination(plain(), model, c);
+}
+
+std::string format_text(const MomentSystem& system) {
+  const Model& model = *system.model;
+  std::ostringstream out;
+  out << "moment equations of " << model.name();
+  if (!model.title().empty()) out << " (" << model.title() << ")";
+  out << "\n\n";
+  std::vector<std::string> sources;
+  std::size_t width = 0;
+  for (const MomentEquation& eq : system.equations) {
+    sources.push_back(source_text(model, eq));
+    width = std::max(width, sources.back().size());
+  }
+  const std::size_t number_width = std::to_string(system.equations.size()).size();
+  for (std::size_t i = 0; i < system.equations.size(); ++i) {
+    const MomentEquation& eq = system.equations[i];
+    std::string number = std::to_string(i + 1);
+    out << std::string(number_width - number.size() + 2, ' ') << number << "  " << sources[i]
+        << std::string(width - sources[i].size() + 3, ' ') << left_side(plain(), model, eq)
+        << " = " << combination(plain(), model, eq.rhs) << "\n";
+  }
+  if (system.equations.empty()) out << "  (none)\n";
+  const std::size_t parameters = model.parameters().size();
+  out << "\nequations: " << system.equations.size() << " (independent: " << system.generic_rank
+      << " of " << parameters << " parameters)\n";
+  out << "parameters:";
+  for (std::size_t p = 0; p < parameters; ++p) out << (p ? ", " : " ") << model.parameters()[p].name;
+  out << "\nmoments needed: " << system.moments.size();
+  for (std::size_t i = 0; i < system.moments.size(); ++i) {
+    out << (i ? ", " : ": ") << format_moment(model, system.moments[i]);
+  }
+  out << "\nidentities used: " << system.identities.size() << "\n";
+  for (const DataIdentity& id : system.identities) {
+    out << "  " << format_moment(model, id.moment) << " = " << format_combination(model, id.value)
+        << "\n";
+  }
+  out << "multipliers skipped: " << system.skipped.size() << "\n";
+  for (const SkippedMultiplier& s : system.skipped) {
+    out << "  [" << model.equations()[s.equation].name() << "]*"
+        << format_monomial(model, s.multiplier) << ": " << s.reason << "\n";
+  }
+  for (const std::string& note : system.notes) out << "note: " << note << "\n";
+  if (system.generic_rank < static_cast<int>(parameters)) {
+    out << "warning: these equations cannot determine all " << parameters
+        << " parameters; add multipliers (--degree or --multipliers)\n";
+  }
+  return out.str();
+}
+
+std::string format_latex(const MomentSystem& system) {
+  const Model& model = *system.model;
+  std::ostringstream out;
+  out << "% moment equations of " << model.name() << "; needs \\usepackage{amsmath}\n";
+  out << "\\begin{align}\n";
+  for (std::size_t i = 0; i < system.equations.size(); ++i) {
+    const MomentEquation& eq = system.equations[i];
+    out << "  " << left_side(latex(), model, eq) << " &= " << combination(latex(), model, eq.rhs);
+    out << (i + 1 < system.equations.size() ? " \\\\\n" : "\n");
+  }
+  out << "\\end{align}\n";
+  return out.str();
+}
+
+std::string format_json(const MomentSystem& system) {
+  const Model& model = *system.model;
+  std::ostringstream out;
+  out << "{\n  \"model\": " << json_string(model.name()) << ",\n  \"parameters\": [";
+  for (std::size_t p = 0; p < model.parameters().size(); ++p) {
+    out << (p ? ", " : "") << json_string(model.parameters()[p].name);
+  }
+  out << "],\n  \"moments\": [";
+  for (std::size_t i = 0; i < system.moments.size(); ++i) {
+    out << (i ? ", " : "") << json_string(format_moment(model, system.moments[i]));
+  }
+  out << "],\n  \"equations\": [";
+  for (std::size_t i = 0; i < system.equations.size(); ++i) {
+    const MomentEquation& eq = system.equations[i];
+    const RowSource& first = eq.sources.front();
+    out << (i ? "," : "") << "\n    {\"equation\": "
+        << json_equation_name(model.equations()[first.equation])
+        << ", \"multiplier\": " << json_string(format_monomial(model, first.multiplier))
+        << ",\n     \"coefficients\": {";
+    for (std::size_t p = 0; p < eq.coefficients.size(); ++p) {
+      out << (p ? ", " : "") << json_string(model.parameters()[p].name) << ": "
+          << json_string(format_combination(model, eq.coefficients[p]));
+    }
+    out << "},\n     \"rhs\": " << json_string(format_combination(model, eq.rhs));
+    out << ",\n     \"sources\": [";
+    for (std::size_t s = 0; s < eq.sources.size(); ++s) {
+      const RowSource& src = eq.sources[s];
+      out << (s ? ", " : "") << "{\"equation\": " << json_equation_name(model.equations()[src.equation])
+          << ", \"multiplier\": " << json_string(format_monomial(model, src.multiplier))
+          << ", \"factor\": " << json_string(number_text(src.factor)) << "}";
+    }
+    out << "]}";
+  }
+  out << "\n  ],\n  \"independent\": " << system.generic_rank << ",\n  \"identities\": [";
+  for (std::size_t i = 0; i < system.identities.size(); ++i) {
+    const DataIdentity& id = system.identities[i];
+    out << (i ? ", " : "")
+        << json_string(format_moment(model, id.moment) + " = " +
+                       format_combination(model, id.value));
+  }
+  out << "],\n  \"skipped\": [";
+  for (std::size_t i = 0; i < system.skipped.size(); ++i) {
+    const SkippedMultiplier& s = system.skipped[i];
+    out << (i ? "," : "") << "\n    {\"equation\": "
+        << json_equation_name(model.equations()[s.equation])
+        << ", \"multiplier\": " << json_string(format_monomial(model, s.multiplier))
+        << ", \"reason\": " << json_string(s.reason) << "}";
+  }
+  out << (system.skipped.empty() ? "" : "\n  ") << "],\n  \"notes\": [";
+  for (std::size_t i = 0; i < system.notes.size(); ++i) {
+    out << (i ? ", " : "") << json_string(system.notes[i]);
+  }
+  out << "]\n}\n";
+  return out.str();
+}
+
+GiNaC::ex moment_as_ex(const Model& model, const Monomial& moment) {
+  GiNaC::ex product = 1;
+  const std::size_t states = model.states().size();
+  for (std::size_t i = 0; i < moment.size(); ++i) {
+    const GiNaC::ex base = i < states ? GiNaC::ex(model.state_symbol(static_cast<int>(i)))
+                                      : GiNaC::ex(model.input_symbol(static_cast<int>(i - states)));
+    product *= GiNaC::pow(base, moment[i]);
+  }
+  return is_one(moment) ? GiNaC::ex(1) : expectation(product);
+}
+
+GiNaC::ex equation_as_ex(const Model& model, const MomentEquation& equation) {
+  auto as_ex = [&](const MomentCombination& c) {
+    GiNaC::ex sum = 0;
+    for (const auto& [m, w] : c) sum += w * moment_as_ex(model, m);
+    return sum;
+  };
+  GiNaC::ex out = -as_ex(equation.rhs);
+  for (std::size_t p = 0; p < equation.coefficients.size(); ++p) {
+    out += model.parameter_symbol(static_cast<int>(p)) * as_ex(equation.coefficients[p]);
+  }
+  return out;
+}
+
+}  // namespace momentid

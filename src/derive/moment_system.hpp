@@ -1,0 +1,105 @@
+#pragma once
+
+#include <ginac/ginac.h>
+
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "model/model.hpp"
+
+namespace momentid {
+
+// The order in which moments are listed: by total degree, then y^2 before y*v before v^2.
+struct MomentOrder {
+  bool operator()(const Monomial& a, const Monomial& b) const;
+};
+
+// A linear combination of observable moments E[monomial] with exact rational weights, listed in
+// MomentOrder. The monomial of all zeros is E[1] = 1, i.e. a constant.
+using MomentCombination = std::map<Monomial, GiNaC::numeric, MomentOrder>;
+
+// Where a moment equation comes from: equation `equation` (index into Model::equations())
+// multiplied by `multiplier` (a monomial in the states), scaled by `factor`.
+struct RowSource {
+  int equation = 0;
+  Monomial multiplier;
+  GiNaC::numeric factor = 1;
+};
+
+// One linear equation in the parameters: sum over p of coefficients[p] * theta_p = rhs, every
+// coefficient and the right-hand side a combination of moments that must be estimated from data.
+// Usually one equation times one multiplier; several sources when derivative moments that are
+// known only in sums had to be eliminated by adding equations.
+struct MomentEquation {
+  std::vector<RowSource> sources;
+  std::vector<MomentCombination> coefficients;  // one per parameter
+  MomentCombination rhs;
+};
+
+// A pure-data identity that stationarity implies, E[moment] = value (e.g. E[y1*y2] = 0 when
+// y1' = y2). The moment equations use `value` in place of E[moment]; the identify stage reports
+// how far the data violate it.
+struct DataIdentity {
+  Monomial moment;
+  MomentCombination value;
+};
+
+// A multiplier that gave no usable moment equation, and why.
+struct SkippedMultiplier {
+  int equation = 0;
+  Monomial multiplier;
+  std::string reason;
+};
+
+// How to choose multipliers. `multipliers` (all equations) wins over `degree` (all monomials in
+// the states of total degree 1..degree), which wins over the model's own `multipliers`
+// statements; with none of these, the degree is raised from 1 until the equations determine
+// every parameter (at most kMaxAutomaticDegree).
+struct DeriveOptions {
+  std::optional<std::vector<Monomial>> multipliers;
+  int degree = 0;
+};
+inline constexpr int kMaxAutomaticDegree = 3;
+
+// The moment equations of a model: the linear system A(mu) theta = b(mu) of the dynamical
+// moment technique, with the identities it used and the multipliers it could not use.
+//
+// Example:
+//   Model model = parse_model_file("models/duffing.mom");
+//   MomentSystem system = derive(model, {.degree = 3});
+//   std::cout << format_text(system);
+struct MomentSystem {
+  const Model* model = nullptr;
+  std::vector<MomentEquation> equations;
+  std::vector<Monomial> moments;  // every moment the equations need, in MomentOrder
+  std::vector<DataIdentity> identities;
+  std::vector<SkippedMultiplier> skipped;
+  std::vector<std::string> notes;  // e.g. an equation without parameters that was not used
+  // Rank of the coefficient matrix for generic moment values: how many parameters the
+  // equations can determine at best.
+  int generic_rank = 0;
+};
+
+// Derives the moment equations. Throws ModelError when the model's multipliers refer to
+// something impossible (never for an equation that merely cannot be reduced: that multiplier is
+// skipped and reported).
+MomentSystem derive(const Model& model, const DeriveOptions& options = {});
+
+// All monomials in `states` variables of total degree 1..degree, lowest degree first.
+std::vector<Monomial> monomials_up_to(int states, int degree);
+
+// Output formats (README, "momentid derive").
+std::string format_moment(const Model& model, const Monomial& moment);
+std::string format_combination(const Model& model, const MomentCombination& combination);
+std::string format_text(const MomentSystem& system);
+std::string format_latex(const MomentSystem& system);
+std::string format_json(const MomentSystem& system);
+
+// An equation as a GiNaC expression sum_p theta_p*A_p - b, the moments written as E(monomial)
+// with the model's symbols, so that equations compare by subtraction.
+GiNaC::ex equation_as_ex(const Model& model, const MomentEquation& equation);
+GiNaC::ex moment_as_ex(const Model& model, const Monomial& moment);
+
+}  // namespace momentid

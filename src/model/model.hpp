@@ -1,0 +1,124 @@
+#pragma once
+
+#include <ginac/ginac.h>
+
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "common/error.hpp"
+
+namespace momentid {
+
+// Exponents of a monomial over the model's variables: the states first, then the inputs, in
+// declaration order (see Model::variables()). `{2, 0, 1}` over (y, v, x) is y^2*x.
+using Monomial = std::vector<int>;
+
+enum class SymbolKind { kState, kInput, kParameter, kConstant };
+
+// "state", "input", "parameter" or "constant".
+const char* kind_name(SymbolKind kind);
+
+// One declared name. `value` is the nominal value of a parameter (optional; the simulator uses
+// it) or the value of a constant (always present). Numbers are kept exact: `0.1` is 1/10.
+struct Declaration {
+  std::string name;
+  SymbolKind kind = SymbolKind::kState;
+  std::optional<GiNaC::numeric> value;
+  SourceLocation where;
+};
+
+// One term of an equation moved to the form `lhs - rhs = 0` and expanded:
+// coefficient * parameter * monomial * derivative, where the parameter and the derivative factor
+// are optional. The model language guarantees at most one of each.
+struct Term {
+  GiNaC::numeric coefficient;
+  int parameter = -1;   // index into Model::parameters(), or -1
+  Monomial monomial;    // over Model::variables()
+  int derivative = -1;  // index of the state whose time derivative is a factor, or -1
+};
+
+// One equation of a model, `lhs = rhs`. Constants are already replaced by their values.
+struct Equation {
+  std::string label;  // as written before ':', or empty
+  int number = 0;     // position among the model's equations, from 1
+  GiNaC::ex lhs;
+  GiNaC::ex rhs;
+  std::vector<Term> terms;  // of lhs - rhs
+  SourceLocation where;
+
+  // The label if there is one, otherwise the number.
+  std::string name() const { return label.empty() ? std::to_string(number) : label; }
+};
+
+// A `multipliers` statement: monomials in the states by which to multiply one labelled equation,
+// or every equation when `equation` is empty.
+struct MultiplierSet {
+  std::string equation;
+  std::vector<Monomial> monomials;
+  SourceLocation where;
+};
+
+// A model read from the model language (grammar/README.md) and checked for meaning: every name
+// declared once, equations polynomial in the states, inputs and derivatives, each term affine in
+// the parameters and with at most one derivative factor, every state's derivative determined.
+//
+// Example:
+//   Model model = parse_model_file("models/duffing.mom");
+//   for (const Equation& eq : model.equations()) std::cout << eq.lhs << " = " << eq.rhs << "\n";
+class Model {
+ public:
+  const std::string& name() const { return name_; }
+  const std::string& title() const { return title_; }
+  const std::string& file() const { return file_; }
+
+  const std::vector<Declaration>& states() const { return states_; }
+  const std::vector<Declaration>& inputs() const { return inputs_; }
+  const std::vector<Declaration>& parameters() const { return parameters_; }
+  const std::vector<Declaration>& constants() const { return constants_; }
+  // The names that monomials are written in: states, then inputs.
+  const std::vector<std::string>& variables() const { return variables_; }
+
+  const std::vector<Equation>& equations() const { return equations_; }
+  const std::vector<MultiplierSet>& multipliers() const { return multipliers_; }
+
+  // The GiNaC symbols the equations are written in.
+  const GiNaC::symbol& state_symbol(int i) const { return state_symbols_[i]; }
+  const GiNaC::symbol& derivative_symbol(int i) const { return derivative_symbols_[i]; }
+  const GiNaC::symbol& input_symbol(int i) const { return input_symbols_[i]; }
+  const GiNaC::symbol& parameter_symbol(int i) const { return parameter_symbols_[i]; }
+
+  // Index of a parameter by name, or -1.
+  int parameter_index(std::string_view name) const;
+
+ private:
+  friend class ModelBuilder;
+  std::string name_, title_, file_;
+  std::vector<Declaration> states_, inputs_, parameters_, constants_;
+  std::vector<std::string> variables_;
+  std::vector<Equation> equations_;
+  std::vector<MultiplierSet> multipliers_;
+  std::vector<GiNaC::symbol> state_symbols_, derivative_symbols_, input_symbols_,
+      parameter_symbols_;
+};
+
+// Reads and checks a model file. Throws ParseError or ModelError naming file, line and column,
+// or Error when the file cannot be read.
+Model parse_model_file(const std::string& path);
+
+// The same for a model held in memory; `file` is the name used in messages.
+Model parse_model(std::string_view text, const std::string& file);
+
+// Parses a comma-separated list of monomials in the model's states, as given to
+// `--multipliers`. `source` names the list in messages (e.g. "--multipliers").
+std::vector<Monomial> parse_multiplier_list(const Model& model, std::string_view text,
+                                            const std::string& source);
+
+// Writes a monomial as `y1^2*y2*x` (factors in declaration order), or `1`.
+std::string format_monomial(const Model& model, const Monomial& monomial);
+
+// Parses a decimal number (`4`, `.5`, `1.5e-3`) exactly, as a rational.
+GiNaC::numeric parse_exact_number(std::string_view text);
+
+}  // namespace momentid

@@ -1,0 +1,727 @@
+// Parses the model language with the PEGTL grammar in grammar/ and checks what the text means.
+// This is the only translation unit that includes PEGTL.
+
+#include <algorithm>
+#include <fstream>
+#include <functional>
+#include <map>
+#include <set>
+#include <sstream>
+
+#include "error_messages.hpp"
+#include "model/model.hpp"
+#include "model_grammar.hpp"
+#include "tao/pegtl/contrib/parse_tree.hpp"
+
+namespace momentid {
+namespace {
+
+namespace pegtl = tao::pegtl;
+namespace g = grammar;
+using Node = pegtl::parse_tree::node;
+
+// The parse-tree nodes kept; every other rule only groups its children.
+template <typename Rule>
+using Selector = pegtl::parse_tree::selector<
+    Rule,
+    pegtl::parse_tree::store_content::on<
+        g::model_statement, g::model_name, g::string_body, g::state_declaration,
+        g::input_declaration, g::param_declaration, g::const_declaration, g::declared_name,
+        g::param_item, g::const_item, g::signed_number, g::number, g::label, g::equation, g::lhs,
+        g::rhs, g::multipliers_statement, g::multiplier, g::expression, g::term_operand,
+        g::product, g::times, g::divide, g::add, g::subtract, g::unary, g::operand,
+        g::minus_sign, g::plus_sign, g::power, g::exponent_operand, g::variable, g::name,
+        g::primes, g::dot_call, g::dot_argument, g::call, g::parenthesized>>;
+
+template <typename Rule>
+using Control = pegtl::must_if<g::error_messages>::control<Rule>;
+
+// The text of line `line` (from 1) of `source`, without its line break.
+std::string line_of(std::string_view source, std::size_t line) {
+  std::size_t begin = 0;
+  for (std::size_t n = 1; n < line && begin != std::string_view::npos; ++n) {
+    begin = source.find('\n', begin);
+    if (begin != std::string_view::npos) ++begin;
+  }
+  if (begin == std::string_view::npos || begin > source.size()) return "";
+  std::size_t end = source.find('\n', begin);
+  std::string text(source.substr(begin, end == std::string_view::npos ? end : end - begin));
+  if (!text.empty() && text.back() == '\r') text.pop_back();
+  return text;
+}
+
+bool is_sum(const Node& n) {
+  return n.is_type<g::lhs>() || n.is_type<g::rhs>() || n.is_type<g::multiplier>() ||
+         n.is_type<g::expression>();
+}
+bool is_product(const Node& n) { return n.is_type<g::product>() || n.is_type<g::term_operand>(); }
+bool is_unary(const Node& n) { return n.is_type<g::unary>() || n.is_type<g::operand>(); }
+
+// What a symbol of an equation stands for.
+struct SymbolRole {
+  enum Kind { kParameter, kVariable, kDerivative } kind;
+  int index;
+};
+
+// An expanded term split into its factors, exponents indexed like the model's declarations.
+struct SplitTerm {
+  GiNaC::numeric coefficient;
+  std::vector<int> parameters, variables, derivatives;
+};
+
+}  // namespace
+
+// Builds a Model from a parse tree, checking meaning as it goes.
+class ModelBuilder {
+ public:
+  ModelBuilder(std::string_view text, std::string file) : text_(text) {
+    model_.file_ = std::move(file);
+  }
+
+  Model build(const Node& root) {
+    collect(root);
+    make_symbols();
+    for (const Node* eq : equation_nodes_) add_equation(*eq);
+    for (const Node* m : multiplier_nodes_) add_multipliers(*m);
+    check_whole_model();
+    return std::move(model_);
+  }
+
+  // Evaluates a `--multipliers` list against an already built model.
+  static std::vector<Monomial> multiplier_list(const Model& model, const Node& root,
+                                               std::string_view text, const std::string& source) {
+    ModelBuilder builder(text, source);
+    builder.model_ = model;
+    builder.model_.file_ = source;
+    builder.index_symbols();
+    std::vector<Monomial> out;
+    for (const auto& child : root.children) {
+      if (child->is_type<g::multiplier>()) builder.add_monomial(*child, out);
+    }
+    return out;
+  }
+
+ private:
+  SourceLocation where(const Node& n) const {
+    const pegtl::position p = n.begin();
+    return {model_.file_, static_cast<int>(p.line), static_cast<int>(p.column),
+            line_of(text_, p.line)};
+  }
+  [[noreturn]] void fail(const Node& n, const std::string& message) const {
+    throw ModelError(where(n), message);
+  }
+
+  // --- Declarations ---------------------------------------------------------------------------
+
+  void collect(const Node& root) {
+    for (const auto& child : root.children) {
+      const Node& n = *child;
+      if (n.is_type<g::model_statement>()) {
+        if (model_statement_ != nullptr) {
+          fail(n, "a second 'model' statement (the first is on line " +
+                      std::to_string(model_statement_->begin().line) + ")");
+        }
+        model_statement_ = &n;
+        for (const auto& part : n.children) {
+          if (part->is_type<g::model_name>()) model_.name_ = part->string();
+          if (part->is_type<g::string_body>()) model_.title_ = part->string();
+        }
+      } else if (n.is_type<g::state_declaration>()) {
+        declare_all(n, SymbolKind::kState);
+      } else if (n.is_type<g::input_declaration>()) {
+        declare_all(n, SymbolKind::kInput);
+      } else if (n.is_type<g::param_declaration>()) {
+        declare_all(n, SymbolKind::kParameter);
+      } else if (n.is_type<g::const_declaration>()) {
+        declare_all(n, SymbolKind::kConstant);
+      } else if (n.is_type<g::equation>()) {
+        equation_nodes_.push_back(&n);
+      } else if (n.is_type<g::multipliers_statement>()) {
+        multiplier_nodes_.push_back(&n);
+      }
+    }
+    if (model_.name_.empty()) {
+      std::string stem = model_.file_;
+      if (auto slash = stem.find_last_of('/'); slash != std::string::npos) stem.erase(0, slash + 1);
+      if (auto dot = stem.find('.'); dot != std::string::npos && dot > 0) stem.erase(dot);
+      model_.name_ = stem;
+    }
+  }
+
+  void declare_all(const Node& statement, SymbolKind kind) {
+    for (const auto& child : statement.children) {
+      const Node* name = child.get();
+      const Node* value = nullptr;
+      if (child->is_type<g::param_item>() || child->is_type<g::const_item>()) {
+        name = child->children.at(0).get();
+        if (child->children.size() > 1) value = child->children[1].get();
+      }
+      if (!name->is_type<g::declared_name>()) continue;
+      declare(*name, value, kind);
+    }
+  }
+
+  void declare(const Node& name_node, const Node* value_node, SymbolKind kind) {
+    const std::string name = name_node.string();
+    if (auto it = declared_.find(name); it != declared_.end()) {
+      const Declaration& first = *it->second;
+      fail(name_node, "'" + name + "' is already declared as " + article(first.kind) + " at " +
+                          std::to_string(first.where.line) + ":" +
+                          std::to_string(first.where.column));
+    }
+    Declaration d{name, kind, std::nullopt, where(name_node)};
+    if (value_node != nullptr) {
+      GiNaC::numeric v = 0;
+      bool negative = false;
+      for (const auto& part : value_node->children) {
+        if (part->is_type<g::minus_sign>()) negative = !negative;
+        if (part->is_type<g::number>()) v = parse_exact_number(part->string_view());
+      }
+      d.value = negative ? -v : v;
+    }
+    std::vector<Declaration>* list = nullptr;
+    switch (kind) {
+      case SymbolKind::kState: list = &model_.states_; break;
+      case SymbolKind::kInput: list = &model_.inputs_; break;
+      case SymbolKind::kParameter: list = &model_.parameters_; break;
+      case SymbolKind::kConstant: list = &model_.constants_; break;
+    }
+    list->push_back(std::move(d));
+    // Pointers into the vectors move when they grow; index by name after collection instead.
+    declared_.clear();
+    for (auto* l : {&model_.states_, &model_.inputs_, &model_.parameters_, &model_.constants_}) {
+      for (const Declaration& x : *l) declared_[x.name] = &x;
+    }
+  }
+
+  static std::string article(SymbolKind kind) {
+    return kind == SymbolKind::kInput ? std::string("an input") : "a " + std::string(kind_name(kind));
+  }
+
+  void make_symbols() {
+    for (const Declaration& s : model_.states_) {
+      model_.state_symbols_.emplace_back(s.name);
+      model_.derivative_symbols_.emplace_back(s.name + "'");
+      model_.variables_.push_back(s.name);
+    }
+    for (const Declaration& u : model_.inputs_) {
+      model_.input_symbols_.emplace_back(u.name);
+      model_.variables_.push_back(u.name);
+    }
+    for (const Declaration& p : model_.parameters_) model_.parameter_symbols_.emplace_back(p.name);
+    index_symbols();
+  }
+
+  void index_symbols() {
+    declared_.clear();
+    roles_.clear();
+    for (auto* l : {&model_.states_, &model_.inputs_, &model_.parameters_, &model_.constants_}) {
+      for (const Declaration& x : *l) declared_[x.name] = &x;
+    }
+    const int n = static_cast<int>(model_.states_.size());
+    for (int i = 0; i < n; ++i) {
+      roles_.emplace(model_.state_symbols_[i], SymbolRole{SymbolRole::kVariable, i});
+      roles_.emplace(model_.derivative_symbols_[i], SymbolRole{SymbolRole::kDerivative, i});
+    }
+    for (std::size_t i = 0; i < model_.inputs_.size(); ++i) {
+      roles_.emplace(model_.input_symbols_[i],
+                     SymbolRole{SymbolRole::kVariable, n + static_cast<int>(i)});
+    }
+    for (std::size_t i = 0; i < model_.parameters_.size(); ++i) {
+      roles_.emplace(model_.parameter_symbols_[i],
+                     SymbolRole{SymbolRole::kParameter, static_cast<int>(i)});
+    }
+  }
+
+  // "declared: states y, v; inputs x; parameters c, k, eps; constants m"
+  std::string declared_list() const {
+    std::string out;
+    auto add = [&](const char* what, const std::vector<Declaration>& list) {
+      if (list.empty()) return;
+      if (!out.empty()) out += "; ";
+      out += what;
+      for (std::size_t i = 0; i < list.size(); ++i) out += (i ? ", " : " ") + list[i].name;
+    };
+    add("states", model_.states_);
+    add("inputs", model_.inputs_);
+    add("parameters", model_.parameters_);
+    add("constants", model_.constants_);
+    return out.empty() ? "nothing is declared" : "declared: " + out;
+  }
+
+  const Declaration& lookup(const Node& n, const std::string& name) const {
+    auto it = declared_.find(name);
+    if (it == declared_.end()) {
+      fail(n, "'" + name + "' is not declared (" + declared_list() + ")");
+    }
+    return *it->second;
+  }
+
+  // --- Expressions ----------------------------------------------------------------------------
+
+  GiNaC::ex state_derivative(const Node& at, const std::string& name) const {
+    const Declaration& d = lookup(at, name);
+    if (d.kind != SymbolKind::kState) {
+      fail(at, "cannot take the time derivative of " + article(d.kind) + " '" + name +
+                   "': only states have derivatives");
+    }
+    return model_.derivative_symbols_[index_of(d)];
+  }
+
+  int index_of(const Declaration& d) const {
+    const std::vector<Declaration>& list = d.kind == SymbolKind::kState       ? model_.states_
+                                           : d.kind == SymbolKind::kInput     ? model_.inputs_
+                                           : d.kind == SymbolKind::kParameter ? model_.parameters_
+                                                                              : model_.constants_;
+    return static_cast<int>(&d - list.data());
+  }
+
+  GiNaC::ex symbol_value(const Node& at, const std::string& name) const {
+    const Declaration& d = lookup(at, name);
+    const int i = index_of(d);
+    switch (d.kind) {
+      case SymbolKind::kState: return model_.state_symbols_[i];
+      case SymbolKind::kInput: return model_.input_symbols_[i];
+      case SymbolKind::kParameter: return model_.parameter_symbols_[i];
+      case SymbolKind::kConstant: return *d.value;
+    }
+    return 0;
+  }
+
+  GiNaC::ex eval(const Node& n) const {
+    if (is_sum(n)) return eval_sum(n, false);
+    if (is_product(n)) return eval_product(n);
+    if (is_unary(n)) {
+      GiNaC::ex value = eval(*n.children.back());
+      for (const auto& c : n.children) {
+        if (c->is_type<g::minus_sign>()) value = -value;
+      }
+      return value;
+    }
+    if (n.is_type<g::power>()) return eval_power(n);
+    if (n.is_type<g::number>()) return parse_exact_number(n.string_view());
+    if (n.is_type<g::parenthesized>()) return eval(*n.children.at(0));
+    if (n.is_type<g::variable>()) {
+      const std::string name = n.children.at(0)->string();
+      if (n.children.size() == 1) return symbol_value(n, name);
+      const std::size_t order = n.children[1]->string_view().size();
+      GiNaC::ex d = state_derivative(n, name);
+      if (order > 1) {
+        fail(*n.children[1], "derivatives of order " + std::to_string(order) +
+                                 " are not supported: write the model in first-order form, "
+                                 "with a state for '" + name + "''");
+      }
+      return d;
+    }
+    if (n.is_type<g::dot_call>()) {
+      const Node& arg = *n.children.at(0);
+      return state_derivative(arg, arg.string());
+    }
+    if (n.is_type<g::call>()) {
+      const std::string name = n.children.at(0)->string();
+      if (auto it = declared_.find(name); it != declared_.end()) {
+        fail(n, "'" + name + "' is " + article(it->second->kind) +
+                    ", not a function: write '" + name + "*(...)' for a product");
+      }
+      fail(n, "function '" + name +
+                  "' is not allowed: equations are polynomials (the only call is dot(...))");
+    }
+    fail(n, "unexpected syntax");  // unreachable with the grammar in grammar/
+  }
+
+  // `top_level`: each product of the sum is a term of the equation as written, so it is checked
+  // for affinity in the parameters and for a single derivative factor.
+  GiNaC::ex eval_sum(const Node& n, bool top_level) const {
+    GiNaC::ex value = 0;
+    bool negate = false;
+    for (const auto& c : n.children) {
+      if (c->is_type<g::add>()) {
+        negate = false;
+      } else if (c->is_type<g::subtract>()) {
+        negate = true;
+      } else {
+        GiNaC::ex term = eval(*c);
+        if (top_level) check_term(*c, term);
+        value += negate ? -term : term;
+      }
+    }
+    return value;
+  }
+
+  GiNaC::ex eval_product(const Node& n) const {
+    GiNaC::ex value = 1;
+    bool divide = false;
+    for (const auto& c : n.children) {
+      if (c->is_type<g::times>()) {
+        divide = false;
+      } else if (c->is_type<g::divide>()) {
+        divide = true;
+      } else {
+        GiNaC::ex factor = eval(*c);
+        if (!divide) {
+          value *= factor;
+          continue;
+        }
+        if (!GiNaC::is_a<GiNaC::numeric>(factor)) {
+          fail(*c, "can only divide by a number, found '" + std::string(c->string_view()) + "'");
+        }
+        if (GiNaC::ex_to<GiNaC::numeric>(factor).is_zero()) fail(*c, "division by zero");
+        value /= factor;
+      }
+    }
+    return value;
+  }
+
+  GiNaC::ex eval_power(const Node& n) const {
+    GiNaC::ex base = eval(*n.children.at(0));
+    if (n.children.size() == 1) return base;
+    const Node& operand = *n.children[1];
+    GiNaC::ex exponent = eval(*operand.children.back());
+    for (const auto& c : operand.children) {
+      if (c->is_type<g::minus_sign>()) exponent = -exponent;
+    }
+    if (!GiNaC::is_a<GiNaC::numeric>(exponent) ||
+        !GiNaC::ex_to<GiNaC::numeric>(exponent).is_nonneg_integer()) {
+      fail(operand, "the exponent must be a non-negative integer, found '" +
+                        std::string(operand.string_view()) + "'");
+    }
+    if (exponent > 64) {
+      fail(operand, "the exponent " + std::string(operand.string_view()) +
+                        " is too large (at most 64)");
+    }
+    return GiNaC::pow(base, exponent);
+  }
+
+  // --- Terms ----------------------------------------------------------------------------------
+
+  SplitTerm split(const GiNaC::ex& term) const {
+    SplitTerm t{1, std::vector<int>(model_.parameters_.size()),
+                std::vector<int>(model_.variables_.size()),
+                std::vector<int>(model_.states_.size())};
+    auto add_factor = [&](const GiNaC::ex& f) {
+      if (GiNaC::is_a<GiNaC::numeric>(f)) {
+        t.coefficient *= GiNaC::ex_to<GiNaC::numeric>(f);
+        return;
+      }
+      GiNaC::ex base = f;
+      int power = 1;
+      if (GiNaC::is_a<GiNaC::power>(f)) {
+        base = f.op(0);
+        power = GiNaC::ex_to<GiNaC::numeric>(f.op(1)).to_int();
+      }
+      const SymbolRole role = roles_.at(base);
+      auto& slot = role.kind == SymbolRole::kParameter ? t.parameters
+                   : role.kind == SymbolRole::kVariable ? t.variables
+                                                        : t.derivatives;
+      slot[role.index] += power;
+    };
+    if (GiNaC::is_a<GiNaC::mul>(term)) {
+      for (const GiNaC::ex& f : term) add_factor(f);
+    } else {
+      add_factor(term);
+    }
+    return t;
+  }
+
+  std::vector<SplitTerm> split_all(const GiNaC::ex& expanded) const {
+    std::vector<SplitTerm> out;
+    if (expanded.is_zero()) return out;
+    if (GiNaC::is_a<GiNaC::add>(expanded)) {
+      for (const GiNaC::ex& term : expanded) out.push_back(split(term));
+    } else {
+      out.push_back(split(expanded));
+    }
+    return out;
+  }
+
+  // `c*k*y`, `k^2*y`, `y'*v'`: factors in declaration order.
+  std::string format_term(const SplitTerm& t) const {
+    std::string out;
+    auto factor = [&](const std::string& name, int power) {
+      if (power == 0) return;
+      if (!out.empty()) out += "*";
+      out += name;
+      if (power > 1) out += "^" + std::to_string(power);
+    };
+    for (std::size_t i = 0; i < t.parameters.size(); ++i) {
+      factor(model_.parameters_[i].name, t.parameters[i]);
+    }
+    for (std::size_t i = 0; i < t.variables.size(); ++i) factor(model_.variables_[i], t.variables[i]);
+    for (std::size_t i = 0; i < t.derivatives.size(); ++i) {
+      factor(model_.states_[i].name + "'", t.derivatives[i]);
+    }
+    std::ostringstream c;
+    c << t.coefficient;
+    if (out.empty()) return c.str();
+    if (t.coefficient == -1) return "-" + out;
+    if (t.coefficient != 1) return c.str() + "*" + out;
+    return out;
+  }
+
+  static int total(const std::vector<int>& v) {
+    int s = 0;
+    for (int x : v) s += x;
+    return s;
+  }
+
+  void check_term(const Node& at, const GiNaC::ex& value) const {
+    for (const SplitTerm& t : split_all(value.expand())) {
+      if (total(t.parameters) > 1) {
+        fail(at, "term '" + format_term(t) +
+                     "' is not affine in the parameters: a term may contain at most one "
+                     "parameter factor");
+      }
+      if (total(t.derivatives) > 1) {
+        fail(at, "term '" + format_term(t) + "' has " + std::to_string(total(t.derivatives)) +
+                     " derivative factors: a term may contain at most one");
+      }
+    }
+  }
+
+  // --- Equations and multipliers --------------------------------------------------------------
+
+  void add_equation(const Node& n) {
+    Equation eq;
+    eq.number = static_cast<int>(model_.equations_.size()) + 1;
+    eq.where = where(n);
+    for (const auto& c : n.children) {
+      if (c->is_type<g::label>()) {
+        eq.label = c->string();
+        if (auto it = labels_.find(eq.label); it != labels_.end()) {
+          fail(*c, "label '" + eq.label + "' is already used on line " +
+                       std::to_string(it->second));
+        }
+        labels_[eq.label] = eq.where.line;
+      } else if (c->is_type<g::lhs>()) {
+        eq.lhs = eval_sum(*c, true);
+      } else if (c->is_type<g::rhs>()) {
+        eq.rhs = eval_sum(*c, true);
+      }
+    }
+    const GiNaC::ex difference = (eq.lhs - eq.rhs).expand();
+    if (difference.is_zero()) fail(n, "the equation reduces to 0 = 0");
+    for (const SplitTerm& s : split_all(difference)) {
+      // Two terms can combine into one that breaks a rule although no term as written does.
+      if (total(s.parameters) > 1 || total(s.derivatives) > 1) check_term(n, difference);
+      Term t;
+      t.coefficient = s.coefficient;
+      t.monomial = s.variables;
+      for (std::size_t i = 0; i < s.parameters.size(); ++i) {
+        if (s.parameters[i]) t.parameter = static_cast<int>(i);
+      }
+      for (std::size_t i = 0; i < s.derivatives.size(); ++i) {
+        if (s.derivatives[i]) t.derivative = static_cast<int>(i);
+      }
+      eq.terms.push_back(std::move(t));
+    }
+    model_.equations_.push_back(std::move(eq));
+  }
+
+  void add_monomial(const Node& n, std::vector<Monomial>& out) const {
+    const GiNaC::ex value = eval_sum(n, false).expand();
+    const std::vector<SplitTerm> terms = split_all(value);
+    const std::string text(n.string_view());
+    if (terms.size() != 1 || terms[0].coefficient != 1 || total(terms[0].parameters) != 0 ||
+        total(terms[0].derivatives) != 0) {
+      fail(n, "a multiplier must be a monomial in the states, such as y or y^2*v, found '" +
+                  text + "'");
+    }
+    const Monomial& m = terms[0].variables;
+    for (std::size_t i = model_.states_.size(); i < m.size(); ++i) {
+      if (m[i] != 0) {
+        fail(n, "multiplier '" + text + "' contains input '" + model_.variables_[i] +
+                    "': multipliers are monomials in the states");
+      }
+    }
+    Monomial states(m.begin(), m.begin() + static_cast<std::ptrdiff_t>(model_.states_.size()));
+    if (std::find(out.begin(), out.end(), states) == out.end()) out.push_back(states);
+  }
+
+  void add_multipliers(const Node& n) {
+    MultiplierSet set;
+    set.where = where(n);
+    for (const auto& c : n.children) {
+      if (c->is_type<g::label>()) {
+        set.equation = c->string();
+        if (labels_.count(set.equation) == 0) {
+          std::string known;
+          for (const Equation& eq : model_.equations_) {
+            if (!eq.label.empty()) known += (known.empty() ? "" : ", ") + eq.label;
+          }
+          fail(*c, "no equation is labelled '" + set.equation + "' (" +
+                       (known.empty() ? std::string("no equation has a label")
+                                      : "labels: " + known) +
+                       ")");
+        }
+      } else if (c->is_type<g::multiplier>()) {
+        add_monomial(*c, set.monomials);
+      }
+    }
+    model_.multipliers_.push_back(std::move(set));
+  }
+
+  // --- The model as a whole -------------------------------------------------------------------
+
+  void check_whole_model() {
+    const SourceLocation start{model_.file_, 1, 1, line_of(text_, 1)};
+    if (model_.states_.empty()) {
+      throw ModelError(start, "the model declares no states (expected a 'state' statement)");
+    }
+    if (model_.equations_.empty()) throw ModelError(start, "the model has no equations");
+
+    std::vector<bool> used(model_.parameters_.size(), false);
+    for (const Equation& eq : model_.equations_) {
+      for (const Term& t : eq.terms) {
+        if (t.parameter >= 0) used[t.parameter] = true;
+      }
+    }
+    for (std::size_t i = 0; i < used.size(); ++i) {
+      if (!used[i]) {
+        throw ModelError(model_.parameters_[i].where,
+                         "parameter '" + model_.parameters_[i].name + "' appears in no equation");
+      }
+    }
+    check_derivatives_determined();
+  }
+
+  // Every state needs an equation of its own that contains its derivative: a matching between
+  // states and equations (augmenting paths; models are small).
+  void check_derivatives_determined() {
+    const std::size_t n = model_.states_.size();
+    std::vector<std::set<int>> contains(n);
+    for (std::size_t e = 0; e < model_.equations_.size(); ++e) {
+      for (const Term& t : model_.equations_[e].terms) {
+        if (t.derivative >= 0) contains[t.derivative].insert(static_cast<int>(e));
+      }
+    }
+    for (std::size_t s = 0; s < n; ++s) {
+      if (contains[s].empty()) {
+        throw ModelError(model_.states_[s].where,
+                         "no equation determines the derivative of state '" +
+                             model_.states_[s].name + "' (no equation contains " +
+                             model_.states_[s].name + "')");
+      }
+    }
+    std::vector<int> owner(model_.equations_.size(), -1);
+    std::function<bool(int, std::vector<bool>&)> augment = [&](int s, std::vector<bool>& seen) {
+      for (int e : contains[s]) {
+        if (seen[e]) continue;
+        seen[e] = true;
+        if (owner[e] < 0 || augment(owner[e], seen)) {
+          owner[e] = s;
+          return true;
+        }
+      }
+      return false;
+    };
+    for (std::size_t s = 0; s < n; ++s) {
+      std::vector<bool> seen(model_.equations_.size(), false);
+      if (!augment(static_cast<int>(s), seen)) {
+        throw ModelError(model_.states_[s].where,
+                         "no equation is left to determine the derivative of state '" +
+                             model_.states_[s].name +
+                             "': the equations containing it are needed for other states");
+      }
+    }
+  }
+
+  std::string_view text_;
+  Model model_;
+  std::map<std::string, const Declaration*> declared_;
+  std::map<GiNaC::ex, SymbolRole, GiNaC::ex_is_less> roles_;
+  std::map<std::string, int> labels_;
+  const Node* model_statement_ = nullptr;
+  std::vector<const Node*> equation_nodes_, multiplier_nodes_;
+};
+
+namespace {
+
+template <typename Rule>
+std::unique_ptr<Node> parse_tree(std::string_view text, const std::string& file) {
+  pegtl::memory_input in(text.data(), text.size(), file);
+  try {
+    return pegtl::parse_tree::parse<Rule, Selector, pegtl::nothing, Control>(in);
+  } catch (const pegtl::parse_error& e) {
+    const pegtl::position& p = e.positions().front();
+    throw ParseError({file, static_cast<int>(p.line), static_cast<int>(p.column),
+                      line_of(text, p.line)},
+                     std::string(e.message()));
+  }
+}
+
+}  // namespace
+
+const char* kind_name(SymbolKind kind) {
+  switch (kind) {
+    case SymbolKind::kState: return "state";
+    case SymbolKind::kInput: return "input";
+    case SymbolKind::kParameter: return "parameter";
+    case SymbolKind::kConstant: return "constant";
+  }
+  return "";
+}
+
+int Model::parameter_index(std::string_view name) const {
+  for (std::size_t i = 0; i < parameters_.size(); ++i) {
+    if (parameters_[i].name == name) return static_cast<int>(i);
+  }
+  return -1;
+}
+
+Model parse_model(std::string_view text, const std::string& file) {
+  std::unique_ptr<Node> root = parse_tree<g::model_file>(text, file);
+  if (!root) throw ParseError({file, 1, 1, line_of(text, 1)}, "expected a model");
+  return ModelBuilder(text, file).build(*root);
+}
+
+Model parse_model_file(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw Error(path + ": cannot open the model file");
+  std::ostringstream text;
+  text << in.rdbuf();
+  return parse_model(text.str(), path);
+}
+
+std::vector<Monomial> parse_multiplier_list(const Model& model, std::string_view text,
+                                            const std::string& source) {
+  std::unique_ptr<Node> root = parse_tree<g::multiplier_option>(text, source);
+  if (!root) throw ParseError({source, 1, 1, std::string(text)}, "expected multipliers");
+  return ModelBuilder::multiplier_list(model, *root, text, source);
+}
+
+std::string format_monomial(const Model& model, const Monomial& monomial) {
+  std::string out;
+  for (std::size_t i = 0; i < monomial.size(); ++i) {
+    if (monomial[i] == 0) continue;
+    if (!out.empty()) out += "*";
+    out += model.variables()[i];
+    if (monomial[i] > 1) out += "^" + std::to_string(monomial[i]);
+  }
+  return out.empty() ? "1" : out;
+}
+
+GiNaC::numeric parse_exact_number(std::string_view text) {
+  GiNaC::numeric mantissa = 0;
+  long scale = 0;  // power of ten
+  bool fraction = false;
+  std::size_t i = 0;
+  for (; i < text.size() && text[i] != 'e' && text[i] != 'E'; ++i) {
+    if (text[i] == '.') {
+      fraction = true;
+      continue;
+    }
+    mantissa = mantissa * 10 + (text[i] - '0');
+    if (fraction) --scale;
+  }
+  if (i < text.size()) {
+    ++i;
+    bool negative = false;
+    if (text[i] == '+' || text[i] == '-') negative = text[i++] == '-';
+    long e = 0;
+    for (; i < text.size(); ++i) e = std::min<long>(e * 10 + (text[i] - '0'), 100000);
+    scale += negative ? -e : e;
+  }
+  return mantissa * GiNaC::pow(GiNaC::numeric(10), GiNaC::numeric(scale));
+}
+
+}  // namespace momentid
