@@ -37,8 +37,8 @@ struct Row {
   std::vector<Linear> parts;
 };
 
-template <typename Key>
-void add_to(std::map<Key, numeric>& into, const Key& key, const numeric& value) {
+template <typename Map>
+void add_to(Map& into, const typename Map::key_type& key, const numeric& value) {
   if (value.is_zero()) return;
   auto [it, inserted] = into.emplace(key, value);
   if (!inserted) {
@@ -47,9 +47,8 @@ void add_to(std::map<Key, numeric>& into, const Key& key, const numeric& value) 
   }
 }
 
-template <typename Key>
-void add_scaled(std::map<Key, numeric>& into, const std::map<Key, numeric>& from,
-                const numeric& factor) {
+template <typename Map>
+void add_scaled(Map& into, const Map& from, const numeric& factor) {
   for (const auto& [key, value] : from) add_to(into, key, value * factor);
 }
 
