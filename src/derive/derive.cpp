@@ -106,7 +106,6 @@ class Deriver {
         }
         continue;
       }
-      normalize_sign(eq);
       system.equations.push_back(std::move(eq));
     }
     std::set<Monomial, MomentOrder> needed;
@@ -427,22 +426,6 @@ class Deriver {
       const numeric factor = it->second;
       c.erase(it);
       add_scaled(c, value, factor);
-    }
-  }
-
-  // The sign is fixed so that the first parameter with a coefficient has a positive leading
-  // weight: the same equation then always prints the same way.
-  static void normalize_sign(MomentEquation& eq) {
-    for (const MomentCombination& c : eq.coefficients) {
-      if (c.empty()) continue;
-      if (c.begin()->second.is_negative()) {
-        for (auto& x : eq.coefficients) {
-          for (auto& [m, v] : x) v = -v;
-        }
-        for (auto& [m, v] : eq.rhs) v = -v;
-        for (auto& s : eq.sources) s.factor = -s.factor;
-      }
-      return;
     }
   }
 
