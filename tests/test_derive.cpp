@@ -1,1 +1,279 @@
 #include <doctest/doctest.h>
+
+#include <string>
+
+#include "derive/moment_system.hpp"
+#include "model/model.hpp"
+
+namespace {
+
+using GiNaC::ex;
+using momentid::derive;
+using momentid::DeriveOptions;
+using momentid::Model;
+using momentid::MomentSystem;
+
+Model model_file(const std::string& name) {
+  return momentid::parse_model_file(std::string(MOMENTID_SOURCE_DIR) + "/models/" + name);
+}
+
+// The model's symbol (state, input or parameter) called `name`.
+ex sym(const Model& model, const std::string& name) {
+  for (std::size_t i = 0; i < model.states().size(); ++i) {
+    if (model.states()[i].name == name) return model.state_symbol(static_cast<int>(i));
+  }
+  for (std::size_t i = 0; i < model.inputs().size(); ++i) {
+    if (model.inputs()[i].name == name) return model.input_symbol(static_cast<int>(i));
+  }
+  const int p = model.parameter_index(name);
+  REQUIRE_MESSAGE(p >= 0, name);
+  return model.parameter_symbol(p);
+}
+
+ex E(const ex& monomial) { return momentid::expectation_of(monomial); }
+
+// Replaces moments that the system's pure-data identities express through others, so that a
+// hand-written equation can be compared with the derived one.
+ex reduce(const MomentSystem& system, const ex& e) {
+  GiNaC::exmap map;
+  for (const momentid::DataIdentity& id : system.identities) {
+    ex value = 0;
+    for (const auto& [m, w] : id.value) value += w * momentid::moment_as_ex(*system.model, m);
+    map[momentid::moment_as_ex(*system.model, id.moment)] = value;
+  }
+  return e.subs(map).expand();
+}
+
+// Checks that derived equation `row` equals `lhs = rhs` up to an overall sign, by subtraction.
+void check_equation(const MomentSystem& system, std::size_t row, const ex& lhs, const ex& rhs) {
+  REQUIRE(row < system.equations.size());
+  const ex got = momentid::equation_as_ex(*system.model, system.equations[row]).expand();
+  const ex want = reduce(system, lhs - rhs);
+  INFO("derived:  ", got, " = 0");
+  INFO("expected: ", want, " = 0");
+  CHECK(((got - want).expand().is_zero() || (got + want).expand().is_zero()));
+}
+
+}  // namespace
+
+TEST_SUITE("derive") {
+  TEST_CASE("example 1 gives equation (3.3): a E[y^2] = E[y x]") {
+    const Model model = model_file("kozin_example1.mom");
+    const MomentSystem system = derive(model);
+    REQUIRE(system.equations.size() == 1);
+    const ex y = sym(model, "y"), x = sym(model, "x"), a = sym(model, "a");
+    check_equation(system, 0, a * E(pow(y, 2)), E(y * x));
+    CHECK(system.generic_rank == 1);
+  }
+
+  TEST_CASE("example 2 with multipliers y1, y2, y2^2 gives the three equations (3.7)") {
+    const Model model = model_file("kozin_example2.mom");
+    const MomentSystem system = derive(model);
+    REQUIRE(system.equations.size() == 3);
+    const ex y1 = sym(model, "y1"), y2 = sym(model, "y2"), x = sym(model, "x");
+    const ex a = sym(model, "a"), b = sym(model, "b"), c = sym(model, "c");
+    check_equation(system, 0, -a * E(pow(y2, 2)) + c * E(pow(y1, 2)), E(y1 * x));
+    check_equation(system, 1, b * E(pow(y2, 2)), E(y2 * x));
+    check_equation(system, 2, b * E(pow(y2, 3)) + c * E(pow(y2, 2) * y1), E(pow(y2, 2) * x));
+    CHECK(system.generic_rank == 3);
+  }
+
+  TEST_CASE("reduces E[y1*y2'] to -E[y2^2] when y1' = y2") {
+    const Model model = model_file("kozin_example2.mom");
+    const MomentSystem system =
+        derive(model, {.multipliers = momentid::parse_multiplier_list(model, "y1", "test")});
+    const ex y1 = sym(model, "y1"), y2 = sym(model, "y2"), x = sym(model, "x");
+    const ex a = sym(model, "a"), c = sym(model, "c");
+    // a E[y1 y2'] + b E[y1 y2] + c E[y1^2] = E[y1 x] with E[y1 y2'] = -E[y2^2], E[y1 y2] = 0.
+    check_equation(system, 0, a * -E(pow(y2, 2)) + c * E(pow(y1, 2)), E(y1 * x));
+  }
+
+  TEST_CASE("example 3 with y1, y2 on the second and y3, y4 on the fourth gives (3.9)") {
+    const Model model = model_file("kozin_example3.mom");
+    const MomentSystem system = derive(model);
+    REQUIRE(system.equations.size() == 4);
+    const ex y1 = sym(model, "y1"), y2 = sym(model, "y2"), y3 = sym(model, "y3"),
+             y4 = sym(model, "y4"), x = sym(model, "x");
+    const ex a = sym(model, "a"), b = sym(model, "b"), c = sym(model, "c"), d = sym(model, "d");
+    // (3.9) as printed in the report, left side = right side.
+    check_equation(system, 0, -E(pow(y2, 2)),
+                   -b * E(pow(y1, 2)) + c * E(y1 * y4) + d * (E(y1 * y3) - E(pow(y1, 2))));
+    check_equation(system, 1, 0,
+                   -a * E(pow(y2, 2)) + c * (E(y4 * y2) - E(pow(y2, 2))) + d * E(y2 * y3));
+    check_equation(system, 2, E(pow(y4, 2)) + E(x * y3),
+                   -c * E(y2 * y3) + d * (E(pow(y3, 2)) - E(y1 * y3)));
+    check_equation(system, 3, E(x * y4),
+                   c * (E(pow(y4, 2)) - E(y4 * y2)) - d * E(y1 * y4));
+    CHECK(system.generic_rank == 4);
+  }
+
+  TEST_CASE("the pure-data identities of example 3 are listed and used") {
+    const Model model = model_file("kozin_example3.mom");
+    const MomentSystem system = derive(model);
+    std::vector<std::string> identities;
+    for (const auto& id : system.identities) {
+      identities.push_back(momentid::format_moment(model, id.moment) + " = " +
+                           momentid::format_combination(model, id.value));
+    }
+    CHECK(identities ==
+          std::vector<std::string>{"E[y1*y2] = 0", "E[y2*y3] = -E[y1*y4]", "E[y3*y4] = 0"});
+    for (const auto& m : system.moments) {
+      const std::string name = momentid::format_moment(model, m);
+      CHECK_MESSAGE((name != "E[y1*y2]" && name != "E[y2*y3]" && name != "E[y3*y4]"), name);
+    }
+  }
+
+  TEST_CASE("duffing with degree 3 gives at least three independent equations in c, k, eps") {
+    const Model model = model_file("duffing.mom");
+    const MomentSystem system = derive(model, {.multipliers = {}, .degree = 3});
+    CHECK(system.equations.size() == 9);
+    CHECK(system.generic_rank == 3);
+    CHECK(system.skipped.empty());
+    const ex y = sym(model, "y"), v = sym(model, "v"), x = sym(model, "x");
+    const ex c = sym(model, "c"), k = sym(model, "k"), eps = sym(model, "eps");
+    // times y: E[y v'] = -E[v^2]; times y*v: E[y v v'] = -E[v^3]/2.
+    check_equation(system, 0, k * E(pow(y, 2)) + eps * E(pow(y, 4)), E(y * x) + E(pow(v, 2)));
+    check_equation(system, 1, c * E(pow(v, 2)), E(v * x));
+    check_equation(system, 3, c * E(y * pow(v, 2)), E(y * v * x) + E(pow(v, 3)) / 2);
+    check_equation(system, 7,
+                   c * E(y * pow(v, 3)) + k * E(pow(y * v, 2)) + eps * E(pow(y, 4) * pow(v, 2)),
+                   E(pow(v, 4)) / 3 + E(y * pow(v, 2) * x));
+  }
+
+  TEST_CASE("derivative moments known only in sums are eliminated by adding equations") {
+    // Two dynamic states: E[v2*v1'] + E[v1*v2'] = 0 fixes neither alone, so equation 3 times v2
+    // and equation 4 times v1 are added.
+    const Model model = model_file("duffing_2dof.mom");
+    const MomentSystem system =
+        derive(model, {.multipliers = momentid::parse_multiplier_list(model, "v1, v2", "test")});
+    REQUIRE(system.equations.size() == 3);
+    const momentid::MomentEquation& sum = system.equations[2];
+    REQUIRE(sum.sources.size() == 2);
+    CHECK(sum.sources[0].equation == 2);
+    CHECK(momentid::format_monomial(model, sum.sources[0].multiplier) == "v2");
+    CHECK(sum.sources[1].equation == 3);
+    CHECK(momentid::format_monomial(model, sum.sources[1].multiplier) == "v1");
+    CHECK(sum.sources[0].factor == sum.sources[1].factor);
+    const ex v1 = sym(model, "v1"), v2 = sym(model, "v2"), y1 = sym(model, "y1"),
+             y2 = sym(model, "y2"), x = sym(model, "x");
+    const ex lhs =
+        sym(model, "c1") * E(v1 * v2) + sym(model, "k1") * E(y1 * v2) +
+          sym(model, "eps1") * E(pow(y1, 3) * v2) + sym(model, "kc") * (E(y1 * v2) - E(y2 * v2)) +
+          sym(model, "c2") * E(v1 * v2) + sym(model, "k2") * E(y2 * v1) +
+          sym(model, "eps2") * E(pow(y2, 3) * v1) + sym(model, "kc") * (E(y2 * v1) - E(y1 * v1));
+    check_equation(system, 2, lhs, E(v1 * x));
+    CHECK(system.skipped.empty());
+  }
+
+  TEST_CASE("a multiplier that cannot be reduced is skipped with its reason") {
+    const Model model = momentid::parse_model(R"(
+state y1, y2
+input x
+param a, b
+y1' = -a*y1 + y2
+y2' = -b*y2 + x
+)",
+                                              "two.mom");
+    const MomentSystem system =
+        derive(model, {.multipliers = momentid::parse_multiplier_list(model, "y1, y2", "test")});
+    // y1 on both equations and y2 on both reduce; y2 on the first and y1 on the second only
+    // together.
+    CHECK(system.equations.size() == 3);
+    CHECK(system.skipped.empty());
+
+    const Model lonely = momentid::parse_model(R"(
+state y1, y2
+input x
+param a, b
+y1' = -a*y1 + x
+y2' = -b*y2 + y1
+multipliers y2
+)",
+                                               "lonely.mom");
+    const MomentSystem s2 = derive(lonely);
+    REQUIRE(s2.skipped.size() == 1);
+    CHECK(s2.skipped[0].equation == 0);
+    CHECK(s2.skipped[0].reason ==
+          "E[y2*y1'] is known only in the sum E[y2*y1'] + E[y1*y2'] (from E[d/dt y1*y2] = 0), "
+          "and no combination of the chosen equations eliminates it");
+    CHECK(s2.equations.size() == 1);
+  }
+
+  TEST_CASE("a derivative multiplied by an input is reported as irreducible") {
+    const Model model = momentid::parse_model(R"(
+state y
+input x
+param a
+(1 + x)*y' = -a*y + x
+multipliers y
+)",
+                                              "input.mom");
+    const MomentSystem system = derive(model);
+    REQUIRE(system.skipped.size() == 1);
+    CHECK(system.skipped[0].reason ==
+          "E[y*x*y'] multiplies an input by a derivative: no stationarity identity reduces it");
+    CHECK(system.equations.empty());
+  }
+
+  TEST_CASE("a parameter in front of a derivative keeps the derivative moment in its coefficient") {
+    const Model model = model_file("kozin_example2.mom");
+    const MomentSystem system = derive(model, {.multipliers = {}, .degree = 2});
+    CHECK(system.generic_rank == 3);
+    CHECK(system.skipped.empty());
+  }
+
+  TEST_CASE("automatic multipliers raise the degree until every parameter is determined") {
+    const Model model = model_file("cubic_first_order.mom");
+    const MomentSystem system = derive(model);
+    CHECK(system.equations.size() == 2);  // y and y^2: y alone gives one equation in a, b
+    CHECK(system.generic_rank == 2);
+  }
+
+  TEST_CASE("a row in which no parameter remains is skipped with what it says") {
+    // Times 1: E[y2'] = 0 and E[y2] = 0 (since y1' = y2) remove b; left is 0 = E[x] - E[y1].
+    const Model model = momentid::parse_model(R"(
+state y1, y2
+input x
+param b
+y1' = y2
+y2' = -b*y2 - y1 + x
+multipliers 1, y2
+)",
+                                              "zero.mom");
+    const MomentSystem system = derive(model);
+    REQUIRE(system.equations.size() == 1);
+    CHECK(momentid::format_monomial(model, system.equations[0].sources[0].multiplier) == "y2");
+    REQUIRE(system.skipped.size() == 1);
+    CHECK(system.skipped[0].reason == "no parameter remains: the equation says only 0 = -E[y1] + E[x]");
+  }
+
+  TEST_CASE("monomials up to degree 2 in two states") {
+    std::vector<std::string> names;
+    const Model model = model_file("kozin_4_1b.mom");
+    for (const auto& m : momentid::monomials_up_to(2, 2)) {
+      momentid::Monomial full = m;
+      full.resize(3, 0);
+      names.push_back(momentid::format_monomial(model, full));
+    }
+    CHECK(names == std::vector<std::string>{"y1", "y2", "y1^2", "y1*y2", "y2^2"});
+  }
+
+  TEST_CASE("the text format shows equations, moments, identities and skipped multipliers") {
+    const Model model = model_file("kozin_example2.mom");
+    const std::string text = momentid::format_text(derive(model));
+    CHECK(text ==
+          "moment equations of kozin_example2 (Oscillator (Kozin & Kozin 1967, eq. 3.4))\n"
+          "\n"
+          "  1  [motion]*y1     -a*E[y2^2] + c*E[y1^2] = E[y1*x]\n"
+          "  2  [motion]*y2     b*E[y2^2] = E[y2*x]\n"
+          "  3  [motion]*y2^2   b*E[y2^3] + c*E[y1*y2^2] = E[y2^2*x]\n"
+          "\n"
+          "equations: 3 (independent: 3 of 3 parameters)\n"
+          "parameters: a, b, c\n"
+          "moments needed: 7: E[y1^2], E[y1*x], E[y2^2], E[y2*x], E[y1*y2^2], E[y2^3], "
+          "E[y2^2*x]\n"
+          "identities used: 1\n"
+          "  E[y1*y2] = 0\n"
+          "multipliers skipped: 0\n");
+  }
+}

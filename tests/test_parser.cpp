@@ -1,1 +1,85 @@
 #include <doctest/doctest.h>
+
+#include "model/model.hpp"
+
+namespace {
+
+const momentid::Model& duffing() {
+  static const momentid::Model model = momentid::parse_model(R"(# comment line
+model duffing "Forced Duffing oscillator"
+state  y, v            # displacement, velocity
+input  x
+param  c = 0.5, k = 4, eps = 1
+const  m = 2
+y' = v
+motion: m*v' = -c*v - k*y
+               - eps*y^3 + x
+multipliers motion: y, v, y^3, y*v^2
+)",
+                                                             "duffing.mom");
+  return model;
+}
+
+}  // namespace
+
+TEST_SUITE("parser") {
+  TEST_CASE("declarations keep their order, kinds and exact values") {
+    const momentid::Model& model = duffing();
+    CHECK(model.name() == "duffing");
+    CHECK(model.title() == "Forced Duffing oscillator");
+    CHECK(model.variables() == std::vector<std::string>{"y", "v", "x"});
+    REQUIRE(model.parameters().size() == 3);
+    CHECK(*model.parameters()[0].value == GiNaC::numeric(1, 2));
+    CHECK(model.parameters()[2].where.line == 5);
+    CHECK(model.parameters()[2].where.column == 24);
+    CHECK(*model.constants()[0].value == 2);
+  }
+
+  TEST_CASE("an equation becomes terms of lhs - rhs with constants substituted") {
+    const momentid::Equation& eq = duffing().equations()[1];
+    CHECK(eq.label == "motion");
+    CHECK(eq.number == 2);
+    CHECK(eq.where.line == 8);
+    CHECK(eq.terms.size() == 5);
+    const momentid::Model& model = duffing();
+    const GiNaC::ex want = 2 * model.derivative_symbol(1) + model.parameter_symbol(0) * model.state_symbol(1) +
+                           model.parameter_symbol(1) * model.state_symbol(0) +
+                           model.parameter_symbol(2) * GiNaC::pow(model.state_symbol(0), 3) -
+                           model.input_symbol(0);
+    CHECK((eq.lhs - eq.rhs - want).expand().is_zero());
+    for (const momentid::Term& t : eq.terms) {
+      if (t.derivative >= 0) {
+        CHECK(t.derivative == 1);
+        CHECK(t.coefficient == 2);
+        CHECK(t.parameter == -1);
+      }
+    }
+  }
+
+  TEST_CASE("a multipliers statement applies to its labelled equation") {
+    const momentid::Model& model = duffing();
+    REQUIRE(model.multipliers().size() == 1);
+    CHECK(model.multipliers()[0].equation == "motion");
+    std::vector<std::string> names;
+    for (const auto& m : model.multipliers()[0].monomials) {
+      momentid::Monomial full = m;
+      full.resize(3, 0);
+      names.push_back(momentid::format_monomial(model, full));
+    }
+    CHECK(names == std::vector<std::string>{"y", "v", "y^3", "y*v^2"});
+  }
+
+  TEST_CASE("the model name defaults to the file name") {
+    const momentid::Model model =
+        momentid::parse_model("state y\ninput x\nparam a\ny' = -a*y + x\n", "dir/first.order.mom");
+    CHECK(model.name() == "first");
+  }
+
+  TEST_CASE("numbers are read exactly") {
+    CHECK(momentid::parse_exact_number("0.1") == GiNaC::numeric(1, 10));
+    CHECK(momentid::parse_exact_number(".5") == GiNaC::numeric(1, 2));
+    CHECK(momentid::parse_exact_number("4.") == 4);
+    CHECK(momentid::parse_exact_number("1e-3") == GiNaC::numeric(1, 1000));
+    CHECK(momentid::parse_exact_number("2.5E+2") == 250);
+  }
+}

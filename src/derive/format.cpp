@@ -309,7 +309,11 @@ GiNaC::ex moment_as_ex(const Model& model, const Monomial& moment) {
                                       : GiNaC::ex(model.input_symbol(static_cast<int>(i - states)));
     product *= GiNaC::pow(base, moment[i]);
   }
-  return is_one(moment) ? GiNaC::ex(1) : expectation(product);
+  return expectation_of(product);
+}
+
+GiNaC::ex expectation_of(const GiNaC::ex& monomial) {
+  return monomial.is_equal(1) ? GiNaC::ex(1) : expectation(monomial);
 }
 
 GiNaC::ex equation_as_ex(const Model& model, const MomentEquation& equation) {

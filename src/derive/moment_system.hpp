@@ -101,5 +101,7 @@ std::string format_json(const MomentSystem& system);
 // with the model's symbols, so that equations compare by subtraction.
 GiNaC::ex equation_as_ex(const Model& model, const MomentEquation& equation);
 GiNaC::ex moment_as_ex(const Model& model, const Monomial& moment);
+// E(monomial) for a product of the model's symbols, as in equation_as_ex; E(1) is 1.
+GiNaC::ex expectation_of(const GiNaC::ex& monomial);
 
 }  // namespace momentid

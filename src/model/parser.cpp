@@ -2,6 +2,8 @@
 // This is the only translation unit that includes PEGTL.
 
 #include <algorithm>
+#include <cerrno>
+#include <cstring>
 #include <fstream>
 #include <functional>
 #include <map>
@@ -676,7 +678,7 @@ Model parse_model(std::string_view text, const std::string& file) {
 
 Model parse_model_file(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error(path + ": cannot open the model file");
+  if (!in) throw Error(path + ": cannot open the model file: " + std::strerror(errno));
   std::ostringstream text;
   text << in.rdbuf();
   return parse_model(text.str(), path);
