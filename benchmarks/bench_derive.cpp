@@ -19,7 +19,8 @@ namespace {
 // mass i + 1; the input drives the last mass.
 std::string chain_model(int n) {
   std::string text = "model chain\nstate ";
-  for (int i = 1; i <= n; ++i) text += (i > 1 ? ", " : "") + std::string("y") + std::to_string(i) + ", v" + std::to_string(i);
+  for (int i = 1; i <= n; ++i)
+    text += (i > 1 ? ", " : "") + std::string("y") + std::to_string(i) + ", v" + std::to_string(i);
   text += "\ninput x\nparam ";
   for (int i = 1; i <= n; ++i) {
     const std::string s = std::to_string(i);
@@ -30,7 +31,8 @@ std::string chain_model(int n) {
   for (int i = 1; i <= n; ++i) {
     const std::string s = std::to_string(i);
     text += "y" + s + "' = v" + s + "\n";
-    text += "v" + s + "' = -c" + s + "*v" + s + " - k" + s + "*y" + s + " - eps" + s + "*y" + s + "^3";
+    text +=
+        "v" + s + "' = -c" + s + "*v" + s + " - k" + s + "*y" + s + " - eps" + s + "*y" + s + "^3";
     if (i < n) text += " - kc" + s + "*(y" + s + " - y" + std::to_string(i + 1) + ")";
     if (i > 1) {
       const std::string p = std::to_string(i - 1);
@@ -55,7 +57,8 @@ Timing time_derive(const std::string& text, int repetitions) {
     const momentid::Model model = momentid::parse_model(text, "chain.mom");
     out.system = momentid::derive(model, {.multipliers = {}, .degree = 2});
     out.system.model = nullptr;
-    times.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+    times.push_back(
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
   }
   std::sort(times.begin(), times.end());
   out.seconds = times[times.size() / 2];
@@ -72,10 +75,11 @@ int main(int argc, char** argv) {
   std::printf("derive --degree 2, median of %d runs\n", repetitions);
   std::printf("  1 oscillator  (2 states):  %9.4f s  %5zu equations\n", single.seconds,
               single.system.equations.size());
-  std::printf("  %d oscillators (%d states): %9.4f s  %5zu equations, %zu moments, rank %d, "
-              "%zu skipped\n",
-              n, 2 * n, chain.seconds, chain.system.equations.size(), chain.system.moments.size(),
-              chain.system.generic_rank, chain.system.skipped.size());
+  std::printf(
+      "  %d oscillators (%d states): %9.4f s  %5zu equations, %zu moments, rank %d, "
+      "%zu skipped\n",
+      n, 2 * n, chain.seconds, chain.system.equations.size(), chain.system.moments.size(),
+      chain.system.generic_rank, chain.system.skipped.size());
   std::printf("  ratio chain / single: %.1f\n", chain.seconds / single.seconds);
   return 0;
 }

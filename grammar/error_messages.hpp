@@ -2,6 +2,8 @@
 // What the parser reports when a `must<>` rule of grammar/model_grammar.hpp fails: the text after
 // "file:line:col: ". Only src/model/parser.cpp includes this header.
 
+#include <string_view>
+
 #include "model_grammar.hpp"
 
 namespace momentid::grammar {
@@ -17,23 +19,42 @@ template <> inline constexpr const char* error_message<string_close> = "expected
 template <> inline constexpr const char* error_message<open_paren> = "expected '(' after dot";
 template <> inline constexpr const char* error_message<dot_argument> = "expected a state name inside dot(...)";
 template <> inline constexpr const char* error_message<close_paren> = "expected ')'";
-template <> inline constexpr const char* error_message<expression> = "expected an expression";
-template <> inline constexpr const char* error_message<exponent_operand> = "expected an exponent after '^'";
-template <> inline constexpr const char* error_message<operand> = "expected an operand after the operator";
-template <> inline constexpr const char* error_message<term_operand> = "expected a term after the operator";
+template <> inline constexpr const char* error_message<closing_paren> = "expected ')'";
+template <> inline constexpr const char* error_message<expression_in_parens> = "expected an expression after '('";
+template <> inline constexpr const char* error_message<exponent_after_operator> = "expected an exponent after '^'";
+template <> inline constexpr const char* error_message<operand_after_operator> = "expected an operand after the operator";
+template <> inline constexpr const char* error_message<term_after_operator> = "expected a term after the operator";
 template <> inline constexpr const char* error_message<model_name> = "expected a model name after 'model'";
 template <> inline constexpr const char* error_message<declared_value> = "expected '= value'";
 template <> inline constexpr const char* error_message<required_value> = "expected '= value': a constant needs a value";
+template <> inline constexpr const char* error_message<item_after_comma<declared_name>> = "expected a name after ','";
+template <> inline constexpr const char* error_message<item_after_comma<param_item>> = "expected a parameter name after ','";
+template <> inline constexpr const char* error_message<item_after_comma<const_item>> = "expected a constant name after ','";
+template <> inline constexpr const char* error_message<item_after_comma<multiplier>> = "expected a multiplier after ','";
 template <> inline constexpr const char* error_message<name_list> = "expected a comma-separated list of names";
 template <> inline constexpr const char* error_message<param_list> = "expected a comma-separated list of parameters, each optionally '= value'";
 template <> inline constexpr const char* error_message<const_list> = "expected a comma-separated list of constants, each '= value'";
 template <> inline constexpr const char* error_message<equals> = "expected '=' of an equation, or a statement keyword (model, state, input, param, const, multipliers)";
-template <> inline constexpr const char* error_message<rhs> = "expected the right side of the equation after '='";
+template <> inline constexpr const char* error_message<rhs_after_equals> = "expected the right side of the equation after '='";
 template <> inline constexpr const char* error_message<multiplier_list> = "expected a comma-separated list of multipliers (monomials in the states)";
 template <> inline constexpr const char* error_message<statement_end> = "expected an operator or the end of the line";
 template <> inline constexpr const char* error_message<line> = "expected a statement: model, state, input, param, const, multipliers or an equation";
 template <> inline constexpr const char* error_message<list_end> = "expected ',' or the end of the multiplier list";
 // clang-format on
+
+// Whether `message` belongs to a rule that may start on a later line (after an operator, a comma
+// or '('): the parser reports such an error at the end of the previous content instead.
+inline bool may_follow_line_break(std::string_view message) {
+  for (const char* m :
+       {error_message<term_after_operator>, error_message<operand_after_operator>,
+        error_message<exponent_after_operator>, error_message<closing_paren>,
+        error_message<expression_in_parens>, error_message<item_after_comma<declared_name>>,
+        error_message<item_after_comma<param_item>>, error_message<item_after_comma<const_item>>,
+        error_message<item_after_comma<multiplier>>}) {
+    if (message == m) return true;
+  }
+  return false;
+}
 
 // The error table for tao::pegtl::must_if: only a failing `must<>` raises; a rule with a
 // message that fails elsewhere (inside `sor<>`, `opt<>`) just backtracks.

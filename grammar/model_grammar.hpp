@@ -60,9 +60,8 @@ struct kw_const : sor<keyword<'c', 'o', 'n', 's', 't', 'a', 'n', 't', 's'>,
                       keyword<'c', 'o', 'n', 's', 't', 'a', 'n', 't'>,
                       keyword<'c', 'o', 'n', 's', 't', 's'>, keyword<'c', 'o', 'n', 's', 't'>> {};
 // `multipliers` or `multiplier`
-struct kw_multipliers
-    : sor<keyword<'m', 'u', 'l', 't', 'i', 'p', 'l', 'i', 'e', 'r', 's'>,
-          keyword<'m', 'u', 'l', 't', 'i', 'p', 'l', 'i', 'e', 'r'>> {};
+struct kw_multipliers : sor<keyword<'m', 'u', 'l', 't', 'i', 'p', 'l', 'i', 'e', 'r', 's'>,
+                            keyword<'m', 'u', 'l', 't', 'i', 'p', 'l', 'i', 'e', 'r'>> {};
 struct kw_dot : keyword<'d', 'o', 't'> {};
 
 // --- Numbers and strings --------------------------------------------------------------------
@@ -70,13 +69,16 @@ struct kw_dot : keyword<'d', 'o', 't'> {};
 // digits of an exponent
 struct exponent_digits : plus<digit> {};
 // e or E, optional sign, digits: the power of ten of a number
-struct decimal_exponent
-    : seq<one<'e', 'E'>, opt<one<'+', '-'>>, must<exponent_digits>> {};
+struct decimal_exponent : seq<one<'e', 'E'>, opt<one<'+', '-'>>, must<exponent_digits>> {};
 // 4, 4., .5, 0.25, 1e-3, 2.5E+2
 struct number : seq<sor<seq<plus<digit>, opt<one<'.'>, star<digit>>>, seq<one<'.'>, plus<digit>>>,
                     opt<decimal_exponent>> {};
+// a leading minus sign
+struct minus_sign : one<'-'> {};
+// a leading plus sign
+struct plus_sign : one<'+'> {};
 // a number with an optional sign, as in a declared value
-struct signed_number : seq<opt<one<'+', '-'>>, sp, must<number>> {};
+struct signed_number : seq<opt<sor<minus_sign, plus_sign>>, sp, must<number>> {};
 // the characters between double quotes
 struct string_body : star<not_one<'"', '\n', '\r'>> {};
 struct string_close : one<'"'> {};
@@ -87,47 +89,56 @@ struct quoted : seq<one<'"'>, string_body, must<string_close>> {};
 
 struct expression;
 struct close_paren : one<')'> {};
+// ')' after an expression, possibly on the next line
+struct closing_paren : seq<ws, close_paren> {};
 struct open_paren : one<'('> {};
 // one or more primes after a name: its time derivative
 struct primes : plus<one<'\''>> {};
 // a state name inside dot( )
 struct dot_argument : name {};
 // dot(y): the time derivative of y
-struct dot_call : seq<kw_dot, sp, must<open_paren>, sp, must<dot_argument>, sp, must<close_paren>> {};
+struct dot_call : seq<kw_dot, sp, must<open_paren>, sp, must<dot_argument>, sp, must<close_paren>> {
+};
 // the expressions inside a call's parentheses
 struct call_arguments : opt<list<expression, one<','>, pegtl::space>> {};
 // name(args): a function call, accepted by the grammar and rejected by the meaning checks
-struct call : seq<name, sp, one<'('>, ws, call_arguments, ws, must<close_paren>> {};
+struct call : seq<name, sp, one<'('>, ws, call_arguments, must<closing_paren>> {};
+// a word that starts a statement, never a variable
+struct reserved : sor<kw_model, kw_state, kw_input, kw_param, kw_const, kw_multipliers> {};
 // a name, optionally followed by primes
-struct variable : seq<name, opt<primes>> {};
+struct variable : seq<not_at<reserved>, name, opt<primes>> {};
+// the expression after '(', possibly on the next line
+struct expression_in_parens : seq<ws, expression> {};
 // a parenthesised expression
-struct parenthesized : seq<one<'('>, ws, must<expression>, ws, must<close_paren>> {};
+struct parenthesized : seq<one<'('>, must<expression_in_parens>, must<closing_paren>> {};
 // the smallest piece of an expression
 struct primary : sor<number, dot_call, call, variable, parenthesized> {};
-// a leading minus sign
-struct minus_sign : one<'-'> {};
-// a leading plus sign
-struct plus_sign : one<'+'> {};
 // the operand of a power: optional sign, then a primary
 struct exponent_operand : seq<opt<sor<minus_sign, plus_sign>>, sp, primary> {};
 // `^` or `**`
 struct power_operator : sor<one<'^'>, string<'*', '*'>> {};
+// the exponent, possibly on the next line
+struct exponent_after_operator : seq<ws, exponent_operand> {};
 // a primary raised to a power
-struct power : seq<primary, opt<sp, power_operator, ws, must<exponent_operand>>> {};
+struct power : seq<primary, opt<sp, power_operator, must<exponent_after_operator>>> {};
 // signs in front of a power
 struct unary : seq<star<sor<minus_sign, plus_sign>, sp>, power> {};
 // what must follow a binary operator
 struct operand : unary {};
+// the operand, possibly on the next line
+struct operand_after_operator : seq<ws, operand> {};
 struct times : seq<one<'*'>, not_at<one<'*'>>> {};
 struct divide : one<'/'> {};
 // a product or quotient of signed powers; a line break may come before or after the operator
-struct product : seq<unary, star<seq<ws, sor<times, divide>, ws, must<operand>>>> {};
+struct product : seq<unary, star<seq<ws, sor<times, divide>, must<operand_after_operator>>>> {};
 // what must follow a `+` or `-` between terms
 struct term_operand : product {};
+// the term, possibly on the next line
+struct term_after_operator : seq<ws, term_operand> {};
 struct add : one<'+'> {};
 struct subtract : one<'-'> {};
 // a sum or difference of products; a line break may come before or after the operator
-struct sum : seq<product, star<seq<ws, sor<add, subtract>, ws, must<term_operand>>>> {};
+struct sum : seq<product, star<seq<ws, sor<add, subtract>, must<term_after_operator>>>> {};
 struct expression : sum {};
 
 // --- Statements -----------------------------------------------------------------------------
@@ -143,14 +154,20 @@ struct declared_value : seq<one<'='>, sp, must<signed_number>> {};
 // a declared value that may not be left out
 struct required_value : seq<one<'='>, sp, must<signed_number>> {};
 struct comma : one<','> {};
+// an item after a comma, possibly on the next line
+template <typename Item>
+struct item_after_comma : seq<ws, Item> {};
+// items separated by commas; a line may break after a comma
+template <typename Item>
+struct comma_list : seq<Item, star<sp, comma, must<item_after_comma<Item>>>> {};
 // `state y, v` and `input x`: names only
-struct name_list : list<declared_name, comma, blank> {};
+struct name_list : comma_list<declared_name> {};
 // `param c = 0.5, k` : names with optional nominal values
 struct param_item : seq<declared_name, sp, opt<declared_value>> {};
-struct param_list : list<param_item, comma, blank> {};
+struct param_list : comma_list<param_item> {};
 // `const m = 1`: names with values
 struct const_item : seq<declared_name, sp, must<required_value>> {};
-struct const_list : list<const_item, comma, blank> {};
+struct const_list : comma_list<const_item> {};
 struct state_declaration : seq<kw_state, sp, must<name_list>> {};
 struct input_declaration : seq<kw_input, sp, must<name_list>> {};
 struct param_declaration : seq<kw_param, sp, must<param_list>> {};
@@ -165,11 +182,13 @@ struct lhs : expression {};
 struct rhs : expression {};
 struct equals : one<'='> {};
 // `[label:] lhs = rhs`
-struct equation : seq<opt<label_prefix>, sp, lhs, sp, must<equals>, ws, must<rhs>> {};
+// the right side, on the same line as '='
+struct rhs_after_equals : seq<sp, rhs> {};
+struct equation : seq<opt<label_prefix>, sp, lhs, sp, must<equals>, must<rhs_after_equals>> {};
 
 // one multiplier: a monomial in the states
 struct multiplier : expression {};
-struct multiplier_list : list<multiplier, comma, blank> {};
+struct multiplier_list : comma_list<multiplier> {};
 // `multipliers [label:] m1, m2, ...`
 struct multipliers_statement
     : seq<kw_multipliers, sp, opt<label_prefix>, sp, must<multiplier_list>> {};

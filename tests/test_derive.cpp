@@ -102,8 +102,7 @@ TEST_SUITE("derive") {
                    -a * E(pow(y2, 2)) + c * (E(y4 * y2) - E(pow(y2, 2))) + d * E(y2 * y3));
     check_equation(system, 2, E(pow(y4, 2)) + E(x * y3),
                    -c * E(y2 * y3) + d * (E(pow(y3, 2)) - E(y1 * y3)));
-    check_equation(system, 3, E(x * y4),
-                   c * (E(pow(y4, 2)) - E(y4 * y2)) - d * E(y1 * y4));
+    check_equation(system, 3, E(x * y4), c * (E(pow(y4, 2)) - E(y4 * y2)) - d * E(y1 * y4));
     CHECK(system.generic_rank == 4);
   }
 
@@ -156,11 +155,11 @@ TEST_SUITE("derive") {
     CHECK(sum.sources[0].factor == sum.sources[1].factor);
     const ex v1 = sym(model, "v1"), v2 = sym(model, "v2"), y1 = sym(model, "y1"),
              y2 = sym(model, "y2"), x = sym(model, "x");
-    const ex lhs =
-        sym(model, "c1") * E(v1 * v2) + sym(model, "k1") * E(y1 * v2) +
-          sym(model, "eps1") * E(pow(y1, 3) * v2) + sym(model, "kc") * (E(y1 * v2) - E(y2 * v2)) +
-          sym(model, "c2") * E(v1 * v2) + sym(model, "k2") * E(y2 * v1) +
-          sym(model, "eps2") * E(pow(y2, 3) * v1) + sym(model, "kc") * (E(y2 * v1) - E(y1 * v1));
+    const ex lhs = sym(model, "c1") * E(v1 * v2) + sym(model, "k1") * E(y1 * v2) +
+                   sym(model, "eps1") * E(pow(y1, 3) * v2) +
+                   sym(model, "kc") * (E(y1 * v2) - E(y2 * v2)) + sym(model, "c2") * E(v1 * v2) +
+                   sym(model, "k2") * E(y2 * v1) + sym(model, "eps2") * E(pow(y2, 3) * v1) +
+                   sym(model, "kc") * (E(y2 * v1) - E(y1 * v1));
     check_equation(system, 2, lhs, E(v1 * x));
     CHECK(system.skipped.empty());
   }
@@ -244,7 +243,8 @@ multipliers 1, y2
     REQUIRE(system.equations.size() == 1);
     CHECK(momentid::format_monomial(model, system.equations[0].sources[0].multiplier) == "y2");
     REQUIRE(system.skipped.size() == 1);
-    CHECK(system.skipped[0].reason == "no parameter remains: the equation says only 0 = -E[y1] + E[x]");
+    CHECK(system.skipped[0].reason ==
+          "no parameter remains: the equation says only 0 = -E[y1] + E[x]");
   }
 
   TEST_CASE("monomials up to degree 2 in two states") {

@@ -20,8 +20,7 @@ TEST_SUITE("models") {
       CHECK(system.notes.empty());
       CHECK(system.generic_rank == static_cast<int>(model.parameters().size()));
       for (const auto& p : model.parameters()) {
-        CHECK_MESSAGE(p.value.has_value() == (model.name().rfind("kozin_example", 0) != 0),
-                      p.name);
+        CHECK_MESSAGE(p.value.has_value() == (model.name().rfind("kozin_example", 0) != 0), p.name);
       }
     }
     CHECK(count == 12);

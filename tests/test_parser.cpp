@@ -42,10 +42,10 @@ TEST_SUITE("parser") {
     CHECK(eq.where.line == 8);
     CHECK(eq.terms.size() == 5);
     const momentid::Model& model = duffing();
-    const GiNaC::ex want = 2 * model.derivative_symbol(1) + model.parameter_symbol(0) * model.state_symbol(1) +
-                           model.parameter_symbol(1) * model.state_symbol(0) +
-                           model.parameter_symbol(2) * GiNaC::pow(model.state_symbol(0), 3) -
-                           model.input_symbol(0);
+    const GiNaC::ex want =
+        2 * model.derivative_symbol(1) + model.parameter_symbol(0) * model.state_symbol(1) +
+        model.parameter_symbol(1) * model.state_symbol(0) +
+        model.parameter_symbol(2) * GiNaC::pow(model.state_symbol(0), 3) - model.input_symbol(0);
     CHECK((eq.lhs - eq.rhs - want).expand().is_zero());
     for (const momentid::Term& t : eq.terms) {
       if (t.derivative >= 0) {

@@ -283,7 +283,8 @@ class Deriver {
       sum.parts.resize(parameters_ + 1);
       for (const auto& [r, factor] : combination) {
         used[r] = true;
-        for (const RowSource& s : rows[r].sources) sum.sources.push_back({s.equation, s.multiplier, s.factor * factor});
+        for (const RowSource& s : rows[r].sources)
+          sum.sources.push_back({s.equation, s.multiplier, s.factor * factor});
         for (std::size_t p = 0; p < sum.parts.size(); ++p) {
           add_scaled(sum.parts[p].moments, rows[r].parts[p].moments, factor);
         }
@@ -292,8 +293,8 @@ class Deriver {
     }
     for (std::size_t r = 0; r < rows.size(); ++r) {
       if (used[r]) continue;
-      skipped.push_back({rows[r].sources[0].equation, rows[r].sources[0].multiplier,
-                         unreduced_reason(rows[r])});
+      skipped.push_back(
+          {rows[r].sources[0].equation, rows[r].sources[0].multiplier, unreduced_reason(rows[r])});
     }
     return out;
   }
@@ -392,8 +393,7 @@ class Deriver {
       std::optional<Monomial> pivot;
       for (const auto& [m, v] : relation) {
         if (m == one) continue;
-        if (!pivot || degree(m) > degree(*pivot) ||
-            (degree(m) == degree(*pivot) && m < *pivot)) {
+        if (!pivot || degree(m) > degree(*pivot) || (degree(m) == degree(*pivot) && m < *pivot)) {
           pivot = m;
         }
       }
@@ -501,13 +501,20 @@ MomentSystem derive(const Model& model, const DeriveOptions& options) {
   } else if (options.degree > 0) {
     all(monomials_up_to(states, options.degree));
   } else if (!model.multipliers().empty()) {
-    std::vector<bool> given(equations.size(), false);
+    // An equation's own statements win over those for all equations; statements of the same
+    // kind add up.
+    std::vector<std::vector<Monomial>> general(equations.size());
     for (const MultiplierSet& set : model.multipliers()) {
       for (std::size_t e = 0; e < equations.size(); ++e) {
         if (!set.equation.empty() && equations[e].label != set.equation) continue;
-        if (!set.equation.empty() || !given[e]) multipliers[e] = set.monomials;
-        given[e] = given[e] || !set.equation.empty();
+        auto& into = set.equation.empty() ? general[e] : multipliers[e];
+        for (const Monomial& m : set.monomials) {
+          if (std::find(into.begin(), into.end(), m) == into.end()) into.push_back(m);
+        }
       }
+    }
+    for (std::size_t e = 0; e < equations.size(); ++e) {
+      if (multipliers[e].empty()) multipliers[e] = general[e];
     }
     MomentSystem system = deriver.run(multipliers);
     for (int e : deriver.dynamic_equations()) {

@@ -82,10 +82,10 @@ std::string left_side(const Notation& n, const Model& model, const MomentEquatio
 std::string source_text(const Model& model, const MomentEquation& eq) {
   std::string out;
   for (const RowSource& s : eq.sources) {
-    std::string one =
-        "[" + model.equations()[s.equation].name() + "]*" + format_monomial(model, s.multiplier);
     const numeric a = GiNaC::abs(s.factor);
-    if (a != 1) one = number_text(a) + "*" + one;
+    std::string one = a == 1 ? std::string() : number_text(a) + "*";
+    one.append("[").append(model.equations()[s.equation].name()).append("]*");
+    one.append(format_monomial(model, s.multiplier));
     if (out.empty()) {
       out = (s.factor.is_negative() ? "-" : "") + one;
     } else {
@@ -105,12 +105,14 @@ const Notation& plain() {
 // Greek letter names and names ending in digits get their usual mathematical form.
 std::string latex_name(const std::string& name) {
   static const std::map<std::string, std::string> greek{
-      {"alpha", "\\alpha"},   {"beta", "\\beta"},   {"gamma", "\\gamma"}, {"delta", "\\delta"},
-      {"eps", "\\varepsilon"}, {"epsilon", "\\varepsilon"}, {"zeta", "\\zeta"}, {"eta", "\\eta"},
-      {"theta", "\\theta"},   {"kappa", "\\kappa"}, {"lambda", "\\lambda"}, {"mu", "\\mu"},
-      {"nu", "\\nu"},         {"xi", "\\xi"},       {"rho", "\\rho"},     {"sigma", "\\sigma"},
-      {"tau", "\\tau"},       {"phi", "\\phi"},     {"chi", "\\chi"},     {"psi", "\\psi"},
-      {"omega", "\\omega"},   {"Omega", "\\Omega"}, {"Delta", "\\Delta"}, {"Gamma", "\\Gamma"}};
+      {"alpha", "\\alpha"}, {"beta", "\\beta"},      {"gamma", "\\gamma"},
+      {"delta", "\\delta"}, {"eps", "\\varepsilon"}, {"epsilon", "\\varepsilon"},
+      {"zeta", "\\zeta"},   {"eta", "\\eta"},        {"theta", "\\theta"},
+      {"kappa", "\\kappa"}, {"lambda", "\\lambda"},  {"mu", "\\mu"},
+      {"nu", "\\nu"},       {"xi", "\\xi"},          {"rho", "\\rho"},
+      {"sigma", "\\sigma"}, {"tau", "\\tau"},        {"phi", "\\phi"},
+      {"chi", "\\chi"},     {"psi", "\\psi"},        {"omega", "\\omega"},
+      {"Omega", "\\Omega"}, {"Delta", "\\Delta"},    {"Gamma", "\\Gamma"}};
   std::size_t split = name.size();
   while (split > 0 && std::isdigit(static_cast<unsigned char>(name[split - 1]))) --split;
   if (split == 0) split = name.size();
@@ -152,10 +154,18 @@ std::string json_string(const std::string& s) {
   std::string out = "\"";
   for (char ch : s) {
     switch (ch) {
-      case '"': out += "\\\""; break;
-      case '\\': out += "\\\\"; break;
-      case '\n': out += "\\n"; break;
-      case '\t': out += "\\t"; break;
+      case '"':
+        out += "\\\"";
+        break;
+      case '\\':
+        out += "\\\\";
+        break;
+      case '\n':
+        out += "\\n";
+        break;
+      case '\t':
+        out += "\\t";
+        break;
       default:
         if (static_cast<unsigned char>(ch) < 0x20) {
           char buffer[8];
@@ -200,15 +210,16 @@ std::string format_text(const MomentSystem& system) {
     const MomentEquation& eq = system.equations[i];
     std::string number = std::to_string(i + 1);
     out << std::string(number_width - number.size() + 2, ' ') << number << "  " << sources[i]
-        << std::string(width - sources[i].size() + 3, ' ') << left_side(plain(), model, eq)
-        << " = " << combination(plain(), model, eq.rhs) << "\n";
+        << std::string(width - sources[i].size() + 3, ' ') << left_side(plain(), model, eq) << " = "
+        << combination(plain(), model, eq.rhs) << "\n";
   }
   if (system.equations.empty()) out << "  (none)\n";
   const std::size_t parameters = model.parameters().size();
   out << "\nequations: " << system.equations.size() << " (independent: " << system.generic_rank
       << " of " << parameters << " parameters)\n";
   out << "parameters:";
-  for (std::size_t p = 0; p < parameters; ++p) out << (p ? ", " : " ") << model.parameters()[p].name;
+  for (std::size_t p = 0; p < parameters; ++p)
+    out << (p ? ", " : " ") << model.parameters()[p].name;
   out << "\nmoments needed: " << system.moments.size();
   for (std::size_t i = 0; i < system.moments.size(); ++i) {
     out << (i ? ", " : ": ") << format_moment(model, system.moments[i]);
@@ -260,8 +271,8 @@ std::string format_json(const MomentSystem& system) {
   for (std::size_t i = 0; i < system.equations.size(); ++i) {
     const MomentEquation& eq = system.equations[i];
     const RowSource& first = eq.sources.front();
-    out << (i ? "," : "") << "\n    {\"equation\": "
-        << json_equation_name(model.equations()[first.equation])
+    out << (i ? "," : "")
+        << "\n    {\"equation\": " << json_equation_name(model.equations()[first.equation])
         << ", \"multiplier\": " << json_string(format_monomial(model, first.multiplier))
         << ",\n     \"coefficients\": {";
     for (std::size_t p = 0; p < eq.coefficients.size(); ++p) {
@@ -272,7 +283,8 @@ std::string format_json(const MomentSystem& system) {
     out << ",\n     \"sources\": [";
     for (std::size_t s = 0; s < eq.sources.size(); ++s) {
       const RowSource& src = eq.sources[s];
-      out << (s ? ", " : "") << "{\"equation\": " << json_equation_name(model.equations()[src.equation])
+      out << (s ? ", " : "")
+          << "{\"equation\": " << json_equation_name(model.equations()[src.equation])
           << ", \"multiplier\": " << json_string(format_monomial(model, src.multiplier))
           << ", \"factor\": " << json_string(number_text(src.factor)) << "}";
     }
@@ -288,8 +300,8 @@ std::string format_json(const MomentSystem& system) {
   out << "],\n  \"skipped\": [";
   for (std::size_t i = 0; i < system.skipped.size(); ++i) {
     const SkippedMultiplier& s = system.skipped[i];
-    out << (i ? "," : "") << "\n    {\"equation\": "
-        << json_equation_name(model.equations()[s.equation])
+    out << (i ? "," : "")
+        << "\n    {\"equation\": " << json_equation_name(model.equations()[s.equation])
         << ", \"multiplier\": " << json_string(format_monomial(model, s.multiplier))
         << ", \"reason\": " << json_string(s.reason) << "}";
   }

@@ -118,7 +118,9 @@ std::vector<Monomial> parse_multiplier_list(const Model& model, std::string_view
 // Writes a monomial as `y1^2*y2*x` (factors in declaration order), or `1`.
 std::string format_monomial(const Model& model, const Monomial& monomial);
 
-// Parses a decimal number (`4`, `.5`, `1.5e-3`) exactly, as a rational.
+// Parses a decimal number (`4`, `.5`, `1.5e-3`) exactly, as a rational. Throws
+// std::out_of_range when its power of ten is beyond kMaxDecimalExponent either way.
 GiNaC::numeric parse_exact_number(std::string_view text);
+inline constexpr long kMaxDecimalExponent = 1000;
 
 }  // namespace momentid

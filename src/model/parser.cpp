@@ -1,14 +1,18 @@
 // Parses the model language with the PEGTL grammar in grammar/ and checks what the text means.
 // This is the only translation unit that includes PEGTL.
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <cerrno>
+#include <cmath>
 #include <cstring>
 #include <fstream>
 #include <functional>
 #include <map>
+#include <random>
 #include <set>
 #include <sstream>
+#include <stdexcept>
 
 #include "error_messages.hpp"
 #include "model/model.hpp"
@@ -25,15 +29,14 @@ using Node = pegtl::parse_tree::node;
 // The parse-tree nodes kept; every other rule only groups its children.
 template <typename Rule>
 using Selector = pegtl::parse_tree::selector<
-    Rule,
-    pegtl::parse_tree::store_content::on<
-        g::model_statement, g::model_name, g::string_body, g::state_declaration,
-        g::input_declaration, g::param_declaration, g::const_declaration, g::declared_name,
-        g::param_item, g::const_item, g::signed_number, g::number, g::label, g::equation, g::lhs,
-        g::rhs, g::multipliers_statement, g::multiplier, g::expression, g::term_operand,
-        g::product, g::times, g::divide, g::add, g::subtract, g::unary, g::operand,
-        g::minus_sign, g::plus_sign, g::power, g::exponent_operand, g::variable, g::name,
-        g::primes, g::dot_call, g::dot_argument, g::call, g::parenthesized>>;
+    Rule, pegtl::parse_tree::store_content::on<
+              g::model_statement, g::model_name, g::string_body, g::state_declaration,
+              g::input_declaration, g::param_declaration, g::const_declaration, g::declared_name,
+              g::param_item, g::const_item, g::signed_number, g::number, g::label, g::equation,
+              g::lhs, g::rhs, g::multipliers_statement, g::multiplier, g::expression,
+              g::term_operand, g::product, g::times, g::divide, g::add, g::subtract, g::unary,
+              g::operand, g::minus_sign, g::plus_sign, g::power, g::exponent_operand, g::variable,
+              g::name, g::primes, g::dot_call, g::dot_argument, g::call, g::parenthesized>>;
 
 template <typename Rule>
 using Control = pegtl::must_if<g::error_messages>::control<Rule>;
@@ -165,6 +168,13 @@ class ModelBuilder {
 
   void declare(const Node& name_node, const Node* value_node, SymbolKind kind) {
     const std::string name = name_node.string();
+    static const std::set<std::string> reserved{
+        "model",     "state",      "states",      "input", "inputs", "param",
+        "params",    "parameter",  "parameters",  "const", "consts", "constant",
+        "constants", "multiplier", "multipliers", "dot"};
+    if (reserved.count(name) != 0) {
+      fail(name_node, "'" + name + "' is a reserved word and cannot be declared");
+    }
     if (auto it = declared_.find(name); it != declared_.end()) {
       const Declaration& first = *it->second;
       fail(name_node, "'" + name + "' is already declared as " + article(first.kind) + " at " +
@@ -177,16 +187,24 @@ class ModelBuilder {
       bool negative = false;
       for (const auto& part : value_node->children) {
         if (part->is_type<g::minus_sign>()) negative = !negative;
-        if (part->is_type<g::number>()) v = parse_exact_number(part->string_view());
+        if (part->is_type<g::number>()) v = number(*part);
       }
       d.value = negative ? -v : v;
     }
     std::vector<Declaration>* list = nullptr;
     switch (kind) {
-      case SymbolKind::kState: list = &model_.states_; break;
-      case SymbolKind::kInput: list = &model_.inputs_; break;
-      case SymbolKind::kParameter: list = &model_.parameters_; break;
-      case SymbolKind::kConstant: list = &model_.constants_; break;
+      case SymbolKind::kState:
+        list = &model_.states_;
+        break;
+      case SymbolKind::kInput:
+        list = &model_.inputs_;
+        break;
+      case SymbolKind::kParameter:
+        list = &model_.parameters_;
+        break;
+      case SymbolKind::kConstant:
+        list = &model_.constants_;
+        break;
     }
     list->push_back(std::move(d));
     // Pointers into the vectors move when they grow; index by name after collection instead.
@@ -197,7 +215,8 @@ class ModelBuilder {
   }
 
   static std::string article(SymbolKind kind) {
-    return kind == SymbolKind::kInput ? std::string("an input") : "a " + std::string(kind_name(kind));
+    return kind == SymbolKind::kInput ? std::string("an input")
+                                      : "a " + std::string(kind_name(kind));
   }
 
   void make_symbols() {
@@ -282,12 +301,24 @@ class ModelBuilder {
     const Declaration& d = lookup(at, name);
     const int i = index_of(d);
     switch (d.kind) {
-      case SymbolKind::kState: return model_.state_symbols_[i];
-      case SymbolKind::kInput: return model_.input_symbols_[i];
-      case SymbolKind::kParameter: return model_.parameter_symbols_[i];
-      case SymbolKind::kConstant: return *d.value;
+      case SymbolKind::kState:
+        return model_.state_symbols_[i];
+      case SymbolKind::kInput:
+        return model_.input_symbols_[i];
+      case SymbolKind::kParameter:
+        return model_.parameter_symbols_[i];
+      case SymbolKind::kConstant:
+        return *d.value;
     }
     return 0;
+  }
+
+  GiNaC::numeric number(const Node& n) const {
+    try {
+      return parse_exact_number(n.string_view());
+    } catch (const std::out_of_range& e) {
+      fail(n, e.what());
+    }
   }
 
   GiNaC::ex eval(const Node& n) const {
@@ -301,7 +332,7 @@ class ModelBuilder {
       return value;
     }
     if (n.is_type<g::power>()) return eval_power(n);
-    if (n.is_type<g::number>()) return parse_exact_number(n.string_view());
+    if (n.is_type<g::number>()) return number(n);
     if (n.is_type<g::parenthesized>()) return eval(*n.children.at(0));
     if (n.is_type<g::variable>()) {
       const std::string name = n.children.at(0)->string();
@@ -311,7 +342,8 @@ class ModelBuilder {
       if (order > 1) {
         fail(*n.children[1], "derivatives of order " + std::to_string(order) +
                                  " are not supported: write the model in first-order form, "
-                                 "with a state for '" + name + "''");
+                                 "with a state for '" +
+                                 name + "''");
       }
       return d;
     }
@@ -322,8 +354,8 @@ class ModelBuilder {
     if (n.is_type<g::call>()) {
       const std::string name = n.children.at(0)->string();
       if (auto it = declared_.find(name); it != declared_.end()) {
-        fail(n, "'" + name + "' is " + article(it->second->kind) +
-                    ", not a function: write '" + name + "*(...)' for a product");
+        fail(n, "'" + name + "' is " + article(it->second->kind) + ", not a function: write '" +
+                    name + "*(...)' for a product");
       }
       fail(n, "function '" + name +
                   "' is not allowed: equations are polynomials (the only call is dot(...))");
@@ -387,9 +419,10 @@ class ModelBuilder {
       fail(operand, "the exponent must be a non-negative integer, found '" +
                         std::string(operand.string_view()) + "'");
     }
+    if (base.is_zero() && exponent.is_zero()) fail(n, "0^0 is undefined");
     if (exponent > 64) {
-      fail(operand, "the exponent " + std::string(operand.string_view()) +
-                        " is too large (at most 64)");
+      fail(operand,
+           "the exponent " + std::string(operand.string_view()) + " is too large (at most 64)");
     }
     return GiNaC::pow(base, exponent);
   }
@@ -412,7 +445,7 @@ class ModelBuilder {
         power = GiNaC::ex_to<GiNaC::numeric>(f.op(1)).to_int();
       }
       const SymbolRole role = roles_.at(base);
-      auto& slot = role.kind == SymbolRole::kParameter ? t.parameters
+      auto& slot = role.kind == SymbolRole::kParameter  ? t.parameters
                    : role.kind == SymbolRole::kVariable ? t.variables
                                                         : t.derivatives;
       slot[role.index] += power;
@@ -443,12 +476,13 @@ class ModelBuilder {
       if (power == 0) return;
       if (!out.empty()) out += "*";
       out += name;
-      if (power > 1) out += "^" + std::to_string(power);
+      if (power > 1) out.append("^").append(std::to_string(power));
     };
     for (std::size_t i = 0; i < t.parameters.size(); ++i) {
       factor(model_.parameters_[i].name, t.parameters[i]);
     }
-    for (std::size_t i = 0; i < t.variables.size(); ++i) factor(model_.variables_[i], t.variables[i]);
+    for (std::size_t i = 0; i < t.variables.size(); ++i)
+      factor(model_.variables_[i], t.variables[i]);
     for (std::size_t i = 0; i < t.derivatives.size(); ++i) {
       factor(model_.states_[i].name + "'", t.derivatives[i]);
     }
@@ -482,7 +516,18 @@ class ModelBuilder {
 
   // --- Equations and multipliers --------------------------------------------------------------
 
+  // GiNaC reports arithmetic it cannot do by exceptions; they become errors at the equation.
   void add_equation(const Node& n) {
+    try {
+      add_equation_checked(n);
+    } catch (const LocatedError&) {
+      throw;
+    } catch (const std::exception& e) {
+      fail(n, std::string("cannot evaluate the equation: ") + e.what());
+    }
+  }
+
+  void add_equation_checked(const Node& n) {
     Equation eq;
     eq.number = static_cast<int>(model_.equations_.size()) + 1;
     eq.where = where(n);
@@ -490,8 +535,8 @@ class ModelBuilder {
       if (c->is_type<g::label>()) {
         eq.label = c->string();
         if (auto it = labels_.find(eq.label); it != labels_.end()) {
-          fail(*c, "label '" + eq.label + "' is already used on line " +
-                       std::to_string(it->second));
+          fail(*c,
+               "label '" + eq.label + "' is already used on line " + std::to_string(it->second));
         }
         labels_[eq.label] = eq.where.line;
       } else if (c->is_type<g::lhs>()) {
@@ -525,8 +570,8 @@ class ModelBuilder {
     const std::string text(n.string_view());
     if (terms.size() != 1 || terms[0].coefficient != 1 || total(terms[0].parameters) != 0 ||
         total(terms[0].derivatives) != 0) {
-      fail(n, "a multiplier must be a monomial in the states, such as y or y^2*v, found '" +
-                  text + "'");
+      fail(n, "a multiplier must be a monomial in the states, such as y or y^2*v, found '" + text +
+                  "'");
     }
     const Monomial& m = terms[0].variables;
     for (std::size_t i = model_.states_.size(); i < m.size(); ++i) {
@@ -550,10 +595,10 @@ class ModelBuilder {
           for (const Equation& eq : model_.equations_) {
             if (!eq.label.empty()) known += (known.empty() ? "" : ", ") + eq.label;
           }
-          fail(*c, "no equation is labelled '" + set.equation + "' (" +
-                       (known.empty() ? std::string("no equation has a label")
-                                      : "labels: " + known) +
-                       ")");
+          fail(*c,
+               "no equation is labelled '" + set.equation + "' (" +
+                   (known.empty() ? std::string("no equation has a label") : "labels: " + known) +
+                   ")");
         }
       } else if (c->is_type<g::multiplier>()) {
         add_monomial(*c, set.monomials);
@@ -625,6 +670,43 @@ class ModelBuilder {
                              "': the equations containing it are needed for other states");
       }
     }
+    check_derivatives_independent();
+  }
+
+  // The equations must be solvable for the derivatives: the matrix of their coefficients
+  // (polynomials in states, inputs and parameters) has full column rank for generic values.
+  // Evaluated at random points; a rank that is full at any point is full generically.
+  void check_derivatives_independent() const {
+    const std::size_t n = model_.states_.size();
+    const std::size_t m = model_.equations_.size();
+    std::mt19937_64 engine(7);
+    std::uniform_real_distribution<double> draw(0.5, 1.5);
+    for (int attempt = 0; attempt < 3; ++attempt) {
+      std::vector<double> variable(model_.variables_.size()), parameter(model_.parameters_.size());
+      for (double& x : variable) x = draw(engine);
+      for (double& x : parameter) x = draw(engine);
+      Eigen::MatrixXd a =
+          Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(m), static_cast<Eigen::Index>(n));
+      for (std::size_t e = 0; e < m; ++e) {
+        for (const Term& t : model_.equations_[e].terms) {
+          if (t.derivative < 0) continue;
+          double value = t.coefficient.to_double();
+          if (t.parameter >= 0) value *= parameter[t.parameter];
+          for (std::size_t i = 0; i < t.monomial.size(); ++i) {
+            value *= std::pow(variable[i], t.monomial[i]);
+          }
+          a(static_cast<Eigen::Index>(e), t.derivative) += value;
+        }
+      }
+      Eigen::FullPivLU<Eigen::MatrixXd> lu(a);
+      lu.setThreshold(1e-9);
+      if (lu.rank() == static_cast<Eigen::Index>(n)) return;
+    }
+    std::string names;
+    for (const Declaration& s : model_.states_) names += (names.empty() ? "" : ", ") + s.name;
+    throw ModelError(model_.equations_.front().where,
+                     "the equations cannot be solved for the derivatives of the states (" + names +
+                         "): their coefficients are linearly dependent");
   }
 
   std::string_view text_;
@@ -638,6 +720,38 @@ class ModelBuilder {
 
 namespace {
 
+// Where to report a parse error. Expressions and lists may continue on the next line, so when
+// something required is missing the parser has already skipped line breaks and comments; the
+// error then belongs at the end of the last line with content, right after what came before.
+SourceLocation error_location(std::string_view text, const std::string& file,
+                              const pegtl::position& p) {
+  std::size_t end = std::min(p.byte, text.size());
+  bool skipped_line = false;
+  while (true) {
+    while (end > 0 && std::isspace(static_cast<unsigned char>(text[end - 1]))) {
+      skipped_line = skipped_line || text[end - 1] == '\n';
+      --end;
+    }
+    if (!skipped_line || end == 0) break;
+    const std::size_t newline = text.rfind('\n', end - 1);
+    const std::size_t start = newline == std::string_view::npos ? 0 : newline + 1;
+    std::size_t content = text.find('#', start);
+    if (content == std::string_view::npos || content > end) content = end;
+    while (content > start && std::isblank(static_cast<unsigned char>(text[content - 1]))) {
+      --content;
+    }
+    if (content == start) {  // a comment line or a blank line: look further up
+      end = start;
+      continue;
+    }
+    const auto line =
+        static_cast<std::size_t>(std::count(text.begin(), text.begin() + start, '\n')) + 1;
+    return {file, static_cast<int>(line), static_cast<int>(content - start + 1),
+            line_of(text, line)};
+  }
+  return {file, static_cast<int>(p.line), static_cast<int>(p.column), line_of(text, p.line)};
+}
+
 template <typename Rule>
 std::unique_ptr<Node> parse_tree(std::string_view text, const std::string& file) {
   pegtl::memory_input in(text.data(), text.size(), file);
@@ -645,9 +759,12 @@ std::unique_ptr<Node> parse_tree(std::string_view text, const std::string& file)
     return pegtl::parse_tree::parse<Rule, Selector, pegtl::nothing, Control>(in);
   } catch (const pegtl::parse_error& e) {
     const pegtl::position& p = e.positions().front();
-    throw ParseError({file, static_cast<int>(p.line), static_cast<int>(p.column),
-                      line_of(text, p.line)},
-                     std::string(e.message()));
+    if (g::may_follow_line_break(e.message())) {
+      throw ParseError(error_location(text, file, p), std::string(e.message()));
+    }
+    throw ParseError(
+        {file, static_cast<int>(p.line), static_cast<int>(p.column), line_of(text, p.line)},
+        std::string(e.message()));
   }
 }
 
@@ -655,10 +772,14 @@ std::unique_ptr<Node> parse_tree(std::string_view text, const std::string& file)
 
 const char* kind_name(SymbolKind kind) {
   switch (kind) {
-    case SymbolKind::kState: return "state";
-    case SymbolKind::kInput: return "input";
-    case SymbolKind::kParameter: return "parameter";
-    case SymbolKind::kConstant: return "constant";
+    case SymbolKind::kState:
+      return "state";
+    case SymbolKind::kInput:
+      return "input";
+    case SymbolKind::kParameter:
+      return "parameter";
+    case SymbolKind::kConstant:
+      return "constant";
   }
   return "";
 }
@@ -697,7 +818,7 @@ std::string format_monomial(const Model& model, const Monomial& monomial) {
     if (monomial[i] == 0) continue;
     if (!out.empty()) out += "*";
     out += model.variables()[i];
-    if (monomial[i] > 1) out += "^" + std::to_string(monomial[i]);
+    if (monomial[i] > 1) out.append("^").append(std::to_string(monomial[i]));
   }
   return out.empty() ? "1" : out;
 }
@@ -720,8 +841,14 @@ GiNaC::numeric parse_exact_number(std::string_view text) {
     bool negative = false;
     if (text[i] == '+' || text[i] == '-') negative = text[i++] == '-';
     long e = 0;
-    for (; i < text.size(); ++i) e = std::min<long>(e * 10 + (text[i] - '0'), 100000);
+    for (; i < text.size(); ++i) e = std::min<long>(e * 10 + (text[i] - '0'), 1000000);
     scale += negative ? -e : e;
+  }
+  if (!mantissa.is_zero() && (scale > kMaxDecimalExponent || scale < -kMaxDecimalExponent)) {
+    throw std::out_of_range("the number '" + std::string(text) +
+                            "' is out of range (powers of ten from -" +
+                            std::to_string(kMaxDecimalExponent) + " to " +
+                            std::to_string(kMaxDecimalExponent) + " are accepted)");
   }
   return mantissa * GiNaC::pow(GiNaC::numeric(10), GiNaC::numeric(scale));
 }
