@@ -60,6 +60,14 @@ class ModelError : public LocatedError {
   using LocatedError::LocatedError;
 };
 
+// A data file that cannot be used: a missing column, a field that is not a finite number, a
+// ragged row, non-uniform time steps, too few rows. The location is the file line (from 1) and
+// the byte column of the offending field.
+class DataError : public LocatedError {
+ public:
+  using LocatedError::LocatedError;
+};
+
 // Renders a located error as the command-line tool prints it: the `what()` line, then the
 // source line and a caret under the column.
 std::string render_with_caret(const LocatedError& error);

@@ -1,0 +1,75 @@
+#pragma once
+
+#include <cstddef>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "common/error.hpp"
+
+namespace momentid {
+
+// Key-value pairs from `# momentid: key=value key=value ...` lines before the header of a data
+// file, e.g. `dt=0.01 input-hold=zoh model=duffing seed=1`. Values hold no blanks.
+struct DataMetadata {
+  std::map<std::string, std::string> values;
+
+  std::optional<std::string> get(const std::string& key) const;
+};
+
+// What to read from a data file: the columns to deliver, in this order (normally the model's
+// states, then its inputs), and where a column has another name in the file (`--columns
+// v=velocity` maps the model's `v` to the file's `velocity`).
+struct ColumnRequest {
+  std::vector<std::string> names;
+  std::map<std::string, std::string> rename;
+  // Fewer data rows than this is an error naming the file (the estimation needs them).
+  std::size_t min_rows = 2;
+};
+
+// Consecutive rows of one run (one continuous record). A block never spans two runs.
+struct DataBlock {
+  std::vector<double> values;  // row-major, rows() x ColumnRequest::names.size()
+  std::size_t rows = 0;
+  long run = 0;                // the `run` column's value, 0 when the file has none
+  bool run_starts = false;     // the first block of a run
+};
+
+// Streams a data file in blocks, so that memory does not grow with its length. Two layouts:
+//
+// CSV: optional `# momentid: ...` metadata lines (and other `#` comment lines) before a header
+// row of column names; then one row per sample. The separator is taken from the header: comma,
+// else semicolon, else blanks. An optional `t` column holds the sample times (uniform steps
+// within a run), an optional `run` column (integers) separates records; other columns not
+// requested are ignored. A UTF-8 byte order mark and CR LF line ends are accepted.
+//
+// Binary (see README, "Data files"): the 8 bytes `MOMNTID1`, a little-endian uint32 H, H bytes
+// of text holding the metadata lines and the header row exactly as in CSV, then the rows as
+// little-endian IEEE-754 float64 values, one per column.
+//
+// Every problem throws DataError located at the file line and column (binary: the row number as
+// line, the column number as column) with what was found and what was expected.
+//
+// Example:
+//   auto reader = DataReader::open("d.csv", {.names = {"y", "v", "x"}});
+//   DataBlock block;
+//   while (reader->next(block, 65536)) accumulate(block);
+class DataReader {
+ public:
+  static std::unique_ptr<DataReader> open(const std::string& path, const ColumnRequest& request);
+  virtual ~DataReader() = default;
+
+  virtual const DataMetadata& metadata() const = 0;
+  // The sample interval: from the `t` column when there is one (checked against the metadata's
+  // `dt` when both are present), otherwise from the metadata, otherwise none. Known after the
+  // first two rows of the first run have been read.
+  virtual std::optional<double> time_step() const = 0;
+  // Reads up to `max_rows` rows into `block`; false (and block.rows == 0) at the end.
+  virtual bool next(DataBlock& block, std::size_t max_rows) = 0;
+  // Data rows delivered so far.
+  virtual std::size_t rows_read() const = 0;
+};
+
+}  // namespace momentid

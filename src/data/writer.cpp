@@ -1,0 +1,115 @@
+#include "data/writer.hpp"
+
+#include <unistd.h>
+
+#include <bit>
+#include <cerrno>
+#include <charconv>
+#include <cstdint>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+
+#include "common/error.hpp"
+
+namespace momentid {
+namespace {
+
+constexpr std::size_t kBufferSize = 1 << 20;
+constexpr char kMagic[8] = {'M', 'O', 'M', 'N', 'T', 'I', 'D', '1'};
+
+}  // namespace
+
+DataWriter::DataWriter(const std::string& path, Format format,
+                       const std::vector<std::string>& metadata,
+                       const std::vector<std::string>& columns)
+    : path_(path), format_(format), columns_(columns.size()), buffer_(kBufferSize) {
+  if (path_ == "-") {
+    file_ = stdout;
+  } else {
+    temporary_ = path_ + ".partial-XXXXXX";
+    const int fd = mkstemp(temporary_.data());
+    if (fd < 0) throw Error(path_ + ": cannot create the output file: " + std::strerror(errno));
+    file_ = fdopen(fd, "wb");
+    if (file_ == nullptr) {
+      ::close(fd);
+      std::remove(temporary_.c_str());
+      throw Error(path_ + ": cannot write the output file: " + std::strerror(errno));
+    }
+  }
+  std::string header;
+  for (const std::string& line : metadata) header += line + "\n";
+  for (std::size_t c = 0; c < columns.size(); ++c) header += (c ? "," : "") + columns[c];
+  header += "\n";
+  if (format_ == Format::kBinary) {
+    std::fwrite(kMagic, 1, sizeof kMagic, file_);
+    const auto length = static_cast<std::uint32_t>(header.size());
+    const unsigned char bytes[4] = {static_cast<unsigned char>(length),
+                                    static_cast<unsigned char>(length >> 8),
+                                    static_cast<unsigned char>(length >> 16),
+                                    static_cast<unsigned char>(length >> 24)};
+    std::fwrite(bytes, 1, 4, file_);
+  }
+  std::fwrite(header.data(), 1, header.size(), file_);
+}
+
+DataWriter::~DataWriter() {
+  if (file_ != nullptr && file_ != stdout) {
+    std::fclose(file_);
+    std::remove(temporary_.c_str());
+  }
+}
+
+void DataWriter::flush() {
+  if (used_ > 0 && std::fwrite(buffer_.data(), 1, used_, file_) != used_) failed_ = true;
+  used_ = 0;
+}
+
+void DataWriter::row(const double* values) {
+  if (buffer_.size() - used_ < columns_ * 32 + 2) flush();
+  char* out = buffer_.data() + used_;
+  if (format_ == Format::kBinary) {
+    for (std::size_t c = 0; c < columns_; ++c) {
+      std::uint64_t bits = std::bit_cast<std::uint64_t>(values[c]);
+      for (int b = 0; b < 8; ++b) *out++ = static_cast<char>(bits >> (8 * b));
+    }
+  } else {
+    char* const end = buffer_.data() + buffer_.size();
+    for (std::size_t c = 0; c < columns_; ++c) {
+      if (c) *out++ = ',';
+      out = std::to_chars(out, end, values[c]).ptr;
+    }
+    *out++ = '\n';
+  }
+  used_ = static_cast<std::size_t>(out - buffer_.data());
+}
+
+void DataWriter::commit() {
+  flush();
+  if (std::fflush(file_) != 0 || std::ferror(file_)) failed_ = true;
+  if (file_ == stdout) {
+    if (failed_) throw Error("cannot write to standard output");
+    return;
+  }
+  const int closed = std::fclose(file_);
+  file_ = nullptr;
+  if (failed_ || closed != 0) {
+    std::remove(temporary_.c_str());
+    throw Error(path_ + ": writing the output file failed: " + std::strerror(errno));
+  }
+  // mkstemp creates the file readable by its owner only; give it the usual permissions.
+  std::error_code ignored;
+  std::filesystem::permissions(temporary_,
+                               std::filesystem::perms::owner_read |
+                                   std::filesystem::perms::owner_write |
+                                   std::filesystem::perms::group_read |
+                                   std::filesystem::perms::others_read,
+                               ignored);
+  if (std::rename(temporary_.c_str(), path_.c_str()) != 0) {
+    const std::string reason = std::strerror(errno);
+    std::remove(temporary_.c_str());
+    throw Error(path_ + ": cannot move the output file into place: " + reason);
+  }
+}
+
+}  // namespace momentid

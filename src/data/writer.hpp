@@ -1,0 +1,46 @@
+#pragma once
+
+#include <cstdio>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace momentid {
+
+// Writes a data file in the layouts DataReader reads (CSV or binary, see data.hpp), whole or not
+// at all: rows go to a temporary file beside the target, which commit() renames into place; a
+// writer destroyed without commit() removes it. The path "-" writes to standard output.
+//
+// Example:
+//   DataWriter out("d.csv", DataWriter::Format::kCsv, {"# momentid: dt=0.01"}, {"t", "y", "x"});
+//   out.row(values);  // one double per column
+//   out.commit();
+class DataWriter {
+ public:
+  enum class Format { kCsv, kBinary };
+
+  // `metadata` lines are written before the header, verbatim (each should start with "# ").
+  DataWriter(const std::string& path, Format format, const std::vector<std::string>& metadata,
+             const std::vector<std::string>& columns);
+  ~DataWriter();
+  DataWriter(const DataWriter&) = delete;
+  DataWriter& operator=(const DataWriter&) = delete;
+
+  // One value per column. CSV numbers are the shortest text that reads back exactly.
+  void row(const double* values);
+  // Flushes, closes and moves the file into place. Throws Error if anything failed.
+  void commit();
+
+ private:
+  void flush();
+
+  std::string path_, temporary_;
+  Format format_;
+  std::size_t columns_;
+  std::FILE* file_ = nullptr;
+  std::vector<char> buffer_;
+  std::size_t used_ = 0;
+  bool failed_ = false;
+};
+
+}  // namespace momentid

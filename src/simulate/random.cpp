@@ -1,0 +1,87 @@
+#include "simulate/random.hpp"
+
+#include <cmath>
+
+namespace momentid {
+namespace {
+
+std::uint64_t splitmix64(std::uint64_t& state) {
+  std::uint64_t z = (state += 0x9e3779b97f4a7c15ULL);
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+  return z ^ (z >> 31);
+}
+
+std::uint64_t rotl(std::uint64_t x, int k) { return (x << k) | (x >> (64 - k)); }
+
+constexpr double kLn2 = 0.6931471805599453094;
+
+}  // namespace
+
+PortableRandom::PortableRandom(std::uint64_t seed, std::uint64_t stream) {
+  std::uint64_t state = seed ^ (0xd1b54a32d192ed03ULL * (stream + 1));
+  for (auto& s : s_) s = splitmix64(state);
+}
+
+std::uint64_t PortableRandom::next() {
+  const std::uint64_t result = rotl(s_[1] * 5, 7) * 9;
+  const std::uint64_t t = s_[1] << 17;
+  s_[2] ^= s_[0];
+  s_[3] ^= s_[1];
+  s_[1] ^= s_[2];
+  s_[0] ^= s_[3];
+  s_[2] ^= t;
+  s_[3] = rotl(s_[3], 45);
+  return result;
+}
+
+double PortableRandom::uniform() { return static_cast<double>(next() >> 11) * 0x1.0p-53; }
+
+double PortableRandom::normal() {
+  if (has_spare_) {
+    has_spare_ = false;
+    return spare_;
+  }
+  double u, v, s;
+  do {
+    u = 2 * uniform() - 1;
+    v = 2 * uniform() - 1;
+    s = u * u + v * v;
+  } while (s >= 1 || s == 0);
+  // sqrt is correctly rounded by IEEE-754, so it is as portable as + - * /.
+  const double factor = std::sqrt(-2 * portable_log(s) / s);
+  spare_ = v * factor;
+  has_spare_ = true;
+  return u * factor;
+}
+
+double portable_log(double x) {
+  // x = m * 2^e with m in [sqrt(1/2), sqrt(2)); ln x = e ln 2 + 2 atanh((m - 1)/(m + 1)).
+  int e = 0;
+  double m = std::frexp(x, &e);  // exact: only changes the exponent
+  if (m < 0.70710678118654752440) {
+    m *= 2;
+    --e;
+  }
+  const double r = (m - 1) / (m + 1);
+  const double r2 = r * r;
+  // atanh(r)/r = sum r^(2k)/(2k+1); |r| < 0.1716, so 13 terms are below 1e-20.
+  double series = 1.0 / 27;
+  for (int k = 12; k >= 0; --k) series = series * r2 + 1.0 / (2 * k + 1);
+  return e * kLn2 + 2 * r * series;
+}
+
+double portable_exp(double x) {
+  // x = k ln 2 + r with |r| <= ln2/2; exp(x) = 2^k exp(r), exp(r) by its Taylor series.
+  const double k = std::floor(x / kLn2 + 0.5);
+  const double r = x - k * kLn2;
+  double sum = 1;
+  double term = 1;
+  for (int n = 1; n <= 20; ++n) {
+    term *= r / n;
+    sum += term;
+  }
+  return std::ldexp(sum, static_cast<int>(k));
+}
+
+}  // namespace momentid
