@@ -73,8 +73,11 @@ double portable_log(double x) {
 
 double portable_exp(double x) {
   // x = k ln 2 + r with |r| <= ln2/2; exp(x) = 2^k exp(r), exp(r) by its Taylor series.
+  // ln 2 split Cody-Waite style: k * kLn2High is exact for |k| < 2^20, so r keeps full precision.
+  constexpr double kLn2High = 6.93147180369123816490e-01;
+  constexpr double kLn2Low = 1.90821492927058770002e-10;
   const double k = std::floor(x / kLn2 + 0.5);
-  const double r = x - k * kLn2;
+  const double r = (x - k * kLn2High) - k * kLn2Low;
   double sum = 1;
   double term = 1;
   for (int n = 1; n <= 20; ++n) {

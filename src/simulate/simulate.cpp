@@ -1,6 +1,8 @@
 #include "simulate/simulate.hpp"
 
+#include <array>
 #include <charconv>
+#include <type_traits>
 #include <cmath>
 #include <map>
 #include <regex>
@@ -61,6 +63,7 @@ CompiledModel::CompiledModel(const Model& model, const std::vector<numeric>& par
   // M y' = h: M[e][j] is the coefficient of yj' in equation e (lhs - rhs), h = -(the rest).
   const std::size_t n = static_cast<std::size_t>(states_);
   std::vector<Terms> m(n * n), h(n);
+  max_power_.assign(static_cast<std::size_t>(variables_), 1);
   for (std::size_t e = 0; e < n; ++e) {
     for (const Term& t : equations[e].terms) {
       numeric c = t.coefficient;
@@ -70,9 +73,17 @@ CompiledModel::CompiledModel(const Model& model, const std::vector<numeric>& par
       } else {
         add_term(h[e], t.monomial, -c);
       }
-      for (int power : t.monomial) stride_ = std::max(stride_, power + 1);
+      for (std::size_t v = 0; v < t.monomial.size(); ++v) {
+        max_power_[v] = std::max(max_power_[v], t.monomial[v]);
+      }
     }
   }
+  std::uint32_t offset = 0;
+  for (int power : max_power_) {
+    power_offset_.push_back(offset);
+    offset += static_cast<std::uint32_t>(power) + 1;
+  }
+  powers_.assign(offset, 1.0);
   for (const Terms& entry : m) constant_matrix_ = constant_matrix_ && is_constant(entry);
   if (constant_matrix_) {
     // Solve once, exactly: f = M^-1 h.
@@ -98,65 +109,38 @@ CompiledModel::CompiledModel(const Model& model, const std::vector<numeric>& par
         if (w.is_zero()) continue;
         for (const auto& [mono, c] : h[e]) add_term(f, mono, w * c);
       }
-      rates_.push_back(compile(f));
+      compile(f);
     }
   } else {
-    for (const Terms& entry : m) matrix_.push_back(compile(entry));
-    for (const Terms& entry : h) forcing_.push_back(compile(entry));
+    for (const Terms& entry : m) compile(entry);
+    for (const Terms& entry : h) compile(entry);
     scratch_.resize(n * (n + 1));
   }
-  powers_.assign(static_cast<std::size_t>(variables_ * stride_), 1.0);
 }
 
-CompiledModel::Polynomial CompiledModel::compile(const Terms& terms) {
-  Polynomial p;
+std::size_t CompiledModel::compile(const Terms& terms) {
   for (const auto& [mono, c] : terms) {
-    p.coefficients.push_back(c.to_double());
-    p.first_factor.push_back(static_cast<std::uint32_t>(p.factor_power_index.size()));
+    TermRef t{c.to_double(), static_cast<std::uint32_t>(factor_index_.size()), 0,
+              static_cast<std::uint32_t>(first_term_.size() - 1)};
     for (std::size_t v = 0; v < mono.size(); ++v) {
       if (mono[v] == 0) continue;
-      p.factor_power_index.push_back(static_cast<std::uint32_t>(v) * stride_ + mono[v]);
+      factor_index_.push_back(power_offset_[v] + static_cast<std::uint32_t>(mono[v]));
+      ++t.factors;
     }
+    terms_.push_back(t);
   }
-  p.first_factor.push_back(static_cast<std::uint32_t>(p.factor_power_index.size()));
-  return p;
+  first_term_.push_back(static_cast<std::uint32_t>(terms_.size()));
+  return first_term_.size() - 2;
 }
 
-void CompiledModel::fill_powers(const double* y, const double* u) const {
-  for (int v = 0; v < variables_; ++v) {
-    double* row = &powers_[static_cast<std::size_t>(v * stride_)];
-    const double x = v < states_ ? y[v] : u[v - states_];
-    row[1] = x;
-    for (int k = 2; k < stride_; ++k) row[k] = row[k - 1] * x;
-  }
-}
-
-double CompiledModel::evaluate(const Polynomial& p) const {
-  double sum = 0;
-  const std::size_t terms = p.coefficients.size();
-  for (std::size_t t = 0; t < terms; ++t) {
-    double product = p.coefficients[t];
-    for (std::uint32_t f = p.first_factor[t]; f < p.first_factor[t + 1]; ++f) {
-      product *= powers_[p.factor_power_index[f]];
-    }
-    sum += product;
-  }
-  return sum;
-}
-
-bool CompiledModel::derivative(const double* y, const double* u, double* dydt) const {
-  fill_powers(y, u);
+bool CompiledModel::solve(double* dydt) const {
   const int n = states_;
-  if (constant_matrix_) {
-    for (int j = 0; j < n; ++j) dydt[j] = evaluate(rates_[static_cast<std::size_t>(j)]);
-    return true;
-  }
   // Gaussian elimination with partial pivoting on [M | h].
   const int w = n + 1;
   double* a = scratch_.data();
   for (int r = 0; r < n; ++r) {
-    for (int c = 0; c < n; ++c) a[r * w + c] = evaluate(matrix_[static_cast<std::size_t>(r * n + c)]);
-    a[r * w + n] = evaluate(forcing_[static_cast<std::size_t>(r)]);
+    for (int c = 0; c < n; ++c) a[r * w + c] = evaluate(static_cast<std::size_t>(r * n + c));
+    a[r * w + n] = evaluate(static_cast<std::size_t>(n * n + r));
   }
   for (int c = 0; c < n; ++c) {
     int pivot = c;
@@ -180,15 +164,26 @@ bool CompiledModel::derivative(const double* y, const double* u, double* dydt) c
   return true;
 }
 
-void simulate(const Model& model, const SimulationOptions& options, SampleSink& sink) {
-  const CompiledModel f(model, options.parameters);
-  const std::size_t n = static_cast<std::size_t>(f.states());
+namespace {
+
+// The integration loop, with the number of states a compile-time constant N when N > 0 so that
+// the Runge-Kutta combinations are unrolled (N = 0: any number, known at run time).
+template <int N>
+void integrate_runs(const Model& model, const CompiledModel& f, const SimulationOptions& options,
+                    SampleSink& sink) {
+  const std::size_t n = N > 0 ? static_cast<std::size_t>(N) : static_cast<std::size_t>(f.states());
   const std::size_t m = static_cast<std::size_t>(f.inputs());
   std::vector<InputProcess> inputs;
   for (std::size_t i = 0; i < m; ++i) {
     inputs.emplace_back(options.inputs[i], options.dt, options.seed, i);
   }
-  std::vector<double> values(n + m), k1(n), k2(n), k3(n), k4(n), trial(n);
+  // Fixed-size arrays when N is known, so that the compiler can keep them in registers.
+  using Stage = std::conditional_t<(N > 0), std::array<double, (N > 0 ? N : 1)>, std::vector<double>>;
+  Stage k1{}, k2{}, k3{}, k4{}, trial{};
+  if constexpr (N == 0) {
+    for (Stage* k : {&k1, &k2, &k3, &k4, &trial}) k->resize(n);
+  }
+  std::vector<double> values(n + m);
   double* y = values.data();
   double* u = values.data() + n;
   const double h = options.dt;
@@ -196,7 +191,7 @@ void simulate(const Model& model, const SimulationOptions& options, SampleSink& 
   double t = 0;
   bool burning_in = false;
 
-  auto fail = [&](const std::string& what) {
+  const auto fail = [&](const std::string& what) [[gnu::cold, gnu::noinline]] {
     const std::string when = burning_in ? "during the burn-in of run " + std::to_string(run + 1)
                                         : "at t = " + shortest_decimal(t) + " in run " +
                                               std::to_string(run + 1);
@@ -204,13 +199,13 @@ void simulate(const Model& model, const SimulationOptions& options, SampleSink& 
                 parameter_list(model, options.parameters) +
                 ": the model is unstable for these values, or the step dt is too large");
   };
-  auto rates = [&](const double* state, double* out) {
+  const auto rates = [&](const double* state, double* out) {
     if (!f.derivative(state, u, out)) {
       fail("met a point where the derivatives cannot be solved for");
     }
   };
   // One Runge-Kutta step from t to t + h with the inputs u held constant.
-  auto integrate = [&] {
+  const auto integrate = [&] {
     rates(y, k1.data());
     for (std::size_t j = 0; j < n; ++j) trial[j] = y[j] + 0.5 * h * k1[j];
     rates(trial.data(), k2.data());
@@ -218,16 +213,22 @@ void simulate(const Model& model, const SimulationOptions& options, SampleSink& 
     rates(trial.data(), k3.data());
     for (std::size_t j = 0; j < n; ++j) trial[j] = y[j] + h * k3[j];
     rates(trial.data(), k4.data());
+    bool finite = true;
     for (std::size_t j = 0; j < n; ++j) {
       y[j] += h / 6 * (k1[j] + 2 * k2[j] + 2 * k3[j] + k4[j]);
-      if (!(std::abs(y[j]) <= kBlowUpBound)) {
-        t += h;
-        fail("blew up: state '" + model.states()[j].name + "' reached " +
-             shortest_decimal(y[j]));
+      finite = finite && std::abs(y[j]) <= kBlowUpBound;
+    }
+    if (!finite) {
+      t += h;
+      for (std::size_t j = 0; j < n; ++j) {
+        if (!(std::abs(y[j]) <= kBlowUpBound)) {
+          fail("blew up: state '" + model.states()[j].name + "' reached " +
+               shortest_decimal(y[j]));
+        }
       }
     }
   };
-  auto draw_inputs = [&] {
+  const auto draw_inputs = [&] {
     for (std::size_t i = 0; i < m; ++i) u[i] = inputs[i].next();
   };
 
@@ -248,6 +249,20 @@ void simulate(const Model& model, const SimulationOptions& options, SampleSink& 
       sink.sample(t, values.data(), run);
       integrate();
     }
+  }
+}
+
+}  // namespace
+
+void simulate(const Model& model, const SimulationOptions& options, SampleSink& sink) {
+  const CompiledModel f(model, options.parameters);
+  switch (f.states()) {
+    case 1: return integrate_runs<1>(model, f, options, sink);
+    case 2: return integrate_runs<2>(model, f, options, sink);
+    case 3: return integrate_runs<3>(model, f, options, sink);
+    case 4: return integrate_runs<4>(model, f, options, sink);
+    case 6: return integrate_runs<6>(model, f, options, sink);
+    default: return integrate_runs<0>(model, f, options, sink);
   }
 }
 

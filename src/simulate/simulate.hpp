@@ -31,26 +31,82 @@ class CompiledModel {
   int inputs() const { return variables_ - states_; }
   // dydt = f(y, u). Returns false if the derivatives cannot be solved for at this point (a
   // state-dependent coefficient matrix that is singular there).
-  bool derivative(const double* y, const double* u, double* dydt) const;
+  [[gnu::always_inline]] bool derivative(const double* y, const double* u, double* dydt) const {
+    fill_powers(y, u);
+    if (!constant_matrix_) return solve(dydt);
+    // One pass over the terms of all the f_j, each adding to its state's rate.
+    for (int j = 0; j < states_; ++j) dydt[j] = 0;
+    const double* powers = powers_.data();
+    const std::uint32_t* factors = factor_index_.data();
+    for (const TermRef& term : terms_) {
+      const std::uint32_t* f = factors + term.first_factor;
+      double product = term.coefficient;
+      switch (term.factors) {
+        case 0: break;
+        case 1: product *= powers[f[0]]; break;
+        case 2: product *= powers[f[0]] * powers[f[1]]; break;
+        default:
+          for (std::uint32_t k = 0; k < term.factors; ++k) product *= powers[f[k]];
+      }
+      dydt[term.polynomial] += product;
+    }
+    return true;
+  }
 
  private:
-  // Sum of coefficient * product of powers of variables, stored flat.
-  struct Polynomial {
-    std::vector<double> coefficients;
-    std::vector<std::uint32_t> first_factor;  // per term, into the factor arrays; one extra end
-    std::vector<std::uint32_t> factor_power_index;  // variable * stride + power
+  // Sums of coefficient * product of powers of variables, all stored in one flat array: term t
+  // of polynomial p is terms_[first_term[p] + t], its factors powers_[factor_index[...]].
+  struct TermRef {
+    double coefficient;
+    std::uint32_t first_factor;
+    std::uint32_t factors;
+    std::uint32_t polynomial;  // which polynomial the term belongs to
   };
-  Polynomial compile(const std::map<Monomial, GiNaC::numeric>& terms);
-  double evaluate(const Polynomial& p) const;
-  void fill_powers(const double* y, const double* u) const;
+  // Appends a polynomial; returns its index.
+  std::size_t compile(const std::map<Monomial, GiNaC::numeric>& terms);
+  [[gnu::always_inline]] double evaluate(std::size_t polynomial) const {
+    double sum = 0;
+    const double* powers = powers_.data();
+    const std::uint32_t* factors = factor_index_.data();
+    const TermRef* terms = terms_.data();
+    for (std::uint32_t t = first_term_[polynomial]; t < first_term_[polynomial + 1]; ++t) {
+      const TermRef& term = terms[t];
+      const std::uint32_t* f = factors + term.first_factor;
+      double product = term.coefficient;
+      switch (term.factors) {
+        case 0: break;
+        case 1: product *= powers[f[0]]; break;
+        case 2: product *= powers[f[0]] * powers[f[1]]; break;
+        default:
+          for (std::uint32_t k = 0; k < term.factors; ++k) product *= powers[f[k]];
+      }
+      sum += product;
+    }
+    return sum;
+  }
+  [[gnu::always_inline]] void fill_powers(const double* y, const double* u) const {
+    double* powers = powers_.data();
+    for (int v = 0; v < variables_; ++v) {
+      double* row = powers + power_offset_[static_cast<std::size_t>(v)];
+      const double x = v < states_ ? y[v] : u[v - states_];
+      row[1] = x;
+      const int top = max_power_[static_cast<std::size_t>(v)];
+      for (int k = 2; k <= top; ++k) row[k] = row[k - 1] * x;
+    }
+  }
+  // Solves M y' = h at the current powers (a state-dependent matrix).
+  bool solve(double* dydt) const;
 
+  std::vector<TermRef> terms_;
+  std::vector<std::uint32_t> first_term_{0};  // per polynomial, plus one end
+  std::vector<std::uint32_t> factor_index_;   // into powers_
+  std::vector<int> max_power_;                // per variable
+  std::vector<std::uint32_t> power_offset_;   // per variable, into powers_
   int states_ = 0;
   int variables_ = 0;
-  int stride_ = 2;  // highest power + 1
   bool constant_matrix_ = true;
-  std::vector<Polynomial> rates_;   // constant matrix: the solved f_j
-  std::vector<Polynomial> matrix_;  // otherwise: M (row-major) and h in M y' = h
-  std::vector<Polynomial> forcing_;
+  // Constant matrix: polynomial j is the solved f_j. Otherwise polynomials 0..n*n-1 are M
+  // (row-major) and n*n..n*n+n-1 are h in M y' = h.
   mutable std::vector<double> powers_;
   mutable std::vector<double> scratch_;
 };

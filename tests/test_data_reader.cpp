@@ -1,0 +1,691 @@
+#include <doctest/doctest.h>
+#include <unistd.h>
+
+#include <bit>
+#include <charconv>
+#include <cmath>
+#include <cstdint>
+#include <exception>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <map>
+#include <optional>
+#include <random>
+#include <string>
+#include <string_view>
+#include <typeinfo>
+#include <utility>
+#include <vector>
+
+#include "data/data.hpp"
+
+namespace {
+
+using momentid::ColumnRequest;
+using momentid::DataBlock;
+using momentid::DataError;
+using momentid::DataReader;
+
+// A file in the temporary directory holding `contents`, removed when this goes out of scope.
+// The name is unique per process and per file, as CTest runs test cases in parallel.
+class TempFile {
+ public:
+  explicit TempFile(std::string_view contents) {
+    static int count = 0;
+    path_ = std::filesystem::temp_directory_path() /
+            ("momentid_test_reader_" + std::to_string(::getpid()) + "_" + std::to_string(count++) +
+             ".dat");
+    std::ofstream out(path_, std::ios::binary);
+    out.write(contents.data(), static_cast<std::streamsize>(contents.size()));
+    REQUIRE(out.good());
+  }
+  TempFile(const TempFile&) = delete;
+  TempFile& operator=(const TempFile&) = delete;
+  ~TempFile() {
+    std::error_code ignored;
+    std::filesystem::remove(path_, ignored);
+  }
+  std::string path() const { return path_.string(); }
+
+ private:
+  std::filesystem::path path_;
+};
+
+// Everything a reader delivers for one file.
+struct Contents {
+  std::vector<DataBlock> blocks;
+  std::vector<double> values;  // all rows, row-major, as requested
+  std::size_t rows = 0;
+  momentid::DataMetadata metadata;
+  std::optional<double> time_step;
+};
+
+Contents read_file(const std::string& path, const ColumnRequest& request,
+                   std::size_t max_rows = 65536) {
+  Contents contents;
+  const auto reader = DataReader::open(path, request);
+  DataBlock block;
+  while (reader->next(block, max_rows)) {
+    REQUIRE(block.rows <= max_rows);
+    REQUIRE(block.values.size() == block.rows * request.names.size());
+    contents.values.insert(contents.values.end(), block.values.begin(), block.values.end());
+    contents.blocks.push_back(block);
+  }
+  CHECK(block.rows == 0);
+  CHECK_FALSE(reader->next(block, max_rows));
+  contents.rows = reader->rows_read();
+  contents.metadata = reader->metadata();
+  contents.time_step = reader->time_step();
+  return contents;
+}
+
+Contents read_text(std::string_view text, const ColumnRequest& request,
+                   std::size_t max_rows = 65536) {
+  const TempFile file(text);
+  return read_file(file.path(), request, max_rows);
+}
+
+// Runs `action` and returns the exception it throws, which must be exactly of type E. Fails the
+// test case when `action` throws nothing, or something else.
+template <class E, class Action>
+E error_from(Action&& action) {
+  try {
+    action();
+  } catch (const E& e) {
+    if (typeid(e) != typeid(E)) FAIL("threw " << typeid(e).name() << ": " << e.what());
+    return e;
+  } catch (const std::exception& e) {
+    FAIL("threw " << typeid(e).name() << " instead: " << e.what());
+  } catch (...) {
+    FAIL("threw something that is not a std::exception");
+  }
+  FAIL("threw nothing");
+  throw;  // not reached: FAIL throws
+}
+
+// Reads a file holding `text` to its end and checks the DataError this throws: its message,
+// where it points, the source line it carries, and that what() is "file:line:col: message".
+void check_read_error(std::string_view text, const ColumnRequest& request,
+                      const std::string& message, int line, int column,
+                      const std::string& source_line) {
+  const TempFile file(text);
+  const DataError e = error_from<DataError>([&] { read_file(file.path(), request); });
+  CHECK(e.message() == message);
+  CHECK(e.location().file == file.path());
+  CHECK(e.location().line == line);
+  CHECK(e.location().column == column);
+  CHECK(e.location().text == source_line);
+  CHECK(std::string(e.what()) ==
+        file.path() + ":" + std::to_string(line) + ":" + std::to_string(column) + ": " + message);
+}
+
+// The binary layout: magic, header length, header text, rows of little-endian float64 values.
+std::string binary_file(std::string_view header_text, const std::vector<double>& values) {
+  std::string out = "MOMNTID1";
+  const auto length = static_cast<std::uint32_t>(header_text.size());
+  for (int i = 0; i < 4; ++i) out += static_cast<char>((length >> (8 * i)) & 0xFF);
+  out += header_text;
+  for (const double value : values) {
+    const auto bits = std::bit_cast<std::uint64_t>(value);
+    for (int i = 0; i < 8; ++i) out += static_cast<char>((bits >> (8 * i)) & 0xFF);
+  }
+  return out;
+}
+
+// The shortest decimal that reads back as `value`, so that a written file reads back exactly.
+std::string decimal(double value) {
+  char buffer[32];
+  return std::string(buffer, std::to_chars(buffer, buffer + sizeof buffer, value).ptr);
+}
+
+// What to read: `names`, with `rename` and `min_rows`.
+ColumnRequest columns(std::vector<std::string> names,
+                      std::map<std::string, std::string> rename = {}, std::size_t min_rows = 2) {
+  ColumnRequest request;
+  request.names = std::move(names);
+  request.rename = std::move(rename);
+  request.min_rows = min_rows;
+  return request;
+}
+
+const double kNaN = std::numeric_limits<double>::quiet_NaN();
+const double kInf = std::numeric_limits<double>::infinity();
+
+}  // namespace
+
+TEST_SUITE("data reader") {
+  // --- Values and columns ---------------------------------------------------------------------
+
+  TEST_CASE("delivers the requested columns in the requested order") {
+    const Contents c = read_text("t,y,v,x\n0,1,2,3\n0.5,4,5,6\n1,7,8,9\n", columns({"x", "y"}));
+    CHECK(c.values == std::vector<double>{3, 1, 6, 4, 9, 7});
+    CHECK(c.rows == 3);
+    REQUIRE(c.blocks.size() == 1);
+    CHECK(c.blocks[0].rows == 3);
+    CHECK(c.blocks[0].run == 0);
+    CHECK(c.blocks[0].run_starts);
+  }
+
+  TEST_CASE("takes a semicolon separator from the header") {
+    const Contents c = read_text("y;v\n1;2\n3;4\n", columns({"v", "y"}));
+    CHECK(c.values == std::vector<double>{2, 1, 4, 3});
+  }
+
+  TEST_CASE("takes a comma separator when the header holds both comma and semicolon") {
+    const Contents c = read_text("y,v;w\n1,2\n3,4\n", columns({"v;w"}));
+    CHECK(c.values == std::vector<double>{2, 4});
+  }
+
+  TEST_CASE("separates columns by runs of blanks and tabs when the header has neither") {
+    const Contents c =
+        read_text("  t \t y   v\n0 1\t\t2\n  0.1   3 4  \n\t0.2\t5\t6\t\n", columns({"y", "v"}));
+    CHECK(c.values == std::vector<double>{1, 2, 3, 4, 5, 6});
+    CHECK(c.time_step == doctest::Approx(0.1).epsilon(1e-12));
+  }
+
+  TEST_CASE("reads a header with a single column and a file shorter than the binary magic") {
+    const Contents c = read_text("y\n1\n2", columns({"y"}));
+    CHECK(c.values == std::vector<double>{1, 2});
+  }
+
+  TEST_CASE("accepts blanks around fields, a leading plus sign and exponents") {
+    const Contents c =
+        read_text("y, v ,x\n +1.5 ,\t-2e-3, 3E2\n+.5,-0,1e+1 \n", columns({"y", "v", "x"}));
+    CHECK(c.values == std::vector<double>{1.5, -2e-3, 300, 0.5, -0.0, 10});
+  }
+
+  TEST_CASE("strips a UTF-8 byte order mark and accepts CR LF line ends") {
+    const Contents c = read_text("\xEF\xBB\xBFt,y\r\n0,1\r\n0.25,2\r\n", columns({"t", "y"}));
+    CHECK(c.values == std::vector<double>{0, 1, 0.25, 2});
+    CHECK(c.time_step == 0.25);
+  }
+
+  TEST_CASE("strips blanks and double quotes from column names") {
+    const Contents c = read_text("\"t\", \"y\" , v\n0,1,2\n1,3,4\n", columns({"y", "v"}));
+    CHECK(c.values == std::vector<double>{1, 2, 3, 4});
+    CHECK(c.time_step == 1.0);
+  }
+
+  TEST_CASE("reads a model name from another column with rename") {
+    const Contents c =
+        read_text("y,velocity\n1,2\n3,4\n", columns({"y", "v"}, {{"v", "velocity"}}));
+    CHECK(c.values == std::vector<double>{1, 2, 3, 4});
+  }
+
+  TEST_CASE("delivers one column for two requested names that read it") {
+    const Contents c = read_text("y,x\n1,2\n3,4\n", columns({"y", "u", "x"}, {{"u", "y"}}));
+    CHECK(c.values == std::vector<double>{1, 1, 2, 3, 3, 4});
+  }
+
+  TEST_CASE("ignores columns that are not requested, whatever they hold") {
+    const Contents c = read_text(",label,y,note\n0,first,1,\n1,second,2,nan\n", columns({"y"}));
+    CHECK(c.values == std::vector<double>{1, 2});
+  }
+
+  TEST_CASE("reads a line longer than a chunk") {
+    const std::string long_field(3 << 20, 'a');
+    const Contents c = read_text("y,note\n1," + long_field + "\n2,b\n", columns({"y"}));
+    CHECK(c.values == std::vector<double>{1, 2});
+  }
+
+  TEST_CASE("ignores blank lines before the header, among the rows and at the end") {
+    const Contents c =
+        read_text("\n  \n# comment\n\nt,y\n0,1\n\n \t\n0.5,2\n1,3\n\n\n", columns({"y"}));
+    CHECK(c.values == std::vector<double>{1, 2, 3});
+    CHECK(c.time_step == 0.5);
+  }
+
+  TEST_CASE("reads a header without rows when min_rows is 0") {
+    const Contents c = read_text("y,v\n", columns({"y"}, {}, 0));
+    CHECK(c.rows == 0);
+    CHECK(c.blocks.empty());
+  }
+
+  // --- Metadata and time step -----------------------------------------------------------------
+
+  TEST_CASE("reads metadata pairs, later keys overwriting earlier ones, and skips other comments") {
+    const Contents c = read_text(
+        "# written by hand\n"
+        "# momentid: dt=0.01 model=duffing seed=1\n"
+        "  #momentid: seed=7 input.x=ma:K=10,w=0.1  empty=\n"
+        "# not momentid: k=v\n"
+        "y\n1\n2\n",
+        columns({"y"}));
+    CHECK(c.metadata.values.size() == 5);
+    CHECK(c.metadata.get("dt") == "0.01");
+    CHECK(c.metadata.get("model") == "duffing");
+    CHECK(c.metadata.get("seed") == "7");
+    CHECK(c.metadata.get("input.x") == "ma:K=10,w=0.1");
+    CHECK(c.metadata.get("empty") == "");
+    CHECK(c.metadata.get("k") == std::nullopt);
+    CHECK(c.time_step == 0.01);
+  }
+
+  TEST_CASE("takes the time step from the t column, else from the metadata dt, else has none") {
+    CHECK(read_text("t,y\n10,1\n10.02,2\n10.04,3\n", columns({"y"})).time_step ==
+          doctest::Approx(0.02).epsilon(1e-12));
+    CHECK(read_text("# momentid: dt=0.02\nt,y\n1,1\n1.02,2\n", columns({"y"})).time_step ==
+          doctest::Approx(0.02).epsilon(1e-12));
+    CHECK(read_text("# momentid: dt=0.5\ny\n1\n2\n", columns({"y"})).time_step == 0.5);
+    CHECK(read_text("y\n1\n2\n", columns({"y"})).time_step == std::nullopt);
+  }
+
+  TEST_CASE("knows the time step once the first two rows of the first run are read") {
+    const TempFile file("t,y\n0,1\n0.5,2\n1,3\n");
+    const auto reader = DataReader::open(file.path(), columns({"y"}));
+    CHECK(reader->time_step() == std::nullopt);
+    DataBlock block;
+    REQUIRE(reader->next(block, 1));
+    CHECK(reader->time_step() == std::nullopt);
+    REQUIRE(reader->next(block, 1));
+    CHECK(reader->time_step() == 0.5);
+    CHECK(reader->rows_read() == 2);
+  }
+
+  TEST_CASE("accepts times with rounding in their last digits") {
+    // Near t = 1e6 a double's rounding changes a 0.1 step by about 1e-9 of it.
+    std::string text = "t,y\n";
+    for (int n = 0; n < 100; ++n) text += decimal(1e6 + n * 0.1) + ",1\n";
+    CHECK(read_text(text, columns({"y"})).rows == 100);
+  }
+
+  // --- Blocks and runs ------------------------------------------------------------------------
+
+  TEST_CASE("splits blocks at max_rows and where the run changes") {
+    const Contents c =
+        read_text("t,y,run\n0,1,1\n1,2,1\n2,3,1\n0,4,2\n1,5,2\n5,6,3\n", columns({"y"}), 2);
+    REQUIRE(c.blocks.size() == 4);
+    CHECK(c.blocks[0].values == std::vector<double>{1, 2});
+    CHECK(c.blocks[0].run == 1);
+    CHECK(c.blocks[0].run_starts);
+    CHECK(c.blocks[1].values == std::vector<double>{3});
+    CHECK(c.blocks[1].run == 1);
+    CHECK_FALSE(c.blocks[1].run_starts);
+    CHECK(c.blocks[2].values == std::vector<double>{4, 5});
+    CHECK(c.blocks[2].run == 2);
+    CHECK(c.blocks[2].run_starts);
+    CHECK(c.blocks[3].values == std::vector<double>{6});
+    CHECK(c.blocks[3].run == 3);
+    CHECK(c.blocks[3].run_starts);
+    CHECK(c.rows == 6);
+    CHECK(c.time_step == 1.0);
+  }
+
+  TEST_CASE("treats a file without a run column as one run numbered 0") {
+    const Contents c = read_text("y\n1\n2\n3\n4\n5\n", columns({"y"}), 2);
+    REQUIRE(c.blocks.size() == 3);
+    CHECK(c.blocks[0].run_starts);
+    CHECK_FALSE(c.blocks[1].run_starts);
+    CHECK_FALSE(c.blocks[2].run_starts);
+    for (const DataBlock& block : c.blocks) CHECK(block.run == 0);
+  }
+
+  TEST_CASE("accepts run numbers written with a zero fraction") {
+    const Contents c = read_text("run,y\n3.0,1\n3,2\n-1.0,3\n", columns({"y"}));
+    REQUIRE(c.blocks.size() == 2);
+    CHECK(c.blocks[0].run == 3);
+    CHECK(c.blocks[0].rows == 2);
+    CHECK(c.blocks[1].run == -1);
+  }
+
+  TEST_CASE("lets the time restart in a new run") {
+    const Contents c =
+        read_text("t,y,run\n0,1,1\n0.1,2,1\n5,3,2\n5.1,4,2\n", columns({"y", "t", "run"}));
+    CHECK(c.values == std::vector<double>{1, 0, 1, 2, 0.1, 1, 3, 5, 2, 4, 5.1, 2});
+    CHECK(c.blocks.size() == 2);
+  }
+
+  // --- Large files ----------------------------------------------------------------------------
+
+  TEST_CASE("streams a large file across chunk boundaries") {
+    // About 15 MB: many 1 MiB chunks, so many rows span two of them.
+    constexpr int kRows = 300000;
+    std::mt19937_64 random(12345);
+    std::normal_distribution<double> normal;
+    std::string text = "# momentid: dt=0.001\nt,y,v,run\n";
+    double y_sum = 0, v_sum = 0;
+    for (int n = 0; n < kRows; ++n) {
+      const double y = normal(random), v = normal(random) * 1e-3;
+      y_sum += y;
+      v_sum += v;
+      text += decimal(n * 0.001) + "," + decimal(y) + "," + decimal(v) + "," +
+              (n < kRows / 2 ? "1" : "2") + "\n";
+    }
+    const TempFile file(text);
+    const auto reader = DataReader::open(file.path(), columns({"v", "y"}));
+    DataBlock block;
+    double y_read = 0, v_read = 0;
+    std::vector<std::size_t> block_rows;
+    std::vector<long> runs;
+    while (reader->next(block, 65536)) {
+      for (std::size_t r = 0; r < block.rows; ++r) {
+        v_read += block.values[2 * r];
+        y_read += block.values[2 * r + 1];
+      }
+      block_rows.push_back(block.rows);
+      if (block.run_starts) runs.push_back(block.run);
+    }
+    // Same values added in the same order: the sums agree exactly.
+    CHECK(y_read == y_sum);
+    CHECK(v_read == v_sum);
+    CHECK(reader->rows_read() == kRows);
+    CHECK(block_rows == std::vector<std::size_t>{65536, 65536, 18928, 65536, 65536, 18928});
+    CHECK(runs == std::vector<long>{1, 2});
+    CHECK(reader->time_step() == doctest::Approx(0.001).epsilon(1e-9));
+  }
+
+  // --- Binary files ---------------------------------------------------------------------------
+
+  TEST_CASE("reads a binary file: metadata, values, runs and time step") {
+    const std::string bytes = binary_file("# momentid: dt=0.1 model=m\r\nt,y,v,run\n",
+                                          {0, 1, -1, 1,  //
+                                           0.1, 2, -2, 1, 0, 3, -3, 2, 0.1, 4, -4, 2});
+    const Contents c = read_text(bytes, columns({"v", "y"}));
+    CHECK(c.values == std::vector<double>{-1, 1, -2, 2, -3, 3, -4, 4});
+    REQUIRE(c.blocks.size() == 2);
+    CHECK(c.blocks[0].run == 1);
+    CHECK(c.blocks[0].run_starts);
+    CHECK(c.blocks[1].run == 2);
+    CHECK(c.blocks[1].run_starts);
+    CHECK(c.metadata.get("model") == "m");
+    CHECK(c.time_step == 0.1);
+    CHECK(c.rows == 4);
+  }
+
+  TEST_CASE("streams a large binary file across chunk boundaries") {
+    // 3-value rows (24 bytes) do not divide a 1 MiB chunk.
+    constexpr int kRows = 300000;
+    std::vector<double> values;
+    double sum = 0;
+    for (int n = 0; n < kRows; ++n) {
+      const double y = std::sin(n * 0.37) * 1e3;
+      sum += y;
+      values.insert(values.end(), {n * 0.01, y, static_cast<double>(n % 7)});
+    }
+    const Contents c = read_text(binary_file("t,y,x\n", values), columns({"y"}));
+    double read_sum = 0;
+    for (const double y : c.values) read_sum += y;
+    CHECK(read_sum == sum);
+    CHECK(c.rows == kRows);
+    CHECK(c.blocks.size() == 5);
+  }
+
+  // --- Errors: the file and its header --------------------------------------------------------
+
+  TEST_CASE("a file that cannot be opened is an Error naming the path and the reason") {
+    const std::string path = "/nonexistent-momentid-dir/data.csv";
+    const momentid::Error e =
+        error_from<momentid::Error>([&] { DataReader::open(path, columns({"y"})); });
+    CHECK(std::string(e.what()) == path + ": cannot open the data file: No such file or directory");
+  }
+
+  TEST_CASE("an empty file asks for a header row") {
+    check_read_error("", columns({"y"}),
+                     "the file is empty: expected a header row naming the columns", 1, 1, "");
+  }
+
+  TEST_CASE("a file of comments and blank lines asks for a header row") {
+    check_read_error("# momentid: dt=0.1\n\n# more\n", columns({"y"}),
+                     "expected a header row naming the columns", 1, 1, "# momentid: dt=0.1");
+  }
+
+  TEST_CASE("a header row of numbers is reported as a missing header") {
+    check_read_error("\n1,2.5,3\n4,5,6\n", columns({"y"}),
+                     "expected a header row naming the columns, found a row of numbers", 2, 1,
+                     "1,2.5,3");
+  }
+
+  TEST_CASE("a missing column is reported with the names the header has") {
+    check_read_error("# c\nt,y,x\n0,1,2\n0.1,1,2\n", columns({"y", "v", "x"}),
+                     "missing column 'v' (the header has: t, y, x)", 2, 1, "t,y,x");
+  }
+
+  TEST_CASE("a missing renamed column is named with the name it stands for") {
+    check_read_error("t,y,x\n0,1,2\n", columns({"y", "v"}, {{"v", "velocity"}}),
+                     "missing column 'velocity' for 'v' (the header has: t, y, x)", 1, 1, "t,y,x");
+  }
+
+  TEST_CASE("a duplicate requested, t or run column is reported with where the first one is") {
+    check_read_error("t,y,v,y\n0,1,2,3\n", columns({"y", "v"}),
+                     "column 'y' appears twice in the header (first at column 3)", 1, 7, "t,y,v,y");
+    check_read_error("t, y, t\n0,1,2\n", columns({"y"}),
+                     "column 't' appears twice in the header (first at column 1)", 1, 7, "t, y, t");
+    check_read_error("run y run\n1 2 3\n", columns({"y"}),
+                     "column 'run' appears twice in the header (first at column 1)", 1, 7,
+                     "run y run");
+  }
+
+  TEST_CASE("a duplicate column that is not used is accepted") {
+    CHECK(read_text("y,x,x\n1,2,3\n4,5,6\n", columns({"y"})).values == std::vector<double>{1, 4});
+  }
+
+  TEST_CASE("a metadata dt that is not a positive number is reported at its value") {
+    check_read_error("# momentid: model=m dt=abc\ny\n1\n2\n", columns({"y"}),
+                     "metadata dt: expected a positive number, found 'abc'", 1, 24,
+                     "# momentid: model=m dt=abc");
+    check_read_error("# momentid: dt=-0.1\ny\n1\n2\n", columns({"y"}),
+                     "metadata dt: expected a positive number, found '-0.1'", 1, 16,
+                     "# momentid: dt=-0.1");
+    check_read_error("# momentid: dt=0\ny\n1\n2\n", columns({"y"}),
+                     "metadata dt: expected a positive number, found '0'", 1, 16,
+                     "# momentid: dt=0");
+    check_read_error("#momentid: dt=\ny\n1\n2\n", columns({"y"}),
+                     "metadata dt: expected a positive number, found nothing", 1, 15,
+                     "#momentid: dt=");
+  }
+
+  TEST_CASE("a metadata entry without '=' is reported") {
+    check_read_error("# momentid: dt=0.1 oops\ny\n1\n2\n", columns({"y"}),
+                     "metadata: expected key=value, found 'oops'", 1, 20,
+                     "# momentid: dt=0.1 oops");
+    check_read_error("# momentid: =1\ny\n1\n2\n", columns({"y"}),
+                     "metadata: expected key=value, found '=1'", 1, 13, "# momentid: =1");
+  }
+
+  // --- Errors: fields and rows ----------------------------------------------------------------
+
+  TEST_CASE("a field that is not a number is reported at its column") {
+    check_read_error("t,y,v\n0,1,2\n0.1,abc,3\n", columns({"y", "v"}),
+                     "column 'y': expected a number, found 'abc'", 3, 5, "0.1,abc,3");
+    check_read_error("t,y,v\n0,1,2\n0.1, 1.5x ,3\n", columns({"y", "v"}),
+                     "column 'y': expected a number, found '1.5x'", 3, 6, "0.1, 1.5x ,3");
+    check_read_error("y v\n+-1 2\n", columns({"y", "v"}),
+                     "column 'y': expected a number, found '+-1'", 2, 1, "+-1 2");
+  }
+
+  TEST_CASE("a field of a renamed column is reported with the column's name in the file") {
+    check_read_error("y;velocity\n1;fast\n", columns({"v"}, {{"v", "velocity"}}),
+                     "column 'velocity': expected a number, found 'fast'", 2, 3, "1;fast");
+  }
+
+  TEST_CASE("a long bad field is shown cut after 40 bytes") {
+    const std::string field =
+        "x123456789"
+        "0123456789"
+        "0123456789"
+        "0123456789"
+        "tail";
+    check_read_error("y\n" + field + "\n", columns({"y"}),
+                     "column 'y': expected a number, found "
+                     "'x123456789012345678901234567890123456789...'",
+                     2, 1, field);
+  }
+
+  TEST_CASE("nan, inf and numbers too large for a double are reported as not finite") {
+    check_read_error("t,y,v\n0,1,2\n0.1,nan,3\n", columns({"y", "v"}),
+                     "column 'y': expected a finite number, found 'nan'", 3, 5, "0.1,nan,3");
+    check_read_error("t,y,v\n0,1,-inf\n", columns({"y", "v"}),
+                     "column 'v': expected a finite number, found '-inf'", 2, 5, "0,1,-inf");
+    check_read_error("y\n1e999\n", columns({"y"}),
+                     "column 'y': expected a finite number, found '1e999'", 2, 1, "1e999");
+    check_read_error("t,y\nInfinity,1\n", columns({"y"}),
+                     "column 't': expected a finite number, found 'Infinity'", 2, 1, "Infinity,1");
+  }
+
+  TEST_CASE("an empty field is reported as such") {
+    check_read_error("t,y,v\n0.1,,3\n", columns({"y", "v"}),
+                     "column 'y': expected a number, found an empty field", 2, 5, "0.1,,3");
+    check_read_error("t,y,v\n0.1,2, \t\n", columns({"y", "v"}),
+                     "column 'v': expected a number, found an empty field", 2, 7, "0.1,2, \t");
+  }
+
+  TEST_CASE("a row with too few fields is reported at column 1") {
+    check_read_error("t,y,v,x\n0,1,2,3\n0.1,1,2\n", columns({"x"}),
+                     "expected 4 fields as in the header, found 3", 3, 1, "0.1,1,2");
+    check_read_error("t y v\n0 1\n", columns({"y"}), "expected 3 fields as in the header, found 2",
+                     2, 1, "0 1");
+  }
+
+  TEST_CASE("a row with too many fields is reported at the first extra field") {
+    check_read_error("t,y,v,x\n0.1,1,2,3,4,5\n", columns({"y"}),
+                     "expected 4 fields as in the header, found 6", 2, 11, "0.1,1,2,3,4,5");
+    check_read_error("y,x\n1,2,\n", columns({"y"}), "expected 2 fields as in the header, found 3",
+                     2, 5, "1,2,");
+    check_read_error("t y v\n0 1 2  3 4\n", columns({"y"}),
+                     "expected 3 fields as in the header, found 5", 2, 8, "0 1 2  3 4");
+  }
+
+  TEST_CASE("a run number that is not an integer is reported") {
+    check_read_error("t,y,run\n0,1,1\n0.1,2,1.5\n", columns({"y"}),
+                     "column 'run': expected an integer, found '1.5'", 3, 7, "0.1,2,1.5");
+  }
+
+  TEST_CASE("a non-uniform time step is reported at the t field") {
+    check_read_error("y,t\n1,5.00\n2,5.01\n3,5.03\n", columns({"y"}),
+                     "non-uniform time step: 0.02 after 0.01 (t = 5.03; samples must be equally "
+                     "spaced)",
+                     4, 3, "3,5.03");
+    // Shown with the digits that tell the two steps apart.
+    check_read_error("t,y\n0,1\n1,2\n2.00001,3\n", columns({"y"}),
+                     "non-uniform time step: 1.00001 after 1 (t = 2.00001; samples must be "
+                     "equally spaced)",
+                     4, 1, "2.00001,3");
+  }
+
+  TEST_CASE("a step in a later run must agree with the file's time step") {
+    check_read_error("t,y,run\n0,1,1\n0.1,2,1\n0,3,2\n0.2,4,2\n", columns({"y"}),
+                     "non-uniform time step: 0.2 after 0.1 (t = 0.2; samples must be equally "
+                     "spaced)",
+                     5, 1, "0.2,4,2");
+  }
+
+  TEST_CASE("a time that does not increase is reported") {
+    check_read_error("t,y\n0,1\n0.1,2\n0.05,3\n", columns({"y"}),
+                     "non-increasing time: t = 0.05 after t = 0.1 (samples must be in increasing "
+                     "time order)",
+                     4, 1, "0.05,3");
+    check_read_error("t,y\n0,1\n0,2\n", columns({"y"}),
+                     "non-increasing time: t = 0 after t = 0 (samples must be in increasing time "
+                     "order)",
+                     3, 1, "0,2");
+  }
+
+  TEST_CASE("a t column that disagrees with the metadata dt is reported at the second row") {
+    check_read_error("# momentid: dt=0.01\nt,y\n0,1\n0.02,2\n0.04,3\n", columns({"y"}),
+                     "time step 0.02 of column 't' disagrees with dt=0.01 in the metadata", 4, 1,
+                     "0.02,2");
+  }
+
+  TEST_CASE("too few rows are reported at the last row, or at the header when there are none") {
+    check_read_error("t,y\n0,1\n\n\n", columns({"y"}), "the data have 1 row; at least 2 are needed",
+                     2, 1, "0,1");
+    check_read_error("# c\nt,y\n", columns({"y"}), "the data have 0 rows; at least 2 are needed", 2,
+                     1, "t,y");
+    check_read_error("y\n1\n2\n", columns({"y"}, {}, 3),
+                     "the data have 2 rows; at least 3 are needed", 3, 1, "2");
+    check_read_error("y\n", columns({"y"}, {}, 1), "the data have 0 rows; at least 1 is needed", 1,
+                     1, "y");
+  }
+
+  TEST_CASE("a very long line is cut in the error's text, with the caret still under the field") {
+    std::string header = "y", row = "1";
+    for (int i = 0; i < 100; ++i) {
+      header += ",c" + std::to_string(i);
+      row += ",1.2345";
+    }
+    // Early in the line: the first 200 bytes.
+    const std::string early = "nan" + row.substr(1);
+    check_read_error(header + "\n" + early + "\n", columns({"y"}),
+                     "column 'y': expected a finite number, found 'nan'", 2, 1,
+                     early.substr(0, 200) + "...");
+    // Far into the line: up to 40 bytes after the field, so that a caret can point at it.
+    const std::string late = row + ",oops," + row;
+    const int column = static_cast<int>(row.size()) + 2;
+    check_read_error(header + ",z," + header + "\n" + late + "\n", columns({"z"}),
+                     "column 'z': expected a number, found 'oops'", 2, column,
+                     late.substr(0, column - 1 + 40) + "...");
+  }
+
+  TEST_CASE("the caret of a data error falls under the field") {
+    const TempFile file("t,y\n0,1\n0.1,x1\n");
+    const DataError e = error_from<DataError>([&] { read_file(file.path(), columns({"y"})); });
+    CHECK(momentid::render_with_caret(e) == file.path() +
+                                                ":3:5: column 'y': expected a number, found "
+                                                "'x1'\n 3 | 0.1,x1\n   |     ^");
+  }
+
+  // --- Errors: binary files -------------------------------------------------------------------
+
+  TEST_CASE("a binary file that ends inside its header is reported") {
+    check_read_error(std::string("MOMNTID1\x05\x00", 10), columns({"y"}),
+                     "the file ends inside its header: expected a 4-byte header length after "
+                     "'MOMNTID1', found 2 bytes",
+                     1, 1, "");
+    check_read_error(std::string("MOMNTID1\x14\x00\x00\x00y,v\n", 16), columns({"y"}),
+                     "the file ends inside its header: expected 20 bytes of header text, found 4",
+                     1, 1, "");
+    check_read_error(std::string("MOMNTID1\xff\xff\xff\xff", 12), columns({"y"}),
+                     "the header length 4294967295 is too large (at most 16777216 bytes of "
+                     "header text)",
+                     1, 1, "");
+  }
+
+  TEST_CASE("a binary file without a header row asks for one") {
+    check_read_error(binary_file("# momentid: dt=1\n", {}), columns({"y"}),
+                     "expected a header row naming the columns", 1, 1, "# momentid: dt=1");
+  }
+
+  TEST_CASE("a binary file that ends inside a row is reported with the row") {
+    std::string bytes = binary_file("t,y,v,x\n", {0, 1, 2, 3, 0.1, 1, 2, 3, 0.2, 1});
+    bytes += "abcd";
+    check_read_error(bytes, columns({"y"}), "the file ends inside row 3: 20 bytes of a 32-byte row",
+                     3, 3, "");
+  }
+
+  TEST_CASE("a missing column of a binary file is reported at the line of its header text") {
+    check_read_error(binary_file("# momentid: dt=0.1\nt,y\n", {0, 1, 0.1, 2}), columns({"y", "v"}),
+                     "missing column 'v' (the header has: t, y)", 2, 1, "t,y");
+  }
+
+  TEST_CASE("a non-finite value of a binary file is reported by row and column number") {
+    check_read_error(binary_file("t,y,v\n", {0, 1, 2, 0.1, kNaN, 2}), columns({"y"}),
+                     "column 'y': expected a finite number, found 'nan'", 2, 2, "");
+    check_read_error(binary_file("t,y,v\n", {0, 1, -kInf}), columns({"y", "v"}),
+                     "column 'v': expected a finite number, found '-inf'", 1, 3, "");
+  }
+
+  TEST_CASE("a non-finite value of a binary file in a column not read is accepted") {
+    CHECK(read_text(binary_file("y,x\n", {1, kNaN, 2, kInf}), columns({"y"})).values ==
+          std::vector<double>{1, 2});
+  }
+
+  TEST_CASE("a run number of a binary file that is not an integer is reported") {
+    check_read_error(binary_file("y,run\n", {1, 1, 2, 1.5}), columns({"y"}),
+                     "column 'run': expected an integer, found '1.5'", 2, 2, "");
+  }
+
+  TEST_CASE("a non-uniform time step of a binary file is reported by row and column number") {
+    check_read_error(binary_file("y,t\n", {1, 0, 2, 0.1, 3, 0.3}), columns({"y"}),
+                     "non-uniform time step: 0.2 after 0.1 (t = 0.3; samples must be equally "
+                     "spaced)",
+                     3, 2, "");
+  }
+
+  TEST_CASE("too few rows of a binary file are reported at the last row or the header") {
+    check_read_error(binary_file("y\n", {1}), columns({"y"}),
+                     "the data have 1 row; at least 2 are needed", 1, 1, "");
+    check_read_error(binary_file("# c\ny\n", {}), columns({"y"}),
+                     "the data have 0 rows; at least 2 are needed", 2, 1, "y");
+  }
+}
