@@ -24,8 +24,13 @@
 #include <cstdio>
 #include <cstring>
 #include <limits>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
 #include <string_view>
 #include <utility>
+#include <vector>
 
 #include "data/data.hpp"
 
@@ -48,8 +53,8 @@ constexpr std::string_view kByteOrderMark = "\xEF\xBB\xBF";
 constexpr std::string_view kMetadataTag = "momentid:";
 constexpr std::size_t kShownFieldBytes = 40;
 constexpr std::size_t kShownLineBytes = 200;
-// Times written with a dozen significant digits still give steps equal to this; a real gap or
-// a doubled step is far larger.
+// Relative tolerance of a time step: far above the rounding of times written with ten or more
+// significant digits, far below a missing sample or a changed step.
 constexpr double kStepTolerance = 1e-6;
 // Steps are differences of times: rounding of t itself adds an error proportional to |t|.
 constexpr double kTimeRounding = 1e-9;
@@ -284,8 +289,7 @@ void read_names(const std::string& path, std::string_view line, Header& header) 
                                                                 : ' ';
   auto add = [&](std::size_t begin, std::size_t end) {
     std::string_view name = line.substr(begin, end - begin);
-    const std::size_t blanks = name.size() - trim(name).size();
-    const std::size_t leading = std::min(blanks, name.find_first_not_of(" \t"));
+    const std::size_t leading = std::min(name.find_first_not_of(" \t"), name.size());
     name = trim(name);
     if (name.size() >= 2 && name.front() == '"' && name.back() == '"') {
       name = name.substr(1, name.size() - 2);
