@@ -2,12 +2,18 @@
 // 1 usage error, 2 bad model or data, 3 nothing identifiable.
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
+#include <cstdio>
 #include <iostream>
+#include <map>
+#include <optional>
 
 #include "data/writer.hpp"
 #include "derive/moment_system.hpp"
 #include "model/model.hpp"
+#include "moments/from_data.hpp"
 #include "simulate/simulate.hpp"
+#include "solve/report.hpp"
 
 namespace {
 
@@ -152,6 +158,153 @@ int run_simulate(const SimulateCommand& command) {
   return 0;
 }
 
+// `--columns v=velocity,x=force`: the model's names mapped to the file's columns.
+std::map<std::string, std::string> column_map(const std::vector<std::string>& entries) {
+  std::map<std::string, std::string> out;
+  for (const std::string& e : entries) {
+    const std::size_t eq = e.find('=');
+    if (eq == std::string::npos || eq == 0 || eq + 1 == e.size()) {
+      throw momentid::UsageError("--columns: expected NAME=COLUMN, found '" + e + "'");
+    }
+    out[e.substr(0, eq)] = e.substr(eq + 1);
+  }
+  return out;
+}
+
+std::optional<momentid::InputHold> hold_option(const std::string& text) {
+  if (text == "zoh") return momentid::InputHold::kZeroOrderHold;
+  if (text == "sample") return momentid::InputHold::kSample;
+  return std::nullopt;
+}
+
+struct IdentifyCommand {
+  std::string model;
+  std::string data;
+  std::string multipliers;
+  int degree = 0;
+  std::string hold;
+  std::size_t batches = 50;
+  std::string weighting = "ls";
+  std::string format = "text";
+  std::vector<std::string> columns;
+};
+
+int run_identify(const IdentifyCommand& command) {
+  const momentid::Model model = momentid::parse_model_file(command.model);
+  momentid::DeriveOptions derive_options;
+  if (!command.multipliers.empty()) {
+    derive_options.multipliers =
+        momentid::parse_multiplier_list(model, command.multipliers, "--multipliers");
+  }
+  derive_options.degree = command.degree;
+  const momentid::MomentSystem system = momentid::derive(model, derive_options);
+  for (const auto& column : column_map(command.columns)) {
+    const auto& v = model.variables();
+    if (std::find(v.begin(), v.end(), column.first) == v.end()) {
+      throw momentid::UsageError("--columns: '" + column.first +
+                                 "' is not a state or input of model " + model.name());
+    }
+  }
+  momentid::DataOptions data_options;
+  data_options.hold = hold_option(command.hold);
+  data_options.batches = command.batches;
+  data_options.rename = column_map(command.columns);
+  data_options.min_rows = 2 * command.batches;
+  std::vector<std::string> states, inputs;
+  for (const auto& d : model.states()) states.push_back(d.name);
+  for (const auto& d : model.inputs()) inputs.push_back(d.name);
+  const momentid::DataMoments data = momentid::moments_from_file(
+      command.data, states, inputs, momentid::moments_to_estimate(system), data_options);
+  const momentid::Estimate estimate =
+      momentid::solve(system, data.estimates, {.gmm = command.weighting == "gmm"});
+  const momentid::IdentifyReport report{&model, command.data, &data, &estimate,
+                                        command.weighting == "gmm"};
+  std::cout << (command.format == "json" ? momentid::format_report_json(report)
+                                         : momentid::format_report_text(report));
+  if (estimate.status == momentid::Estimate::Status::kNothingIdentifiable) {
+    std::cerr << "momentid: nothing identifiable: " << estimate.message << "\n";
+    return kNothingIdentifiable;
+  }
+  return 0;
+}
+
+struct CheckCommand {
+  std::string data;
+  std::string model;
+  std::size_t lags = 9;
+  std::string hold;
+  std::vector<std::string> columns;
+};
+
+int run_check(const CheckCommand& command) {
+  std::optional<momentid::Model> model;
+  std::vector<std::string> states, inputs;
+  if (!command.model.empty()) {
+    model = momentid::parse_model_file(command.model);
+    for (const auto& d : model->states()) states.push_back(d.name);
+    for (const auto& d : model->inputs()) inputs.push_back(d.name);
+  } else {
+    // Without a model every numeric column but t and run is a channel.
+    const auto reader = momentid::DataReader::open(command.data, {.names = {}, .rename = {},
+                                                                  .min_rows = 0});
+    for (const std::string& c : reader->columns()) {
+      if (!c.empty() && c != "t" && c != "run") states.push_back(c);
+    }
+  }
+  std::optional<momentid::MomentSystem> system;
+  std::vector<momentid::Monomial> moments;
+  if (model) {
+    system = momentid::derive(*model);
+    moments = momentid::moments_to_estimate(*system);
+  }
+  momentid::DataOptions options;
+  options.lags = command.lags;
+  options.hold = hold_option(command.hold);
+  options.rename = column_map(command.columns);
+  const momentid::DataMoments data =
+      momentid::moments_from_file(command.data, states, inputs, moments, options);
+
+  std::printf("data %s: %zu rows in %zu %s", command.data.c_str(), data.rows, data.runs,
+              data.runs == 1 ? "run" : "runs");
+  if (data.time_step) std::printf(", dt = %g", *data.time_step);
+  std::printf("\n\n%-10s %12s %12s  %-*s %s\n", "channel", "mean", "variance",
+              static_cast<int>(6 * command.lags), "autocorrelation at lags 1, 2, ...",
+              "corr. time");
+  for (const momentid::ChannelStatistics& c : data.channels) {
+    std::string lags;
+    for (double r : c.autocorrelation) {
+      char text[16];
+      std::snprintf(text, sizeof text, "%5.2f ", r);
+      lags += text;
+    }
+    std::string time = c.correlation_time > command.lags
+                           ? "> " + std::to_string(command.lags)
+                           : std::to_string(c.correlation_time);
+    std::printf("%-10s %12.5g %12.5g  %-*s %s\n", c.name.c_str(), c.mean, c.variance,
+                static_cast<int>(6 * command.lags), lags.c_str(), time.c_str());
+  }
+  std::printf("\n");
+  const std::vector<std::string> warnings = momentid::smoothness_warnings(data);
+  for (const momentid::ChannelStatistics& c : data.channels) {
+    if (!c.is_input || c.autocorrelation.empty()) continue;
+    if (c.autocorrelation[0] >= 0.5) {
+      std::printf("input %s is smooth enough for the moment method (lag-1 autocorrelation "
+                  "%.3f)\n", c.name.c_str(), c.autocorrelation[0]);
+    }
+  }
+  if (model) {
+    const momentid::Estimate estimate = momentid::solve(*system, data.estimates);
+    if (estimate.identities.empty()) std::printf("stationarity identities: none for this model\n");
+    else std::printf("stationarity identities (sample violation, z-score):\n");
+    for (const auto& c : estimate.identities) {
+      std::printf("  %s: %.3g (z = %.2f)%s\n", c.identity.c_str(), c.violation, c.z,
+                  std::abs(c.z) > 4 ? "  <- violated: not stationary, or not this model" : "");
+    }
+  }
+  for (const std::string& w : warnings) std::printf("warning: %s\n", w.c_str());
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -200,6 +353,41 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"csv", "bin"}));
   simulate_app->add_option("-o,--output", simulate.output, "output file, - for standard output");
 
+  IdentifyCommand identify;
+  CLI::App* identify_app = app.add_subcommand(
+      "identify", "estimate the parameters of a model from data, with standard errors");
+  identify_app->add_option("MODEL", identify.model, "model file")->required();
+  identify_app->add_option("DATA", identify.data, "data file (CSV or binary)")->required();
+  auto* identify_multipliers =
+      identify_app->add_option("--multipliers", identify.multipliers, "multipliers, as for derive");
+  identify_app->add_option("--degree", identify.degree, "multipliers up to this degree")
+      ->check(CLI::Range(1, 12))
+      ->excludes(identify_multipliers);
+  identify_app
+      ->add_option("--input-hold", identify.hold,
+                   "how the inputs were sampled (default: the file's metadata, else sample)")
+      ->check(CLI::IsMember({"sample", "zoh"}));
+  identify_app->add_option("--batches", identify.batches, "batches for the standard errors")
+      ->check(CLI::Range(std::size_t{2}, std::size_t{10000}));
+  identify_app->add_option("--weighting", identify.weighting, "ls, or gmm for two-step optimal")
+      ->check(CLI::IsMember({"ls", "gmm"}));
+  identify_app->add_option("--format", identify.format, "output format")
+      ->check(CLI::IsMember({"text", "json"}));
+  identify_app->add_option("--columns", identify.columns, "NAME=COLUMN: where a model variable is")
+      ->delimiter(',');
+
+  CheckCommand check;
+  CLI::App* check_app = app.add_subcommand(
+      "check", "statistics of a data file: autocorrelations, smoothness, stationarity");
+  check_app->add_option("DATA", check.data, "data file (CSV or binary)")->required();
+  check_app->add_option("MODEL", check.model, "model file: check its stationarity identities");
+  check_app->add_option("--lags", check.lags, "autocorrelation lags")
+      ->check(CLI::Range(std::size_t{1}, std::size_t{1000}));
+  check_app->add_option("--input-hold", check.hold, "how the inputs were sampled")
+      ->check(CLI::IsMember({"sample", "zoh"}));
+  check_app->add_option("--columns", check.columns, "NAME=COLUMN: where a model variable is")
+      ->delimiter(',');
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -210,6 +398,8 @@ int main(int argc, char** argv) {
   try {
     if (derive_app->parsed()) return run_derive(derive);
     if (simulate_app->parsed()) return run_simulate(simulate);
+    if (identify_app->parsed()) return run_identify(identify);
+    if (check_app->parsed()) return run_check(check);
   } catch (const momentid::LocatedError& e) {
     std::cerr << momentid::render_with_caret(e) << "\n";
     return e.exit_code();

@@ -62,6 +62,8 @@ class DataReader {
   virtual ~DataReader() = default;
 
   virtual const DataMetadata& metadata() const = 0;
+  // The column names of the file's header, in file order.
+  virtual const std::vector<std::string>& columns() const = 0;
   // The sample interval: from the `t` column when there is one (checked against the metadata's
   // `dt` when both are present), otherwise from the metadata, otherwise none. Known after the
   // first two rows of the first run have been read.

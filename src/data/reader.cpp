@@ -442,6 +442,8 @@ class StreamReader : public DataReader {
  public:
   const DataMetadata& metadata() const override { return header_.metadata; }
 
+  const std::vector<std::string>& columns() const override { return header_.names; }
+
   std::optional<double> time_step() const override { return step_ ? step_ : header_.metadata_dt; }
 
   std::size_t rows_read() const override { return rows_read_; }

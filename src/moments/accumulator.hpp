@@ -16,8 +16,8 @@ enum class InputHold { kSample, kZeroOrderHold };
 
 // Time averages of the moments E[monomial] from a time series, in one streaming pass, kept per
 // contiguous stretch of the record so that their sampling covariance can be estimated from batch
-// means. Each moment is computed from precomputed powers of the channels; the trapezoidal rule
-// runs over the intervals between consecutive rows of one run, never across runs.
+// means. Each moment is computed from precomputed powers of the channels and averaged over the
+// intervals between consecutive rows of one run, never across runs (see close_interval).
 //
 // Accumulators merge exactly: sums and interval counts add, so shards of a record (or runs) can
 // be accumulated anywhere and combined.
@@ -38,6 +38,8 @@ class MomentAccumulator {
   void start_run();
   // Adds `rows` consecutive rows of the current run, each states then inputs.
   void add(const double* rows, std::size_t count);
+  // Closes the current run: call after the last rows, before reading the stretches.
+  void finish();
   // Appends another accumulator's stretches after this one's (same moments and hold).
   void merge(const MomentAccumulator& other);
 
@@ -53,7 +55,8 @@ class MomentAccumulator {
   const std::vector<Stretch>& stretches() const { return stretches_; }
 
  private:
-  void close_stretch_if_full();
+  void finish_run();
+  void close_interval(std::size_t n);
   void compact();
 
   std::vector<Monomial> moments_;
@@ -64,8 +67,9 @@ class MomentAccumulator {
   std::vector<int> max_power_;
   std::vector<std::size_t> power_offset_;
   std::vector<double> powers_;
-  std::vector<double> previous_state_part_, previous_input_part_, state_part_, input_part_;
-  bool has_previous_ = false;
+  // The state and input parts of every moment at the last four rows of the run (row mod 4).
+  std::vector<double> state_ring_, input_ring_;
+  std::size_t run_rows_ = 0;
   std::vector<Stretch> stretches_;
   std::size_t max_stretches_;
   std::size_t stretch_length_ = 64;  // intervals per stretch, doubled when there are too many

@@ -1,0 +1,227 @@
+#include "moments/from_data.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <condition_variable>
+#include <exception>
+#include <mutex>
+#include <thread>
+
+namespace momentid {
+namespace {
+
+constexpr std::size_t kBlockRows = 1 << 15;
+
+// Sums for the mean, variance and lagged products of every channel, over pairs within runs.
+class LagSums {
+ public:
+  LagSums(std::size_t channels, std::size_t lags)
+      : channels_(channels),
+        lags_(lags),
+        history_(lags * channels, 0.0),
+        sum_(channels, 0.0),
+        sum_squares_(channels, 0.0),
+        products_(lags * channels, 0.0),
+        pairs_(lags, 0) {}
+
+  void start_run() { filled_ = 0; }
+
+  void add(const double* rows, std::size_t count) {
+    for (std::size_t r = 0; r < count; ++r) {
+      const double* x = rows + r * channels_;
+      for (std::size_t c = 0; c < channels_; ++c) {
+        sum_[c] += x[c];
+        sum_squares_[c] += x[c] * x[c];
+      }
+      // history_ holds the previous `lags_` rows, newest first at `head_`.
+      for (std::size_t l = 0; l < std::min(filled_, lags_); ++l) {
+        const double* past = &history_[((head_ + l) % lags_) * channels_];
+        for (std::size_t c = 0; c < channels_; ++c) products_[l * channels_ + c] += x[c] * past[c];
+        ++pairs_[l];
+      }
+      if (lags_ > 0) {
+        head_ = (head_ + lags_ - 1) % lags_;
+        std::copy(x, x + channels_, &history_[head_ * channels_]);
+      }
+      ++filled_;
+      ++count_;
+    }
+  }
+
+  ChannelStatistics statistics(std::size_t c) const {
+    ChannelStatistics s;
+    const double n = static_cast<double>(count_);
+    s.mean = sum_[c] / n;
+    s.variance = sum_squares_[c] / n - s.mean * s.mean;
+    s.correlation_time = lags_ + 1;
+    for (std::size_t l = 0; l < lags_; ++l) {
+      const double rho = pairs_[l] > 0 && s.variance > 0
+                             ? (products_[l * channels_ + c] / static_cast<double>(pairs_[l]) -
+                                s.mean * s.mean) /
+                                   s.variance
+                             : std::nan("");
+      s.autocorrelation.push_back(rho);
+      if (s.correlation_time == lags_ + 1 && rho < std::exp(-1.0)) s.correlation_time = l + 1;
+    }
+    return s;
+  }
+
+ private:
+  std::size_t channels_, lags_;
+  std::vector<double> history_, sum_, sum_squares_, products_;
+  std::vector<std::size_t> pairs_;
+  std::size_t head_ = 0, filled_ = 0, count_ = 0;
+};
+
+// Hands filled blocks from the reading thread to the accumulating one, two at a time at most.
+class BlockQueue {
+ public:
+  explicit BlockQueue(std::size_t capacity) : free_(capacity) {
+    for (auto& b : free_) b = std::make_unique<DataBlock>();
+  }
+  std::unique_ptr<DataBlock> take_free() {
+    std::unique_lock lock(mutex_);
+    changed_.wait(lock, [&] { return !free_.empty() || stop_; });
+    if (stop_) return nullptr;
+    auto b = std::move(free_.back());
+    free_.pop_back();
+    return b;
+  }
+  void give_free(std::unique_ptr<DataBlock> b) {
+    std::lock_guard lock(mutex_);
+    free_.push_back(std::move(b));
+    changed_.notify_all();
+  }
+  void push_full(std::unique_ptr<DataBlock> b) {
+    std::lock_guard lock(mutex_);
+    full_.push_back(std::move(b));
+    changed_.notify_all();
+  }
+  // nullptr when the reader has finished (or failed) and everything has been taken.
+  std::unique_ptr<DataBlock> take_full() {
+    std::unique_lock lock(mutex_);
+    changed_.wait(lock, [&] { return !full_.empty() || done_; });
+    if (full_.empty()) return nullptr;
+    auto b = std::move(full_.front());
+    full_.erase(full_.begin());
+    return b;
+  }
+  void finish(std::exception_ptr error) {
+    std::lock_guard lock(mutex_);
+    done_ = true;
+    error_ = error;
+    changed_.notify_all();
+  }
+  void stop() {
+    std::lock_guard lock(mutex_);
+    stop_ = true;
+    changed_.notify_all();
+  }
+  std::exception_ptr error() {
+    std::lock_guard lock(mutex_);
+    return error_;
+  }
+
+ private:
+  std::mutex mutex_;
+  std::condition_variable changed_;
+  std::vector<std::unique_ptr<DataBlock>> free_, full_;
+  bool done_ = false, stop_ = false;
+  std::exception_ptr error_;
+};
+
+}  // namespace
+
+DataMoments moments_from_file(const std::string& path, const std::vector<std::string>& states,
+                              const std::vector<std::string>& inputs,
+                              const std::vector<Monomial>& moments, const DataOptions& options) {
+  ColumnRequest request;
+  request.names = states;
+  request.names.insert(request.names.end(), inputs.begin(), inputs.end());
+  request.rename = options.rename;
+  request.min_rows = options.min_rows;
+  std::unique_ptr<DataReader> reader = DataReader::open(path, request);
+
+  DataMoments out;
+  out.metadata = reader->metadata();
+  if (options.hold) {
+    out.hold = *options.hold;
+  } else {
+    const auto hold = out.metadata.get("input-hold");
+    out.hold = hold && *hold == "zoh" ? InputHold::kZeroOrderHold : InputHold::kSample;
+  }
+  const std::size_t channels = request.names.size();
+  MomentAccumulator accumulator(moments, states.size(), inputs.size(), out.hold, options.batches);
+  LagSums lags(channels, options.lags);
+
+  BlockQueue queue(3);
+  std::thread producer([&] {
+    try {
+      while (auto block = queue.take_free()) {
+        if (!reader->next(*block, kBlockRows)) {
+          queue.give_free(std::move(block));
+          break;
+        }
+        queue.push_full(std::move(block));
+      }
+      queue.finish(nullptr);
+    } catch (...) {
+      queue.finish(std::current_exception());
+    }
+  });
+  try {
+    while (auto block = queue.take_full()) {
+      if (block->run_starts) {
+        accumulator.start_run();
+        lags.start_run();
+        ++out.runs;
+      }
+      accumulator.add(block->values.data(), block->rows);
+      lags.add(block->values.data(), block->rows);
+      out.rows += block->rows;
+      queue.give_free(std::move(block));
+    }
+  } catch (...) {
+    queue.stop();
+    producer.join();
+    throw;
+  }
+  producer.join();
+  if (auto error = queue.error()) std::rethrow_exception(error);
+
+  accumulator.finish();
+  out.time_step = reader->time_step();
+  out.estimates = estimates(accumulator, options.batches);
+  for (std::size_t c = 0; c < channels; ++c) {
+    ChannelStatistics s = lags.statistics(c);
+    s.name = request.names[c];
+    s.is_input = c >= states.size();
+    out.channels.push_back(std::move(s));
+  }
+  return out;
+}
+
+}  // namespace momentid
+
+namespace momentid {
+
+std::vector<std::string> smoothness_warnings(const DataMoments& data) {
+  std::vector<std::string> out;
+  for (const ChannelStatistics& c : data.channels) {
+    if (c.autocorrelation.empty() || std::isnan(c.autocorrelation[0])) continue;
+    const double rho = c.autocorrelation[0];
+    char text[32];
+    std::snprintf(text, sizeof text, "%.3f", rho);
+    if (c.is_input && rho < 0.5) {
+      out.push_back("input '" + c.name + "' is nearly white (lag-1 autocorrelation " + text +
+                    "): the method needs a smooth input, and the estimates will be biased");
+    } else if (!c.is_input && rho < 0.9) {
+      out.push_back("sampling is coarse for the dynamics: the lag-1 autocorrelation of '" +
+                    c.name + "' is " + text +
+                    "; the time averages are biased, sample faster if you can");
+    }
+  }
+  return out;
+}
+
+}  // namespace momentid

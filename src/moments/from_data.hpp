@@ -1,0 +1,62 @@
+#pragma once
+
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "data/data.hpp"
+#include "moments/accumulator.hpp"
+
+namespace momentid {
+
+// Mean, variance and autocorrelations of one channel (pairs never span two runs).
+struct ChannelStatistics {
+  std::string name;
+  bool is_input = false;
+  double mean = 0;
+  double variance = 0;
+  std::vector<double> autocorrelation;  // lags 1..L
+  // Samples until the autocorrelation first drops below 1/e (L + 1 if it never does).
+  std::size_t correlation_time = 0;
+};
+
+struct DataOptions {
+  // How inputs were sampled; nullopt: the file's `input-hold` metadata, else kSample.
+  std::optional<InputHold> hold;
+  std::size_t batches = 50;
+  std::map<std::string, std::string> rename;  // model name -> file column
+  std::size_t lags = 1;                       // autocorrelations computed, per channel
+  std::size_t min_rows = 2;
+};
+
+// What one pass over a data file yields.
+struct DataMoments {
+  MomentEstimates estimates;  // for the requested moments, in their order
+  std::vector<ChannelStatistics> channels;  // the model's states, then inputs
+  DataMetadata metadata;
+  InputHold hold = InputHold::kSample;
+  std::optional<double> time_step;
+  std::size_t rows = 0;
+  std::size_t runs = 0;
+};
+
+// Reads `path` once, streaming (memory does not grow with the file), and estimates `moments`
+// over the model's variables (states, then inputs), with the channels' statistics. The file is
+// parsed on one thread while the moments are accumulated on another. Throws DataError for a bad
+// file and Error if it cannot be read.
+DataMoments moments_from_file(const std::string& path, const std::vector<std::string>& states,
+                              const std::vector<std::string>& inputs,
+                              const std::vector<Monomial>& moments, const DataOptions& options);
+
+}  // namespace momentid
+
+namespace momentid {
+
+// Warnings about the data for the moment method: an input that is nearly white (lag-1
+// autocorrelation below 0.5; the method needs a smooth input) and sampling too coarse for the
+// dynamics (a state's lag-1 autocorrelation below 0.9: the trapezoidal averages of products
+// with derivatives are then biased).
+std::vector<std::string> smoothness_warnings(const DataMoments& data);
+
+}  // namespace momentid

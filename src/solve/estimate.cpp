@@ -1,0 +1,279 @@
+#include "solve/estimate.hpp"
+
+#include <Eigen/Dense>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <set>
+#include <sstream>
+
+#include "solve/distributions.hpp"
+
+namespace momentid {
+namespace {
+
+using Eigen::MatrixXd;
+using Eigen::VectorXd;
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// d A / d mu_k and d b / d mu_k: which entries of the system a moment enters, with its weight.
+struct MomentUse {
+  std::vector<std::tuple<Eigen::Index, Eigen::Index, double>> a;  // row, parameter, weight
+  std::vector<std::pair<Eigen::Index, double>> b;                 // row, weight
+};
+
+std::string format_number(double x) {
+  std::ostringstream out;
+  out.precision(4);
+  out << x;
+  return out.str();
+}
+
+}  // namespace
+
+std::vector<Monomial> moments_to_estimate(const MomentSystem& system) {
+  std::vector<Monomial> out = system.moments;
+  std::set<Monomial, MomentOrder> seen(out.begin(), out.end());
+  const Monomial one(system.model->variables().size(), 0);
+  auto add = [&](const Monomial& m) {
+    if (m != one && seen.insert(m).second) out.push_back(m);
+  };
+  for (const DataIdentity& id : system.identities) {
+    add(id.moment);
+    for (const auto& [m, w] : id.value) add(m);
+  }
+  return out;
+}
+
+Estimate solve(const MomentSystem& system, const MomentEstimates& estimates,
+               const SolveOptions& options) {
+  const Model& model = *system.model;
+  const std::vector<Monomial> moments = moments_to_estimate(system);
+  std::map<Monomial, Eigen::Index> index;
+  for (std::size_t k = 0; k < moments.size(); ++k) index[moments[k]] = static_cast<Eigen::Index>(k);
+  const Monomial one(model.variables().size(), 0);
+  const auto rows = static_cast<Eigen::Index>(system.equations.size());
+  const auto params = static_cast<Eigen::Index>(model.parameters().size());
+  const auto k_count = static_cast<Eigen::Index>(moments.size());
+
+  Estimate out;
+  out.rows = system.equations.size();
+  out.batches = estimates.batch_means.size();
+  out.intervals = estimates.intervals;
+  for (const Declaration& p : model.parameters()) out.parameters.push_back({p.name});
+  if (rows == 0 || params == 0) {
+    out.status = Estimate::Status::kNothingIdentifiable;
+    out.message = "the model gives no moment equations";
+    return out;
+  }
+
+  VectorXd mu(k_count);
+  for (Eigen::Index k = 0; k < k_count; ++k) mu(k) = estimates.mean[static_cast<std::size_t>(k)];
+  MatrixXd cov_mu(k_count, k_count);
+  const auto c = estimates.covariance();
+  for (Eigen::Index i = 0; i < k_count; ++i) {
+    for (Eigen::Index j = 0; j < k_count; ++j) {
+      cov_mu(i, j) = c[static_cast<std::size_t>(i)][static_cast<std::size_t>(j)];
+    }
+  }
+
+  MatrixXd a = MatrixXd::Zero(rows, params);
+  VectorXd b = VectorXd::Zero(rows);
+  std::vector<MomentUse> uses(static_cast<std::size_t>(k_count));
+  for (Eigen::Index r = 0; r < rows; ++r) {
+    const MomentEquation& eq = system.equations[static_cast<std::size_t>(r)];
+    for (Eigen::Index p = 0; p < params; ++p) {
+      for (const auto& [m, w] : eq.coefficients[static_cast<std::size_t>(p)]) {
+        const double weight = w.to_double();
+        if (m == one) {
+          a(r, p) += weight;
+          continue;
+        }
+        const Eigen::Index k = index.at(m);
+        a(r, p) += weight * mu(k);
+        uses[static_cast<std::size_t>(k)].a.emplace_back(r, p, weight);
+      }
+    }
+    for (const auto& [m, w] : eq.rhs) {
+      const double weight = w.to_double();
+      if (m == one) {
+        b(r) += weight;
+        continue;
+      }
+      const Eigen::Index k = index.at(m);
+      b(r) += weight * mu(k);
+      uses[static_cast<std::size_t>(k)].b.emplace_back(r, weight);
+    }
+  }
+
+  // Columns scaled to unit length: moments of different orders differ by orders of magnitude.
+  VectorXd scale(params);
+  for (Eigen::Index p = 0; p < params; ++p) {
+    const double norm = a.col(p).norm();
+    scale(p) = norm > 0 ? norm : 1;
+  }
+  const MatrixXd as = a * scale.cwiseInverse().asDiagonal();
+  Eigen::JacobiSVD<MatrixXd> svd(as, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  const VectorXd& sigma = svd.singularValues();
+  const double tolerance = 1e-10 * (sigma.size() > 0 ? sigma(0) : 0.0);
+  Eigen::Index rank = 0;
+  for (Eigen::Index i = 0; i < sigma.size(); ++i) rank += sigma(i) > tolerance ? 1 : 0;
+  out.rank = static_cast<std::size_t>(rank);
+  const Eigen::Index smallest = std::min(rows, params) - 1;
+  out.condition = sigma(smallest) > 0 ? sigma(0) / sigma(smallest)
+                                      : std::numeric_limits<double>::infinity();
+  if (rank == 0) {
+    out.status = Estimate::Status::kNothingIdentifiable;
+    out.message = "the moment equations are all zero for these data";
+    return out;
+  }
+
+  const MatrixXd u = svd.matrixU().leftCols(rank);
+  const MatrixXd v = svd.matrixV().leftCols(rank);
+  const VectorXd inverse_sigma = sigma.head(rank).cwiseInverse();
+  const MatrixXd pinv = v * inverse_sigma.asDiagonal() * u.transpose();  // P x R
+  const MatrixXd normal_pinv = v * inverse_sigma.cwiseAbs2().asDiagonal() * v.transpose();
+  const VectorXd theta_scaled = pinv * b;
+  const VectorXd theta = theta_scaled.cwiseQuotient(scale);
+  const VectorXd residual = b - as * theta_scaled;
+
+  // Parameters that the null space touches cannot be told apart from others.
+  std::vector<bool> identifiable(static_cast<std::size_t>(params), true);
+  if (rank < params) {
+    out.status = Estimate::Status::kRankDeficient;
+    const MatrixXd null = svd.matrixV().rightCols(params - rank);
+    std::string combos;
+    for (Eigen::Index j = 0; j < null.cols(); ++j) {
+      VectorXd d = null.col(j).cwiseQuotient(scale);
+      d /= d.cwiseAbs().maxCoeff();
+      std::string combo;
+      for (Eigen::Index p = 0; p < params; ++p) {
+        if (std::abs(null(p, j)) < 1e-6) continue;
+        identifiable[static_cast<std::size_t>(p)] = false;
+        const double w = d(p);
+        combo += (combo.empty() ? (w < 0 ? "-" : "") : (w < 0 ? " - " : " + ")) +
+                 (std::abs(std::abs(w) - 1) < 1e-9 ? "" : format_number(std::abs(w)) + "*") +
+                 model.parameters()[static_cast<std::size_t>(p)].name;
+      }
+      combos += (combos.empty() ? "" : "; ") + combo;
+    }
+    out.message = "the data cannot separate the parameters along " + combos +
+                  ": only " + std::to_string(rank) + " of " + std::to_string(params) +
+                  " parameter combinations are determined";
+  }
+
+  // Delta method: d theta / d mu_k for every moment, then Cov(theta) = J Cov(mu) J^T.
+  MatrixXd jacobian = MatrixXd::Zero(params, k_count);
+  for (Eigen::Index k = 0; k < k_count; ++k) {
+    const MomentUse& use = uses[static_cast<std::size_t>(k)];
+    if (use.a.empty() && use.b.empty()) continue;
+    MatrixXd da = MatrixXd::Zero(rows, params);
+    VectorXd db = VectorXd::Zero(rows);
+    for (const auto& [r, p, w] : use.a) da(r, p) += w / scale(p);
+    for (const auto& [r, w] : use.b) db(r) += w;
+    const VectorXd d_theta_scaled =
+        normal_pinv * (da.transpose() * residual) + pinv * (db - da * theta_scaled);
+    jacobian.col(k) = d_theta_scaled.cwiseQuotient(scale);
+  }
+  const MatrixXd cov_theta = jacobian * cov_mu * jacobian.transpose();
+  const double t975 = out.batches >= 2
+                          ? student_t_quantile(0.975, static_cast<double>(out.batches - 1))
+                          : kNaN;
+  for (Eigen::Index p = 0; p < params; ++p) {
+    ParameterEstimate& e = out.parameters[static_cast<std::size_t>(p)];
+    e.estimate = theta(p);
+    e.identifiable = identifiable[static_cast<std::size_t>(p)];
+    e.std_error = e.identifiable && out.batches >= 2 ? std::sqrt(std::max(0.0, cov_theta(p, p)))
+                                                     : kNaN;
+    e.ci_low = e.estimate - t975 * e.std_error;
+    e.ci_high = e.estimate + t975 * e.std_error;
+  }
+
+  if (out.batches < 10) {
+    out.warnings.push_back("only " + std::to_string(out.batches) +
+                           " batches: the standard errors are rough (use a longer record or "
+                           "more batches)");
+  }
+  if (out.condition > 1e8) {
+    out.warnings.push_back("the equations are ill-conditioned (condition number " +
+                           format_number(out.condition) +
+                           "): the parameters are nearly inseparable with these multipliers");
+  }
+
+  // Pure-data identities: the sample violation of E[m] = value, in standard errors.
+  for (const DataIdentity& id : system.identities) {
+    VectorXd weights = VectorXd::Zero(k_count);
+    double constant = 0;
+    weights(index.at(id.moment)) += 1;
+    for (const auto& [m, w] : id.value) {
+      if (m == one) {
+        constant += w.to_double();
+      } else {
+        weights(index.at(m)) -= w.to_double();
+      }
+    }
+    IdentityCheck check;
+    check.identity = format_moment(model, id.moment) + " = " + format_combination(model, id.value);
+    check.violation = weights.dot(mu) - constant;
+    const double variance = weights.dot(cov_mu * weights);
+    check.z = variance > 0 ? check.violation / std::sqrt(variance) : kNaN;
+    out.identities.push_back(check);
+  }
+
+  if (!options.gmm) return out;
+  // Two-step optimal weighting: the moment conditions g = A theta - b have covariance
+  // S = G Cov(mu) G^T with G = dg/dmu at the first-step estimate; weight by S^-1.
+  if (rank < params) {
+    out.warnings.push_back("no optimally weighted estimate: the system is rank-deficient");
+    return out;
+  }
+  MatrixXd g_mu = MatrixXd::Zero(rows, k_count);
+  for (Eigen::Index k = 0; k < k_count; ++k) {
+    const MomentUse& use = uses[static_cast<std::size_t>(k)];
+    for (const auto& [r, p, w] : use.a) g_mu(r, k) += w * theta(p);
+    for (const auto& [r, w] : use.b) g_mu(r, k) -= w;
+  }
+  const MatrixXd s = g_mu * cov_mu * g_mu.transpose();
+  Eigen::SelfAdjointEigenSolver<MatrixXd> eigen(s);
+  const VectorXd lambda = eigen.eigenvalues();
+  const double lambda_max = lambda.maxCoeff();
+  VectorXd inverse_lambda = VectorXd::Zero(rows);
+  Eigen::Index s_rank = 0;
+  for (Eigen::Index i = 0; i < rows; ++i) {
+    if (lambda(i) > 1e-12 * lambda_max) {
+      inverse_lambda(i) = 1 / lambda(i);
+      ++s_rank;
+    }
+  }
+  if (static_cast<std::size_t>(s_rank) + 1 > out.batches) {
+    out.warnings.push_back("optimal weighting needs more batches than equations (" +
+                           std::to_string(out.batches) + " batches for " +
+                           std::to_string(rows) + " equations): use --batches");
+  }
+  const MatrixXd w = eigen.eigenvectors() * inverse_lambda.asDiagonal() *
+                     eigen.eigenvectors().transpose();
+  const MatrixXd information = as.transpose() * w * as;
+  Eigen::LDLT<MatrixXd> ldlt(information);
+  const VectorXd theta_gmm_scaled = ldlt.solve(as.transpose() * w * b);
+  const VectorXd g = as * theta_gmm_scaled - b;
+  const MatrixXd cov_gmm_scaled = ldlt.solve(MatrixXd::Identity(params, params));
+  for (Eigen::Index p = 0; p < params; ++p) {
+    ParameterEstimate e{model.parameters()[static_cast<std::size_t>(p)].name};
+    e.estimate = theta_gmm_scaled(p) / scale(p);
+    e.std_error = std::sqrt(std::max(0.0, cov_gmm_scaled(p, p))) / scale(p);
+    e.ci_low = e.estimate - t975 * e.std_error;
+    e.ci_high = e.estimate + t975 * e.std_error;
+    out.gmm_parameters.push_back(e);
+  }
+  out.j_dof = static_cast<int>(s_rank - params);
+  if (out.j_dof > 0) {
+    out.j_statistic = g.dot(w * g);
+    out.j_pvalue = chi_square_upper_tail(*out.j_statistic, out.j_dof);
+  } else {
+    out.warnings.push_back("no J test: as many equations as parameters (add multipliers)");
+  }
+  return out;
+}
+
+}  // namespace momentid

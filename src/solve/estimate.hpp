@@ -1,0 +1,64 @@
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "derive/moment_system.hpp"
+#include "moments/accumulator.hpp"
+
+namespace momentid {
+
+// One parameter's estimate. `identifiable` is false when the data determine only combinations
+// of this parameter with others (then the estimate is the minimum-norm one and the error NaN).
+struct ParameterEstimate {
+  std::string name;
+  double estimate = 0;
+  double std_error = 0;
+  double ci_low = 0, ci_high = 0;  // 95% interval
+  bool identifiable = true;
+};
+
+// The sample violation of a pure-data identity E[m] = value, in standard errors.
+struct IdentityCheck {
+  std::string identity;
+  double violation = 0;
+  double z = 0;
+};
+
+// The result of an identification: parameters with standard errors and 95% intervals, and the
+// diagnostics that say when to distrust them. Like a solver summary, it is a value even when the
+// answer is poor: `status` and `warnings` say so.
+struct Estimate {
+  enum class Status { kOk, kRankDeficient, kNothingIdentifiable };
+  Status status = Status::kOk;
+  std::string message;  // what went wrong, for kRankDeficient and kNothingIdentifiable
+
+  std::vector<ParameterEstimate> parameters;      // least squares
+  std::vector<ParameterEstimate> gmm_parameters;  // two-step optimal weighting, when asked
+  std::size_t rows = 0;                           // equations in the system
+  std::size_t rank = 0;
+  double condition = 0;  // of the column-scaled coefficient matrix
+  std::size_t batches = 0;
+  std::size_t intervals = 0;  // sample intervals the moments average over
+  std::optional<double> j_statistic, j_pvalue;
+  int j_dof = 0;
+  std::vector<IdentityCheck> identities;
+  std::vector<std::string> warnings;
+};
+
+struct SolveOptions {
+  bool gmm = false;
+};
+
+// The moments the solver needs estimates of, in the order `solve` expects them: the system's
+// moments, then those its identities mention.
+std::vector<Monomial> moments_to_estimate(const MomentSystem& system);
+
+// Solves A(mu) theta = b(mu) by least squares with scaled columns and a rank-revealing SVD, and
+// propagates the moments' batch covariance to the parameters (delta method). `estimates` are
+// for moments_to_estimate(system), in that order.
+Estimate solve(const MomentSystem& system, const MomentEstimates& estimates,
+               const SolveOptions& options = {});
+
+}  // namespace momentid

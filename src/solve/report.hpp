@@ -1,0 +1,24 @@
+#pragma once
+
+#include <string>
+
+#include "moments/from_data.hpp"
+#include "solve/estimate.hpp"
+
+namespace momentid {
+
+// What `momentid identify` prints: the estimate and where it came from.
+struct IdentifyReport {
+  const Model* model = nullptr;
+  std::string data_path;
+  const DataMoments* data = nullptr;
+  const Estimate* estimate = nullptr;
+  bool gmm = false;  // the optimally weighted estimate is the main result
+};
+
+// A table (parameter, estimate, standard error, 95% interval), then the diagnostics.
+std::string format_report_text(const IdentifyReport& report);
+// The JSON layout documented in the README ("momentid identify").
+std::string format_report_json(const IdentifyReport& report);
+
+}  // namespace momentid
