@@ -4,6 +4,7 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <optional>
 #include <random>
 #include <set>
 
@@ -117,7 +118,8 @@ class Deriver {
     }
     needed.erase(Monomial(variables_, 0));
     system.moments.assign(needed.begin(), needed.end());
-    system.generic_rank = generic_rank(system);
+    system.generic_rank = generic_rank(system, /*symmetric=*/false);
+    system.symmetric_rank = generic_rank(system, /*symmetric=*/true);
     return system;
   }
 
@@ -429,12 +431,16 @@ class Deriver {
     }
   }
 
-  int generic_rank(const MomentSystem& system) const {
+  // With `symmetric`, moments of odd total degree are set to zero, as they vanish for a system
+  // that is symmetric under y, u -> -y, -u driven by a symmetric input.
+  int generic_rank(const MomentSystem& system, bool symmetric) const {
     if (system.equations.empty() || parameters_ == 0) return 0;
     std::mt19937_64 engine(20260101);
     std::uniform_real_distribution<double> draw(0.5, 2.0);
     std::map<Monomial, double> value;
-    for (const Monomial& m : system.moments) value[m] = draw(engine);
+    for (const Monomial& m : system.moments) {
+      value[m] = symmetric && degree(m) % 2 == 1 ? 0.0 : draw(engine);
+    }
     value[Monomial(variables_, 0)] = 1.0;
     Eigen::MatrixXd a(system.equations.size(), parameters_);
     for (std::size_t r = 0; r < system.equations.size(); ++r) {
@@ -525,13 +531,19 @@ MomentSystem derive(const Model& model, const DeriveOptions& options) {
     }
     return system;
   } else {
-    MomentSystem best;
+    // The lowest degree that determines every parameter even when odd moments vanish (as they
+    // do for symmetric systems under symmetric input); failing that, the lowest that does for
+    // generic moments.
+    const int parameters = static_cast<int>(model.parameters().size());
+    std::optional<MomentSystem> generic;
+    MomentSystem last;
     for (int d = 1; d <= kMaxAutomaticDegree; ++d) {
       all(monomials_up_to(states, d));
-      best = deriver.run(multipliers);
-      if (best.generic_rank == static_cast<int>(model.parameters().size())) break;
+      last = deriver.run(multipliers);
+      if (last.symmetric_rank == parameters) return last;
+      if (!generic && last.generic_rank == parameters) generic = last;
     }
-    return best;
+    return generic ? *generic : last;
   }
   return deriver.run(multipliers);
 }

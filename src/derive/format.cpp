@@ -216,7 +216,11 @@ std::string format_text(const MomentSystem& system) {
   if (system.equations.empty()) out << "  (none)\n";
   const std::size_t parameters = model.parameters().size();
   out << "\nequations: " << system.equations.size() << " (independent: " << system.generic_rank
-      << " of " << parameters << " parameters)\n";
+      << " of " << parameters << " parameters";
+  if (system.symmetric_rank < system.generic_rank) {
+    out << "; " << system.symmetric_rank << " if odd moments vanish, as for symmetric systems";
+  }
+  out << ")\n";
   out << "parameters:";
   for (std::size_t p = 0; p < parameters; ++p)
     out << (p ? ", " : " ") << model.parameters()[p].name;
@@ -290,7 +294,8 @@ std::string format_json(const MomentSystem& system) {
     }
     out << "]}";
   }
-  out << "\n  ],\n  \"independent\": " << system.generic_rank << ",\n  \"identities\": [";
+  out << "\n  ],\n  \"independent\": " << system.generic_rank
+      << ",\n  \"independent_if_symmetric\": " << system.symmetric_rank << ",\n  \"identities\": [";
   for (std::size_t i = 0; i < system.identities.size(); ++i) {
     const DataIdentity& id = system.identities[i];
     out << (i ? ", " : "")

@@ -56,7 +56,7 @@ struct SkippedMultiplier {
 // How to choose multipliers. `multipliers` (all equations) wins over `degree` (all monomials in
 // the states of total degree 1..degree), which wins over the model's own `multipliers`
 // statements; with none of these, the degree is raised from 1 until the equations determine
-// every parameter (at most kMaxAutomaticDegree).
+// every parameter even for symmetric data (at most kMaxAutomaticDegree; see derive()).
 struct DeriveOptions {
   std::optional<std::vector<Monomial>> multipliers;
   int degree = 0;
@@ -80,6 +80,9 @@ struct MomentSystem {
   // Rank of the coefficient matrix for generic moment values: how many parameters the
   // equations can determine at best.
   int generic_rank = 0;
+  // The same when moments of odd total degree vanish, as for a system symmetric under
+  // y, u -> -y, -u with a symmetric input: equations that only hold odd moments then say 0 = 0.
+  int symmetric_rank = 0;
 };
 
 // Derives the moment equations. Throws ModelError when the model's multipliers refer to
