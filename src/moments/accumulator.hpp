@@ -72,7 +72,7 @@ class MomentAccumulator {
   std::size_t run_rows_ = 0;
   std::vector<Stretch> stretches_;
   std::size_t max_stretches_;
-  std::size_t stretch_length_ = 64;  // intervals per stretch, doubled when there are too many
+  std::size_t stretch_length_ = 1;  // intervals per stretch, doubled when there are too many
   std::size_t intervals_ = 0;
 };
 

@@ -61,7 +61,9 @@ Estimate solve(const MomentSystem& system, const MomentEstimates& estimates,
   out.rows = system.equations.size();
   out.batches = estimates.batch_means.size();
   out.intervals = estimates.intervals;
-  for (const Declaration& p : model.parameters()) out.parameters.push_back({p.name});
+  for (const Declaration& p : model.parameters()) {
+    out.parameters.push_back({p.name, kNaN, kNaN, kNaN, kNaN, /*identifiable=*/false});
+  }
   if (rows == 0 || params == 0) {
     out.status = Estimate::Status::kNothingIdentifiable;
     out.message = "the model gives no moment equations";
