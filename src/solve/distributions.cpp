@@ -2,14 +2,16 @@
 
 #include <cmath>
 #include <limits>
+#include <utility>
 
 namespace momentid {
 namespace {
 
-// Regularized lower incomplete gamma P(a, x): its series for x < a + 1, else 1 - the continued
-// fraction of Q(a, x) (evaluated by the modified Lentz method).
-double gamma_p(double a, double x) {
-  if (x <= 0) return 0;
+// Regularized incomplete gamma functions: P(a, x) by its series for x < a + 1, Q(a, x) = 1 - P
+// by its continued fraction (modified Lentz method) otherwise, so that neither tail loses its
+// digits to cancellation. Returns {P, Q}.
+std::pair<double, double> gamma_pq(double a, double x) {
+  if (x <= 0) return {0, 1};
   const double log_prefix = a * std::log(x) - x - std::lgamma(a);
   if (x < a + 1) {
     double term = 1 / a, sum = term;
@@ -18,7 +20,8 @@ double gamma_p(double a, double x) {
       sum += term;
       if (std::abs(term) < std::abs(sum) * 1e-16) break;
     }
-    return sum * std::exp(log_prefix);
+    const double p = sum * std::exp(log_prefix);
+    return {p, 1 - p};
   }
   constexpr double tiny = 1e-300;
   double b = x + 1 - a, c = 1 / tiny, d = 1 / b, h = d;
@@ -34,7 +37,8 @@ double gamma_p(double a, double x) {
     h *= delta;
     if (std::abs(delta - 1) < 1e-16) break;
   }
-  return 1 - std::exp(log_prefix) * h;
+  const double q = std::exp(log_prefix) * h;
+  return {1 - q, q};
 }
 
 // Continued fraction of the incomplete beta function (modified Lentz).
@@ -80,8 +84,7 @@ double beta_regularized(double a, double b, double x) {
 }  // namespace
 
 double chi_square_upper_tail(double x, double dof) {
-  if (x <= 0) return 1;
-  return 1 - gamma_p(dof / 2, x / 2);
+  return gamma_pq(dof / 2, x / 2).second;
 }
 
 double student_t_cdf(double t, double dof) {
