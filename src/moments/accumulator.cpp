@@ -22,14 +22,22 @@ MomentAccumulator::MomentAccumulator(std::vector<Monomial> moments, std::size_t 
     offset += static_cast<std::size_t>(p) + 1;
   }
   powers_.assign(offset, 1.0);
-  for (const Monomial& m : moments_) {
-    std::vector<std::size_t> state, input;
-    for (std::size_t v = 0; v < variables; ++v) {
-      if (m[v] == 0) continue;
-      (v < states_ ? state : input).push_back(power_offset_[v] + static_cast<std::size_t>(m[v]));
+  // Each moment's state factors, then its input factors, as indices into the power table.
+  first_factor_.push_back(0);
+  for (std::size_t i = 0; i < moments_.size(); ++i) {
+    const Monomial& m = moments_[i];
+    bool has_input = false;
+    for (std::size_t v = 0; v < states_; ++v) {
+      if (m[v] != 0) factors_.push_back(power_offset_[v] + static_cast<std::size_t>(m[v]));
     }
-    state_factors_.push_back(std::move(state));
-    input_factors_.push_back(std::move(input));
+    first_factor_.push_back(factors_.size());
+    for (std::size_t v = states_; v < variables; ++v) {
+      if (m[v] == 0) continue;
+      factors_.push_back(power_offset_[v] + static_cast<std::size_t>(m[v]));
+      has_input = true;
+    }
+    first_factor_.push_back(factors_.size());
+    (hold_ == InputHold::kZeroOrderHold && has_input ? held_ : plain_).push_back(i);
   }
   const std::size_t k = moments_.size();
   state_ring_.assign(4 * k, 0.0);
@@ -62,12 +70,15 @@ void MomentAccumulator::add(const double* rows, std::size_t count) {
     }
     double* state = &state_ring_[(run_rows_ % 4) * k];
     double* input = &input_ring_[(run_rows_ % 4) * k];
+    const std::size_t* factors = factors_.data();
+    const std::size_t* first = first_factor_.data();
+    const double* powers = powers_.data();
     for (std::size_t i = 0; i < k; ++i) {
-      double s = 1, u = 1;
-      for (std::size_t f : state_factors_[i]) s *= powers_[f];
-      for (std::size_t f : input_factors_[i]) u *= powers_[f];
-      state[i] = s;
-      input[i] = u;
+      double g = 1, h = 1;
+      for (std::size_t f = first[2 * i]; f < first[2 * i + 1]; ++f) g *= powers[factors[f]];
+      for (std::size_t f = first[2 * i + 1]; f < first[2 * i + 2]; ++f) h *= powers[factors[f]];
+      state[i] = g;
+      input[i] = h;
     }
     ++run_rows_;
     // With rows up to m = run_rows_ - 1 known, the interval [m - 2, m - 1] can be closed.
@@ -112,13 +123,10 @@ void MomentAccumulator::close_interval(std::size_t n) {
   const double* g2 = n + 2 < rows ? state(n + 2) : g1;
   Stretch& stretch = stretches_.back();
   double* sums = stretch.sums.data();
-  for (std::size_t i = 0; i < k; ++i) {
-    if (hold_ == InputHold::kZeroOrderHold && !input_factors_[i].empty()) {
-      sums[i] += h0[i] * (w[0] * gm[i] + w[1] * g0[i] + w[2] * g1[i] + w[3] * g2[i]);
-    } else {
-      sums[i] += 0.5 * (g0[i] * h0[i] + g1[i] * h1[i]);
-    }
+  for (std::size_t i : held_) {
+    sums[i] += h0[i] * (w[0] * gm[i] + w[1] * g0[i] + w[2] * g1[i] + w[3] * g2[i]);
   }
+  for (std::size_t i : plain_) sums[i] += 0.5 * (g0[i] * h0[i] + g1[i] * h1[i]);
   ++stretch.intervals;
   ++intervals_;
   if (stretch.intervals == stretch_length_) {

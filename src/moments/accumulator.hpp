@@ -62,8 +62,10 @@ class MomentAccumulator {
   std::vector<Monomial> moments_;
   std::size_t states_, inputs_;
   InputHold hold_;
-  // Factor lists: each moment's state part and input part as indices into the power table.
-  std::vector<std::vector<std::size_t>> state_factors_, input_factors_;
+  // Moment i's state factors are factors_[first_factor_[2i] .. first_factor_[2i+1]), its input
+  // factors follow up to first_factor_[2i+2]; entries index the power table.
+  std::vector<std::size_t> factors_, first_factor_;
+  std::vector<std::size_t> held_, plain_;  // moments averaged with a held input, and the others
   std::vector<int> max_power_;
   std::vector<std::size_t> power_offset_;
   std::vector<double> powers_;
