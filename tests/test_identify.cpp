@@ -78,8 +78,10 @@ TEST_SUITE("identify") {
     // dt = 0.01, the report's input (K = 10, w = 0.1), 10^6 samples. The Duffing input is
     // strong enough (sigma = 20: E[y^2] ~ 1) that the cubic term carries a third of the force.
     for (const auto& [file, input] :
-         {std::pair{"kozin_4_1a.mom", "ma:K=10,w=0.1"}, std::pair{"kozin_4_1b.mom", "ma:K=10,w=0.1"},
-          std::pair{"kozin_4_1c.mom", "ma:K=10,w=0.1"}, std::pair{"kozin_4_1d.mom", "ma:K=10,w=0.1"},
+         {std::pair<std::string, std::string>{"kozin_4_1a.mom", "ma:K=10,w=0.1"},
+          std::pair{"kozin_4_1b.mom", "ma:K=10,w=0.1"},
+          std::pair{"kozin_4_1c.mom", "ma:K=10,w=0.1"},
+          std::pair{"kozin_4_1d.mom", "ma:K=10,w=0.1"},
           std::pair{"duffing.mom", "ma:K=10,w=0.1,sigma=20"}}) {
       const Model model = model_file(file);
       Case c;
@@ -96,8 +98,9 @@ TEST_SUITE("identify") {
   }
 
   TEST_CASE("95% intervals contain the truth in at least 16 of 20 seeds at 10^5 samples") {
-    for (const auto& [file, input] : {std::pair{"kozin_4_1b.mom", "ma:K=10,w=0.1"},
-                                      std::pair{"duffing.mom", "ma:K=10,w=0.1,sigma=20"}}) {
+    for (const auto& [file, input] :
+         {std::pair<std::string, std::string>{"kozin_4_1b.mom", "ma:K=10,w=0.1"},
+          std::pair{"duffing.mom", "ma:K=10,w=0.1,sigma=20"}}) {
       const Model model = model_file(file);
       std::vector<int> covered(model.parameters().size(), 0);
       for (std::uint64_t seed = 1; seed <= 20; ++seed) {
@@ -146,7 +149,8 @@ TEST_SUITE("identify") {
   TEST_CASE("reading zoh data as samples biases the first-order estimate downwards") {
     // With `sample`, the product x*y is averaged with the trapezoidal rule, which pairs half of
     // each held input with the state at the start of its interval (the report's program paired
-    // it with the state at the end, and its bias was upwards).
+    // it with the state at the end, and its bias was upwards). The size is of order 1/K: about
+    // -10% for K = 10.
     const Model model = model_file("kozin_4_1a.mom");
     Case c;
     c.samples = 400000;
@@ -155,8 +159,8 @@ TEST_SUITE("identify") {
     const Estimate mismatched = identify(model, c);
     const double bias = mismatched.parameters[0].estimate / consistent.parameters[0].estimate - 1;
     INFO("relative bias ", bias);
-    CHECK(bias < -0.01);
-    CHECK(bias > -0.10);
+    CHECK(bias < -0.05);
+    CHECK(bias > -0.15);
     CHECK(std::abs(consistent.parameters[0].estimate - 1) < 4 * consistent.parameters[0].std_error);
   }
 
