@@ -77,12 +77,12 @@ TEST_SUITE("identify") {
   TEST_CASE("the report's systems and the Duffing oscillator are recovered within 1%") {
     // dt = 0.01, the report's input (K = 10, w = 0.1), 10^6 samples. The Duffing input is
     // strong enough (sigma = 20: E[y^2] ~ 1) that the cubic term carries a third of the force.
-    for (const auto& [file, input] :
-         {std::pair<std::string, std::string>{"kozin_4_1a.mom", "ma:K=10,w=0.1"},
-          std::pair{"kozin_4_1b.mom", "ma:K=10,w=0.1"},
-          std::pair{"kozin_4_1c.mom", "ma:K=10,w=0.1"},
-          std::pair{"kozin_4_1d.mom", "ma:K=10,w=0.1"},
-          std::pair{"duffing.mom", "ma:K=10,w=0.1,sigma=20"}}) {
+    for (const auto& [file, input] : std::vector<std::pair<std::string, std::string>>{
+             {"kozin_4_1a.mom", "ma:K=10,w=0.1"},
+             {"kozin_4_1b.mom", "ma:K=10,w=0.1"},
+             {"kozin_4_1c.mom", "ma:K=10,w=0.1"},
+             {"kozin_4_1d.mom", "ma:K=10,w=0.1"},
+             {"duffing.mom", "ma:K=10,w=0.1,sigma=20"}}) {
       const Model model = model_file(file);
       Case c;
       c.input = input;
@@ -98,9 +98,8 @@ TEST_SUITE("identify") {
   }
 
   TEST_CASE("95% intervals contain the truth in at least 16 of 20 seeds at 10^5 samples") {
-    for (const auto& [file, input] :
-         {std::pair<std::string, std::string>{"kozin_4_1b.mom", "ma:K=10,w=0.1"},
-          std::pair{"duffing.mom", "ma:K=10,w=0.1,sigma=20"}}) {
+    for (const auto& [file, input] : std::vector<std::pair<std::string, std::string>>{
+             {"kozin_4_1b.mom", "ma:K=10,w=0.1"}, {"duffing.mom", "ma:K=10,w=0.1,sigma=20"}}) {
       const Model model = model_file(file);
       std::vector<int> covered(model.parameters().size(), 0);
       for (std::uint64_t seed = 1; seed <= 20; ++seed) {
