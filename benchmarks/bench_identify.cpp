@@ -61,8 +61,7 @@ int one_pass(const std::string& path) {
   const momentid::Model model = momentid::parse_model(kModel, "duffing.mom");
   const auto list = moments(model);
   const auto start = std::chrono::steady_clock::now();
-  const momentid::DataMoments data =
-      momentid::moments_from_file(path, {"y", "v"}, {"x"}, list, {});
+  const momentid::DataMoments data = momentid::moments_from_file(path, {"y", "v"}, {"x"}, list, {});
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   rusage usage{};
@@ -82,8 +81,8 @@ Pass run_pass(const std::string& self, const std::string& path) {
   command.append(self).append("' --pass '").append(path).append("'");
   FILE* pipe = popen(command.c_str(), "r");
   Pass p;
-  if (pipe == nullptr || std::fscanf(pipe, "%lf %ld %zu %zu", &p.seconds, &p.peak_kib, &p.rows,
-                                     &p.moments) != 4) {
+  if (pipe == nullptr ||
+      std::fscanf(pipe, "%lf %ld %zu %zu", &p.seconds, &p.peak_kib, &p.rows, &p.moments) != 4) {
     std::fprintf(stderr, "bench_identify: the pass failed\n");
     std::exit(1);
   }
@@ -130,9 +129,10 @@ int main(int argc, char** argv) {
   std::printf("  %zu rows, %.0f MB: %.2f s, %.0f MB/s, %.2f M rows/s\n", pass.rows, megabytes,
               pass.seconds, megabytes / pass.seconds, pass.rows / pass.seconds / 1e6);
   if (numpy_seconds > 0) {
-    std::printf("  numpy baseline (loadtxt + the same moments): %.2f s, ratio numpy / momentid: "
-                "%.1f\n",
-                numpy_seconds, numpy_seconds / pass.seconds);
+    std::printf(
+        "  numpy baseline (loadtxt + the same moments): %.2f s, ratio numpy / momentid: "
+        "%.1f\n",
+        numpy_seconds, numpy_seconds / pass.seconds);
   } else {
     std::printf("  numpy baseline: not run (needs /usr/bin/python3 with numpy)\n");
   }

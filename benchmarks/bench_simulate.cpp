@@ -28,7 +28,9 @@ double hand_written(std::size_t steps, double dt, std::uint64_t seed) {
   momentid::InputProcess input(momentid::InputSpec{}, dt, seed, 0);
   double y = 0, v = 0, checksum = 0;
   auto fy = [](double, double vv) { return vv; };
-  auto fv = [&](double yy, double vv, double x) { return -c * vv - k * yy - eps * yy * yy * yy + x; };
+  auto fv = [&](double yy, double vv, double x) {
+    return -c * vv - k * yy - eps * yy * yy * yy + x;
+  };
   for (std::size_t s = 0; s < steps; ++s) {
     const double x = input.next();
     checksum += y;
@@ -50,7 +52,8 @@ double median_seconds(int repetitions, F&& f) {
   for (int r = 0; r < repetitions; ++r) {
     const auto start = std::chrono::steady_clock::now();
     f();
-    times.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+    times.push_back(
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
   }
   std::sort(times.begin(), times.end());
   return times[times.size() / 2];

@@ -93,9 +93,9 @@ TEST_SUITE("simulate") {
     Eigen::VectorXd b = Eigen::VectorXd::Zero(dim);
     big.topLeftCorner(2, 2) = f;
     for (int i = 1; i < k; ++i) big.block(0, 1 + i, 2, 1) = 0.1 * g;  // w * v_{n-i}
-    b.head(2) = 0.1 * g;                                               // w * v_n
-    b(2) = 1;                                                          // v_n becomes v_{n-1}
-    for (int i = 3; i < dim; ++i) big(i, i - 1) = 1;                   // shift the others
+    b.head(2) = 0.1 * g;                                              // w * v_n
+    b(2) = 1;                                                         // v_n becomes v_{n-1}
+    for (int i = 3; i < dim; ++i) big(i, i - 1) = 1;                  // shift the others
     Eigen::MatrixXd p = b * b.transpose(), power = big;
     for (int i = 0; i < 40; ++i) {  // doubling: P = sum_j A^j B B^T (A^T)^j
       p += power * p * power.transpose();
@@ -187,8 +187,8 @@ TEST_SUITE("simulate") {
   }
 
   TEST_CASE("portable_log and portable_exp agree with the C library to about an ulp") {
-    for (double x : {1e-300, 1e-10, 0.1, 0.5, 0.70710678, 0.9999999, 1.0, 1.5, 2.0, 10.0, 1e10,
-                     1e300}) {
+    for (double x :
+         {1e-300, 1e-10, 0.1, 0.5, 0.70710678, 0.9999999, 1.0, 1.5, 2.0, 10.0, 1e10, 1e300}) {
       CHECK(std::abs(momentid::portable_log(x) - std::log(x)) <=
             4e-16 * std::max(1.0, std::abs(std::log(x))));
     }
@@ -242,8 +242,8 @@ TEST_SUITE("simulate") {
   }
 
   TEST_CASE("a state that blows up stops the simulation with the state, time and parameters") {
-    const Model model = momentid::parse_model("state y\ninput x\nparam a = 20\ny' = a*y + x\n",
-                                              "unstable.mom");
+    const Model model =
+        momentid::parse_model("state y\ninput x\nparam a = 20\ny' = a*y + x\n", "unstable.mom");
     SimulationOptions options = options_for(model, 100000, 1);
     options.burn_in = 0;
     Recorder rec(2);
@@ -259,8 +259,8 @@ TEST_SUITE("simulate") {
   }
 
   TEST_CASE("parameter values: nominal values, --set overrides, missing values are errors") {
-    const Model model = momentid::parse_model(
-        "state y\ninput x\nparam a = 1, b\ny' = -a*y - b*y^3 + x\n", "m.mom");
+    const Model model =
+        momentid::parse_model("state y\ninput x\nparam a = 1, b\ny' = -a*y - b*y^3 + x\n", "m.mom");
     const auto values = momentid::parameter_values(model, {"b=-2.5e-1", "a=+3"});
     CHECK(values[0] == 3);
     CHECK(values[1] == GiNaC::numeric(-1, 4));
@@ -305,8 +305,8 @@ TEST_SUITE("simulate") {
                          momentid::UsageError);
     CHECK_THROWS_WITH_AS(InputSpec::parse("white:tau=1", "--input"),
                          "--input: unknown setting 'tau' for a white input", momentid::UsageError);
-    CHECK_THROWS_WITH_AS(InputSpec::parse("ou:tau=-1", "--input"),
-                         "--input: tau must be positive", momentid::UsageError);
+    CHECK_THROWS_WITH_AS(InputSpec::parse("ou:tau=-1", "--input"), "--input: tau must be positive",
+                         momentid::UsageError);
   }
 
   TEST_CASE("the Ornstein-Uhlenbeck input has variance sigma^2 and correlation exp(-dt/tau)") {

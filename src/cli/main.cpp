@@ -81,8 +81,8 @@ std::vector<momentid::InputSpec> input_specs(const momentid::Model& model,
     }
     if (index == inputs.size()) {
       if (inputs.size() != 1) {
-        throw momentid::UsageError("--input: with several inputs write NAME=SPEC, found '" +
-                                   text + "'");
+        throw momentid::UsageError("--input: with several inputs write NAME=SPEC, found '" + text +
+                                   "'");
       }
       index = 0;
     }
@@ -126,13 +126,12 @@ int run_simulate(const SimulateCommand& command) {
   options.seed = command.seed;
 
   std::vector<std::string> metadata;
-  metadata.push_back("# momentid: model=" + model.name() +
-                     " dt=" + momentid::shortest_decimal(options.dt) +
-                     " input-hold=zoh seed=" + std::to_string(options.seed) +
-                     " samples=" + std::to_string(options.samples) +
-                     " runs=" + std::to_string(options.runs) +
-                     " burn-in=" + std::to_string(options.burn_in) +
-                     " continue=" + (options.continue_runs ? "yes" : "no"));
+  metadata.push_back(
+      "# momentid: model=" + model.name() + " dt=" + momentid::shortest_decimal(options.dt) +
+      " input-hold=zoh seed=" + std::to_string(options.seed) +
+      " samples=" + std::to_string(options.samples) + " runs=" + std::to_string(options.runs) +
+      " burn-in=" + std::to_string(options.burn_in) +
+      " continue=" + (options.continue_runs ? "yes" : "no"));
   std::string parameters = "# momentid:";
   for (std::size_t p = 0; p < options.parameters.size(); ++p) {
     parameters += " param." + model.parameters()[p].name + "=" +
@@ -245,8 +244,8 @@ int run_check(const CheckCommand& command) {
     for (const auto& d : model->inputs()) inputs.push_back(d.name);
   } else {
     // Without a model every numeric column but t and run is a channel.
-    const auto reader = momentid::DataReader::open(command.data, {.names = {}, .rename = {},
-                                                                  .min_rows = 0});
+    const auto reader =
+        momentid::DataReader::open(command.data, {.names = {}, .rename = {}, .min_rows = 0});
     for (const std::string& c : reader->columns()) {
       if (!c.empty() && c != "t" && c != "run") states.push_back(c);
     }
@@ -277,9 +276,8 @@ int run_check(const CheckCommand& command) {
       std::snprintf(text, sizeof text, "%5.2f ", r);
       lags += text;
     }
-    std::string time = c.correlation_time > command.lags
-                           ? "> " + std::to_string(command.lags)
-                           : std::to_string(c.correlation_time);
+    std::string time = c.correlation_time > command.lags ? "> " + std::to_string(command.lags)
+                                                         : std::to_string(c.correlation_time);
     std::printf("%-10s %12.5g %12.5g  %-*s %s\n", c.name.c_str(), c.mean, c.variance,
                 static_cast<int>(6 * command.lags), lags.c_str(), time.c_str());
   }
@@ -288,14 +286,18 @@ int run_check(const CheckCommand& command) {
   for (const momentid::ChannelStatistics& c : data.channels) {
     if (!c.is_input || c.autocorrelation.empty()) continue;
     if (c.autocorrelation[0] >= 0.5) {
-      std::printf("input %s is smooth enough for the moment method (lag-1 autocorrelation "
-                  "%.3f)\n", c.name.c_str(), c.autocorrelation[0]);
+      std::printf(
+          "input %s is smooth enough for the moment method (lag-1 autocorrelation "
+          "%.3f)\n",
+          c.name.c_str(), c.autocorrelation[0]);
     }
   }
   if (model) {
     const momentid::Estimate estimate = momentid::solve(*system, data.estimates);
-    if (estimate.identities.empty()) std::printf("stationarity identities: none for this model\n");
-    else std::printf("stationarity identities (sample violation, z-score):\n");
+    if (estimate.identities.empty())
+      std::printf("stationarity identities: none for this model\n");
+    else
+      std::printf("stationarity identities (sample violation, z-score):\n");
     for (const auto& c : estimate.identities) {
       std::printf("  %s: %.3g (z = %.2f)%s\n", c.identity.c_str(), c.violation, c.z,
                   std::abs(c.z) > 4 ? "  <- violated: not stationary, or not this model" : "");

@@ -33,8 +33,8 @@ struct ColumnRequest {
 struct DataBlock {
   std::vector<double> values;  // row-major, rows() x ColumnRequest::names.size()
   std::size_t rows = 0;
-  long run = 0;                // the `run` column's value, 0 when the file has none
-  bool run_starts = false;     // the first block of a run
+  long run = 0;             // the `run` column's value, 0 when the file has none
+  bool run_starts = false;  // the first block of a run
 };
 
 // Streams a data file in blocks, so that memory does not grow with its length. Two layouts:

@@ -44,10 +44,9 @@ DataWriter::DataWriter(const std::string& path, Format format,
   if (format_ == Format::kBinary) {
     std::fwrite(kMagic, 1, sizeof kMagic, file_);
     const auto length = static_cast<std::uint32_t>(header.size());
-    const unsigned char bytes[4] = {static_cast<unsigned char>(length),
-                                    static_cast<unsigned char>(length >> 8),
-                                    static_cast<unsigned char>(length >> 16),
-                                    static_cast<unsigned char>(length >> 24)};
+    const unsigned char bytes[4] = {
+        static_cast<unsigned char>(length), static_cast<unsigned char>(length >> 8),
+        static_cast<unsigned char>(length >> 16), static_cast<unsigned char>(length >> 24)};
     std::fwrite(bytes, 1, 4, file_);
   }
   std::fwrite(header.data(), 1, header.size(), file_);
@@ -99,12 +98,11 @@ void DataWriter::commit() {
   }
   // mkstemp creates the file readable by its owner only; give it the usual permissions.
   std::error_code ignored;
-  std::filesystem::permissions(temporary_,
-                               std::filesystem::perms::owner_read |
-                                   std::filesystem::perms::owner_write |
-                                   std::filesystem::perms::group_read |
-                                   std::filesystem::perms::others_read,
-                               ignored);
+  std::filesystem::permissions(
+      temporary_,
+      std::filesystem::perms::owner_read | std::filesystem::perms::owner_write |
+          std::filesystem::perms::group_read | std::filesystem::perms::others_read,
+      ignored);
   if (std::rename(temporary_.c_str(), path_.c_str()) != 0) {
     const std::string reason = std::strerror(errno);
     std::remove(temporary_.c_str());

@@ -1,8 +1,8 @@
 #include "moments/from_data.hpp"
 
 #include <cmath>
-#include <cstdio>
 #include <condition_variable>
+#include <cstdio>
 #include <exception>
 #include <mutex>
 #include <thread>
@@ -55,11 +55,11 @@ class LagSums {
     s.variance = sum_squares_[c] / n - s.mean * s.mean;
     s.correlation_time = lags_ + 1;
     for (std::size_t l = 0; l < lags_; ++l) {
-      const double rho = pairs_[l] > 0 && s.variance > 0
-                             ? (products_[l * channels_ + c] / static_cast<double>(pairs_[l]) -
-                                s.mean * s.mean) /
-                                   s.variance
-                             : std::nan("");
+      const double rho =
+          pairs_[l] > 0 && s.variance > 0
+              ? (products_[l * channels_ + c] / static_cast<double>(pairs_[l]) - s.mean * s.mean) /
+                    s.variance
+              : std::nan("");
       s.autocorrelation.push_back(rho);
       if (s.correlation_time == lags_ + 1 && rho < std::exp(-1.0)) s.correlation_time = l + 1;
     }
@@ -216,9 +216,8 @@ std::vector<std::string> smoothness_warnings(const DataMoments& data) {
       out.push_back("input '" + c.name + "' is nearly white (lag-1 autocorrelation " + text +
                     "): the method needs a smooth input, and the estimates will be biased");
     } else if (!c.is_input && rho < 0.9) {
-      out.push_back("sampling is coarse for the dynamics: the lag-1 autocorrelation of '" +
-                    c.name + "' is " + text +
-                    "; the time averages are biased, sample faster if you can");
+      out.push_back("sampling is coarse for the dynamics: the lag-1 autocorrelation of '" + c.name +
+                    "' is " + text + "; the time averages are biased, sample faster if you can");
     }
   }
   return out;

@@ -32,7 +32,7 @@ struct DataOptions {
 
 // What one pass over a data file yields.
 struct DataMoments {
-  MomentEstimates estimates;  // for the requested moments, in their order
+  MomentEstimates estimates;                // for the requested moments, in their order
   std::vector<ChannelStatistics> channels;  // the model's states, then inputs
   DataMetadata metadata;
   InputHold hold = InputHold::kSample;

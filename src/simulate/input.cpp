@@ -137,8 +137,12 @@ std::string InputSpec::text() const {
       }
       break;
     }
-    case Kind::kOrnsteinUhlenbeck: out = "ou:tau=" + shortest(tau); break;
-    case Kind::kWhite: out = "white:"; break;
+    case Kind::kOrnsteinUhlenbeck:
+      out = "ou:tau=" + shortest(tau);
+      break;
+    case Kind::kWhite:
+      out = "white:";
+      break;
   }
   if (out.back() != ':') out += ",";
   return out + "sigma=" + shortest(sigma) + ",mean=" + shortest(mean);
@@ -158,7 +162,8 @@ InputProcess::InputProcess(const InputSpec& spec, double dt, std::uint64_t seed,
       innovation_ = std::sqrt(1 - decay_ * decay_);
       state_ = spec_.sigma * random_.normal();
       break;
-    case InputSpec::Kind::kWhite: break;
+    case InputSpec::Kind::kWhite:
+      break;
   }
 }
 
@@ -180,7 +185,8 @@ double InputProcess::next() {
       state_ = decay_ * state_ + innovation_ * spec_.sigma * random_.normal();
       return value;
     }
-    case InputSpec::Kind::kWhite: return spec_.mean + spec_.sigma * random_.normal();
+    case InputSpec::Kind::kWhite:
+      return spec_.mean + spec_.sigma * random_.normal();
   }
   return 0;
 }

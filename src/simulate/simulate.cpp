@@ -2,10 +2,10 @@
 
 #include <array>
 #include <charconv>
-#include <type_traits>
 #include <cmath>
 #include <map>
 #include <regex>
+#include <type_traits>
 
 #include "common/error.hpp"
 
@@ -104,8 +104,8 @@ CompiledModel::CompiledModel(const Model& model, const std::vector<numeric>& par
     for (std::size_t j = 0; j < n; ++j) {
       Terms f;
       for (std::size_t e = 0; e < n; ++e) {
-        const numeric w = GiNaC::ex_to<numeric>(inverse(static_cast<unsigned>(j),
-                                                        static_cast<unsigned>(e)));
+        const numeric w =
+            GiNaC::ex_to<numeric>(inverse(static_cast<unsigned>(j), static_cast<unsigned>(e)));
         if (w.is_zero()) continue;
         for (const auto& [mono, c] : h[e]) add_term(f, mono, w * c);
       }
@@ -178,7 +178,8 @@ void integrate_runs(const Model& model, const CompiledModel& f, const Simulation
     inputs.emplace_back(options.inputs[i], options.dt, options.seed, i);
   }
   // Fixed-size arrays when N is known, so that the compiler can keep them in registers.
-  using Stage = std::conditional_t<(N > 0), std::array<double, (N > 0 ? N : 1)>, std::vector<double>>;
+  using Stage =
+      std::conditional_t<(N > 0), std::array<double, (N > 0 ? N : 1)>, std::vector<double>>;
   Stage k1{}, k2{}, k3{}, k4{}, trial{};
   if constexpr (N == 0) {
     for (Stage* k : {&k1, &k2, &k3, &k4, &trial}) k->resize(n);
@@ -192,9 +193,9 @@ void integrate_runs(const Model& model, const CompiledModel& f, const Simulation
   bool burning_in = false;
 
   const auto fail = [&](const std::string& what) [[gnu::cold, gnu::noinline]] {
-    const std::string when = burning_in ? "during the burn-in of run " + std::to_string(run + 1)
-                                        : "at t = " + shortest_decimal(t) + " in run " +
-                                              std::to_string(run + 1);
+    const std::string when =
+        burning_in ? "during the burn-in of run " + std::to_string(run + 1)
+                   : "at t = " + shortest_decimal(t) + " in run " + std::to_string(run + 1);
     throw Error("the simulation " + what + " " + when + " with " +
                 parameter_list(model, options.parameters) +
                 ": the model is unstable for these values, or the step dt is too large");
@@ -222,8 +223,7 @@ void integrate_runs(const Model& model, const CompiledModel& f, const Simulation
       t += h;
       for (std::size_t j = 0; j < n; ++j) {
         if (!(std::abs(y[j]) <= kBlowUpBound)) {
-          fail("blew up: state '" + model.states()[j].name + "' reached " +
-               shortest_decimal(y[j]));
+          fail("blew up: state '" + model.states()[j].name + "' reached " + shortest_decimal(y[j]));
         }
       }
     }
@@ -257,12 +257,18 @@ void integrate_runs(const Model& model, const CompiledModel& f, const Simulation
 void simulate(const Model& model, const SimulationOptions& options, SampleSink& sink) {
   const CompiledModel f(model, options.parameters);
   switch (f.states()) {
-    case 1: return integrate_runs<1>(model, f, options, sink);
-    case 2: return integrate_runs<2>(model, f, options, sink);
-    case 3: return integrate_runs<3>(model, f, options, sink);
-    case 4: return integrate_runs<4>(model, f, options, sink);
-    case 6: return integrate_runs<6>(model, f, options, sink);
-    default: return integrate_runs<0>(model, f, options, sink);
+    case 1:
+      return integrate_runs<1>(model, f, options, sink);
+    case 2:
+      return integrate_runs<2>(model, f, options, sink);
+    case 3:
+      return integrate_runs<3>(model, f, options, sink);
+    case 4:
+      return integrate_runs<4>(model, f, options, sink);
+    case 6:
+      return integrate_runs<6>(model, f, options, sink);
+    default:
+      return integrate_runs<0>(model, f, options, sink);
   }
 }
 

@@ -42,9 +42,14 @@ class CompiledModel {
       const std::uint32_t* f = factors + term.first_factor;
       double product = term.coefficient;
       switch (term.factors) {
-        case 0: break;
-        case 1: product *= powers[f[0]]; break;
-        case 2: product *= powers[f[0]] * powers[f[1]]; break;
+        case 0:
+          break;
+        case 1:
+          product *= powers[f[0]];
+          break;
+        case 2:
+          product *= powers[f[0]] * powers[f[1]];
+          break;
         default:
           for (std::uint32_t k = 0; k < term.factors; ++k) product *= powers[f[k]];
       }
@@ -74,9 +79,14 @@ class CompiledModel {
       const std::uint32_t* f = factors + term.first_factor;
       double product = term.coefficient;
       switch (term.factors) {
-        case 0: break;
-        case 1: product *= powers[f[0]]; break;
-        case 2: product *= powers[f[0]] * powers[f[1]]; break;
+        case 0:
+          break;
+        case 1:
+          product *= powers[f[0]];
+          break;
+        case 2:
+          product *= powers[f[0]] * powers[f[1]];
+          break;
         default:
           for (std::uint32_t k = 0; k < term.factors; ++k) product *= powers[f[k]];
       }
@@ -126,7 +136,8 @@ struct SimulationOptions {
   std::vector<InputSpec> inputs;           // one per model input
   double dt = 0.01;
   std::size_t samples = 10000;  // per run
-  std::size_t burn_in = 10000;  // steps discarded before each run (before the first with --continue)
+  std::size_t burn_in =
+      10000;  // steps discarded before each run (before the first with --continue)
   std::size_t runs = 1;
   bool continue_runs = false;  // start each run from the previous run's last state
   std::uint64_t seed = 1;

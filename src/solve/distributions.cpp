@@ -83,9 +83,7 @@ double beta_regularized(double a, double b, double x) {
 
 }  // namespace
 
-double chi_square_upper_tail(double x, double dof) {
-  return gamma_pq(dof / 2, x / 2).second;
-}
+double chi_square_upper_tail(double x, double dof) { return gamma_pq(dof / 2, x / 2).second; }
 
 double student_t_cdf(double t, double dof) {
   const double tail = 0.5 * beta_regularized(dof / 2, 0.5, dof / (dof + t * t));

@@ -123,8 +123,8 @@ Estimate solve(const MomentSystem& system, const MomentEstimates& estimates,
   for (Eigen::Index i = 0; i < sigma.size(); ++i) rank += sigma(i) > tolerance ? 1 : 0;
   out.rank = static_cast<std::size_t>(rank);
   const Eigen::Index smallest = std::min(rows, params) - 1;
-  out.condition = sigma(smallest) > 0 ? sigma(0) / sigma(smallest)
-                                      : std::numeric_limits<double>::infinity();
+  out.condition =
+      sigma(smallest) > 0 ? sigma(0) / sigma(smallest) : std::numeric_limits<double>::infinity();
   if (rank == 0) {
     out.status = Estimate::Status::kNothingIdentifiable;
     out.message = "the moment equations are all zero for these data";
@@ -160,8 +160,8 @@ Estimate solve(const MomentSystem& system, const MomentEstimates& estimates,
       }
       combos += (combos.empty() ? "" : "; ") + combo;
     }
-    out.message = "the data cannot separate the parameters along " + combos +
-                  ": only " + std::to_string(rank) + " of " + std::to_string(params) +
+    out.message = "the data cannot separate the parameters along " + combos + ": only " +
+                  std::to_string(rank) + " of " + std::to_string(params) +
                   " parameter combinations are determined";
   }
 
@@ -179,15 +179,14 @@ Estimate solve(const MomentSystem& system, const MomentEstimates& estimates,
     jacobian.col(k) = d_theta_scaled.cwiseQuotient(scale);
   }
   const MatrixXd cov_theta = jacobian * cov_mu * jacobian.transpose();
-  const double t975 = out.batches >= 2
-                          ? student_t_quantile(0.975, static_cast<double>(out.batches - 1))
-                          : kNaN;
+  const double t975 =
+      out.batches >= 2 ? student_t_quantile(0.975, static_cast<double>(out.batches - 1)) : kNaN;
   for (Eigen::Index p = 0; p < params; ++p) {
     ParameterEstimate& e = out.parameters[static_cast<std::size_t>(p)];
     e.estimate = theta(p);
     e.identifiable = identifiable[static_cast<std::size_t>(p)];
-    e.std_error = e.identifiable && out.batches >= 2 ? std::sqrt(std::max(0.0, cov_theta(p, p)))
-                                                     : kNaN;
+    e.std_error =
+        e.identifiable && out.batches >= 2 ? std::sqrt(std::max(0.0, cov_theta(p, p))) : kNaN;
     e.ci_low = e.estimate - t975 * e.std_error;
     e.ci_high = e.estimate + t975 * e.std_error;
   }
@@ -250,11 +249,11 @@ Estimate solve(const MomentSystem& system, const MomentEstimates& estimates,
   }
   if (static_cast<std::size_t>(s_rank) + 1 > out.batches) {
     out.warnings.push_back("optimal weighting needs more batches than equations (" +
-                           std::to_string(out.batches) + " batches for " +
-                           std::to_string(rows) + " equations): use --batches");
+                           std::to_string(out.batches) + " batches for " + std::to_string(rows) +
+                           " equations): use --batches");
   }
-  const MatrixXd w = eigen.eigenvectors() * inverse_lambda.asDiagonal() *
-                     eigen.eigenvectors().transpose();
+  const MatrixXd w =
+      eigen.eigenvectors() * inverse_lambda.asDiagonal() * eigen.eigenvectors().transpose();
   const MatrixXd information = as.transpose() * w * as;
   Eigen::LDLT<MatrixXd> ldlt(information);
   const VectorXd theta_gmm_scaled = ldlt.solve(as.transpose() * w * b);

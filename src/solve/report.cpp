@@ -46,13 +46,13 @@ void table(std::ostringstream& out, const std::vector<ParameterEstimate>& parame
   std::size_t width = 9;
   for (const auto& p : parameters) width = std::max(width, p.name.size());
   char line[256];
-  std::snprintf(line, sizeof line, "  %-*s  %14s  %12s  %s\n", static_cast<int>(width),
-                "parameter", "estimate", "std error", "95% interval");
+  std::snprintf(line, sizeof line, "  %-*s  %14s  %12s  %s\n", static_cast<int>(width), "parameter",
+                "estimate", "std error", "95% interval");
   out << line;
   for (const auto& p : parameters) {
-    const std::string interval =
-        p.identifiable ? "[" + number(p.ci_low) + ", " + number(p.ci_high) + "]"
-                       : "not identifiable";
+    const std::string interval = p.identifiable
+                                     ? "[" + number(p.ci_low) + ", " + number(p.ci_high) + "]"
+                                     : "not identifiable";
     std::snprintf(line, sizeof line, "  %-*s  %14s  %12s  %s\n", static_cast<int>(width),
                   p.name.c_str(), number(p.estimate).c_str(), number(p.std_error, "%.3g").c_str(),
                   interval.c_str());
