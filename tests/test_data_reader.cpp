@@ -19,8 +19,11 @@
 #include <vector>
 
 #include "data/data.hpp"
+#include "test_support.hpp"
 
 namespace {
+
+using momentid::testing::error_from;
 
 using momentid::ColumnRequest;
 using momentid::DataBlock;
@@ -84,24 +87,6 @@ Contents read_text(std::string_view text, const ColumnRequest& request,
                    std::size_t max_rows = 65536) {
   const TempFile file(text);
   return read_file(file.path(), request, max_rows);
-}
-
-// Runs `action` and returns the exception it throws, which must be exactly of type E. Fails the
-// test case when `action` throws nothing, or something else.
-template <class E, class Action>
-E error_from(Action&& action) {
-  try {
-    action();
-  } catch (const E& e) {
-    if (typeid(e) != typeid(E)) FAIL("threw " << typeid(e).name() << ": " << e.what());
-    return e;
-  } catch (const std::exception& e) {
-    FAIL("threw " << typeid(e).name() << " instead: " << e.what());
-  } catch (...) {
-    FAIL("threw something that is not a std::exception");
-  }
-  FAIL("threw nothing");
-  throw;  // not reached: FAIL throws
 }
 
 // Reads a file holding `text` to its end and checks the DataError this throws: its message,

@@ -4,18 +4,17 @@
 
 #include "derive/moment_system.hpp"
 #include "model/model.hpp"
+#include "test_support.hpp"
 
 namespace {
+
+using momentid::testing::model_file;
 
 using GiNaC::ex;
 using momentid::derive;
 using momentid::DeriveOptions;
 using momentid::Model;
 using momentid::MomentSystem;
-
-Model model_file(const std::string& name) {
-  return momentid::parse_model_file(std::string(MOMENTID_SOURCE_DIR) + "/models/" + name);
-}
 
 // The model's symbol (state, input or parameter) called `name`.
 ex sym(const Model& model, const std::string& name) {

@@ -11,16 +11,15 @@
 #include "moments/accumulator.hpp"
 #include "simulate/simulate.hpp"
 #include "solve/estimate.hpp"
+#include "test_support.hpp"
 
 namespace {
+
+using momentid::testing::model_file;
 
 using momentid::Estimate;
 using momentid::InputHold;
 using momentid::Model;
-
-Model model_file(const std::string& name) {
-  return momentid::parse_model_file(std::string(MOMENTID_SOURCE_DIR) + "/models/" + name);
-}
 
 // Feeds simulated samples straight into a moment accumulator (no file in between).
 struct Accumulate : momentid::SampleSink {

@@ -7,31 +7,16 @@
 #include <vector>
 
 #include "model/model.hpp"
+#include "test_support.hpp"
 
 namespace {
+
+using momentid::testing::error_from;
 
 using momentid::LocatedError;
 using momentid::Model;
 using momentid::ModelError;
 using momentid::ParseError;
-
-// Runs `action` and returns the exception it throws, which must be exactly of type E. Fails the
-// test case when `action` throws nothing, or something else.
-template <class E, class Action>
-E error_from(Action&& action) {
-  try {
-    action();
-  } catch (const E& e) {
-    if (typeid(e) != typeid(E)) FAIL("threw " << typeid(e).name() << ": " << e.what());
-    return e;
-  } catch (const std::exception& e) {
-    FAIL("threw " << typeid(e).name() << " instead: " << e.what());
-  } catch (...) {
-    FAIL("threw something that is not a std::exception");
-  }
-  FAIL("threw nothing");
-  return E({}, "");  // not reached: FAIL throws
-}
 
 // The error that parsing the model `text` (named "test.mom") throws.
 template <class E>

@@ -9,16 +9,15 @@
 #include "data/writer.hpp"
 #include "model/model.hpp"
 #include "simulate/simulate.hpp"
+#include "test_support.hpp"
 
 namespace {
+
+using momentid::testing::model_file;
 
 using momentid::InputSpec;
 using momentid::Model;
 using momentid::SimulationOptions;
-
-Model model_file(const std::string& name) {
-  return momentid::parse_model_file(std::string(MOMENTID_SOURCE_DIR) + "/models/" + name);
-}
 
 // Keeps every sample: values[row][column], columns t, states, inputs, run.
 struct Recorder : momentid::SampleSink {

@@ -26,15 +26,20 @@ struct DeriveCommand {
   std::string format = "text";
 };
 
+// The moment equations with the multipliers from `--multipliers` or `--degree`.
+momentid::MomentSystem derive_with(const momentid::Model& model, const std::string& multipliers,
+                                   int degree) {
+  momentid::DeriveOptions options;
+  if (!multipliers.empty()) {
+    options.multipliers = momentid::parse_multiplier_list(model, multipliers, "--multipliers");
+  }
+  options.degree = degree;
+  return momentid::derive(model, options);
+}
+
 int run_derive(const DeriveCommand& command) {
   const momentid::Model model = momentid::parse_model_file(command.model);
-  momentid::DeriveOptions options;
-  if (!command.multipliers.empty()) {
-    options.multipliers =
-        momentid::parse_multiplier_list(model, command.multipliers, "--multipliers");
-  }
-  options.degree = command.degree;
-  const momentid::MomentSystem system = momentid::derive(model, options);
+  const momentid::MomentSystem system = derive_with(model, command.multipliers, command.degree);
   if (command.format == "latex") {
     std::cout << momentid::format_latex(system);
   } else if (command.format == "json") {
@@ -190,13 +195,7 @@ struct IdentifyCommand {
 
 int run_identify(const IdentifyCommand& command) {
   const momentid::Model model = momentid::parse_model_file(command.model);
-  momentid::DeriveOptions derive_options;
-  if (!command.multipliers.empty()) {
-    derive_options.multipliers =
-        momentid::parse_multiplier_list(model, command.multipliers, "--multipliers");
-  }
-  derive_options.degree = command.degree;
-  const momentid::MomentSystem system = momentid::derive(model, derive_options);
+  const momentid::MomentSystem system = derive_with(model, command.multipliers, command.degree);
   for (const auto& column : column_map(command.columns)) {
     const auto& v = model.variables();
     if (std::find(v.begin(), v.end(), column.first) == v.end()) {

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <sstream>
 
+#include "common/json.hpp"
 #include "derive/moment_system.hpp"
 
 namespace momentid {
@@ -148,35 +149,6 @@ const Notation& latex() {
                           },
                           latex_name, latex_number, "\\,"};
   return n;
-}
-
-std::string json_string(const std::string& s) {
-  std::string out = "\"";
-  for (char ch : s) {
-    switch (ch) {
-      case '"':
-        out += "\\\"";
-        break;
-      case '\\':
-        out += "\\\\";
-        break;
-      case '\n':
-        out += "\\n";
-        break;
-      case '\t':
-        out += "\\t";
-        break;
-      default:
-        if (static_cast<unsigned char>(ch) < 0x20) {
-          char buffer[8];
-          std::snprintf(buffer, sizeof buffer, "\\u%04x", ch);
-          out += buffer;
-        } else {
-          out += ch;
-        }
-    }
-  }
-  return out + "\"";
 }
 
 std::string json_equation_name(const Equation& eq) {

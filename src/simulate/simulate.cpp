@@ -114,7 +114,7 @@ CompiledModel::CompiledModel(const Model& model, const std::vector<numeric>& par
   } else {
     for (const Terms& entry : m) compile(entry);
     for (const Terms& entry : h) compile(entry);
-    scratch_.resize(n * (n + 1));
+    scratch_.resize(2 * n * (n + 1));
   }
 }
 
@@ -137,10 +137,13 @@ bool CompiledModel::solve(double* dydt) const {
   const int n = states_;
   // Gaussian elimination with partial pivoting on [M | h].
   const int w = n + 1;
+  // Polynomials 0..n*n-1 are M row by row, n*n..n*n+n-1 are h: build [M | h] from them.
+  double* values = scratch_.data() + n * w;
+  evaluate_all(values, static_cast<std::size_t>(n * w));
   double* a = scratch_.data();
   for (int r = 0; r < n; ++r) {
-    for (int c = 0; c < n; ++c) a[r * w + c] = evaluate(static_cast<std::size_t>(r * n + c));
-    a[r * w + n] = evaluate(static_cast<std::size_t>(n * n + r));
+    for (int c = 0; c < n; ++c) a[r * w + c] = values[r * n + c];
+    a[r * w + n] = values[n * n + r];
   }
   for (int c = 0; c < n; ++c) {
     int pivot = c;

@@ -34,8 +34,25 @@ class CompiledModel {
   [[gnu::always_inline]] bool derivative(const double* y, const double* u, double* dydt) const {
     fill_powers(y, u);
     if (!constant_matrix_) return solve(dydt);
-    // One pass over the terms of all the f_j, each adding to its state's rate.
-    for (int j = 0; j < states_; ++j) dydt[j] = 0;
+    evaluate_all(dydt, static_cast<std::size_t>(states_));
+    return true;
+  }
+
+ private:
+  // Sums of coefficient * product of powers of variables, all stored in one flat array: term t
+  // of polynomial p is terms_[first_term[p] + t], its factors powers_[factor_index[...]].
+  struct TermRef {
+    double coefficient;
+    std::uint32_t first_factor;
+    std::uint32_t factors;
+    std::uint32_t polynomial;  // which polynomial the term belongs to
+  };
+  // Appends a polynomial; returns its index.
+  std::size_t compile(const std::map<Monomial, GiNaC::numeric>& terms);
+  // out[p] = polynomial p at the powers last filled in, for all `count` polynomials, in one
+  // pass over the terms.
+  [[gnu::always_inline]] void evaluate_all(double* out, std::size_t count) const {
+    for (std::size_t p = 0; p < count; ++p) out[p] = 0;
     const double* powers = powers_.data();
     const std::uint32_t* factors = factor_index_.data();
     for (const TermRef& term : terms_) {
@@ -53,46 +70,8 @@ class CompiledModel {
         default:
           for (std::uint32_t k = 0; k < term.factors; ++k) product *= powers[f[k]];
       }
-      dydt[term.polynomial] += product;
+      out[term.polynomial] += product;
     }
-    return true;
-  }
-
- private:
-  // Sums of coefficient * product of powers of variables, all stored in one flat array: term t
-  // of polynomial p is terms_[first_term[p] + t], its factors powers_[factor_index[...]].
-  struct TermRef {
-    double coefficient;
-    std::uint32_t first_factor;
-    std::uint32_t factors;
-    std::uint32_t polynomial;  // which polynomial the term belongs to
-  };
-  // Appends a polynomial; returns its index.
-  std::size_t compile(const std::map<Monomial, GiNaC::numeric>& terms);
-  [[gnu::always_inline]] double evaluate(std::size_t polynomial) const {
-    double sum = 0;
-    const double* powers = powers_.data();
-    const std::uint32_t* factors = factor_index_.data();
-    const TermRef* terms = terms_.data();
-    for (std::uint32_t t = first_term_[polynomial]; t < first_term_[polynomial + 1]; ++t) {
-      const TermRef& term = terms[t];
-      const std::uint32_t* f = factors + term.first_factor;
-      double product = term.coefficient;
-      switch (term.factors) {
-        case 0:
-          break;
-        case 1:
-          product *= powers[f[0]];
-          break;
-        case 2:
-          product *= powers[f[0]] * powers[f[1]];
-          break;
-        default:
-          for (std::uint32_t k = 0; k < term.factors; ++k) product *= powers[f[k]];
-      }
-      sum += product;
-    }
-    return sum;
   }
   [[gnu::always_inline]] void fill_powers(const double* y, const double* u) const {
     double* powers = powers_.data();

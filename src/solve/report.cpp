@@ -4,6 +4,8 @@
 #include <cstdio>
 #include <sstream>
 
+#include "common/json.hpp"
+
 namespace momentid {
 namespace {
 
@@ -19,23 +21,6 @@ std::string json_number(double x) {
   char text[64];
   std::snprintf(text, sizeof text, "%.17g", x);
   return text;
-}
-
-std::string json_string(const std::string& s) {
-  std::string out = "\"";
-  for (char ch : s) {
-    if (ch == '"' || ch == '\\') {
-      out += '\\';
-      out += ch;
-    } else if (static_cast<unsigned char>(ch) < 0x20) {
-      char code[8];
-      std::snprintf(code, sizeof code, "\\u%04x", ch);
-      out += code;
-    } else {
-      out += ch;
-    }
-  }
-  return out + "\"";
 }
 
 const char* hold_name(InputHold hold) {
