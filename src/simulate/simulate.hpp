@@ -52,25 +52,32 @@ class CompiledModel {
   // out[p] = polynomial p at the powers last filled in, for all `count` polynomials, in one
   // pass over the terms.
   [[gnu::always_inline]] void evaluate_all(double* out, std::size_t count) const {
-    for (std::size_t p = 0; p < count; ++p) out[p] = 0;
     const double* powers = powers_.data();
     const std::uint32_t* factors = factor_index_.data();
-    for (const TermRef& term : terms_) {
-      const std::uint32_t* f = factors + term.first_factor;
-      double product = term.coefficient;
-      switch (term.factors) {
-        case 0:
-          break;
-        case 1:
-          product *= powers[f[0]];
-          break;
-        case 2:
-          product *= powers[f[0]] * powers[f[1]];
-          break;
-        default:
-          for (std::uint32_t k = 0; k < term.factors; ++k) product *= powers[f[k]];
+    const TermRef* terms = terms_.data();
+    for (std::size_t p = 0; p < count; ++p) {
+      // Summed in a register: adding into out[p] term by term would chain every addition
+      // through memory.
+      double sum = 0;
+      for (std::uint32_t t = first_term_[p]; t < first_term_[p + 1]; ++t) {
+        const TermRef& term = terms[t];
+        const std::uint32_t* f = factors + term.first_factor;
+        double product = term.coefficient;
+        switch (term.factors) {
+          case 0:
+            break;
+          case 1:
+            product *= powers[f[0]];
+            break;
+          case 2:
+            product *= powers[f[0]] * powers[f[1]];
+            break;
+          default:
+            for (std::uint32_t k = 0; k < term.factors; ++k) product *= powers[f[k]];
+        }
+        sum += product;
       }
-      out[term.polynomial] += product;
+      out[p] = sum;
     }
   }
   [[gnu::always_inline]] void fill_powers(const double* y, const double* u) const {
