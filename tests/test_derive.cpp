@@ -279,4 +279,32 @@ multipliers 1, y2
           "  E[y1*y2] = 0\n"
           "multipliers skipped: 0\n");
   }
+
+  TEST_CASE("a kinematic equation of mixed degree does not start an endless identity search") {
+    // y' = -y - y^3 + x relates moments of degree k to degree k + 2 without end; identities are
+    // looked for only up to the equations' own degree.
+    const Model model = momentid::parse_model(
+        "state y, v\ninput x\nparam c\ny' = -y - y^3 + x\nv' = -c*v + y\n", "loop.mom");
+    const MomentSystem system = derive(model);
+    CHECK(system.generic_rank == 1);
+    REQUIRE(system.identities.size() == 1);
+    CHECK(momentid::format_moment(model, system.identities[0].moment) + " = " +
+              momentid::format_combination(model, system.identities[0].value) ==
+          "E[y^4] = -E[y^2] + E[y*x]");
+  }
+
+  TEST_CASE("a degree that would build too many products is refused with the count") {
+    std::string text = "state y1, y2, y3, y4, y5, y6, y7, y8\ninput x\nparam a\n";
+    text += "y1' = -a*y1 + x\n";
+    for (int i = 2; i <= 8; ++i) {
+      text += "y" + std::to_string(i) + "' = -a*y" + std::to_string(i) + " + y" +
+              std::to_string(i - 1) + "\n";
+    }
+    const Model model = momentid::parse_model(text, "chain.mom");
+    CHECK_THROWS_WITH_AS(derive(model, {.multipliers = {}, .degree = 8}),
+                         "--degree 8 on 8 states would multiply 8 equations by 12869 monomials "
+                         "each, more than 20000 products: use a lower degree or give "
+                         "--multipliers",
+                         momentid::UsageError);
+  }
 }

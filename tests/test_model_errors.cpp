@@ -735,8 +735,8 @@ y' = -a*b*c*d*k*y
   TEST_CASE("a number beyond the accepted range of powers of ten is an error") {
     const auto e = error_of<ModelError>("state y\nparam c\nconst a = 1e200000\ny' = -c*y + a\n");
     check_error(e,
-                "the number '1e200000' is out of range (powers of ten from -1000 to 1000 are "
-                "accepted)",
+                "the number '1e200000' is out of range (powers of ten from -1000 to 1000 and at "
+                "most 1000 digits are accepted)",
                 3, 11, "const a = 1e200000");
     const Model zero =
         momentid::parse_model("state y\nparam c\ny' = -c*y + 0e99999*y\n", "test.mom");
@@ -760,5 +760,37 @@ y' = -a*b*c*d*k*y
                 "the equations cannot be solved for the derivatives of the states (y, v): their "
                 "coefficients are linearly dependent",
                 4, 1, "y' + v' = v");
+  }
+
+  // --- Limits -----------------------------------------------------------------------------------
+
+  TEST_CASE("parentheses nested too deep are an error, not a stack overflow") {
+    const std::string text = "state y\ninput x\nparam a\ny' = -a*" + std::string(5000, '(') + "y" +
+                             std::string(5000, ')') + " + x\n";
+    const auto e = error_of<ParseError>(text);
+    CHECK(e.message() == "parentheses are nested more than 200 deep");
+    CHECK(e.location().line == 4);
+    CHECK(e.location().column == 209);
+  }
+
+  TEST_CASE("a term or multiplier of too high a degree is an error") {
+    const auto e = error_of<ModelError>("state y\nparam a\ny' = -a*(y^64)^64\n");
+    check_error(e, "this term has degree 4096, above the highest allowed (64)", 3, 9,
+                "y' = -a*(y^64)^64");
+    std::string product = "y";
+    for (int i = 0; i < 99; ++i) product += "*y";
+    const auto f =
+        error_of<ModelError>("state y\nparam a\ny' = -a*y\nmultipliers " + product + "\n");
+    CHECK(f.message() == "this term has degree 65, above the highest allowed (64)");
+    const auto g = multiplier_error_of<ModelError>(oscillator(), "(((y^64)^64)^64)^64");
+    CHECK(g.message() == "this term has degree 4096, above the highest allowed (64)");
+  }
+
+  TEST_CASE("a power of a number that would be huge is an error") {
+    const auto e = error_of<ModelError>(
+        "state y\ninput x\nparam a\ny' = -a*y + x + "
+        "0*((1e1000)^64)^64*y\n");
+    check_error(e, "the number is too large (about 1e64000; at most 1e2000)", 4, 20,
+                "y' = -a*y + x + 0*((1e1000)^64)^64*y");
   }
 }

@@ -361,6 +361,11 @@ class Deriver {
     for (const Row& row : rows) {
       for (const Linear& part : row.parts) visit(part.moments);
     }
+    // Identities are looked for only among moments no higher than the equations' own: with a
+    // kinematic equation such as y' = 1 - y (or -y - y^3) each identity would otherwise bring in
+    // moments of a higher degree without end.
+    int top = 0;
+    for (const Monomial& m : seen) top = std::max(top, degree(m));
     std::vector<MomentCombination> relations;
     while (!work.empty()) {
       const Monomial mu = work.back();
@@ -379,6 +384,9 @@ class Deriver {
           if (!done.insert(beta).second) continue;
           std::optional<MomentCombination> identity = data_identity(beta);
           if (!identity || identity->empty()) continue;
+          bool bounded = true;
+          for (const auto& [m, w] : *identity) bounded = bounded && degree(m) <= top;
+          if (!bounded) continue;
           visit(*identity);
           relations.push_back(std::move(*identity));
         }
@@ -494,10 +502,30 @@ std::vector<Monomial> monomials_up_to(int states, int max_degree) {
   return out;
 }
 
+namespace {
+
+// How many monomials in `states` variables have degree 1..degree: C(states + degree, degree) - 1.
+double count_monomials(int states, int degree) {
+  double c = 1;
+  for (int i = 1; i <= degree; ++i) c = c * (states + i) / i;
+  return c - 1;
+}
+
+}  // namespace
+
 MomentSystem derive(const Model& model, const DeriveOptions& options) {
   Deriver deriver(model);
   const int states = static_cast<int>(model.states().size());
   const auto& equations = model.equations();
+  const double dynamic = static_cast<double>(deriver.dynamic_equations().size());
+  if (options.degree > 0 && dynamic * count_monomials(states, options.degree) > kMaxProducts) {
+    throw UsageError("--degree " + std::to_string(options.degree) + " on " +
+                     std::to_string(states) + " states would multiply " +
+                     std::to_string(static_cast<long>(dynamic)) + " equations by " +
+                     std::to_string(static_cast<long>(count_monomials(states, options.degree))) +
+                     " monomials each, more than " + std::to_string(kMaxProducts) +
+                     " products: use a lower degree or give --multipliers");
+  }
   std::vector<std::vector<Monomial>> multipliers(equations.size());
   auto all = [&](const std::vector<Monomial>& list) {
     for (auto& m : multipliers) m = list;
@@ -538,6 +566,7 @@ MomentSystem derive(const Model& model, const DeriveOptions& options) {
     std::optional<MomentSystem> generic;
     MomentSystem last;
     for (int d = 1; d <= kMaxAutomaticDegree; ++d) {
+      if (d > 1 && dynamic * count_monomials(states, d) > kMaxProducts) break;
       all(monomials_up_to(states, d));
       last = deriver.run(multipliers);
       if (last.symmetric_rank == parameters) return last;

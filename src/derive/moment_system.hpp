@@ -62,6 +62,9 @@ struct DeriveOptions {
   int degree = 0;
 };
 inline constexpr int kMaxAutomaticDegree = 3;
+// At most this many products of an equation and a multiplier; `--degree` beyond it is refused
+// (UsageError) and the automatic choice stops below it.
+inline constexpr long kMaxProducts = 20000;
 
 // The moment equations of a model: the linear system A(mu) theta = b(mu) of the dynamical
 // moment technique, with the identities it used and the multipliers it could not use.
@@ -85,8 +88,8 @@ struct MomentSystem {
   int symmetric_rank = 0;
 };
 
-// Derives the moment equations. Throws ModelError when the model's multipliers refer to
-// something impossible (never for an equation that merely cannot be reduced: that multiplier is
+// Derives the moment equations. Throws UsageError when `degree` would build more than
+// kMaxProducts products (never for an equation that merely cannot be reduced: that multiplier is
 // skipped and reported).
 MomentSystem derive(const Model& model, const DeriveOptions& options = {});
 

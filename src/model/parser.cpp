@@ -22,6 +22,11 @@
 namespace momentid {
 namespace {
 
+// Limits that keep every model small enough to derive and simulate.
+constexpr int kMaxDegree = 64;          // total degree of a term or multiplier
+constexpr int kMaxNumberDigits = 2000;  // of a number computed from a power
+constexpr int kMaxNesting = 200;        // of parentheses
+
 namespace pegtl = tao::pegtl;
 namespace g = grammar;
 using Node = pegtl::parse_tree::node;
@@ -175,13 +180,13 @@ class ModelBuilder {
     if (reserved.count(name) != 0) {
       fail(name_node, "'" + name + "' is a reserved word and cannot be declared");
     }
-    if (auto it = declared_.find(name); it != declared_.end()) {
-      const Declaration& first = *it->second;
+    Declaration d{name, kind, std::nullopt, where(name_node)};
+    if (auto [it, fresh] = first_declaration_.emplace(name, d); !fresh) {
+      const Declaration& first = it->second;
       fail(name_node, "'" + name + "' is already declared as " + article(first.kind) + " at " +
                           std::to_string(first.where.line) + ":" +
                           std::to_string(first.where.column));
     }
-    Declaration d{name, kind, std::nullopt, where(name_node)};
     if (value_node != nullptr) {
       GiNaC::numeric v = 0;
       bool negative = false;
@@ -207,11 +212,6 @@ class ModelBuilder {
         break;
     }
     list->push_back(std::move(d));
-    // Pointers into the vectors move when they grow; index by name after collection instead.
-    declared_.clear();
-    for (auto* l : {&model_.states_, &model_.inputs_, &model_.parameters_, &model_.constants_}) {
-      for (const Declaration& x : *l) declared_[x.name] = &x;
-    }
   }
 
   static std::string article(SymbolKind kind) {
@@ -394,6 +394,7 @@ class ModelBuilder {
         GiNaC::ex factor = eval(*c);
         if (!divide) {
           value *= factor;
+          check_size(n, value);
           continue;
         }
         if (!GiNaC::is_a<GiNaC::numeric>(factor)) {
@@ -420,11 +421,57 @@ class ModelBuilder {
                         std::string(operand.string_view()) + "'");
     }
     if (base.is_zero() && exponent.is_zero()) fail(n, "0^0 is undefined");
-    if (exponent > 64) {
-      fail(operand,
-           "the exponent " + std::string(operand.string_view()) + " is too large (at most 64)");
+    if (exponent > kMaxDegree) {
+      fail(operand, "the exponent " + std::string(operand.string_view()) +
+                        " is too large (at most " + std::to_string(kMaxDegree) + ")");
     }
-    return GiNaC::pow(base, exponent);
+    if (GiNaC::is_a<GiNaC::numeric>(base)) {
+      const GiNaC::numeric b = GiNaC::ex_to<GiNaC::numeric>(base);
+      std::ostringstream numerator, denominator;
+      numerator << b.numer();
+      denominator << b.denom();
+      const double digits =
+          static_cast<double>(std::max(numerator.str().size(), denominator.str().size()) - 1) *
+          GiNaC::ex_to<GiNaC::numeric>(exponent).to_double();
+      if (digits > kMaxNumberDigits) {
+        fail(n, "the number is too large (about 1e" + std::to_string(static_cast<long>(digits)) +
+                    "; at most 1e" + std::to_string(kMaxNumberDigits) + ")");
+      }
+    }
+    GiNaC::ex value = GiNaC::pow(base, exponent);
+    check_size(n, value);
+    return value;
+  }
+
+  // The highest total degree of any term of `e` in the symbols, without expanding it.
+  static int total_degree(const GiNaC::ex& e) {
+    if (GiNaC::is_a<GiNaC::symbol>(e)) return 1;
+    if (GiNaC::is_a<GiNaC::add>(e)) {
+      int d = 0;
+      for (const GiNaC::ex& op : e) d = std::max(d, total_degree(op));
+      return d;
+    }
+    if (GiNaC::is_a<GiNaC::mul>(e)) {
+      long d = 0;
+      for (const GiNaC::ex& op : e) d += total_degree(op);
+      return static_cast<int>(std::min<long>(d, 1L << 20));
+    }
+    if (GiNaC::is_a<GiNaC::power>(e) && GiNaC::is_a<GiNaC::numeric>(e.op(1))) {
+      const long d = static_cast<long>(total_degree(e.op(0))) *
+                     std::min<long>(GiNaC::ex_to<GiNaC::numeric>(e.op(1)).to_long(), 1L << 20);
+      return static_cast<int>(std::min<long>(d, 1L << 20));
+    }
+    return 0;
+  }
+
+  // Keeps terms within what the derivation and the simulator handle: a degree of at most
+  // kMaxDegree in all variables, parameters and derivatives together.
+  void check_size(const Node& at, const GiNaC::ex& value) const {
+    const int degree = total_degree(value);
+    if (degree > kMaxDegree) {
+      fail(at, "this term has degree " + std::to_string(degree) + ", above the highest allowed (" +
+                   std::to_string(kMaxDegree) + ")");
+    }
   }
 
   // --- Terms ----------------------------------------------------------------------------------
@@ -565,6 +612,16 @@ class ModelBuilder {
   }
 
   void add_monomial(const Node& n, std::vector<Monomial>& out) const {
+    try {
+      add_monomial_checked(n, out);
+    } catch (const LocatedError&) {
+      throw;
+    } catch (const std::exception& e) {
+      fail(n, std::string("cannot evaluate the multiplier: ") + e.what());
+    }
+  }
+
+  void add_monomial_checked(const Node& n, std::vector<Monomial>& out) const {
     const GiNaC::ex value = eval_sum(n, false).expand();
     const std::vector<SplitTerm> terms = split_all(value);
     const std::string text(n.string_view());
@@ -711,7 +768,8 @@ class ModelBuilder {
 
   std::string_view text_;
   Model model_;
-  std::map<std::string, const Declaration*> declared_;
+  std::map<std::string, const Declaration*> declared_;    // after all declarations are collected
+  std::map<std::string, Declaration> first_declaration_;  // while they are
   std::map<GiNaC::ex, SymbolRole, GiNaC::ex_is_less> roles_;
   std::map<std::string, int> labels_;
   const Node* model_statement_ = nullptr;
@@ -752,8 +810,38 @@ SourceLocation error_location(std::string_view text, const std::string& file,
   return {file, static_cast<int>(p.line), static_cast<int>(p.column), line_of(text, p.line)};
 }
 
+// Parentheses nested too deep would exhaust the stack of the recursive parser and evaluator.
+void check_nesting(std::string_view text, const std::string& file) {
+  int depth = 0;
+  std::size_t line = 1, line_start = 0;
+  bool comment = false, quoted = false;
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const char ch = text[i];
+    if (ch == '\n') {
+      ++line;
+      line_start = i + 1;
+      comment = quoted = false;
+    } else if (comment) {
+      continue;
+    } else if (ch == '"') {
+      quoted = !quoted;
+    } else if (quoted) {
+      continue;
+    } else if (ch == '#') {
+      comment = true;
+    } else if (ch == '(' && ++depth > kMaxNesting) {
+      throw ParseError(
+          {file, static_cast<int>(line), static_cast<int>(i - line_start + 1), line_of(text, line)},
+          "parentheses are nested more than " + std::to_string(kMaxNesting) + " deep");
+    } else if (ch == ')' && depth > 0) {
+      --depth;
+    }
+  }
+}
+
 template <typename Rule>
 std::unique_ptr<Node> parse_tree(std::string_view text, const std::string& file) {
+  check_nesting(text, file);
   pegtl::memory_input in(text.data(), text.size(), file);
   try {
     return pegtl::parse_tree::parse<Rule, Selector, pegtl::nothing, Control>(in);
@@ -824,7 +912,7 @@ std::string format_monomial(const Model& model, const Monomial& monomial) {
 }
 
 GiNaC::numeric parse_exact_number(std::string_view text) {
-  GiNaC::numeric mantissa = 0;
+  std::string digits;
   long scale = 0;  // power of ten
   bool fraction = false;
   std::size_t i = 0;
@@ -833,7 +921,7 @@ GiNaC::numeric parse_exact_number(std::string_view text) {
       fraction = true;
       continue;
     }
-    mantissa = mantissa * 10 + (text[i] - '0');
+    digits += text[i];
     if (fraction) --scale;
   }
   if (i < text.size()) {
@@ -844,13 +932,20 @@ GiNaC::numeric parse_exact_number(std::string_view text) {
     for (; i < text.size(); ++i) e = std::min<long>(e * 10 + (text[i] - '0'), 1000000);
     scale += negative ? -e : e;
   }
-  if (!mantissa.is_zero() && (scale > kMaxDecimalExponent || scale < -kMaxDecimalExponent)) {
-    throw std::out_of_range("the number '" + std::string(text) +
-                            "' is out of range (powers of ten from -" +
-                            std::to_string(kMaxDecimalExponent) + " to " +
-                            std::to_string(kMaxDecimalExponent) + " are accepted)");
+  const std::size_t first = digits.find_first_not_of('0');
+  if (first == std::string::npos) return 0;
+  digits.erase(0, first);
+  // The power of ten of the leading digit decides the range.
+  const long magnitude = scale + static_cast<long>(digits.size()) - 1;
+  if (magnitude > kMaxDecimalExponent || magnitude < -kMaxDecimalExponent ||
+      digits.size() > static_cast<std::size_t>(kMaxDecimalExponent)) {
+    throw std::out_of_range(
+        "the number '" + std::string(text.substr(0, 40)) + (text.size() > 40 ? "..." : "") +
+        "' is out of range (powers of ten from -" + std::to_string(kMaxDecimalExponent) + " to " +
+        std::to_string(kMaxDecimalExponent) + " and at most " +
+        std::to_string(kMaxDecimalExponent) + " digits are accepted)");
   }
-  return mantissa * GiNaC::pow(GiNaC::numeric(10), GiNaC::numeric(scale));
+  return GiNaC::numeric(digits.c_str()) * GiNaC::pow(GiNaC::numeric(10), GiNaC::numeric(scale));
 }
 
 }  // namespace momentid
