@@ -1,5 +1,6 @@
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <string>
 
 #include "derive/moment_system.hpp"
@@ -306,5 +307,47 @@ multipliers 1, y2
                          "each, more than 20000 products: use a lower degree or give "
                          "--multipliers",
                          momentid::UsageError);
+  }
+
+  TEST_CASE("notes say when the model cannot be stationary or an equation is not used") {
+    const Model growing = momentid::parse_model(
+        "state y, z\ninput x\nparam a\ny' = -a*y + x\nz' = 1\n", "growing.mom");
+    const MomentSystem g =
+        derive(growing, {.multipliers = momentid::parse_multiplier_list(growing, "y, z", "test")});
+    CHECK(std::find(g.notes.begin(), g.notes.end(),
+                    "the model cannot be stationary: a stationarity identity says 0 = 1") !=
+          g.notes.end());
+
+    const Model square = momentid::parse_model(
+        "state y1, y2\ninput x\nparam a, b\ny1' = y2^2\ny2' = -a*y2 - b*y1 + x\n", "sq.mom");
+    const MomentSystem sq = derive(square);
+    CHECK(std::find(sq.notes.begin(), sq.notes.end(),
+                    "stationarity requires E[y2^2] = 0, which only a zero signal satisfies: "
+                    "check the parameter-free equations") != sq.notes.end());
+
+    const Model twice = momentid::parse_model(
+        "state y, v\ninput x\nparam c, k\ny' = v\nkin: 2*y' = 2*v\nv' = -c*v - k*y + x\n"
+        "multipliers kin: y\nmultipliers y\n",
+        "twice.mom");
+    const MomentSystem t = derive(twice);
+    CHECK(t.notes == std::vector<std::string>{
+                         "equation kin gives y' again (equation 1 already does): it gives no "
+                         "moment equations",
+                         "the multipliers for equation kin are not used: it has no unknown "
+                         "parameters"});
+  }
+
+  TEST_CASE("products that reduce to 0 = 0 are counted in a note") {
+    const Model model = momentid::parse_model(
+        "state y\ninput x\nparam a, k\nk*y' = k*x - a*y\nmultipliers 1, y\n", "z.mom");
+    const MomentSystem system = derive(model);
+    CHECK(system.equations.size() == 2);
+    const Model redundant = momentid::parse_model(
+        "state y, v\ninput x\nparam k, c\ny' = v\nk*y' = k*v\nv' = -c*v - k*y + x\n"
+        "multipliers y\n",
+        "r.mom");
+    const MomentSystem r = derive(redundant);
+    CHECK(std::find(r.notes.begin(), r.notes.end(),
+                    "1 product reduces to 0 = 0 and gives no equation") != r.notes.end());
   }
 }

@@ -793,4 +793,23 @@ y' = -a*b*c*d*k*y
     check_error(e, "the number is too large (about 1e64000; at most 1e2000)", 4, 20,
                 "y' = -a*y + x + 0*((1e1000)^64)^64*y");
   }
+
+  TEST_CASE("a byte order mark before the model is ignored") {
+    const Model model =
+        momentid::parse_model("\xEF\xBB\xBFstate y\ninput x\nparam a\ny' = -a*y + x\n", "b.mom");
+    CHECK(model.states().size() == 1);
+  }
+
+  TEST_CASE("a directory given as the model file is reported as such") {
+    const auto e = error_from<momentid::Error>(
+        [] { momentid::parse_model_file(std::string(MOMENTID_SOURCE_DIR) + "/models"); });
+    CHECK(std::string(e.what()) == std::string(MOMENTID_SOURCE_DIR) +
+                                       "/models: cannot read the model file: it is a directory");
+  }
+
+  TEST_CASE("a model named after its file keeps only safe characters") {
+    const Model model = momentid::parse_model("state y\ninput x\nparam a\ny' = -a*y + x\n",
+                                              "dir/we\xffird name.mom");
+    CHECK(model.name() == "we_ird_name");
+  }
 }

@@ -1,5 +1,6 @@
 #include <doctest/doctest.h>
 
+#include "common/json.hpp"
 #include "solve/distributions.hpp"
 
 TEST_SUITE("solve") {
@@ -18,5 +19,10 @@ TEST_SUITE("solve") {
           doctest::Approx(2.77644510519779).epsilon(1e-9));
     CHECK(momentid::student_t_cdf(1.0, 3) == doctest::Approx(0.80449889052271).epsilon(1e-9));
     CHECK(momentid::student_t_cdf(-1.0, 3) == doctest::Approx(1 - 0.80449889052271).epsilon(1e-9));
+  }
+
+  TEST_CASE("JSON strings escape quotes and control characters and stay valid UTF-8") {
+    CHECK(momentid::json_string("a\"b\\c\nd\x01") == "\"a\\\"b\\\\c\\nd\\u0001\"");
+    CHECK(momentid::json_string("\xc3\xa9t\xff") == "\"\xc3\xa9t\\ufffd\"");
   }
 }

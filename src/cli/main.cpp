@@ -21,17 +21,17 @@ constexpr int kNothingIdentifiable = 3;
 
 struct DeriveCommand {
   std::string model;
-  std::string multipliers;
+  std::optional<std::string> multipliers;
   int degree = 0;
   std::string format = "text";
 };
 
 // The moment equations with the multipliers from `--multipliers` or `--degree`.
-momentid::MomentSystem derive_with(const momentid::Model& model, const std::string& multipliers,
-                                   int degree) {
+momentid::MomentSystem derive_with(const momentid::Model& model,
+                                   const std::optional<std::string>& multipliers, int degree) {
   momentid::DeriveOptions options;
-  if (!multipliers.empty()) {
-    options.multipliers = momentid::parse_multiplier_list(model, multipliers, "--multipliers");
+  if (multipliers) {
+    options.multipliers = momentid::parse_multiplier_list(model, *multipliers, "--multipliers");
   }
   options.degree = degree;
   return momentid::derive(model, options);
@@ -48,7 +48,9 @@ int run_derive(const DeriveCommand& command) {
     std::cout << momentid::format_text(system);
   }
   if (system.equations.empty()) {
-    std::cerr << "momentid: no moment equation could be derived for " << command.model << "\n";
+    std::cerr << "momentid: no moment equation could be derived for " << command.model
+              << (model.parameters().empty() ? ": the model has no unknown parameters" : "")
+              << "\n";
     return kNothingIdentifiable;
   }
   return 0;
@@ -184,7 +186,7 @@ std::optional<momentid::InputHold> hold_option(const std::string& text) {
 struct IdentifyCommand {
   std::string model;
   std::string data;
-  std::string multipliers;
+  std::optional<std::string> multipliers;
   int degree = 0;
   std::string hold;
   std::size_t batches = 50;
@@ -407,6 +409,10 @@ int main(int argc, char** argv) {
   } catch (const momentid::Error& e) {
     std::cerr << "momentid: " << e.what() << "\n";
     return e.exit_code();
+  } catch (const std::exception& e) {
+    // Everything momentid checks is reported above; this is a failure it did not foresee.
+    std::cerr << "momentid: internal error: " << e.what() << "\n";
+    return 2;
   }
   return 0;
 }

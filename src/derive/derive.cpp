@@ -72,7 +72,8 @@ class Deriver {
         states_(static_cast<int>(model.states().size())),
         variables_(static_cast<int>(model.variables().size())),
         parameters_(static_cast<int>(model.parameters().size())),
-        kinematic_(model.states().size()) {
+        kinematic_(model.states().size()),
+        kinematic_source_(model.states().size(), -1) {
     classify_equations();
   }
 
@@ -90,6 +91,7 @@ class Deriver {
     for (Row& row : rows) reduce_derivatives(row);
     std::vector<Row> usable = eliminate_unreduced(rows, system.skipped);
     apply_identities(usable, system);
+    int vanished = 0;
     for (Row& row : usable) {
       MomentEquation eq;
       eq.sources = row.sources;
@@ -100,7 +102,9 @@ class Deriver {
       }
       for (const auto& [m, c] : row.parts[0].moments) eq.rhs[m] = -c;
       if (!any) {
-        if (!eq.rhs.empty()) {
+        if (eq.rhs.empty()) {
+          ++vanished;
+        } else {
           system.skipped.push_back({row.sources[0].equation, row.sources[0].multiplier,
                                     "no parameter remains: the equation says only 0 = " +
                                         format_combination(model_, eq.rhs)});
@@ -109,6 +113,12 @@ class Deriver {
       }
       system.equations.push_back(std::move(eq));
     }
+    if (vanished > 0) {
+      system.notes.push_back(std::to_string(vanished) +
+                             (vanished == 1 ? " product reduces" : " products reduce") +
+                             " to 0 = 0 and gives no equation");
+    }
+    if (parameters_ == 0) system.notes.push_back("the model has no unknown parameters");
     std::set<Monomial, MomentOrder> needed;
     for (const MomentEquation& eq : system.equations) {
       for (const auto& c : eq.coefficients) {
@@ -143,8 +153,14 @@ class Deriver {
         dynamic_.push_back(static_cast<int>(e));
         continue;
       }
-      const bool explicit_in_one =
-          derivative_terms == 1 && degree(lead->monomial) == 0 && !kinematic_[lead->derivative];
+      const bool explicit_in_one = derivative_terms == 1 && degree(lead->monomial) == 0;
+      if (explicit_in_one && kinematic_[lead->derivative]) {
+        notes_.push_back("equation " + eqs[e].name() + " gives " +
+                         model_.states()[lead->derivative].name + "' again (equation " +
+                         eqs[kinematic_source_[lead->derivative]].name() +
+                         " already does): it gives no moment equations");
+        continue;
+      }
       if (!explicit_in_one) {
         notes_.push_back("equation " + eqs[e].name() +
                          " has no unknown parameters and is not of the form y' = f(y, u): "
@@ -156,6 +172,7 @@ class Deriver {
         if (&t != lead) add_to(f, t.monomial, -t.coefficient / lead->coefficient);
       }
       kinematic_[lead->derivative] = std::move(f);
+      kinematic_source_[lead->derivative] = static_cast<int>(e);
     }
   }
 
@@ -367,6 +384,23 @@ class Deriver {
     int top = 0;
     for (const Monomial& m : seen) top = std::max(top, degree(m));
     std::vector<MomentCombination> relations;
+    // E[d/dt y] = 0 for every state given by a kinematic equation: E[f(y, u)] = 0. Its
+    // constant part, if alone (y' = 1), says the model cannot be stationary at all.
+    for (int j = 0; j < states_; ++j) {
+      if (!kinematic_[j]) continue;
+      Monomial beta(variables_, 0);
+      beta[j] = 1;
+      done.insert(beta);
+      std::optional<MomentCombination> identity = data_identity(beta);
+      if (!identity || identity->empty()) continue;
+      const Monomial one(variables_, 0);
+      bool contradiction = true, relevant = false;
+      for (const auto& [m, w] : *identity) {
+        contradiction = contradiction && m == one;
+        relevant = relevant || seen.count(m) != 0;
+      }
+      if (contradiction || relevant) relations.push_back(std::move(*identity));
+    }
     while (!work.empty()) {
       const Monomial mu = work.back();
       work.pop_back();
@@ -407,7 +441,13 @@ class Deriver {
           pivot = m;
         }
       }
-      if (!pivot) continue;
+      if (!pivot) {
+        if (relation.count(one) != 0) {
+          system.notes.push_back("the model cannot be stationary: a stationarity identity says "
+                                 "0 = " + format_combination(model_, relation));
+        }
+        continue;
+      }
       MomentCombination value;
       const numeric lead = relation.at(*pivot);
       for (const auto& [m, v] : relation) {
@@ -425,7 +465,15 @@ class Deriver {
     for (Row& row : rows) {
       for (Linear& part : row.parts) substitute(part.moments, solved);
     }
-    for (auto& [m, value] : solved) system.identities.push_back({m, value});
+    for (auto& [m, value] : solved) {
+      const bool even = std::all_of(m.begin(), m.end(), [](int e) { return e % 2 == 0; });
+      if (value.empty() && even) {
+        system.notes.push_back("stationarity requires " + format_moment(model_, m) +
+                               " = 0, which only a zero signal satisfies: check the "
+                               "parameter-free equations");
+      }
+      system.identities.push_back({m, value});
+    }
   }
 
   static void substitute(MomentCombination& c,
@@ -472,6 +520,7 @@ class Deriver {
   const Model& model_;
   int states_, variables_, parameters_;
   std::vector<std::optional<MomentCombination>> kinematic_;
+  std::vector<int> kinematic_source_;  // the equation that gave each kinematic state
   std::vector<int> dynamic_;
   std::vector<std::string> notes_;
 };
@@ -551,10 +600,22 @@ MomentSystem derive(const Model& model, const DeriveOptions& options) {
       if (multipliers[e].empty()) multipliers[e] = general[e];
     }
     MomentSystem system = deriver.run(multipliers);
-    for (int e : deriver.dynamic_equations()) {
-      if (multipliers[e].empty()) {
+    const std::vector<int>& dynamic_equations = deriver.dynamic_equations();
+    for (std::size_t e = 0; e < equations.size(); ++e) {
+      const bool dynamic = std::find(dynamic_equations.begin(), dynamic_equations.end(),
+                                     static_cast<int>(e)) != dynamic_equations.end();
+      if (dynamic && multipliers[e].empty()) {
         system.notes.push_back("equation " + equations[e].name() +
                                " has no multipliers: no multipliers statement covers it");
+      }
+      if (!dynamic && !equations[e].label.empty()) {
+        for (const MultiplierSet& set : model.multipliers()) {
+          if (set.equation == equations[e].label) {
+            system.notes.push_back("the multipliers for equation " + equations[e].name() +
+                                   " are not used: it has no unknown parameters");
+            break;
+          }
+        }
       }
     }
     return system;

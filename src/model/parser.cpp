@@ -6,6 +6,7 @@
 #include <cerrno>
 #include <cmath>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <functional>
 #include <map>
@@ -154,6 +155,10 @@ class ModelBuilder {
       std::string stem = model_.file_;
       if (auto slash = stem.find_last_of('/'); slash != std::string::npos) stem.erase(0, slash + 1);
       if (auto dot = stem.find('.'); dot != std::string::npos && dot > 0) stem.erase(dot);
+      // A name from a file name keeps only characters that every output format can carry.
+      for (char& ch : stem) {
+        if (!std::isalnum(static_cast<unsigned char>(ch)) && ch != '_' && ch != '-') ch = '_';
+      }
       model_.name_ = stem;
     }
   }
@@ -880,12 +885,18 @@ int Model::parameter_index(std::string_view name) const {
 }
 
 Model parse_model(std::string_view text, const std::string& file) {
+  // A UTF-8 byte order mark, as some editors write, is not part of the model.
+  if (text.substr(0, 3) == "\xEF\xBB\xBF") text.remove_prefix(3);
   std::unique_ptr<Node> root = parse_tree<g::model_file>(text, file);
   if (!root) throw ParseError({file, 1, 1, line_of(text, 1)}, "expected a model");
   return ModelBuilder(text, file).build(*root);
 }
 
 Model parse_model_file(const std::string& path) {
+  std::error_code ignored;
+  if (std::filesystem::is_directory(path, ignored)) {
+    throw Error(path + ": cannot read the model file: it is a directory");
+  }
   std::ifstream in(path, std::ios::binary);
   if (!in) throw Error(path + ": cannot open the model file: " + std::strerror(errno));
   std::ostringstream text;
