@@ -812,4 +812,17 @@ y' = -a*b*c*d*k*y
                                               "dir/we\xffird name.mom");
     CHECK(model.name() == "we_ird_name");
   }
+
+  TEST_CASE("a long source line is shown as a window around the caret") {
+    const std::string text = "state y\ninput x\nparam a\ny' = -a*y + x" + std::string(200, ' ') +
+                             "+ q" + std::string(200, ' ') + "\n";
+    const auto e = error_of<ModelError>(text);
+    const std::string shown = momentid::render_with_caret(e);
+    const std::string line = text.substr(24, text.size() - 25);  // line 4, without its '\n'
+    const std::string window = "..." + line.substr(215 - 70, 70 + 50) + "...";
+    CHECK(shown ==
+          "test.mom:4:216: 'q' is not declared (declared: states y; inputs x; "
+          "parameters a)\n 4 | " +
+              window + "\n   | " + std::string(73, ' ') + "^");
+  }
 }

@@ -443,8 +443,10 @@ class Deriver {
       }
       if (!pivot) {
         if (relation.count(one) != 0) {
-          system.notes.push_back("the model cannot be stationary: a stationarity identity says "
-                                 "0 = " + format_combination(model_, relation));
+          system.notes.push_back(
+              "the model cannot be stationary: a stationarity identity says "
+              "0 = " +
+              format_combination(model_, relation));
         }
         continue;
       }
