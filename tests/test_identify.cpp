@@ -5,10 +5,13 @@
 #include <doctest/doctest.h>
 
 #include <cmath>
+#include <filesystem>
 
+#include "data/writer.hpp"
 #include "derive/moment_system.hpp"
 #include "model/model.hpp"
 #include "moments/accumulator.hpp"
+#include "moments/from_data.hpp"
 #include "simulate/simulate.hpp"
 #include "solve/estimate.hpp"
 #include "test_support.hpp"
@@ -177,5 +180,48 @@ TEST_SUITE("identify") {
           "combinations are determined");
     CHECK_FALSE(e.parameters[0].identifiable);
     CHECK(std::abs(e.parameters[0].estimate + e.parameters[1].estimate - 1) < 0.05);
+  }
+
+  TEST_CASE("pairing the input with the state at the end of its interval biases upwards") {
+    // The report's program paired x_n with y_{n+1}: --input-shift 1 with sample averaging. The
+    // bias is about +1/K; pairing with the start (shift 0, sample) gives about -1/K.
+    const Model model = model_file("kozin_4_1a.mom");
+    const auto path = std::filesystem::temp_directory_path() / "momentid_shift_test.csv";
+    {
+      momentid::DataWriter out(path.string(), momentid::DataWriter::Format::kCsv, {},
+                               {"t", "y", "x"});
+      struct Rows : momentid::SampleSink {
+        momentid::DataWriter& out;
+        explicit Rows(momentid::DataWriter& o) : out(o) {}
+        void sample(double t, const double* v, std::size_t) override {
+          const double row[3] = {t, v[0], v[1]};
+          out.row(row);
+        }
+      } rows(out);
+      momentid::SimulationOptions options;
+      options.parameters = momentid::parameter_values(model, {});
+      options.inputs = {momentid::InputSpec{}};
+      options.samples = 200000;
+      momentid::simulate(model, options, rows);
+      out.commit();
+    }
+    const momentid::MomentSystem system = momentid::derive(model);
+    auto estimate = [&](InputHold hold, long shift) {
+      momentid::DataOptions options;
+      options.hold = hold;
+      options.input_shift = shift;
+      const auto data = momentid::moments_from_file(path.string(), {"y"}, {"x"},
+                                                    momentid::moments_to_estimate(system), options);
+      return momentid::solve(system, data.estimates).parameters[0].estimate;
+    };
+    const double end = estimate(InputHold::kSample, 1), start = estimate(InputHold::kSample, 0),
+                 consistent = estimate(InputHold::kZeroOrderHold, 0);
+    std::filesystem::remove(path);
+    INFO("end ", end, ", start ", start, ", consistent ", consistent);
+    CHECK(end - 1 > 0.05);
+    CHECK(end - 1 < 0.15);
+    CHECK(start - 1 < -0.05);
+    CHECK(start - 1 > -0.15);
+    CHECK(std::abs(consistent - 1) < 0.01);
   }
 }

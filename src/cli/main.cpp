@@ -193,6 +193,7 @@ struct IdentifyCommand {
   std::string weighting = "ls";
   std::string format = "text";
   std::vector<std::string> columns;
+  long input_shift = 0;
 };
 
 int run_identify(const IdentifyCommand& command) {
@@ -210,15 +211,17 @@ int run_identify(const IdentifyCommand& command) {
   data_options.batches = command.batches;
   data_options.rename = column_map(command.columns);
   data_options.min_rows = 2 * command.batches;
+  data_options.input_shift = command.input_shift;
   std::vector<std::string> states, inputs;
   for (const auto& d : model.states()) states.push_back(d.name);
   for (const auto& d : model.inputs()) inputs.push_back(d.name);
-  const momentid::DataMoments data = momentid::moments_from_file(
-      command.data, states, inputs, momentid::moments_to_estimate(system), data_options);
+  const std::vector<momentid::Monomial> moments = momentid::moments_to_estimate(system);
+  const momentid::DataMoments data =
+      momentid::moments_from_file(command.data, states, inputs, moments, data_options);
   const momentid::Estimate estimate =
       momentid::solve(system, data.estimates, {.gmm = command.weighting == "gmm"});
-  const momentid::IdentifyReport report{&model, command.data, &data, &estimate,
-                                        command.weighting == "gmm"};
+  const momentid::IdentifyReport report{
+      &model, command.data, &data, &estimate, command.weighting == "gmm", &moments};
   std::cout << (command.format == "json" ? momentid::format_report_json(report)
                                          : momentid::format_report_text(report));
   if (estimate.status == momentid::Estimate::Status::kNothingIdentifiable) {
@@ -378,6 +381,10 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"text", "json"}));
   identify_app->add_option("--columns", identify.columns, "NAME=COLUMN: where a model variable is")
       ->delimiter(',');
+  identify_app
+      ->add_option("--input-shift", identify.input_shift,
+                   "pair input row n with state row n + k (delayed measurements)")
+      ->check(CLI::Range(-1000L, 1000L));
 
   CheckCommand check;
   CLI::App* check_app = app.add_subcommand(

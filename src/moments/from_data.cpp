@@ -3,6 +3,7 @@
 #include <cmath>
 #include <condition_variable>
 #include <cstdio>
+#include <deque>
 #include <exception>
 #include <mutex>
 #include <thread>
@@ -71,6 +72,46 @@ class LagSums {
   std::vector<double> history_, sum_, sum_squares_, products_;
   std::vector<std::size_t> pairs_;
   std::size_t head_ = 0, filled_ = 0, count_ = 0;
+};
+
+// Pairs input row n with state row n + shift within a run (`--input-shift`), for data whose
+// input and state channels are not aligned in time. Rows without a partner are dropped.
+class InputShift {
+ public:
+  InputShift(std::size_t states, std::size_t inputs, long shift)
+      : states_(states), inputs_(inputs), shift_(shift) {}
+
+  void start_run() { past_.clear(); }
+
+  // The shifted rows for `count` new rows (states, then inputs).
+  const std::vector<double>& apply(const double* rows, std::size_t count) {
+    const std::size_t width = states_ + inputs_;
+    const std::size_t lag = static_cast<std::size_t>(shift_ < 0 ? -shift_ : shift_);
+    out_.clear();
+    for (std::size_t r = 0; r < count; ++r) {
+      const double* row = rows + r * width;
+      if (past_.size() == lag) {
+        // shift > 0: the states of this row with the inputs of `lag` rows ago; shift < 0: the
+        // states of `lag` rows ago with the inputs of this row.
+        const double* early = lag == 0 ? row : past_.front().data();
+        const double* states = shift_ >= 0 ? row : early;
+        const double* inputs = shift_ >= 0 ? early : row;
+        out_.insert(out_.end(), states, states + states_);
+        out_.insert(out_.end(), inputs + states_, inputs + width);
+      }
+      if (lag > 0) {
+        if (past_.size() == lag) past_.pop_front();
+        past_.emplace_back(row, row + width);
+      }
+    }
+    return out_;
+  }
+
+ private:
+  std::size_t states_, inputs_;
+  long shift_;
+  std::deque<std::vector<double>> past_;
+  std::vector<double> out_;
 };
 
 // Hands filled blocks from the reading thread to the accumulating one, two at a time at most.
@@ -153,6 +194,7 @@ DataMoments moments_from_file(const std::string& path, const std::vector<std::st
   const std::size_t channels = request.names.size();
   MomentAccumulator accumulator(moments, states.size(), inputs.size(), out.hold, options.batches);
   LagSums lags(channels, options.lags);
+  InputShift shift(states.size(), inputs.size(), options.input_shift);
 
   BlockQueue queue(3);
   std::thread producer([&] {
@@ -172,11 +214,17 @@ DataMoments moments_from_file(const std::string& path, const std::vector<std::st
   try {
     while (auto block = queue.take_full()) {
       if (block->run_starts) {
+        shift.start_run();
         accumulator.start_run();
         lags.start_run();
         ++out.runs;
       }
-      accumulator.add(block->values.data(), block->rows);
+      if (options.input_shift == 0) {
+        accumulator.add(block->values.data(), block->rows);
+      } else {
+        const std::vector<double>& shifted = shift.apply(block->values.data(), block->rows);
+        accumulator.add(shifted.data(), shifted.size() / channels);
+      }
       lags.add(block->values.data(), block->rows);
       out.rows += block->rows;
       queue.give_free(std::move(block));

@@ -28,6 +28,8 @@ struct DataOptions {
   std::map<std::string, std::string> rename;  // model name -> file column
   std::size_t lags = 1;                       // autocorrelations computed, per channel
   std::size_t min_rows = 2;
+  // Pair input row n with state row n + input_shift (0: the same row).
+  long input_shift = 0;
 };
 
 // What one pass over a data file yields.

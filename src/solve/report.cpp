@@ -113,6 +113,14 @@ std::string format_report_json(const IdentifyReport& r) {
       << ",\n  \"data\": " << json_string(r.data_path)
       << ",\n  \"parameters\": " << parameters(gmm ? e.gmm_parameters : e.parameters);
   if (gmm) out << ",\n  \"least_squares\": " << parameters(e.parameters);
+  if (r.moments != nullptr) {
+    out << ",\n  \"moments\": {";
+    for (std::size_t k = 0; k < r.moments->size(); ++k) {
+      out << (k ? ", " : "") << json_string(format_moment(*r.model, (*r.moments)[k])) << ": "
+          << json_number(d.estimates.mean[k]);
+    }
+    out << "}";
+  }
   out << ",\n  \"diagnostics\": {\n    \"status\": "
       << json_string(e.status == Estimate::Status::kOk              ? "ok"
                      : e.status == Estimate::Status::kRankDeficient ? "rank-deficient"

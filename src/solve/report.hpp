@@ -14,6 +14,8 @@ struct IdentifyReport {
   const DataMoments* data = nullptr;
   const Estimate* estimate = nullptr;
   bool gmm = false;  // the optimally weighted estimate is the main result
+  // The moments in data->estimates, in order (moments_to_estimate of the system).
+  const std::vector<Monomial>* moments = nullptr;
 };
 
 // A table (parameter, estimate, standard error, 95% interval), then the diagnostics.
