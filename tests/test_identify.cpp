@@ -4,6 +4,7 @@
 
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 
@@ -223,5 +224,21 @@ TEST_SUITE("identify") {
     CHECK(start - 1 < -0.05);
     CHECK(start - 1 > -0.15);
     CHECK(std::abs(consistent - 1) < 0.01);
+  }
+
+  TEST_CASE("no optimally weighted estimate when there are not more batches than equations") {
+    const Model model = model_file("duffing.mom");
+    Case c;
+    c.samples = 50000;
+    c.input = "ma:K=10,w=0.1,sigma=20";
+    c.degree = 3;
+    c.gmm = true;
+    c.batches = 5;
+    const Estimate e = identify(model, c);
+    CHECK(e.gmm_parameters.empty());
+    CHECK_FALSE(e.j_statistic.has_value());
+    CHECK(std::find(e.warnings.begin(), e.warnings.end(),
+                    "no optimally weighted estimate: it needs more batches than equations (5 "
+                    "batches for 9 equations): use --batches") != e.warnings.end());
   }
 }

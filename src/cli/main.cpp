@@ -3,6 +3,7 @@
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <iostream>
 #include <map>
@@ -242,10 +243,25 @@ struct CheckCommand {
 int run_check(const CheckCommand& command) {
   std::optional<momentid::Model> model;
   std::vector<std::string> states, inputs;
+  std::vector<std::string> missing_inputs;
   if (!command.model.empty()) {
     model = momentid::parse_model_file(command.model);
     for (const auto& d : model->states()) states.push_back(d.name);
-    for (const auto& d : model->inputs()) inputs.push_back(d.name);
+    // The statistics of the states and most identities need no input: inputs missing from the
+    // file are left out rather than refused.
+    const auto reader =
+        momentid::DataReader::open(command.data, {.names = {}, .rename = {}, .min_rows = 0});
+    const auto& columns = reader->columns();
+    const auto renamed = column_map(command.columns);
+    for (const auto& d : model->inputs()) {
+      const auto it = renamed.find(d.name);
+      const std::string column = it == renamed.end() ? d.name : it->second;
+      if (std::find(columns.begin(), columns.end(), column) == columns.end()) {
+        missing_inputs.push_back(d.name);
+      } else {
+        inputs.push_back(d.name);
+      }
+    }
   } else {
     // Without a model every numeric column but t and run is a channel.
     const auto reader =
@@ -256,9 +272,18 @@ int run_check(const CheckCommand& command) {
   }
   std::optional<momentid::MomentSystem> system;
   std::vector<momentid::Monomial> moments;
+  std::vector<momentid::Monomial> full_moments;  // over all the model's variables
   if (model) {
     system = momentid::derive(*model);
-    moments = momentid::moments_to_estimate(*system);
+    if (!missing_inputs.empty()) inputs.clear();  // then the channels are the states only
+    for (const momentid::Monomial& m : momentid::moments_to_estimate(*system)) {
+      const auto first_input = m.begin() + static_cast<std::ptrdiff_t>(states.size());
+      if (inputs.empty() && std::any_of(first_input, m.end(), [](int e) { return e != 0; })) {
+        continue;
+      }
+      full_moments.push_back(m);
+      moments.emplace_back(m.begin(), inputs.empty() ? first_input : m.end());
+    }
   }
   momentid::DataOptions options;
   options.lags = command.lags;
@@ -297,12 +322,16 @@ int run_check(const CheckCommand& command) {
     }
   }
   if (model) {
-    const momentid::Estimate estimate = momentid::solve(*system, data.estimates);
-    if (estimate.identities.empty())
-      std::printf("stationarity identities: none for this model\n");
-    else
+    for (const std::string& name : missing_inputs) {
+      std::printf("input %s is not in the file: only the states are checked\n", name.c_str());
+    }
+    const auto identities = momentid::check_identities(*system, full_moments, data.estimates);
+    if (identities.empty()) {
+      std::printf("stationarity identities: none to check\n");
+    } else {
       std::printf("stationarity identities (sample violation, z-score):\n");
-    for (const auto& c : estimate.identities) {
+    }
+    for (const auto& c : identities) {
       std::printf("  %s: %.3g (z = %.2f)%s\n", c.identity.c_str(), c.violation, c.z,
                   std::abs(c.z) > 4 ? "  <- violated: not stationary, or not this model" : "");
     }
@@ -314,6 +343,7 @@ int run_check(const CheckCommand& command) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  momentid::remove_partial_output_on_interrupt();
   CLI::App app{"momentid: identify the parameters of polynomial ODE models from random data"};
   app.require_subcommand(1);
   app.set_version_flag("--version", "momentid 0.1.0");
@@ -346,7 +376,19 @@ int main(int argc, char** argv) {
       "input process [NAME=]SPEC: ma:K=10,w=0.1 | ma:weights=[..] | ou:tau=T | white, with "
       "sigma= and mean= (default ma:K=10,w=0.1)");
   simulate_app->add_option("--dt", simulate.dt, "integration and sampling step")
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::Validator(
+          [](const std::string& text) {
+            double dt = 0;
+            try {
+              dt = std::stod(text);
+            } catch (const std::exception&) {
+              dt = 0;
+            }
+            return std::isfinite(dt) && dt >= 1e-9 && dt <= 1e6
+                       ? std::string()
+                       : "expected a number from 1e-9 to 1e6, found '" + text + "'";
+          },
+          "1e-9 to 1e6"));
   simulate_app->add_option("--samples", simulate.samples, "samples per run")
       ->check(CLI::Range(std::size_t{1}, std::size_t{1} << 40));
   simulate_app->add_option("--burn-in", simulate.burn_in, "steps discarded before each run");

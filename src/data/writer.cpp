@@ -5,6 +5,7 @@
 #include <bit>
 #include <cerrno>
 #include <charconv>
+#include <csignal>
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
@@ -24,9 +25,25 @@ DataWriter::DataWriter(const std::string& path, Format format,
                        const std::vector<std::string>& metadata,
                        const std::vector<std::string>& columns)
     : path_(path), format_(format), columns_(columns.size()), buffer_(kBufferSize) {
+  std::error_code error;
+  const auto status = std::filesystem::status(path_, error);
   if (path_ == "-") {
     file_ = stdout;
+  } else if (std::filesystem::exists(status) && !std::filesystem::is_regular_file(status)) {
+    // A device or a pipe is written to directly: renaming onto it would replace it.
+    file_ = std::fopen(path_.c_str(), "wb");
+    if (file_ == nullptr) {
+      throw Error(path_ + ": cannot write the output: " + std::strerror(errno));
+    }
+    direct_ = true;
   } else {
+    // Through a symbolic link, the file it points to is replaced, not the link.
+    for (int hops = 0; hops < 40; ++hops) {
+      const std::filesystem::path link(path_);
+      if (!std::filesystem::is_symlink(std::filesystem::symlink_status(link, error))) break;
+      const std::filesystem::path target = std::filesystem::read_symlink(link, error);
+      path_ = (target.is_absolute() ? target : link.parent_path() / target).string();
+    }
     temporary_ = path_ + ".partial-XXXXXX";
     const int fd = mkstemp(temporary_.data());
     if (fd < 0) throw Error(path_ + ": cannot create the output file: " + std::strerror(errno));
@@ -36,6 +53,7 @@ DataWriter::DataWriter(const std::string& path, Format format,
       std::remove(temporary_.c_str());
       throw Error(path_ + ": cannot write the output file: " + std::strerror(errno));
     }
+    remember_temporary();
   }
   std::string header;
   for (const std::string& line : metadata) header += line + "\n";
@@ -55,8 +73,9 @@ DataWriter::DataWriter(const std::string& path, Format format,
 DataWriter::~DataWriter() {
   if (file_ != nullptr && file_ != stdout) {
     std::fclose(file_);
-    std::remove(temporary_.c_str());
+    if (!direct_) std::remove(temporary_.c_str());
   }
+  forget_temporary();
 }
 
 void DataWriter::flush() {
@@ -92,6 +111,10 @@ void DataWriter::commit() {
   }
   const int closed = std::fclose(file_);
   file_ = nullptr;
+  if (direct_) {
+    if (failed_ || closed != 0) throw Error(path_ + ": writing the output failed");
+    return;
+  }
   if (failed_ || closed != 0) {
     std::remove(temporary_.c_str());
     throw Error(path_ + ": writing the output file failed: " + std::strerror(errno));
@@ -106,8 +129,38 @@ void DataWriter::commit() {
   if (std::rename(temporary_.c_str(), path_.c_str()) != 0) {
     const std::string reason = std::strerror(errno);
     std::remove(temporary_.c_str());
+    forget_temporary();
     throw Error(path_ + ": cannot move the output file into place: " + reason);
   }
+  forget_temporary();
+}
+
+// The temporary file being written, for remove_partial_output() to delete from a signal
+// handler: a fixed buffer, since a handler may not allocate.
+namespace {
+char g_temporary[4096];
+volatile std::sig_atomic_t g_has_temporary = 0;
+
+extern "C" void remove_and_reraise(int signal) {
+  if (g_has_temporary) ::unlink(g_temporary);
+  std::signal(signal, SIG_DFL);
+  std::raise(signal);
+}
+}  // namespace
+
+void DataWriter::remember_temporary() {
+  if (temporary_.size() < sizeof g_temporary) {
+    std::memcpy(g_temporary, temporary_.c_str(), temporary_.size() + 1);
+    g_has_temporary = 1;
+  }
+}
+
+void DataWriter::forget_temporary() { g_has_temporary = 0; }
+
+void remove_partial_output_on_interrupt() {
+  std::signal(SIGINT, remove_and_reraise);
+  std::signal(SIGTERM, remove_and_reraise);
+  std::signal(SIGHUP, remove_and_reraise);
 }
 
 }  // namespace momentid

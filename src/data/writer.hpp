@@ -9,7 +9,8 @@ namespace momentid {
 
 // Writes a data file in the layouts DataReader reads (CSV or binary, see data.hpp), whole or not
 // at all: rows go to a temporary file beside the target, which commit() renames into place; a
-// writer destroyed without commit() removes it. The path "-" writes to standard output.
+// writer destroyed without commit() removes it. The path "-" writes to standard output; a
+// device or a pipe is written to directly; through a symbolic link, its target is replaced.
 //
 // Example:
 //   DataWriter out("d.csv", DataWriter::Format::kCsv, {"# momentid: dt=0.01"}, {"t", "y", "x"});
@@ -33,6 +34,8 @@ class DataWriter {
 
  private:
   void flush();
+  void remember_temporary();
+  void forget_temporary();
 
   std::string path_, temporary_;
   Format format_;
@@ -41,6 +44,11 @@ class DataWriter {
   std::vector<char> buffer_;
   std::size_t used_ = 0;
   bool failed_ = false;
+  bool direct_ = false;  // writing straight to a device or pipe, not through a temporary file
 };
+
+// Makes SIGINT, SIGTERM and SIGHUP delete the temporary file a DataWriter is filling before the
+// process ends, so that an interrupted run leaves nothing behind. For programs that write files.
+void remove_partial_output_on_interrupt();
 
 }  // namespace momentid

@@ -129,7 +129,7 @@ void MomentAccumulator::close_interval(std::size_t n) {
   for (std::size_t i : plain_) sums[i] += 0.5 * (g0[i] * h0[i] + g1[i] * h1[i]);
   ++stretch.intervals;
   ++intervals_;
-  if (stretch.intervals == stretch_length_) {
+  if (stretch.intervals >= stretch_length_) {
     stretches_.push_back({std::vector<double>(k, 0.0), 0});
     if (stretches_.size() > max_stretches_) compact();
   }
@@ -178,11 +178,17 @@ MomentEstimates estimates(const MomentAccumulator& accumulator, std::size_t batc
   MomentEstimates out;
   out.mean.assign(k, 0.0);
   out.intervals = accumulator.intervals();
-  const std::size_t b = std::min(batches, full.size());
+  const std::size_t b = std::max<std::size_t>(1, std::min(batches, full.size()));
   std::vector<std::vector<double>> sums(b, std::vector<double>(k, 0.0));
   std::vector<std::size_t> counts(b, 0);
+  // A stretch goes to the batch its middle falls in, so that batches hold nearly equal numbers
+  // of intervals.
+  std::size_t before = 0;
   for (std::size_t i = 0; i < full.size(); ++i) {
-    const std::size_t batch = i * b / full.size();
+    const std::size_t middle = before + full[i]->intervals / 2;
+    before += full[i]->intervals;
+    const std::size_t batch =
+        std::min(b - 1, out.intervals > 0 ? middle * b / out.intervals : std::size_t{0});
     for (std::size_t j = 0; j < k; ++j) {
       sums[batch][j] += full[i]->sums[j];
       out.mean[j] += full[i]->sums[j];
@@ -192,10 +198,13 @@ MomentEstimates estimates(const MomentAccumulator& accumulator, std::size_t batc
   if (out.intervals > 0) {
     for (double& m : out.mean) m /= static_cast<double>(out.intervals);
   }
+  std::vector<std::vector<double>> means;
   for (std::size_t i = 0; i < b; ++i) {
+    if (counts[i] == 0) continue;
     for (double& s : sums[i]) s /= static_cast<double>(counts[i]);
+    means.push_back(std::move(sums[i]));
   }
-  out.batch_means = std::move(sums);
+  out.batch_means = std::move(means);
   return out;
 }
 

@@ -21,6 +21,7 @@ class LagSums {
         lags_(lags),
         history_(lags * channels, 0.0),
         sum_(channels, 0.0),
+        shifted_(channels, 0.0),
         sum_squares_(channels, 0.0),
         products_(lags * channels, 0.0),
         pairs_(lags, 0) {}
@@ -29,7 +30,12 @@ class LagSums {
 
   void add(const double* rows, std::size_t count) {
     for (std::size_t r = 0; r < count; ++r) {
-      const double* x = rows + r * channels_;
+      // Sums of values less the channel's first value: a large offset would otherwise cancel
+      // the variance away in sum(x^2)/n - mean^2.
+      if (count_ == 0) offset_.assign(rows, rows + channels_);
+      for (std::size_t c = 0; c < channels_; ++c)
+        shifted_[c] = rows[r * channels_ + c] - offset_[c];
+      const double* x = shifted_.data();
       for (std::size_t c = 0; c < channels_; ++c) {
         sum_[c] += x[c];
         sum_squares_[c] += x[c] * x[c];
@@ -52,15 +58,16 @@ class LagSums {
   ChannelStatistics statistics(std::size_t c) const {
     ChannelStatistics s;
     const double n = static_cast<double>(count_);
-    s.mean = sum_[c] / n;
-    s.variance = sum_squares_[c] / n - s.mean * s.mean;
+    const double shifted_mean = sum_[c] / n;
+    s.mean = offset_[c] + shifted_mean;
+    s.variance = sum_squares_[c] / n - shifted_mean * shifted_mean;
     s.correlation_time = lags_ + 1;
     for (std::size_t l = 0; l < lags_; ++l) {
-      const double rho =
-          pairs_[l] > 0 && s.variance > 0
-              ? (products_[l * channels_ + c] / static_cast<double>(pairs_[l]) - s.mean * s.mean) /
-                    s.variance
-              : std::nan("");
+      const double rho = pairs_[l] > 0 && s.variance > 0
+                             ? (products_[l * channels_ + c] / static_cast<double>(pairs_[l]) -
+                                shifted_mean * shifted_mean) /
+                                   s.variance
+                             : std::nan("");
       s.autocorrelation.push_back(rho);
       if (s.correlation_time == lags_ + 1 && rho < std::exp(-1.0)) s.correlation_time = l + 1;
     }
@@ -69,7 +76,7 @@ class LagSums {
 
  private:
   std::size_t channels_, lags_;
-  std::vector<double> history_, sum_, sum_squares_, products_;
+  std::vector<double> history_, sum_, shifted_, offset_, sum_squares_, products_;
   std::vector<std::size_t> pairs_;
   std::size_t head_ = 0, filled_ = 0, count_ = 0;
 };
@@ -238,6 +245,11 @@ DataMoments moments_from_file(const std::string& path, const std::vector<std::st
   if (auto error = queue.error()) std::rethrow_exception(error);
 
   accumulator.finish();
+  if (accumulator.intervals() == 0 && !moments.empty()) {
+    throw Error(path + ": no run has two consecutive rows" +
+                (options.input_shift != 0 ? " after the input shift" : std::string()) +
+                ": the time averages need at least one interval");
+  }
   out.time_step = reader->time_step();
   out.estimates = estimates(accumulator, options.batches);
   for (std::size_t c = 0; c < channels; ++c) {

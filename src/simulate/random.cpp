@@ -1,6 +1,7 @@
 #include "simulate/random.hpp"
 
 #include <cmath>
+#include <limits>
 
 namespace momentid {
 namespace {
@@ -72,6 +73,8 @@ double portable_log(double x) {
 }
 
 double portable_exp(double x) {
+  if (x < -745) return 0;  // below the smallest subnormal
+  if (x > 709.8) return std::numeric_limits<double>::infinity();
   // x = k ln 2 + r with |r| <= ln2/2; exp(x) = 2^k exp(r), exp(r) by its Taylor series.
   // ln 2 split Cody-Waite style: k * kLn2High is exact for |k| < 2^20, so r keeps full precision.
   constexpr double kLn2High = 6.93147180369123816490e-01;

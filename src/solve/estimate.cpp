@@ -46,6 +46,45 @@ std::vector<Monomial> moments_to_estimate(const MomentSystem& system) {
   return out;
 }
 
+std::vector<IdentityCheck> check_identities(const MomentSystem& system,
+                                            const std::vector<Monomial>& moments,
+                                            const MomentEstimates& estimates) {
+  const Model& model = *system.model;
+  const Monomial one(model.variables().size(), 0);
+  std::map<Monomial, std::size_t> index;
+  for (std::size_t k = 0; k < moments.size(); ++k) index[moments[k]] = k;
+  const auto cov = estimates.covariance();
+  std::vector<IdentityCheck> out;
+  for (const DataIdentity& id : system.identities) {
+    // Weights over the moments: +1 for E[m], minus the value's weights; E[1] is a constant.
+    std::vector<std::pair<std::size_t, double>> weights;
+    double constant = 0;
+    bool available = index.count(id.moment) != 0;
+    if (available) weights.emplace_back(index.at(id.moment), 1.0);
+    for (const auto& [m, w] : id.value) {
+      if (m == one) {
+        constant += w.to_double();
+      } else if (index.count(m) != 0) {
+        weights.emplace_back(index.at(m), -w.to_double());
+      } else {
+        available = false;
+      }
+    }
+    if (!available) continue;
+    IdentityCheck check;
+    check.identity = format_moment(model, id.moment) + " = " + format_combination(model, id.value);
+    check.violation = -constant;
+    double variance = 0;
+    for (const auto& [i, wi] : weights) {
+      check.violation += wi * estimates.mean[i];
+      for (const auto& [j, wj] : weights) variance += wi * wj * cov[i][j];
+    }
+    check.z = variance > 0 ? check.violation / std::sqrt(variance) : kNaN;
+    out.push_back(check);
+  }
+  return out;
+}
+
 Estimate solve(const MomentSystem& system, const MomentEstimates& estimates,
                const SolveOptions& options) {
   const Model& model = *system.model;
@@ -64,6 +103,7 @@ Estimate solve(const MomentSystem& system, const MomentEstimates& estimates,
   for (const Declaration& p : model.parameters()) {
     out.parameters.push_back({p.name, kNaN, kNaN, kNaN, kNaN, /*identifiable=*/false});
   }
+  out.identities = check_identities(system, moments, estimates);
   if (rows == 0 || params == 0) {
     out.status = Estimate::Status::kNothingIdentifiable;
     out.message = "the model gives no moment equations";
@@ -202,31 +242,20 @@ Estimate solve(const MomentSystem& system, const MomentEstimates& estimates,
                            "): the parameters are nearly inseparable with these multipliers");
   }
 
-  // Pure-data identities: the sample violation of E[m] = value, in standard errors.
-  for (const DataIdentity& id : system.identities) {
-    VectorXd weights = VectorXd::Zero(k_count);
-    double constant = 0;
-    weights(index.at(id.moment)) += 1;
-    for (const auto& [m, w] : id.value) {
-      if (m == one) {
-        constant += w.to_double();
-      } else {
-        weights(index.at(m)) -= w.to_double();
-      }
-    }
-    IdentityCheck check;
-    check.identity = format_moment(model, id.moment) + " = " + format_combination(model, id.value);
-    check.violation = weights.dot(mu) - constant;
-    const double variance = weights.dot(cov_mu * weights);
-    check.z = variance > 0 ? check.violation / std::sqrt(variance) : kNaN;
-    out.identities.push_back(check);
-  }
-
   if (!options.gmm) return out;
   // Two-step optimal weighting: the moment conditions g = A theta - b have covariance
   // S = G Cov(mu) G^T with G = dg/dmu at the first-step estimate; weight by S^-1.
   if (rank < params) {
     out.warnings.push_back("no optimally weighted estimate: the system is rank-deficient");
+    return out;
+  }
+  // S is estimated from B batch means, so it has rank B - 1 at most: with as many equations or
+  // more it is singular and the weighting meaningless.
+  if (out.batches < system.equations.size() + 2) {
+    out.warnings.push_back(
+        "no optimally weighted estimate: it needs more batches than equations (" +
+        std::to_string(out.batches) + " batches for " + std::to_string(rows) +
+        " equations): use --batches");
     return out;
   }
   MatrixXd g_mu = MatrixXd::Zero(rows, k_count);

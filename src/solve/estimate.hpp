@@ -55,6 +55,12 @@ struct SolveOptions {
 // moments, then those its identities mention.
 std::vector<Monomial> moments_to_estimate(const MomentSystem& system);
 
+// The sample violation of each of the system's pure-data identities whose moments are all among
+// `moments` (the order of `estimates`), in standard errors.
+std::vector<IdentityCheck> check_identities(const MomentSystem& system,
+                                            const std::vector<Monomial>& moments,
+                                            const MomentEstimates& estimates);
+
 // Solves A(mu) theta = b(mu) by least squares with scaled columns and a rank-revealing SVD, and
 // propagates the moments' batch covariance to the parameters (delta method). `estimates` are
 // for moments_to_estimate(system), in that order.
