@@ -342,6 +342,11 @@ int run_check(const CheckCommand& command) {
 
 }  // namespace
 
+#if defined(__SANITIZE_ADDRESS__)
+// CLN allocates a few bytes at start-up that it never frees; that is not momentid's leak.
+extern "C" const char* __lsan_default_suppressions() { return "leak:libcln.so\n"; }
+#endif
+
 int main(int argc, char** argv) {
   momentid::remove_partial_output_on_interrupt();
   CLI::App app{"momentid: identify the parameters of polynomial ODE models from random data"};
@@ -456,11 +461,11 @@ int main(int argc, char** argv) {
     std::cerr << momentid::render_with_caret(e) << "\n";
     return e.exit_code();
   } catch (const momentid::Error& e) {
-    std::cerr << "momentid: " << e.what() << "\n";
+    std::cerr << "momentid: " << momentid::printable(e.what()) << "\n";
     return e.exit_code();
   } catch (const std::exception& e) {
     // Everything momentid checks is reported above; this is a failure it did not foresee.
-    std::cerr << "momentid: internal error: " << e.what() << "\n";
+    std::cerr << "momentid: internal error: " << momentid::printable(e.what()) << "\n";
     return 2;
   }
   return 0;

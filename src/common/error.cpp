@@ -1,12 +1,37 @@
 #include "common/error.hpp"
 
 #include <algorithm>
+#include <string_view>
 
 namespace momentid {
 
+std::string printable(std::string_view text) {
+  std::string out;
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const auto byte = static_cast<unsigned char>(text[i]);
+    if (byte < 0x80) {
+      out += (byte < 0x20 && byte != '\t' && byte != '\n') || byte == 0x7f ? '?' : text[i];
+      continue;
+    }
+    // Keep valid UTF-8 sequences, replace anything else.
+    const std::size_t n = (byte >> 5) == 6 ? 2 : (byte >> 4) == 14 ? 3 : (byte >> 3) == 30 ? 4 : 0;
+    bool valid = n > 0 && i + n <= text.size();
+    for (std::size_t k = 1; valid && k < n; ++k) {
+      valid = (static_cast<unsigned char>(text[i + k]) >> 6) == 2;
+    }
+    if (valid) {
+      out.append(text.substr(i, n));
+      i += n - 1;
+    } else {
+      out += '?';
+    }
+  }
+  return out;
+}
+
 std::string render_with_caret(const LocatedError& error) {
   const SourceLocation& w = error.location();
-  std::string out = error.what();
+  std::string out = printable(error.what());
   if (w.text.empty()) return out;
   // Long lines are shown as a window around the column, so that the caret stays in view.
   constexpr std::size_t kBefore = 70, kAfter = 50;
@@ -17,8 +42,8 @@ std::string render_with_caret(const LocatedError& error) {
   const std::string shown =
       lead + w.text.substr(begin, end - begin) + (end < w.text.size() ? "..." : "");
   const std::string number = std::to_string(w.line);
-  out += "\n " + number + " | " + shown + "\n " + std::string(number.size(), ' ') + " | " +
-         std::string(lead.size(), ' ');
+  out += "\n " + number + " | " + printable(shown) + "\n " + std::string(number.size(), ' ') +
+         " | " + std::string(lead.size(), ' ');
   for (std::size_t i = begin; i < column && i < w.text.size(); ++i) {
     out += w.text[i] == '\t' ? '\t' : ' ';
   }

@@ -2,6 +2,7 @@
 
 #include <stdexcept>
 #include <string>
+#include <string_view>
 
 namespace momentid {
 
@@ -67,6 +68,10 @@ class DataError : public LocatedError {
  public:
   using LocatedError::LocatedError;
 };
+
+// `text` safe to print on a terminal: control characters and bytes that are not UTF-8 become
+// '?'; tabs and line feeds stay.
+std::string printable(std::string_view text);
 
 // Renders a located error as the command-line tool prints it: the `what()` line, then the
 // source line and a caret under the column.

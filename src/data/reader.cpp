@@ -372,8 +372,15 @@ ColumnMap map_columns(const std::string& path, const Header& header, const Colum
   const auto location = [&](std::size_t column) {
     return text_location(path, header.line, column, header.text);
   };
+  // The header's names for messages: the first twelve, each cut at 40 characters.
   std::string listed;
-  for (const std::string& name : header.names) listed += (listed.empty() ? "" : ", ") + name;
+  for (std::size_t i = 0; i < header.names.size() && i < 12; ++i) {
+    const std::string& name = header.names[i];
+    listed += (listed.empty() ? "" : ", ") + name.substr(0, 40) + (name.size() > 40 ? "..." : "");
+  }
+  if (header.names.size() > 12) {
+    listed += " and " + std::to_string(header.names.size() - 12) + " more";
+  }
 
   std::vector<std::string> file_names;
   for (const std::string& name : request.names) {

@@ -1,0 +1,31 @@
+// libFuzzer target: any bytes as a data file (CSV or binary), read to the end by the reader that
+// `identify` uses, asking for the columns y, v and x. Only momentid::Error may escape.
+
+#include <unistd.h>
+
+#include <cstddef>
+#include <cstdint>
+#include <cstdio>
+#include <string>
+
+#include "data/data.hpp"
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  static const std::string path = "/tmp/momentid_fuzz_data_" + std::to_string(getpid());
+  if (std::FILE* f = std::fopen(path.c_str(), "wb")) {
+    std::fwrite(data, 1, size, f);
+    std::fclose(f);
+  }
+  try {
+    momentid::ColumnRequest request;
+    request.names = {"y", "v", "x"};
+    request.min_rows = 1;
+    auto reader = momentid::DataReader::open(path, request);
+    momentid::DataBlock block;
+    while (reader->next(block, 7)) {
+    }
+    (void)reader->time_step();
+  } catch (const momentid::Error&) {
+  }
+  return 0;
+}

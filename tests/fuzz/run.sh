@@ -1,0 +1,24 @@
+#!/usr/bin/env bash
+# Builds the fuzz targets with clang (libFuzzer, ASan, UBSan) and runs one for a given time.
+#
+# Usage: tests/fuzz/run.sh model|data SECONDS [extra libFuzzer options]
+# The corpus grows in build-fuzz/corpus-TARGET (seeded from models/ or tests/data/); crashes
+# and hangs are written to build-fuzz/findings-TARGET/.
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+target=$1
+seconds=$2
+shift 2
+cmake -S . -B build-fuzz -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+  -DMOMENTID_FUZZ=ON -DMOMENTID_BUILD_TESTS=OFF -DMOMENTID_BUILD_BENCHMARKS=OFF >/dev/null
+cmake --build build-fuzz -j2 --target "fuzz_$target" >/dev/null
+corpus=build-fuzz/corpus-$target
+findings=build-fuzz/findings-$target
+mkdir -p "$corpus" "$findings"
+if [[ $target == model ]]; then
+  cp -n models/*.mom tests/data/*.mom "$corpus"/ 2>/dev/null || true
+else
+  cp -n tests/data/*.csv tests/expected/*.csv "$corpus"/ 2>/dev/null || true
+fi
+exec "build-fuzz/fuzz_$target" "$corpus" -max_total_time="$seconds" -timeout=10 \
+  -rss_limit_mb=4096 -max_len=4096 -artifact_prefix="$findings/" -print_final_stats=1 "$@"
