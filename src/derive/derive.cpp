@@ -604,13 +604,13 @@ MomentSystem derive(const Model& model, const DeriveOptions& options) {
     MomentSystem system = deriver.run(multipliers);
     const std::vector<int>& dynamic_equations = deriver.dynamic_equations();
     for (std::size_t e = 0; e < equations.size(); ++e) {
-      const bool dynamic = std::find(dynamic_equations.begin(), dynamic_equations.end(),
-                                     static_cast<int>(e)) != dynamic_equations.end();
-      if (dynamic && multipliers[e].empty()) {
+      const bool has_parameters = std::find(dynamic_equations.begin(), dynamic_equations.end(),
+                                            static_cast<int>(e)) != dynamic_equations.end();
+      if (has_parameters && multipliers[e].empty()) {
         system.notes.push_back("equation " + equations[e].name() +
                                " has no multipliers: no multipliers statement covers it");
       }
-      if (!dynamic && !equations[e].label.empty()) {
+      if (!has_parameters && !equations[e].label.empty()) {
         for (const MultiplierSet& set : model.multipliers()) {
           if (set.equation == equations[e].label) {
             system.notes.push_back("the multipliers for equation " + equations[e].name() +

@@ -845,9 +845,9 @@ void check_nesting(std::string_view text, const std::string& file) {
 }
 
 template <typename Rule>
-std::unique_ptr<Node> parse_tree(std::string_view text, const std::string& file) {
+std::unique_ptr<Node> parse_tree(pegtl::memory_input<>& in, std::string_view text,
+                                 const std::string& file) {
   check_nesting(text, file);
-  pegtl::memory_input in(text.data(), text.size(), file);
   try {
     return pegtl::parse_tree::parse<Rule, Selector, pegtl::nothing, Control>(in);
   } catch (const pegtl::parse_error& e) {
@@ -887,7 +887,9 @@ int Model::parameter_index(std::string_view name) const {
 Model parse_model(std::string_view text, const std::string& file) {
   // A UTF-8 byte order mark, as some editors write, is not part of the model.
   if (text.substr(0, 3) == "\xEF\xBB\xBF") text.remove_prefix(3);
-  std::unique_ptr<Node> root = parse_tree<g::model_file>(text, file);
+  // The parse tree's positions refer to the input's source name: it must outlive the tree.
+  pegtl::memory_input in(text.data(), text.size(), file);
+  std::unique_ptr<Node> root = parse_tree<g::model_file>(in, text, file);
   if (!root) throw ParseError({file, 1, 1, line_of(text, 1)}, "expected a model");
   return ModelBuilder(text, file).build(*root);
 }
@@ -906,7 +908,8 @@ Model parse_model_file(const std::string& path) {
 
 std::vector<Monomial> parse_multiplier_list(const Model& model, std::string_view text,
                                             const std::string& source) {
-  std::unique_ptr<Node> root = parse_tree<g::multiplier_option>(text, source);
+  pegtl::memory_input in(text.data(), text.size(), source);
+  std::unique_ptr<Node> root = parse_tree<g::multiplier_option>(in, text, source);
   if (!root) throw ParseError({source, 1, 1, std::string(text)}, "expected multipliers");
   return ModelBuilder::multiplier_list(model, *root, text, source);
 }
