@@ -68,8 +68,8 @@ void MomentAccumulator::add(const double* rows, std::size_t count) {
       p[1] = row[v];
       for (int e = 2; e <= max_power_[v]; ++e) p[e] = p[e - 1] * row[v];
     }
-    double* state = &state_ring_[(run_rows_ % 4) * k];
-    double* input = &input_ring_[(run_rows_ % 4) * k];
+    double* state = state_ring_.data() + (run_rows_ % 4) * k;
+    double* input = input_ring_.data() + (run_rows_ % 4) * k;
     const std::size_t* factors = factors_.data();
     const std::size_t* first = first_factor_.data();
     const double* powers = powers_.data();
@@ -97,8 +97,8 @@ void MomentAccumulator::add(const double* rows, std::size_t count) {
 void MomentAccumulator::close_interval(std::size_t n) {
   const std::size_t k = moments_.size();
   const std::size_t rows = run_rows_;
-  auto state = [&](std::size_t row) { return &state_ring_[(row % 4) * k]; };
-  auto input = [&](std::size_t row) { return &input_ring_[(row % 4) * k]; };
+  auto state = [&](std::size_t row) { return state_ring_.data() + (row % 4) * k; };
+  auto input = [&](std::size_t row) { return input_ring_.data() + (row % 4) * k; };
   const double* g0 = state(n);
   const double* g1 = state(n + 1);
   const double* h0 = input(n);
