@@ -2,7 +2,7 @@
 // Duffing model, against a numpy baseline that loads the same file and computes the same moments,
 // in the same run. Also the peak memory of the pass for N/10 and N rows.
 //
-// Usage: bench_identify [rows=10000000] [directory=/tmp]
+// Usage: bench_identify [rows=10000000] [directory=/tmp] [--no-baseline]
 //        bench_identify --pass FILE   (one pass; prints seconds and peak RSS; used internally)
 
 #include <sys/resource.h>
@@ -96,6 +96,7 @@ int main(int argc, char** argv) {
   if (argc == 3 && std::string(argv[1]) == "--pass") return one_pass(argv[2]);
   const std::size_t rows = argc > 1 ? std::strtoull(argv[1], nullptr, 10) : 10000000;
   const std::filesystem::path dir = argc > 2 ? argv[2] : "/tmp";
+  const bool baseline = !(argc > 3 && std::string(argv[3]) == "--no-baseline");
   const momentid::Model model = momentid::parse_model(kModel, "duffing.mom");
   const std::string big = (dir / "bench_identify_big.csv").string();
   const std::string small = (dir / "bench_identify_small.csv").string();
@@ -115,7 +116,7 @@ int main(int argc, char** argv) {
     numpy.append(",").append(std::to_string(m[2]));
   }
   double numpy_seconds = 0;
-  if (FILE* pipe = popen(numpy.c_str(), "r")) {
+  if (FILE* pipe = baseline ? popen(numpy.c_str(), "r") : nullptr) {
     if (std::fscanf(pipe, "%lf", &numpy_seconds) != 1) numpy_seconds = 0;
     while (std::fgetc(pipe) != EOF) {
     }
