@@ -135,7 +135,8 @@ int main(int argc, char** argv) {
         "%.1f\n",
         numpy_seconds, numpy_seconds / pass.seconds);
   } else {
-    std::printf("  numpy baseline: not run (needs /usr/bin/python3 with numpy)\n");
+    std::printf("  numpy baseline: not run%s\n",
+                baseline ? " (it needs /usr/bin/python3 with numpy)" : " (--no-baseline)");
   }
   std::printf("  peak memory: %ld KiB for %zu rows, %ld KiB for %zu rows (ratio %.3f)\n",
               small_pass.peak_kib, small_pass.rows, pass.peak_kib, pass.rows,

@@ -244,14 +244,14 @@ int run_check(const CheckCommand& command) {
   std::optional<momentid::Model> model;
   std::vector<std::string> states, inputs;
   std::vector<std::string> missing_inputs;
+  const std::vector<std::string> columns =
+      momentid::DataReader::open(command.data, {.names = {}, .rename = {}, .min_rows = 0})
+          ->columns();
   if (!command.model.empty()) {
     model = momentid::parse_model_file(command.model);
     for (const auto& d : model->states()) states.push_back(d.name);
     // The statistics of the states and most identities need no input: inputs missing from the
     // file are left out rather than refused.
-    const auto reader =
-        momentid::DataReader::open(command.data, {.names = {}, .rename = {}, .min_rows = 0});
-    const auto& columns = reader->columns();
     const auto renamed = column_map(command.columns);
     for (const auto& d : model->inputs()) {
       const auto it = renamed.find(d.name);
@@ -263,10 +263,8 @@ int run_check(const CheckCommand& command) {
       }
     }
   } else {
-    // Without a model every numeric column but t and run is a channel.
-    const auto reader =
-        momentid::DataReader::open(command.data, {.names = {}, .rename = {}, .min_rows = 0});
-    for (const std::string& c : reader->columns()) {
+    // Without a model every column but t and run is a channel.
+    for (const std::string& c : columns) {
       if (!c.empty() && c != "t" && c != "run") states.push_back(c);
     }
   }
