@@ -4,7 +4,7 @@
 #include <charconv>
 #include <cmath>
 #include <map>
-#include <regex>
+#include <string_view>
 #include <type_traits>
 
 #include "common/error.hpp"
@@ -275,11 +275,37 @@ void simulate(const Model& model, const SimulationOptions& options, SampleSink& 
   }
 }
 
+namespace {
+
+// [+-] digits [. digits] [e [+-] digits], with digits on at least one side of the point.
+bool is_decimal(std::string_view text) {
+  std::size_t i = 0;
+  auto digits = [&] {
+    const std::size_t start = i;
+    while (i < text.size() && text[i] >= '0' && text[i] <= '9') ++i;
+    return i - start;
+  };
+  if (i < text.size() && (text[i] == '+' || text[i] == '-')) ++i;
+  std::size_t mantissa = digits();
+  if (i < text.size() && text[i] == '.') {
+    ++i;
+    mantissa += digits();
+  }
+  if (mantissa == 0) return false;
+  if (i < text.size() && (text[i] == 'e' || text[i] == 'E')) {
+    ++i;
+    if (i < text.size() && (text[i] == '+' || text[i] == '-')) ++i;
+    if (digits() == 0) return false;
+  }
+  return i == text.size();
+}
+
+}  // namespace
+
 std::vector<numeric> parameter_values(const Model& model,
                                       const std::vector<std::string>& assignments) {
   std::vector<std::optional<numeric>> values;
   for (const Declaration& p : model.parameters()) values.push_back(p.value);
-  static const std::regex number(R"([+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?)");
   for (const std::string& a : assignments) {
     const std::size_t eq = a.find('=');
     if (eq == std::string::npos) {
@@ -293,7 +319,7 @@ std::vector<numeric> parameter_values(const Model& model,
       throw UsageError("--set: '" + name + "' is not a parameter of model " + model.name() +
                        " (parameters: " + known + ")");
     }
-    if (!std::regex_match(text, number)) {
+    if (!is_decimal(text)) {
       throw UsageError("--set: the value of '" + name + "' must be a number, found '" + text + "'");
     }
     const bool negative = text[0] == '-';
