@@ -36,15 +36,6 @@ std::vector<momentid::Monomial> moments(const momentid::Model& model) {
   return momentid::moments_to_estimate(momentid::derive(model, options));
 }
 
-struct Rows : momentid::SampleSink {
-  momentid::DataWriter& out;
-  explicit Rows(momentid::DataWriter& o) : out(o) {}
-  void sample(double t, const double* v, std::size_t) override {
-    const double row[4] = {t, v[0], v[1], v[2]};
-    out.row(row);
-  }
-};
-
 void write_data(const momentid::Model& model, const std::string& path, std::size_t rows) {
   momentid::SimulationOptions options;
   options.parameters = momentid::parameter_values(model, {});
@@ -52,7 +43,7 @@ void write_data(const momentid::Model& model, const std::string& path, std::size
   options.samples = rows;
   momentid::DataWriter out(path, momentid::DataWriter::Format::kCsv,
                            {"# momentid: dt=0.01 input-hold=zoh"}, {"t", "y", "v", "x"});
-  Rows sink(out);
+  momentid::SampleRows sink(out, 3, /*with_run=*/false);
   momentid::simulate(model, options, sink);
   out.commit();
 }

@@ -191,14 +191,7 @@ TEST_SUITE("identify") {
     {
       momentid::DataWriter out(path.string(), momentid::DataWriter::Format::kCsv, {},
                                {"t", "y", "x"});
-      struct Rows : momentid::SampleSink {
-        momentid::DataWriter& out;
-        explicit Rows(momentid::DataWriter& o) : out(o) {}
-        void sample(double t, const double* v, std::size_t) override {
-          const double row[3] = {t, v[0], v[1]};
-          out.row(row);
-        }
-      } rows(out);
+      momentid::SampleRows rows(out, 2, /*with_run=*/false);
       momentid::SimulationOptions options;
       options.parameters = momentid::parameter_values(model, {});
       options.inputs = {momentid::InputSpec{}};

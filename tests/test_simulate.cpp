@@ -156,14 +156,7 @@ TEST_SUITE("simulate") {
     auto write = [&](const std::string& name, std::uint64_t seed) {
       momentid::DataWriter out((dir / name).string(), momentid::DataWriter::Format::kCsv,
                                {"# momentid: test"}, {"t", "y", "v", "x"});
-      struct Sink : momentid::SampleSink {
-        momentid::DataWriter& out;
-        explicit Sink(momentid::DataWriter& o) : out(o) {}
-        void sample(double t, const double* v, std::size_t) override {
-          const double row[4] = {t, v[0], v[1], v[2]};
-          out.row(row);
-        }
-      } sink(out);
+      momentid::SampleRows sink(out, 3, /*with_run=*/false);
       momentid::simulate(model, options_for(model, 5000, seed), sink);
       out.commit();
       return read_file(dir / name);

@@ -103,24 +103,6 @@ std::vector<momentid::InputSpec> input_specs(const momentid::Model& model,
   return specs;
 }
 
-// Writes the simulated samples as rows t, states, inputs[, run].
-class RowWriter : public momentid::SampleSink {
- public:
-  RowWriter(momentid::DataWriter& out, std::size_t values, bool with_run)
-      : out_(out), row_(values + 1 + (with_run ? 1 : 0)), with_run_(with_run) {}
-  void sample(double t, const double* values, std::size_t run) override {
-    row_[0] = t;
-    std::copy(values, values + (row_.size() - 1 - (with_run_ ? 1 : 0)), row_.begin() + 1);
-    if (with_run_) row_.back() = static_cast<double>(run + 1);
-    out_.row(row_.data());
-  }
-
- private:
-  momentid::DataWriter& out_;
-  std::vector<double> row_;
-  bool with_run_;
-};
-
 int run_simulate(const SimulateCommand& command) {
   const momentid::Model model = momentid::parse_model_file(command.model);
   momentid::SimulationOptions options;
@@ -159,7 +141,7 @@ int run_simulate(const SimulateCommand& command) {
                            command.format == "bin" ? momentid::DataWriter::Format::kBinary
                                                    : momentid::DataWriter::Format::kCsv,
                            metadata, columns);
-  RowWriter rows(out, model.variables().size(), with_run);
+  momentid::SampleRows rows(out, model.variables().size(), with_run);
   momentid::simulate(model, options, rows);
   out.commit();
   return 0;

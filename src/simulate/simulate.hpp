@@ -2,10 +2,12 @@
 
 #include <ginac/ginac.h>
 
+#include <algorithm>
 #include <cstdint>
 #include <string>
 #include <vector>
 
+#include "data/writer.hpp"
 #include "model/model.hpp"
 #include "simulate/input.hpp"
 
@@ -114,6 +116,25 @@ class SampleSink {
   virtual ~SampleSink() = default;
   // `values`: states, then inputs.
   virtual void sample(double t, const double* values, std::size_t run) = 0;
+};
+
+// Writes the samples as rows t, states, inputs[, run] (runs numbered from 1), the layout of
+// `momentid simulate`.
+class SampleRows : public SampleSink {
+ public:
+  SampleRows(DataWriter& out, std::size_t values, bool with_run)
+      : out_(out), row_(values + 1 + (with_run ? 1 : 0)), with_run_(with_run) {}
+  void sample(double t, const double* values, std::size_t run) override {
+    row_[0] = t;
+    std::copy(values, values + (row_.size() - 1 - (with_run_ ? 1 : 0)), row_.begin() + 1);
+    if (with_run_) row_.back() = static_cast<double>(run + 1);
+    out_.row(row_.data());
+  }
+
+ private:
+  DataWriter& out_;
+  std::vector<double> row_;
+  bool with_run_;
 };
 
 // How to simulate (README, "momentid simulate").
