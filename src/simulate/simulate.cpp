@@ -1,11 +1,9 @@
 #include "simulate/simulate.hpp"
 
-#include <array>
 #include <charconv>
 #include <cmath>
 #include <map>
 #include <string_view>
-#include <type_traits>
 
 #include "common/error.hpp"
 
@@ -167,26 +165,15 @@ bool CompiledModel::solve(double* dydt) const {
   return true;
 }
 
-namespace {
-
-// The integration loop, with the number of states a compile-time constant N when N > 0 so that
-// the Runge-Kutta combinations are unrolled (N = 0: any number, known at run time).
-template <int N>
-void integrate_runs(const Model& model, const CompiledModel& f, const SimulationOptions& options,
-                    SampleSink& sink) {
-  const std::size_t n = N > 0 ? static_cast<std::size_t>(N) : static_cast<std::size_t>(f.states());
+void simulate(const Model& model, const SimulationOptions& options, SampleSink& sink) {
+  const CompiledModel f(model, options.parameters);
+  const std::size_t n = static_cast<std::size_t>(f.states());
   const std::size_t m = static_cast<std::size_t>(f.inputs());
   std::vector<InputProcess> inputs;
   for (std::size_t i = 0; i < m; ++i) {
     inputs.emplace_back(options.inputs[i], options.dt, options.seed, i);
   }
-  // Fixed-size arrays when N is known, so that the compiler can keep them in registers.
-  using Stage =
-      std::conditional_t<(N > 0), std::array<double, (N > 0 ? N : 1)>, std::vector<double>>;
-  Stage k1{}, k2{}, k3{}, k4{}, trial{};
-  if constexpr (N == 0) {
-    for (Stage* k : {&k1, &k2, &k3, &k4, &trial}) k->resize(n);
-  }
+  std::vector<double> k1(n), k2(n), k3(n), k4(n), trial(n);
   std::vector<double> values(n + m);
   double* y = values.data();
   double* u = values.data() + n;
@@ -195,7 +182,7 @@ void integrate_runs(const Model& model, const CompiledModel& f, const Simulation
   double t = 0;
   bool burning_in = false;
 
-  const auto fail = [&](const std::string& what) [[gnu::cold, gnu::noinline]] {
+  const auto fail = [&](const std::string& what) {
     const std::string when =
         burning_in ? "during the burn-in of run " + std::to_string(run + 1)
                    : "at t = " + shortest_decimal(t) + " in run " + std::to_string(run + 1);
@@ -252,26 +239,6 @@ void integrate_runs(const Model& model, const CompiledModel& f, const Simulation
       sink.sample(t, values.data(), run);
       integrate();
     }
-  }
-}
-
-}  // namespace
-
-void simulate(const Model& model, const SimulationOptions& options, SampleSink& sink) {
-  const CompiledModel f(model, options.parameters);
-  switch (f.states()) {
-    case 1:
-      return integrate_runs<1>(model, f, options, sink);
-    case 2:
-      return integrate_runs<2>(model, f, options, sink);
-    case 3:
-      return integrate_runs<3>(model, f, options, sink);
-    case 4:
-      return integrate_runs<4>(model, f, options, sink);
-    case 6:
-      return integrate_runs<6>(model, f, options, sink);
-    default:
-      return integrate_runs<0>(model, f, options, sink);
   }
 }
 
