@@ -46,14 +46,17 @@ std::vector<Monomial> moments_to_estimate(const MomentSystem& system) {
   return out;
 }
 
-std::vector<IdentityCheck> check_identities(const MomentSystem& system,
-                                            const std::vector<Monomial>& moments,
-                                            const MomentEstimates& estimates) {
+namespace {
+
+// check_identities with the moments' covariance already computed.
+std::vector<IdentityCheck> identity_checks(const MomentSystem& system,
+                                           const std::vector<Monomial>& moments,
+                                           const MomentEstimates& estimates,
+                                           const std::vector<std::vector<double>>& cov) {
   const Model& model = *system.model;
   const Monomial one(model.variables().size(), 0);
   std::map<Monomial, std::size_t> index;
   for (std::size_t k = 0; k < moments.size(); ++k) index[moments[k]] = k;
-  const auto cov = estimates.covariance();
   std::vector<IdentityCheck> out;
   for (const DataIdentity& id : system.identities) {
     // Weights over the moments: +1 for E[m], minus the value's weights; E[1] is a constant.
@@ -85,6 +88,14 @@ std::vector<IdentityCheck> check_identities(const MomentSystem& system,
   return out;
 }
 
+}  // namespace
+
+std::vector<IdentityCheck> check_identities(const MomentSystem& system,
+                                            const std::vector<Monomial>& moments,
+                                            const MomentEstimates& estimates) {
+  return identity_checks(system, moments, estimates, estimates.covariance());
+}
+
 Estimate solve(const MomentSystem& system, const MomentEstimates& estimates,
                const SolveOptions& options) {
   const Model& model = *system.model;
@@ -103,7 +114,8 @@ Estimate solve(const MomentSystem& system, const MomentEstimates& estimates,
   for (const Declaration& p : model.parameters()) {
     out.parameters.push_back({p.name, kNaN, kNaN, kNaN, kNaN, /*identifiable=*/false});
   }
-  out.identities = check_identities(system, moments, estimates);
+  const auto c = estimates.covariance();
+  out.identities = identity_checks(system, moments, estimates, c);
   if (rows == 0 || params == 0) {
     out.status = Estimate::Status::kNothingIdentifiable;
     out.message = "the model gives no moment equations";
@@ -113,7 +125,6 @@ Estimate solve(const MomentSystem& system, const MomentEstimates& estimates,
   VectorXd mu(k_count);
   for (Eigen::Index k = 0; k < k_count; ++k) mu(k) = estimates.mean[static_cast<std::size_t>(k)];
   MatrixXd cov_mu(k_count, k_count);
-  const auto c = estimates.covariance();
   for (Eigen::Index i = 0; i < k_count; ++i) {
     for (Eigen::Index j = 0; j < k_count; ++j) {
       cov_mu(i, j) = c[static_cast<std::size_t>(i)][static_cast<std::size_t>(j)];
