@@ -10,8 +10,8 @@
 #include <string>
 #include <vector>
 
-#include "derive/moment_system.hpp"
-#include "model/model.hpp"
+#include "momentid/derive.hpp"
+#include "momentid/model.hpp"
 
 namespace {
 

@@ -13,12 +13,12 @@
 #include <filesystem>
 #include <string>
 
-#include "data/writer.hpp"
-#include "derive/moment_system.hpp"
-#include "model/model.hpp"
-#include "moments/from_data.hpp"
-#include "simulate/simulate.hpp"
-#include "solve/estimate.hpp"
+#include "momentid/writer.hpp"
+#include "momentid/derive.hpp"
+#include "momentid/model.hpp"
+#include "momentid/data_pass.hpp"
+#include "momentid/simulate.hpp"
+#include "momentid/estimate.hpp"
 
 namespace {
 

@@ -11,8 +11,8 @@
 #include <string>
 #include <vector>
 
-#include "model/model.hpp"
-#include "simulate/simulate.hpp"
+#include "momentid/model.hpp"
+#include "momentid/simulate.hpp"
 
 namespace {
 

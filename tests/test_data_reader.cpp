@@ -18,7 +18,7 @@
 #include <utility>
 #include <vector>
 
-#include "data/data.hpp"
+#include "momentid/reader.hpp"
 #include "test_support.hpp"
 
 namespace {

@@ -3,8 +3,8 @@
 #include <algorithm>
 #include <string>
 
-#include "derive/moment_system.hpp"
-#include "model/model.hpp"
+#include "momentid/derive.hpp"
+#include "momentid/model.hpp"
 #include "test_support.hpp"
 
 namespace {

@@ -8,13 +8,13 @@
 #include <cmath>
 #include <filesystem>
 
-#include "data/writer.hpp"
-#include "derive/moment_system.hpp"
-#include "model/model.hpp"
-#include "moments/accumulator.hpp"
-#include "moments/from_data.hpp"
-#include "simulate/simulate.hpp"
-#include "solve/estimate.hpp"
+#include "momentid/writer.hpp"
+#include "momentid/derive.hpp"
+#include "momentid/model.hpp"
+#include "momentid/accumulator.hpp"
+#include "momentid/data_pass.hpp"
+#include "momentid/simulate.hpp"
+#include "momentid/estimate.hpp"
 #include "test_support.hpp"
 
 namespace {

@@ -6,7 +6,7 @@
 #include <typeinfo>
 #include <vector>
 
-#include "model/model.hpp"
+#include "momentid/model.hpp"
 #include "test_support.hpp"
 
 namespace {

@@ -2,8 +2,8 @@
 
 #include <filesystem>
 
-#include "derive/moment_system.hpp"
-#include "model/model.hpp"
+#include "momentid/derive.hpp"
+#include "momentid/model.hpp"
 
 TEST_SUITE("models") {
   TEST_CASE("every model in models/ parses and derives equations for all its parameters") {

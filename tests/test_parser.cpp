@@ -1,6 +1,6 @@
 #include <doctest/doctest.h>
 
-#include "model/model.hpp"
+#include "momentid/model.hpp"
 
 namespace {
 

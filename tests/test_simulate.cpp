@@ -6,9 +6,9 @@
 #include <fstream>
 #include <sstream>
 
-#include "data/writer.hpp"
-#include "model/model.hpp"
-#include "simulate/simulate.hpp"
+#include "momentid/writer.hpp"
+#include "momentid/model.hpp"
+#include "momentid/simulate.hpp"
 #include "test_support.hpp"
 
 namespace {

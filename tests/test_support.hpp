@@ -7,7 +7,7 @@
 #include <string>
 #include <typeinfo>
 
-#include "model/model.hpp"
+#include "momentid/model.hpp"
 
 namespace momentid::testing {
 

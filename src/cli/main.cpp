@@ -9,11 +9,11 @@
 #include <map>
 #include <optional>
 
-#include "data/writer.hpp"
-#include "derive/moment_system.hpp"
-#include "model/model.hpp"
-#include "moments/from_data.hpp"
-#include "simulate/simulate.hpp"
+#include "momentid/writer.hpp"
+#include "momentid/derive.hpp"
+#include "momentid/model.hpp"
+#include "momentid/data_pass.hpp"
+#include "momentid/simulate.hpp"
 #include "solve/report.hpp"
 
 namespace {

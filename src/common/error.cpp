@@ -1,4 +1,4 @@
-#include "common/error.hpp"
+#include "momentid/error.hpp"
 
 #include <algorithm>
 #include <string_view>

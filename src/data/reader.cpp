@@ -32,7 +32,7 @@
 #include <utility>
 #include <vector>
 
-#include "data/data.hpp"
+#include "momentid/reader.hpp"
 
 namespace momentid {
 

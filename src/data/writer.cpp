@@ -1,4 +1,4 @@
-#include "data/writer.hpp"
+#include "momentid/writer.hpp"
 
 #include <unistd.h>
 
@@ -11,7 +11,7 @@
 #include <cstring>
 #include <filesystem>
 
-#include "common/error.hpp"
+#include "momentid/error.hpp"
 
 namespace momentid {
 namespace {

@@ -8,7 +8,7 @@
 #include <random>
 #include <set>
 
-#include "derive/moment_system.hpp"
+#include "momentid/derive.hpp"
 
 namespace momentid {
 namespace {

@@ -4,7 +4,7 @@
 #include <sstream>
 
 #include "common/json.hpp"
-#include "derive/moment_system.hpp"
+#include "momentid/derive.hpp"
 
 namespace momentid {
 

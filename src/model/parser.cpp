@@ -16,7 +16,7 @@
 #include <stdexcept>
 
 #include "error_messages.hpp"
-#include "model/model.hpp"
+#include "momentid/model.hpp"
 #include "model_grammar.hpp"
 #include "tao/pegtl/contrib/parse_tree.hpp"
 

@@ -1,4 +1,4 @@
-#include "moments/accumulator.hpp"
+#include "momentid/accumulator.hpp"
 
 #include <algorithm>
 

@@ -1,10 +1,10 @@
-#include "simulate/input.hpp"
+#include "momentid/input.hpp"
 
 #include <charconv>
 #include <cmath>
 #include <sstream>
 
-#include "common/error.hpp"
+#include "momentid/error.hpp"
 
 namespace momentid {
 namespace {

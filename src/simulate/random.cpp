@@ -1,4 +1,4 @@
-#include "simulate/random.hpp"
+#include "momentid/random.hpp"
 
 #include <cmath>
 #include <limits>

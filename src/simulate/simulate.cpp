@@ -1,11 +1,11 @@
-#include "simulate/simulate.hpp"
+#include "momentid/simulate.hpp"
 
 #include <charconv>
 #include <cmath>
 #include <map>
 #include <string_view>
 
-#include "common/error.hpp"
+#include "momentid/error.hpp"
 
 namespace momentid {
 namespace {

@@ -1,4 +1,4 @@
-#include "solve/estimate.hpp"
+#include "momentid/estimate.hpp"
 
 #include <Eigen/Dense>
 #include <cmath>

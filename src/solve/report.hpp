@@ -2,8 +2,8 @@
 
 #include <string>
 
-#include "moments/from_data.hpp"
-#include "solve/estimate.hpp"
+#include "momentid/data_pass.hpp"
+#include "momentid/estimate.hpp"
 
 namespace momentid {
 

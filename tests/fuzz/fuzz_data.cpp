@@ -8,7 +8,7 @@
 #include <cstdio>
 #include <string>
 
-#include "data/data.hpp"
+#include "momentid/reader.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   static const std::string path = "/tmp/momentid_fuzz_data_" + std::to_string(getpid());

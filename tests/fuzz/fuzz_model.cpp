@@ -5,8 +5,8 @@
 #include <cstdint>
 #include <string_view>
 
-#include "derive/moment_system.hpp"
-#include "model/model.hpp"
+#include "momentid/derive.hpp"
+#include "momentid/model.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string_view text(reinterpret_cast<const char*>(data), size);

@@ -7,7 +7,7 @@
 #include <string_view>
 #include <vector>
 
-#include "common/error.hpp"
+#include "momentid/error.hpp"
 
 namespace momentid {
 

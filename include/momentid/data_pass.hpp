@@ -5,8 +5,8 @@
 #include <string>
 #include <vector>
 
-#include "data/data.hpp"
-#include "moments/accumulator.hpp"
+#include "momentid/reader.hpp"
+#include "momentid/accumulator.hpp"
 
 namespace momentid {
 

@@ -4,8 +4,8 @@
 #include <string>
 #include <vector>
 
-#include "derive/moment_system.hpp"
-#include "moments/accumulator.hpp"
+#include "momentid/derive.hpp"
+#include "momentid/accumulator.hpp"
 
 namespace momentid {
 

@@ -1,4 +1,4 @@
-#include "moments/from_data.hpp"
+#include "momentid/data_pass.hpp"
 
 #include <cmath>
 #include <condition_variable>

@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "common/error.hpp"
+#include "momentid/error.hpp"
 
 namespace momentid {
 

@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "simulate/random.hpp"
+#include "momentid/random.hpp"
 
 namespace momentid {
 

@@ -7,9 +7,9 @@
 #include <string>
 #include <vector>
 
-#include "data/writer.hpp"
-#include "model/model.hpp"
-#include "simulate/input.hpp"
+#include "momentid/writer.hpp"
+#include "momentid/model.hpp"
+#include "momentid/input.hpp"
 
 namespace momentid {
 

@@ -3,7 +3,7 @@
 #include <cstddef>
 #include <vector>
 
-#include "model/model.hpp"
+#include "momentid/model.hpp"
 
 namespace momentid {
 
