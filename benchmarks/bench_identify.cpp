@@ -41,11 +41,7 @@ void write_data(const momentid::Model& model, const std::string& path, std::size
   options.parameters = momentid::parameter_values(model, {});
   options.inputs = {momentid::InputSpec::parse("ma:K=10,w=0.1,sigma=20", "bench")};
   options.samples = rows;
-  momentid::DataWriter out(path, momentid::DataWriter::Format::kCsv,
-                           {"# momentid: dt=0.01 input-hold=zoh"}, {"t", "y", "v", "x"});
-  momentid::SampleRows sink(out, 3, /*with_run=*/false);
-  momentid::simulate(model, options, sink);
-  out.commit();
+  momentid::simulate_to_file(model, options, path, momentid::DataWriter::Format::kCsv);
 }
 
 int one_pass(const std::string& path) {

@@ -237,7 +237,7 @@ TEST_SUITE("data reader") {
         "# not momentid: k=v\n"
         "y\n1\n2\n",
         columns({"y"}));
-    CHECK(c.metadata.values.size() == 5);
+    CHECK(c.metadata.size() == 5);
     CHECK(c.metadata.get("dt") == "0.01");
     CHECK(c.metadata.get("model") == "duffing");
     CHECK(c.metadata.get("seed") == "7");

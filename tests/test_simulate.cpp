@@ -154,11 +154,8 @@ TEST_SUITE("simulate") {
     const auto dir = std::filesystem::temp_directory_path() / "momentid_test_simulate";
     std::filesystem::create_directories(dir);
     auto write = [&](const std::string& name, std::uint64_t seed) {
-      momentid::DataWriter out((dir / name).string(), momentid::DataWriter::Format::kCsv,
-                               {"# momentid: test"}, {"t", "y", "v", "x"});
-      momentid::SampleRows sink(out, 3, /*with_run=*/false);
-      momentid::simulate(model, options_for(model, 5000, seed), sink);
-      out.commit();
+      momentid::simulate_to_file(model, options_for(model, 5000, seed), (dir / name).string(),
+                                 momentid::DataWriter::Format::kCsv);
       return read_file(dir / name);
     };
     const std::string a = write("a.csv", 7), b = write("b.csv", 7), c = write("c.csv", 8);

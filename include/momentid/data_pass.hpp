@@ -5,8 +5,8 @@
 #include <string>
 #include <vector>
 
-#include "momentid/reader.hpp"
 #include "momentid/accumulator.hpp"
+#include "momentid/reader.hpp"
 
 namespace momentid {
 

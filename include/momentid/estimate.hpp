@@ -4,8 +4,8 @@
 #include <string>
 #include <vector>
 
-#include "momentid/derive.hpp"
 #include "momentid/accumulator.hpp"
+#include "momentid/derive.hpp"
 
 namespace momentid {
 

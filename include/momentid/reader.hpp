@@ -8,16 +8,9 @@
 #include <vector>
 
 #include "momentid/error.hpp"
+#include "momentid/metadata.hpp"
 
 namespace momentid {
-
-// Key-value pairs from `# momentid: key=value key=value ...` lines before the header of a data
-// file, e.g. `dt=0.01 input-hold=zoh model=duffing seed=1`. Values hold no blanks.
-struct DataMetadata {
-  std::map<std::string, std::string> values;
-
-  std::optional<std::string> get(const std::string& key) const;
-};
 
 // What to read from a data file: the columns to deliver, in this order (normally the model's
 // states, then its inputs), and where a column has another name in the file (`--columns
@@ -58,6 +51,7 @@ struct DataBlock {
 //   while (reader->next(block, 65536)) accumulate(block);
 class DataReader {
  public:
+  // Opens a file, choosing the format by its first bytes (not by its name).
   static std::unique_ptr<DataReader> open(const std::string& path, const ColumnRequest& request);
   virtual ~DataReader() = default;
 
@@ -72,6 +66,43 @@ class DataReader {
   virtual bool next(DataBlock& block, std::size_t max_rows) = 0;
   // Data rows delivered so far.
   virtual std::size_t rows_read() const = 0;
+};
+
+// Columns held in memory by the caller, e.g. numpy arrays: no copy is made, so the values must
+// outlive every reader opened on them. Column c's value in row r is
+// `columns[c].values[r * columns[c].stride]`. The names follow the CSV rules: `t` holds the
+// sample times and `run` separates records; `metadata` may give `dt` and `input-hold`. Errors
+// are located at `name`, the row (from 1) as line and the column (from 1) as column.
+struct MemoryColumn {
+  std::string name;
+  const double* values = nullptr;
+  std::size_t stride = 1;
+};
+struct MemoryData {
+  std::vector<MemoryColumn> columns;
+  std::size_t rows = 0;
+  DataMetadata metadata;
+  std::string name = "<memory>";
+};
+
+// Where the data of an identification come from: a file (any format DataReader::open reads) or
+// columns in memory. A source is opened once per pass, with the columns the pass needs.
+//
+// Example:
+//   DataSource source = DataSource::file("d.csv");
+//   auto reader = source.open({.names = {"y", "x"}});
+class DataSource {
+ public:
+  static DataSource file(std::string path);
+  static DataSource memory(MemoryData data);
+
+  // The path, or MemoryData::name.
+  const std::string& name() const { return name_; }
+  std::unique_ptr<DataReader> open(const ColumnRequest& request) const;
+
+ private:
+  std::string name_;
+  std::optional<MemoryData> memory_;
 };
 
 }  // namespace momentid

@@ -7,9 +7,10 @@
 #include <string>
 #include <vector>
 
-#include "momentid/writer.hpp"
-#include "momentid/model.hpp"
 #include "momentid/input.hpp"
+#include "momentid/metadata.hpp"
+#include "momentid/model.hpp"
+#include "momentid/writer.hpp"
 
 namespace momentid {
 
@@ -148,21 +149,37 @@ struct SimulationOptions {
   std::size_t runs = 1;
   bool continue_runs = false;  // start each run from the previous run's last state
   std::uint64_t seed = 1;
+
+  // Throws UsageError naming the first option that `model` cannot be simulated with: a count of
+  // parameter values or input processes that differs from the model's, a dt outside
+  // [kMinStep, kMaxStep] or not finite, no samples or no runs.
+  void validate(const Model& model) const;
+  static constexpr double kMinStep = 1e-9;
+  static constexpr double kMaxStep = 1e6;
 };
 
 // Integrates the model with the classical fourth-order Runge-Kutta method at a fixed step, each
 // input held constant over a step, from y = 0. Throws Error when a state becomes non-finite or
 // exceeds kBlowUpBound, naming the state, the time, the run and the parameter values.
+// The options are validated first.
 void simulate(const Model& model, const SimulationOptions& options, SampleSink& sink);
 inline constexpr double kBlowUpBound = 1e100;
+
+// The metadata `momentid simulate` writes: model, dt, input-hold=zoh, seed, samples, runs,
+// burn-in and continue on one line; the parameter values (`param.NAME`) on the next; each input
+// process (`input.NAME`) on a line of its own.
+DataMetadata simulation_metadata(const Model& model, const SimulationOptions& options);
+
+// Simulates into a data file in the layout of `momentid simulate`: columns t, the states, the
+// inputs and, for several runs, `run` (from 1), after simulation_metadata(); written whole or not
+// at all (see DataWriter). `path` "-" is standard output.
+void simulate_to_file(const Model& model, const SimulationOptions& options, const std::string& path,
+                      DataWriter::Format format);
 
 // The values of the model's parameters: nominal values, overridden by `assignments` (`k=4`,
 // `eps=-0.5`, exact decimals). Throws UsageError for an unknown name or a bad number, and
 // ModelError naming a parameter that has no value.
 std::vector<GiNaC::numeric> parameter_values(const Model& model,
                                              const std::vector<std::string>& assignments);
-
-// The shortest decimal text that reads back as exactly `x`.
-std::string shortest_decimal(double x);
 
 }  // namespace momentid

@@ -5,6 +5,8 @@
 #include <string>
 #include <vector>
 
+#include "momentid/metadata.hpp"
+
 namespace momentid {
 
 // Writes a data file in the layouts DataReader reads (CSV or binary, see data.hpp), whole or not
@@ -13,15 +15,16 @@ namespace momentid {
 // device or a pipe is written to directly; through a symbolic link, its target is replaced.
 //
 // Example:
-//   DataWriter out("d.csv", DataWriter::Format::kCsv, {"# momentid: dt=0.01"}, {"t", "y", "x"});
+//   DataMetadata metadata;
+//   metadata.add_line({{"dt", "0.01"}});
+//   DataWriter out("d.csv", DataWriter::Format::kCsv, metadata, {"t", "y", "x"});
 //   out.row(values);  // one double per column
 //   out.commit();
 class DataWriter {
  public:
   enum class Format { kCsv, kBinary };
 
-  // `metadata` lines are written before the header, verbatim (each should start with "# ").
-  DataWriter(const std::string& path, Format format, const std::vector<std::string>& metadata,
+  DataWriter(const std::string& path, Format format, const DataMetadata& metadata,
              const std::vector<std::string>& columns);
   ~DataWriter();
   DataWriter(const DataWriter&) = delete;

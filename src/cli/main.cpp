@@ -9,11 +9,11 @@
 #include <map>
 #include <optional>
 
-#include "momentid/writer.hpp"
+#include "momentid/data_pass.hpp"
 #include "momentid/derive.hpp"
 #include "momentid/model.hpp"
-#include "momentid/data_pass.hpp"
 #include "momentid/simulate.hpp"
+#include "momentid/writer.hpp"
 #include "solve/report.hpp"
 
 namespace {
@@ -115,35 +115,9 @@ int run_simulate(const SimulateCommand& command) {
   options.continue_runs = command.continue_runs;
   options.seed = command.seed;
 
-  std::vector<std::string> metadata;
-  metadata.push_back(
-      "# momentid: model=" + model.name() + " dt=" + momentid::shortest_decimal(options.dt) +
-      " input-hold=zoh seed=" + std::to_string(options.seed) +
-      " samples=" + std::to_string(options.samples) + " runs=" + std::to_string(options.runs) +
-      " burn-in=" + std::to_string(options.burn_in) +
-      " continue=" + (options.continue_runs ? "yes" : "no"));
-  std::string parameters = "# momentid:";
-  for (std::size_t p = 0; p < options.parameters.size(); ++p) {
-    parameters += " param." + model.parameters()[p].name + "=" +
-                  momentid::shortest_decimal(options.parameters[p].to_double());
-  }
-  metadata.push_back(parameters);
-  for (std::size_t i = 0; i < options.inputs.size(); ++i) {
-    metadata.push_back("# momentid: input." + model.inputs()[i].name + "=" +
-                       options.inputs[i].text());
-  }
-  std::vector<std::string> columns{"t"};
-  for (const std::string& v : model.variables()) columns.push_back(v);
-  const bool with_run = options.runs > 1;
-  if (with_run) columns.push_back("run");
-
-  momentid::DataWriter out(command.output,
-                           command.format == "bin" ? momentid::DataWriter::Format::kBinary
-                                                   : momentid::DataWriter::Format::kCsv,
-                           metadata, columns);
-  momentid::SampleRows rows(out, model.variables().size(), with_run);
-  momentid::simulate(model, options, rows);
-  out.commit();
+  momentid::simulate_to_file(model, options, command.output,
+                             command.format == "bin" ? momentid::DataWriter::Format::kBinary
+                                                     : momentid::DataWriter::Format::kCsv);
   return 0;
 }
 

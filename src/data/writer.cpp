@@ -11,18 +11,17 @@
 #include <cstring>
 #include <filesystem>
 
+#include "data/format.hpp"
 #include "momentid/error.hpp"
 
 namespace momentid {
 namespace {
 
 constexpr std::size_t kBufferSize = 1 << 20;
-constexpr char kMagic[8] = {'M', 'O', 'M', 'N', 'T', 'I', 'D', '1'};
 
 }  // namespace
 
-DataWriter::DataWriter(const std::string& path, Format format,
-                       const std::vector<std::string>& metadata,
+DataWriter::DataWriter(const std::string& path, Format format, const DataMetadata& metadata,
                        const std::vector<std::string>& columns)
     : path_(path), format_(format), columns_(columns.size()), buffer_(kBufferSize) {
   std::error_code error;
@@ -55,12 +54,9 @@ DataWriter::DataWriter(const std::string& path, Format format,
     }
     remember_temporary();
   }
-  std::string header;
-  for (const std::string& line : metadata) header += line + "\n";
-  for (std::size_t c = 0; c < columns.size(); ++c) header += (c ? "," : "") + columns[c];
-  header += "\n";
+  const std::string header = data::header_text(metadata, columns);
   if (format_ == Format::kBinary) {
-    std::fwrite(kMagic, 1, sizeof kMagic, file_);
+    std::fwrite(data::kMagic.data(), 1, data::kMagic.size(), file_);
     const auto length = static_cast<std::uint32_t>(header.size());
     const unsigned char bytes[4] = {
         static_cast<unsigned char>(length), static_cast<unsigned char>(length >> 8),

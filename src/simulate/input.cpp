@@ -4,16 +4,11 @@
 #include <cmath>
 #include <sstream>
 
+#include "common/decimal.hpp"
 #include "momentid/error.hpp"
 
 namespace momentid {
 namespace {
-
-std::string shortest(double x) {
-  char buffer[32];
-  const auto result = std::to_chars(buffer, buffer + sizeof buffer, x);
-  return std::string(buffer, result.ptr);
-}
 
 double parse_number(const std::string& text, const std::string& what, const std::string& option) {
   double value = 0;
@@ -126,26 +121,26 @@ std::string InputSpec::text() const {
       bool equal = true;
       for (double w : weights) equal = equal && w == weights.front();
       if (equal) {
-        out = "ma:K=" + std::to_string(weights.size()) + ",w=" + shortest(weights.front());
+        out = "ma:K=" + std::to_string(weights.size()) + ",w=" + shortest_decimal(weights.front());
       } else {
         out = "ma:weights=[";
         for (std::size_t i = 0; i < weights.size(); ++i) {
           if (i) out += ',';
-          out += shortest(weights[i]);
+          out += shortest_decimal(weights[i]);
         }
         out += "]";
       }
       break;
     }
     case Kind::kOrnsteinUhlenbeck:
-      out = "ou:tau=" + shortest(tau);
+      out = "ou:tau=" + shortest_decimal(tau);
       break;
     case Kind::kWhite:
       out = "white:";
       break;
   }
   if (out.back() != ':') out += ",";
-  return out + "sigma=" + shortest(sigma) + ",mean=" + shortest(mean);
+  return out + "sigma=" + shortest_decimal(sigma) + ",mean=" + shortest_decimal(mean);
 }
 
 InputProcess::InputProcess(const InputSpec& spec, double dt, std::uint64_t seed,

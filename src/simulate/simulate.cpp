@@ -5,6 +5,7 @@
 #include <map>
 #include <string_view>
 
+#include "common/decimal.hpp"
 #include "momentid/error.hpp"
 
 namespace momentid {
@@ -41,12 +42,6 @@ std::string parameter_list(const Model& model, const std::vector<numeric>& value
 }
 
 }  // namespace
-
-std::string shortest_decimal(double x) {
-  char buffer[32];
-  const auto result = std::to_chars(buffer, buffer + sizeof buffer, x);
-  return std::string(buffer, result.ptr);
-}
 
 CompiledModel::CompiledModel(const Model& model, const std::vector<numeric>& parameters)
     : states_(static_cast<int>(model.states().size())),
@@ -165,7 +160,25 @@ bool CompiledModel::solve(double* dydt) const {
   return true;
 }
 
+void SimulationOptions::validate(const Model& model) const {
+  const auto count = [&](std::size_t found, std::size_t expected, const std::string& what) {
+    if (found != expected) {
+      throw UsageError("simulate: model " + model.name() + " needs " + std::to_string(expected) +
+                       " " + what + ", found " + std::to_string(found));
+    }
+  };
+  count(parameters.size(), model.parameters().size(), "parameter values");
+  count(inputs.size(), model.inputs().size(), "input processes");
+  if (!(std::isfinite(dt) && dt >= kMinStep && dt <= kMaxStep)) {
+    throw UsageError("simulate: dt must be a number from 1e-9 to 1e6, found " +
+                     shortest_decimal(dt));
+  }
+  if (samples == 0) throw UsageError("simulate: the number of samples must be at least 1");
+  if (runs == 0) throw UsageError("simulate: the number of runs must be at least 1");
+}
+
 void simulate(const Model& model, const SimulationOptions& options, SampleSink& sink) {
+  options.validate(model);
   const CompiledModel f(model, options.parameters);
   const std::size_t n = static_cast<std::size_t>(f.states());
   const std::size_t m = static_cast<std::size_t>(f.inputs());
@@ -310,6 +323,41 @@ std::vector<numeric> parameter_values(const Model& model,
     out.push_back(*values[p]);
   }
   return out;
+}
+
+DataMetadata simulation_metadata(const Model& model, const SimulationOptions& options) {
+  DataMetadata metadata;
+  metadata.add_line({{"model", model.name()},
+                     {"dt", shortest_decimal(options.dt)},
+                     {"input-hold", "zoh"},
+                     {"seed", std::to_string(options.seed)},
+                     {"samples", std::to_string(options.samples)},
+                     {"runs", std::to_string(options.runs)},
+                     {"burn-in", std::to_string(options.burn_in)},
+                     {"continue", options.continue_runs ? "yes" : "no"}});
+  DataMetadata::Line parameters;
+  for (std::size_t p = 0; p < options.parameters.size(); ++p) {
+    parameters.emplace_back("param." + model.parameters()[p].name,
+                            shortest_decimal(options.parameters[p].to_double()));
+  }
+  metadata.add_line(std::move(parameters));
+  for (std::size_t i = 0; i < options.inputs.size(); ++i) {
+    metadata.add_line({{"input." + model.inputs()[i].name, options.inputs[i].text()}});
+  }
+  return metadata;
+}
+
+void simulate_to_file(const Model& model, const SimulationOptions& options, const std::string& path,
+                      DataWriter::Format format) {
+  options.validate(model);
+  std::vector<std::string> columns{"t"};
+  for (const std::string& v : model.variables()) columns.push_back(v);
+  const bool with_run = options.runs > 1;
+  if (with_run) columns.push_back("run");
+  DataWriter out(path, format, simulation_metadata(model, options), columns);
+  SampleRows rows(out, model.variables().size(), with_run);
+  simulate(model, options, rows);
+  out.commit();
 }
 
 }  // namespace momentid

@@ -1,0 +1,42 @@
+#pragma once
+
+#include <cstddef>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace momentid {
+
+// The key-value pairs a data file carries in `# momentid: key=value key=value ...` lines before
+// its header row, e.g. `dt=0.01 input-hold=zoh model=duffing seed=1`. Keys and values hold no
+// blanks; a key given twice means its last value. The lines are kept as they were read or
+// added, so that metadata copied from one file to another reads the same.
+//
+// Known keys: `dt` (the sample interval, a positive number), `input-hold` (`zoh` or `sample`);
+// `momentid simulate` also writes the model, the seed, the parameter values (`param.NAME`) and
+// the input processes (`input.NAME`).
+//
+// Example:
+//   DataMetadata m;
+//   m.add_line({{"dt", "0.01"}, {"input-hold", "zoh"}});
+//   m.get("dt");  // "0.01"
+//   m.text();     // "# momentid: dt=0.01 input-hold=zoh\n"
+class DataMetadata {
+ public:
+  using Line = std::vector<std::pair<std::string, std::string>>;
+
+  // The last value given for `key`, if any.
+  std::optional<std::string> get(const std::string& key) const;
+  void add_line(Line line);
+  const std::vector<Line>& lines() const { return lines_; }
+  // The number of distinct keys.
+  std::size_t size() const;
+  // The lines as a data file holds them, each `# momentid: ` and its pairs, ended by a newline.
+  std::string text() const;
+
+ private:
+  std::vector<Line> lines_;
+};
+
+}  // namespace momentid

@@ -1,0 +1,140 @@
+// The binary layout (README, "Data files"): errors in the header text are located by the line
+// and byte column of that text, errors in the rows by the row number (from 1) and the column
+// number (from 1).
+
+#include <array>
+#include <bit>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+
+#include "common/decimal.hpp"
+#include "data/format.hpp"
+#include "data/formats.hpp"
+#include "data/lines.hpp"
+#include "data/stream_reader.hpp"
+#include "data/text.hpp"
+
+namespace momentid::data {
+namespace {
+
+constexpr std::uint32_t kMaxBinaryHeaderBytes = std::uint32_t{16} << 20;
+constexpr std::size_t kChunkBytes = std::size_t{1} << 20;
+
+// Little-endian bytes to a number, whatever the byte order of this machine.
+template <class Unsigned>
+Unsigned load_little_endian(const unsigned char* bytes) {
+  Unsigned value = 0;
+  for (std::size_t i = sizeof(Unsigned); i-- > 0;) value = (value << 8) | bytes[i];
+  return value;
+}
+
+double load_double(const unsigned char* bytes) {
+  if constexpr (std::endian::native == std::endian::little) {
+    double value;
+    std::memcpy(&value, bytes, sizeof value);
+    return value;
+  } else {
+    return std::bit_cast<double>(load_little_endian<std::uint64_t>(bytes));
+  }
+}
+
+// The binary layout: a header text as in CSV, then rows of little-endian float64 values.
+class BinaryReader final : public StreamReader {
+ public:
+  // Reads the header of `file`, whose first bytes, already read, are the magic.
+  BinaryReader(File file, const std::string& path, const ColumnRequest& request)
+      : StreamReader(path, request), file_(std::move(file)) {
+    const SourceLocation start{path_, 1, 1, ""};
+    std::array<unsigned char, 4> length_bytes;
+    const std::size_t got = read_fully(file_.get(), path_, length_bytes.data(), 4);
+    if (got < 4) {
+      fail(start, "the file ends inside its header: expected a 4-byte header length after '" +
+                      std::string(kMagic) + "', found " + plural(got, "byte"));
+    }
+    const std::uint32_t length = load_little_endian<std::uint32_t>(length_bytes.data());
+    if (length > kMaxBinaryHeaderBytes) {
+      fail(start, "the header length " + std::to_string(length) + " is too large (at most " +
+                      std::to_string(kMaxBinaryHeaderBytes) + " bytes of header text)");
+    }
+    std::string text(length, '\0');
+    const std::size_t text_got = read_fully(file_.get(), path_, text.data(), length);
+    if (text_got < length) {
+      fail(start, "the file ends inside its header: expected " + plural(length, "byte") +
+                      " of header text, found " + std::to_string(text_got));
+    }
+    LineReader lines(text);
+    header_ = read_header(path_, lines, /*binary=*/true);
+    map_ = map_columns(path_, header_, request_);
+    for (std::size_t field = 0; field < header_.names.size(); ++field) {
+      if (map_.needed[field]) needed_fields_.push_back(field);
+    }
+    row_bytes_ = sizeof(double) * header_.names.size();
+    buffer_.resize(std::max<std::size_t>(1, kChunkBytes / row_bytes_) * row_bytes_);
+  }
+
+ protected:
+  bool read_row(double* row, RowKeys& keys) override {
+    if (position_ == filled_) {
+      if (at_end_) return false;
+      filled_ = read_fully(file_.get(), path_, buffer_.data(), buffer_.size());
+      position_ = 0;
+      at_end_ = filled_ < buffer_.size();
+      if (filled_ == 0) return false;
+    }
+    const std::size_t left = filled_ - position_;
+    ++row_number_;
+    if (left < row_bytes_) {
+      fail({path_, clamp_to_int(row_number_), static_cast<int>(left / sizeof(double)) + 1, ""},
+           "the file ends inside row " + std::to_string(row_number_) + ": " + plural(left, "byte") +
+               " of a " + std::to_string(row_bytes_) + "-byte row");
+    }
+    const unsigned char* const bytes = buffer_.data() + position_;
+    position_ += row_bytes_;
+    for (const std::size_t field : needed_fields_) {
+      const double value = load_double(bytes + sizeof(double) * field);
+      if (!std::isfinite(value)) bad_value(field, value, "expected a finite number");
+      if (map_.output[field] >= 0) row[map_.output[field]] = value;
+      if (static_cast<int>(field) == map_.time) keys.t = value;
+      if (static_cast<int>(field) == map_.run && !to_run(value, keys.run)) {
+        bad_value(field, value, "expected an integer");
+      }
+    }
+    return true;
+  }
+
+  SourceLocation field_location(int field) const override {
+    return {path_, clamp_to_int(row_number_), field + 1, ""};
+  }
+
+  SourceLocation last_row_location() const override {
+    if (row_number_ == 0) return text_location(path_, header_.line, 1, header_.text);
+    return {path_, clamp_to_int(row_number_), 1, ""};
+  }
+
+ private:
+  [[noreturn]] void bad_value(std::size_t field, double value, const std::string& expected) {
+    fail(field_location(static_cast<int>(field)), "column '" + header_.names[field] +
+                                                      "': " + expected + ", found '" +
+                                                      shortest_decimal(value) + "'");
+  }
+
+  File file_;
+  std::vector<std::size_t> needed_fields_;
+  std::size_t row_bytes_ = 0;
+  std::vector<unsigned char> buffer_;  // whole rows
+  std::size_t position_ = 0, filled_ = 0;
+  bool at_end_ = false;
+  long long row_number_ = 0;
+};
+
+}  // namespace
+
+bool is_binary(std::string_view first_bytes) { return first_bytes.starts_with(kMagic); }
+
+std::unique_ptr<DataReader> open_binary(File file, const std::string& path,
+                                        const ColumnRequest& request, std::string_view) {
+  return std::make_unique<BinaryReader>(std::move(file), path, request);
+}
+
+}  // namespace momentid::data

@@ -1,0 +1,163 @@
+// The CSV layout (README, "Data files").
+//
+// Choices the header leaves open, made here:
+// - Blank lines (empty, or only blanks and tabs) are ignored wherever they are: before the
+//   header, among the data rows and at the end of the file.
+// - A `#` line after the header is a data row like any other (and so an error).
+// - Comma- and semicolon-separated fields may carry blanks around them; an empty header name
+//   (e.g. the index column pandas writes) names a column that cannot be requested.
+// - A `run` value must be an integer, written with or without a zero fraction (`3` or `3.0`).
+// - Columns count bytes from the start of the line; on the first line they count from after a
+//   UTF-8 byte order mark, so that they match the line text the error carries.
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+
+#include "data/formats.hpp"
+#include "data/lines.hpp"
+#include "data/stream_reader.hpp"
+#include "data/text.hpp"
+
+namespace momentid::data {
+namespace {
+
+// The CSV layout: one text line per row.
+class CsvReader final : public StreamReader {
+ public:
+  CsvReader(File file, const std::string& path, const ColumnRequest& request,
+            std::string_view start)
+      : StreamReader(path, request), file_(std::move(file)), lines_(file_.get(), path, start) {
+    header_ = read_header(path_, lines_);
+    map_ = map_columns(path_, header_, request_);
+    separator_ = header_.separator;
+    fields_ = header_.names.size();
+    field_starts_.assign(fields_, nullptr);
+  }
+
+ protected:
+  bool read_row(double* row, RowKeys& keys) override {
+    do {
+      if (!lines_.next(line_)) return false;
+    } while (is_blank_line(line_));
+    ++rows_parsed_;
+    if (rows_parsed_ <= request_.min_rows) {
+      last_short_row_.assign(line_);
+      last_short_row_line_ = lines_.line_number();
+    }
+    const char* p = line_.data();
+    const char* const end = p + line_.size();
+    std::size_t field = 0;
+    if (separator_ == ' ') {
+      for (;; ++field) {
+        p = skip_blanks(p, end);
+        if (p == end) break;
+        if (field == fields_) too_many_fields(p);
+        p = map_.needed[field] ? read_field(field, p, row, keys) : field_end(p, end);
+      }
+    } else {
+      for (;; ++field) {
+        if (field == fields_) too_many_fields(p);
+        p = map_.needed[field] ? read_field(field, p, row, keys) : field_end(p, end);
+        if (p == end) break;
+        ++p;  // the separator
+      }
+      ++field;
+    }
+    if (field != fields_) {
+      fail(location(line_.data()), "expected " + plural(fields_, "field") +
+                                       " as in the header, found " + std::to_string(field));
+    }
+    return true;
+  }
+
+  SourceLocation field_location(int field) const override {
+    return location(field_starts_[static_cast<std::size_t>(field)]);
+  }
+
+  SourceLocation last_row_location() const override {
+    if (rows_parsed_ == 0) return text_location(path_, header_.line, 1, header_.text);
+    return text_location(path_, last_short_row_line_, 1, last_short_row_);
+  }
+
+ private:
+  SourceLocation location(const char* at) const {
+    return text_location(path_, lines_.line_number(),
+                         static_cast<std::size_t>(at - line_.data()) + 1, line_);
+  }
+
+  // The end of the field starting at `p`: the next separator or the end of the line.
+  const char* field_end(const char* p, const char* end) const {
+    if (separator_ == ' ') {
+      while (p != end && !is_blank(*p)) ++p;
+      return p;
+    }
+    const void* const found = std::memchr(p, separator_, static_cast<std::size_t>(end - p));
+    return found == nullptr ? end : static_cast<const char*>(found);
+  }
+
+  // Reads the number in the field starting at `p` and returns the end of the field.
+  const char* read_field(std::size_t field, const char* p, double* row, RowKeys& keys) {
+    const char* const end = line_.data() + line_.size();
+    const char* const start = skip_blanks(p, end);
+    double value = 0;
+    const char* after = parse_number(start, end, value);
+    if (after != nullptr && separator_ != ' ') after = skip_blanks(after, end);
+    if (after == nullptr || (after != end && *after != separator_ && !is_blank(*after))) {
+      bad_field(field, p, "expected a number");
+    }
+    if (!std::isfinite(value)) bad_field(field, p, "expected a finite number");
+    if (map_.output[field] >= 0) row[map_.output[field]] = value;
+    if (static_cast<int>(field) == map_.time) {
+      keys.t = value;
+      field_starts_[field] = start;
+    }
+    if (static_cast<int>(field) == map_.run) {
+      if (!to_run(value, keys.run)) bad_field(field, p, "expected an integer");
+      field_starts_[field] = start;
+    }
+    return after;
+  }
+
+  // Reports the field that starts at `p`: at its first non-blank byte, if it has one.
+  [[noreturn]] void bad_field(std::size_t field, const char* p, const std::string& expected) {
+    const char* const end = line_.data() + line_.size();
+    const char* const start = skip_blanks(p, end);
+    const std::string_view text =
+        trim(std::string_view(start, static_cast<std::size_t>(field_end(start, end) - start)));
+    fail(location(text.empty() ? p : start),
+         "column '" + header_.names[field] + "': " + expected + ", found " +
+             (text.empty() ? "an empty field" : quoted_field(text)));
+  }
+
+  [[noreturn]] void too_many_fields(const char* extra) {
+    const char* const end = line_.data() + line_.size();
+    std::size_t count = fields_;
+    if (separator_ == ' ') {
+      for (const char* p = extra; (p = skip_blanks(p, end)) != end; p = field_end(p, end)) ++count;
+    } else {
+      count += 1 + static_cast<std::size_t>(std::count(extra, end, separator_));
+    }
+    fail(location(extra), "expected " + plural(fields_, "field") + " as in the header, found " +
+                              std::to_string(count));
+  }
+
+  File file_;
+  LineReader lines_;
+  char separator_ = ',';
+  std::size_t fields_ = 0;
+  std::string_view line_;
+  std::vector<const char*> field_starts_;  // of the `t` and `run` fields of the current row
+  std::size_t rows_parsed_ = 0;
+  std::string last_short_row_;  // the last row while there are fewer than min_rows
+  long long last_short_row_line_ = 0;
+};
+
+}  // namespace
+
+std::unique_ptr<DataReader> open_csv(File file, const std::string& path,
+                                     const ColumnRequest& request, std::string_view start) {
+  return std::make_unique<CsvReader>(std::move(file), path, request, start);
+}
+
+}  // namespace momentid::data

@@ -1,0 +1,42 @@
+#pragma once
+// The data file formats DataReader::open chooses from, by content. A new format is one source
+// file that defines its detector and opener, and one entry in the table in reader.cpp.
+
+#include <memory>
+#include <string>
+#include <string_view>
+
+#include "data/text.hpp"
+#include "momentid/reader.hpp"
+
+namespace momentid::data {
+
+// How many bytes at the start of a file the detectors see.
+inline constexpr std::size_t kDetectBytes = 8;
+
+// One format: whether a file that starts with `first_bytes` (kDetectBytes, fewer for a shorter
+// file) is in it, and how to read it. `open` receives the file positioned just after those
+// bytes.
+struct DataFormat {
+  const char* name;
+  bool (*detect)(std::string_view first_bytes);
+  std::unique_ptr<DataReader> (*open)(File file, const std::string& path,
+                                      const ColumnRequest& request, std::string_view first_bytes);
+};
+
+bool is_binary(std::string_view first_bytes);
+std::unique_ptr<DataReader> open_binary(File file, const std::string& path,
+                                        const ColumnRequest& request, std::string_view first_bytes);
+
+// CSV takes any file the other formats do not recognise.
+std::unique_ptr<DataReader> open_csv(File file, const std::string& path,
+                                     const ColumnRequest& request, std::string_view first_bytes);
+
+}  // namespace momentid::data
+
+namespace momentid::data {
+
+// Reads columns in memory; `data` must outlive the reader.
+std::unique_ptr<DataReader> open_memory(const MemoryData& data, const ColumnRequest& request);
+
+}  // namespace momentid::data

@@ -1,0 +1,106 @@
+#include "data/stream_reader.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "common/decimal.hpp"
+#include "data/text.hpp"
+
+namespace momentid::data {
+namespace {
+
+// Relative tolerance of a time step: far above the rounding of times written with ten or more
+// significant digits, far below a missing sample or a changed step.
+constexpr double kStepTolerance = 1e-6;
+// Steps are differences of times: rounding of t itself adds an error proportional to |t|.
+constexpr double kTimeRounding = 1e-9;
+
+}  // namespace
+
+bool to_run(double value, long& run) {
+  constexpr double kLimit = 9.0e18;
+  if (!(std::abs(value) < kLimit) || value != std::trunc(value)) return false;
+  run = static_cast<long>(value);
+  return true;
+}
+
+bool StreamReader::next(DataBlock& block, std::size_t max_rows) {
+  const std::size_t width = request_.names.size();
+  max_rows = std::max<std::size_t>(max_rows, 1);
+  block.values.resize(max_rows * width);
+  block.rows = 0;
+  if (has_pending_) {
+    std::copy(pending_.begin(), pending_.end(), block.values.begin());
+    block.run = current_run_;
+    block.run_starts = true;
+    block.rows = 1;
+    has_pending_ = false;
+  }
+  RowKeys keys;
+  while (block.rows < max_rows) {
+    double* const row = block.values.data() + block.rows * width;
+    if (!read_row(row, keys)) {
+      finish(rows_read_ + block.rows);
+      break;
+    }
+    for (const auto& [to, from] : map_.copies) row[to] = row[from];
+    const bool run_starts = !started_ || keys.run != current_run_;
+    if (run_starts) {
+      started_ = true;
+      current_run_ = keys.run;
+      has_previous_time_ = false;
+    }
+    if (map_.time >= 0) check_time(keys.t);
+    if (run_starts && block.rows > 0) {
+      // The row begins the next block: a block never spans two runs.
+      pending_.assign(row, row + width);
+      has_pending_ = true;
+      break;
+    }
+    if (block.rows == 0) {
+      block.run = current_run_;
+      block.run_starts = run_starts;
+    }
+    ++block.rows;
+  }
+  block.values.resize(block.rows * width);
+  rows_read_ += block.rows;
+  return block.rows > 0;
+}
+
+void StreamReader::check_time(double t) {
+  if (has_previous_time_) {
+    const double step = t - previous_time_;
+    if (!(step > 0)) {
+      fail(field_location(map_.time), "non-increasing time: t = " + shortest_decimal(t) +
+                                          " after t = " + shortest_decimal(previous_time_) +
+                                          " (samples must be in increasing time order)");
+    }
+    const double allowance = kTimeRounding * std::max(std::abs(t), std::abs(previous_time_));
+    if (!step_) {
+      const std::optional<double> dt = header_.metadata_dt;
+      if (dt && std::abs(step - *dt) > kStepTolerance * *dt + allowance) {
+        fail(field_location(map_.time), "time step " + distinguished(step, *dt).first +
+                                            " of column 't' disagrees with dt=" +
+                                            header_.metadata_dt_text + " in the metadata");
+      }
+      step_ = step;
+    } else if (std::abs(step - *step_) > kStepTolerance * *step_ + allowance) {
+      const auto [found, expected] = distinguished(step, *step_);
+      fail(field_location(map_.time), "non-uniform time step: " + found + " after " + expected +
+                                          " (t = " + shortest_decimal(t) +
+                                          "; samples must be equally spaced)");
+    }
+  }
+  previous_time_ = t;
+  has_previous_time_ = true;
+}
+
+void StreamReader::finish(std::size_t rows) {
+  if (rows >= request_.min_rows) return;
+  fail(last_row_location(), "the data have " + plural(rows, "row") + "; at least " +
+                                std::to_string(request_.min_rows) +
+                                (request_.min_rows == 1 ? " is" : " are") + " needed");
+}
+
+}  // namespace momentid::data

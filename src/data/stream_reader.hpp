@@ -1,0 +1,69 @@
+#pragma once
+
+#include <cstddef>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "data/header.hpp"
+#include "momentid/reader.hpp"
+
+namespace momentid::data {
+
+// A run number must be an integer that fits a long.
+bool to_run(double value, long& run);
+
+// The time and run of a row.
+struct RowKeys {
+  double t = 0;
+  long run = 0;
+};
+
+// The reading both layouts share: blocks, runs and the time-step checks. A layout delivers rows
+// through read_row() and says where a field is for errors.
+class StreamReader : public DataReader {
+ public:
+  const DataMetadata& metadata() const override { return header_.metadata; }
+
+  const std::vector<std::string>& columns() const override { return header_.names; }
+
+  std::optional<double> time_step() const override { return step_ ? step_ : header_.metadata_dt; }
+
+  std::size_t rows_read() const override { return rows_read_; }
+
+  bool next(DataBlock& block, std::size_t max_rows) override;
+
+ protected:
+  StreamReader(std::string path, const ColumnRequest& request)
+      : path_(std::move(path)), request_(request) {}
+
+  // Reads the next data row: the requested values into `row` (in request order), its time and
+  // run into `keys`. False at the end of the data.
+  virtual bool read_row(double* row, RowKeys& keys) = 0;
+  // Where field `field` (from 0) of the row read last is.
+  virtual SourceLocation field_location(int field) const = 0;
+  // Where the last data row is, or the header when there is none.
+  virtual SourceLocation last_row_location() const = 0;
+
+  std::string path_;
+  ColumnRequest request_;
+  Header header_;
+  ColumnMap map_;
+
+ private:
+  void check_time(double t);
+
+  // Fails when the data have fewer than the requested minimum of rows.
+  void finish(std::size_t rows);
+
+  std::optional<double> step_;
+  double previous_time_ = 0;
+  bool has_previous_time_ = false;
+  bool started_ = false;
+  long current_run_ = 0;
+  std::vector<double> pending_;
+  bool has_pending_ = false;
+  std::size_t rows_read_ = 0;
+};
+
+}  // namespace momentid::data

@@ -1,0 +1,109 @@
+#include "data/text.hpp"
+
+#include <fast_float/fast_float.h>
+
+#include <algorithm>
+#include <array>
+#include <cerrno>
+#include <charconv>
+#include <cmath>
+#include <cstring>
+#include <limits>
+
+namespace momentid::data {
+
+bool is_blank(char c) { return c == ' ' || c == '\t'; }
+
+const char* skip_blanks(const char* p, const char* end) {
+  while (p != end && is_blank(*p)) ++p;
+  return p;
+}
+
+bool is_blank_line(std::string_view line) {
+  return std::all_of(line.begin(), line.end(), is_blank);
+}
+
+std::string_view trim(std::string_view s) {
+  while (!s.empty() && is_blank(s.front())) s.remove_prefix(1);
+  while (!s.empty() && is_blank(s.back())) s.remove_suffix(1);
+  return s;
+}
+
+const char* parse_number(const char* p, const char* end, double& value) {
+  if (p != end && *p == '+') {
+    ++p;
+    if (p == end || *p == '+' || *p == '-') return nullptr;
+  }
+  const fast_float::from_chars_result result = fast_float::from_chars(p, end, value);
+  if (result.ec == std::errc::result_out_of_range) {
+    value = std::numeric_limits<double>::infinity();
+  } else if (result.ec != std::errc()) {
+    return nullptr;
+  }
+  return result.ptr;
+}
+
+bool is_number(std::string_view text, double& value) {
+  const char* end = text.data() + text.size();
+  return !text.empty() && parse_number(text.data(), end, value) == end;
+}
+
+std::pair<std::string, std::string> distinguished(double a, double b) {
+  std::array<char, 40> buffer_a, buffer_b;
+  std::string text_a, text_b;
+  for (int precision = 6; precision <= 17; ++precision) {
+    const auto end_a = std::to_chars(buffer_a.data(), buffer_a.data() + buffer_a.size(), a,
+                                     std::chars_format::general, precision);
+    const auto end_b = std::to_chars(buffer_b.data(), buffer_b.data() + buffer_b.size(), b,
+                                     std::chars_format::general, precision);
+    text_a.assign(buffer_a.data(), end_a.ptr);
+    text_b.assign(buffer_b.data(), end_b.ptr);
+    if (text_a != text_b) break;
+  }
+  return {text_a, text_b};
+}
+
+std::string quoted_field(std::string_view field) {
+  if (field.size() <= kShownFieldBytes) return "'" + std::string(field) + "'";
+  std::size_t cut = kShownFieldBytes;
+  // Do not cut a UTF-8 sequence: back up to the start of the character.
+  while (cut > 0 && (static_cast<unsigned char>(field[cut]) & 0xC0) == 0x80) --cut;
+  return "'" + std::string(field.substr(0, cut)) + "...'";
+}
+
+std::string plural(std::size_t count, const std::string& noun) {
+  return std::to_string(count) + " " + noun + (count == 1 ? "" : "s");
+}
+
+int clamp_to_int(long long n) {
+  return static_cast<int>(std::min<long long>(n, std::numeric_limits<int>::max()));
+}
+
+SourceLocation text_location(const std::string& path, long long line, std::size_t column,
+                             std::string_view text) {
+  const std::size_t keep = std::max(kShownLineBytes, column - 1 + kShownFieldBytes);
+  std::string shown(text.substr(0, keep));
+  if (text.size() > keep) shown += "...";
+  return {path, clamp_to_int(line), clamp_to_int(static_cast<long long>(column)), shown};
+}
+
+[[noreturn]] void fail(SourceLocation where, const std::string& message) {
+  throw DataError(std::move(where), message);
+}
+
+std::size_t read_fully(std::FILE* file, const std::string& path, void* into, std::size_t size) {
+  std::size_t got = 0;
+  while (got < size) {
+    const std::size_t n = std::fread(static_cast<char*>(into) + got, 1, size - got, file);
+    if (n == 0) {
+      if (std::ferror(file)) {
+        throw Error(path + ": cannot read the data file: " + std::strerror(errno));
+      }
+      break;
+    }
+    got += n;
+  }
+  return got;
+}
+
+}  // namespace momentid::data
