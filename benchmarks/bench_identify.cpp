@@ -1,6 +1,6 @@
-// The pass over a data file that `identify` makes (parse + moments), on a CSV of N rows of the
-// Duffing model, against a numpy baseline that loads the same file and computes the same moments,
-// in the same run. Also the peak memory of the pass for N/10 and N rows.
+// `identify` on a data file (derive, the pass that parses and accumulates, solve), on a CSV of N
+// rows of the Duffing model, against a numpy baseline that loads the same file and computes the
+// same moments, in the same run. Also the peak memory of the pass for N/10 and N rows.
 //
 // Usage: bench_identify [rows=10000000] [directory=/tmp] [--no-baseline]
 //        bench_identify --pass FILE   (one pass; prints seconds and peak RSS; used internally)
@@ -13,12 +13,12 @@
 #include <filesystem>
 #include <string>
 
-#include "momentid/writer.hpp"
 #include "momentid/derive.hpp"
-#include "momentid/model.hpp"
-#include "momentid/data_pass.hpp"
-#include "momentid/simulate.hpp"
 #include "momentid/estimate.hpp"
+#include "momentid/identify.hpp"
+#include "momentid/model.hpp"
+#include "momentid/simulate.hpp"
+#include "momentid/writer.hpp"
 
 namespace {
 
@@ -46,14 +46,15 @@ void write_data(const momentid::Model& model, const std::string& path, std::size
 
 int one_pass(const std::string& path) {
   const momentid::Model model = momentid::parse_model(kModel, "duffing.mom");
-  const auto list = moments(model);
   const auto start = std::chrono::steady_clock::now();
-  const momentid::DataMoments data = momentid::moments_from_file(path, {"y", "v"}, {"x"}, list, {});
+  const momentid::IdentifyResult result =
+      momentid::identify(model, momentid::DataSource::file(path), {.degree = 3});
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   rusage usage{};
   getrusage(RUSAGE_SELF, &usage);
-  std::printf("%.6f %ld %zu %zu\n", seconds, usage.ru_maxrss, data.rows, list.size());
+  std::printf("%.6f %ld %zu %zu\n", seconds, usage.ru_maxrss, result.data.rows,
+              result.moments.size());
   return 0;
 }
 

@@ -8,13 +8,12 @@
 #include <cmath>
 #include <filesystem>
 
-#include "momentid/writer.hpp"
 #include "momentid/derive.hpp"
-#include "momentid/model.hpp"
-#include "momentid/accumulator.hpp"
-#include "momentid/data_pass.hpp"
-#include "momentid/simulate.hpp"
 #include "momentid/estimate.hpp"
+#include "momentid/identify.hpp"
+#include "momentid/model.hpp"
+#include "momentid/simulate.hpp"
+#include "momentid/writer.hpp"
 #include "test_support.hpp"
 
 namespace {
@@ -25,17 +24,14 @@ using momentid::Estimate;
 using momentid::InputHold;
 using momentid::Model;
 
-// Feeds simulated samples straight into a moment accumulator (no file in between).
-struct Accumulate : momentid::SampleSink {
-  momentid::MomentAccumulator& accumulator;
-  std::size_t run = static_cast<std::size_t>(-1);
-  explicit Accumulate(momentid::MomentAccumulator& a) : accumulator(a) {}
-  void sample(double, const double* values, std::size_t r) override {
-    if (r != run) {
-      accumulator.start_run();
-      run = r;
-    }
-    accumulator.add(values, 1);
+// Keeps simulated samples in memory, one column per model variable, and a run column.
+struct Columns : momentid::SampleSink {
+  std::vector<std::vector<double>> values;
+  std::vector<double> runs;
+  explicit Columns(std::size_t variables) : values(variables) {}
+  void sample(double, const double* row, std::size_t run) override {
+    for (std::size_t v = 0; v < values.size(); ++v) values[v].push_back(row[v]);
+    runs.push_back(static_cast<double>(run));
   }
 };
 
@@ -49,25 +45,31 @@ struct Case {
   std::size_t batches = 50;
 };
 
-// Simulates `truth` (its nominal values) and identifies `fitted` (by default the same model).
+// Simulates `truth` (its nominal values) into memory and identifies `fitted` (by default the
+// same model) from it.
 Estimate identify(const Model& truth, const Case& c, const Model* fitted = nullptr) {
   const Model& model = fitted ? *fitted : truth;
-  momentid::DeriveOptions derive_options;
-  derive_options.degree = c.degree;
-  const momentid::MomentSystem system = momentid::derive(model, derive_options);
-  momentid::MomentAccumulator accumulator(momentid::moments_to_estimate(system),
-                                          model.states().size(), model.inputs().size(), c.hold,
-                                          c.batches);
   momentid::SimulationOptions options;
   options.parameters = momentid::parameter_values(truth, {});
   options.inputs.assign(truth.inputs().size(), momentid::InputSpec::parse(c.input, "test"));
   options.samples = c.samples;
   options.burn_in = 5000;
   options.seed = c.seed;
-  Accumulate sink(accumulator);
-  momentid::simulate(truth, options, sink);
-  accumulator.finish();
-  return momentid::solve(system, momentid::estimates(accumulator, c.batches), {.gmm = c.gmm});
+  Columns columns(truth.variables().size());
+  momentid::simulate(truth, options, columns);
+  momentid::MemoryData data;
+  data.rows = c.samples;
+  for (std::size_t v = 0; v < columns.values.size(); ++v) {
+    data.columns.push_back({truth.variables()[v], columns.values[v].data()});
+  }
+  data.columns.push_back({"run", columns.runs.data()});
+  momentid::IdentifyOptions identify_options;
+  identify_options.degree = c.degree;
+  identify_options.hold = c.hold;
+  identify_options.batches = c.batches;
+  identify_options.gmm = c.gmm;
+  return momentid::identify(model, momentid::DataSource::memory(std::move(data)), identify_options)
+      .estimate;
 }
 
 double truth_of(const Model& model, std::size_t p) {
@@ -188,25 +190,15 @@ TEST_SUITE("identify") {
     // bias is about +1/K; pairing with the start (shift 0, sample) gives about -1/K.
     const Model model = model_file("kozin_4_1a.mom");
     const auto path = std::filesystem::temp_directory_path() / "momentid_shift_test.csv";
-    {
-      momentid::DataWriter out(path.string(), momentid::DataWriter::Format::kCsv, {},
-                               {"t", "y", "x"});
-      momentid::SampleRows rows(out, 2, /*with_run=*/false);
-      momentid::SimulationOptions options;
-      options.parameters = momentid::parameter_values(model, {});
-      options.inputs = {momentid::InputSpec{}};
-      options.samples = 200000;
-      momentid::simulate(model, options, rows);
-      out.commit();
-    }
-    const momentid::MomentSystem system = momentid::derive(model);
+    momentid::SimulationOptions options;
+    options.parameters = momentid::parameter_values(model, {});
+    options.inputs = {momentid::InputSpec{}};
+    options.samples = 200000;
+    momentid::simulate_to_file(model, options, path.string(), momentid::DataWriter::Format::kCsv);
     auto estimate = [&](InputHold hold, long shift) {
-      momentid::DataOptions options;
-      options.hold = hold;
-      options.input_shift = shift;
-      const auto data = momentid::moments_from_file(path.string(), {"y"}, {"x"},
-                                                    momentid::moments_to_estimate(system), options);
-      return momentid::solve(system, data.estimates).parameters[0].estimate;
+      const momentid::IdentifyResult result = momentid::identify(
+          model, momentid::DataSource::file(path.string()), {.hold = hold, .input_shift = shift});
+      return result.estimate.parameters[0].estimate;
     };
     const double end = estimate(InputHold::kSample, 1), start = estimate(InputHold::kSample, 0),
                  consistent = estimate(InputHold::kZeroOrderHold, 0);

@@ -6,9 +6,9 @@
 #include <fstream>
 #include <sstream>
 
-#include "momentid/writer.hpp"
 #include "momentid/model.hpp"
 #include "momentid/simulate.hpp"
+#include "momentid/writer.hpp"
 #include "test_support.hpp"
 
 namespace {

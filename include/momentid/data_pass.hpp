@@ -43,11 +43,11 @@ struct DataMoments {
   std::size_t runs = 0;
 };
 
-// Reads `path` once, streaming (memory does not grow with the file), and estimates `moments`
-// over the model's variables (states, then inputs), with the channels' statistics. The file is
-// parsed on one thread while the moments are accumulated on another. Throws DataError for a bad
-// file and Error if it cannot be read.
-DataMoments moments_from_file(const std::string& path, const std::vector<std::string>& states,
+// Reads `source` once, streaming (memory does not grow with a file), and estimates `moments`
+// over the model's variables (states, then inputs), with the channels' statistics. The data are
+// read on one thread while the moments are accumulated on another. Throws DataError for bad
+// data and Error if a file cannot be read.
+DataMoments moments_from_data(const DataSource& source, const std::vector<std::string>& states,
                               const std::vector<std::string>& inputs,
                               const std::vector<Monomial>& moments, const DataOptions& options);
 

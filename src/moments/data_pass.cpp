@@ -180,7 +180,7 @@ class BlockQueue {
 
 }  // namespace
 
-DataMoments moments_from_file(const std::string& path, const std::vector<std::string>& states,
+DataMoments moments_from_data(const DataSource& source, const std::vector<std::string>& states,
                               const std::vector<std::string>& inputs,
                               const std::vector<Monomial>& moments, const DataOptions& options) {
   ColumnRequest request;
@@ -188,7 +188,7 @@ DataMoments moments_from_file(const std::string& path, const std::vector<std::st
   request.names.insert(request.names.end(), inputs.begin(), inputs.end());
   request.rename = options.rename;
   request.min_rows = options.min_rows;
-  std::unique_ptr<DataReader> reader = DataReader::open(path, request);
+  std::unique_ptr<DataReader> reader = source.open(request);
 
   DataMoments out;
   out.metadata = reader->metadata();
@@ -246,7 +246,7 @@ DataMoments moments_from_file(const std::string& path, const std::vector<std::st
 
   accumulator.finish();
   if (accumulator.intervals() == 0 && !moments.empty()) {
-    throw Error(path + ": no run has two consecutive rows" +
+    throw Error(source.name() + ": no run has two consecutive rows" +
                 (options.input_shift != 0 ? " after the input shift" : std::string()) +
                 ": the time averages need at least one interval");
   }

@@ -1,5 +1,6 @@
-#include "solve/report.hpp"
+#include "momentid/identify.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <sstream>
@@ -7,6 +8,68 @@
 #include "common/json.hpp"
 
 namespace momentid {
+
+void IdentifyOptions::validate(const Model& model) const {
+  if (batches < kMinBatches || batches > kMaxBatches) {
+    throw UsageError("batches: expected a number from " + std::to_string(kMinBatches) + " to " +
+                     std::to_string(kMaxBatches) + ", found " + std::to_string(batches));
+  }
+  if (degree < 0 || degree > kMaxDegree) {
+    throw UsageError("degree: expected 0 (automatic) or a number from 1 to " +
+                     std::to_string(kMaxDegree) + ", found " + std::to_string(degree));
+  }
+  if (input_shift < -kMaxInputShift || input_shift > kMaxInputShift) {
+    throw UsageError("input shift: expected a number from -" + std::to_string(kMaxInputShift) +
+                     " to " + std::to_string(kMaxInputShift) + ", found " +
+                     std::to_string(input_shift));
+  }
+  const auto& variables = model.variables();
+  for (const auto& column : columns) {
+    if (std::find(variables.begin(), variables.end(), column.first) == variables.end()) {
+      throw UsageError("--columns: '" + column.first + "' is not a state or input of model " +
+                       model.name());
+    }
+  }
+}
+
+const std::vector<ParameterEstimate>& IdentifyResult::parameters() const {
+  return gmm && !estimate.gmm_parameters.empty() ? estimate.gmm_parameters : estimate.parameters;
+}
+
+IdentifyResult identify(const Model& model, const DataSource& source,
+                        const IdentifyOptions& options) {
+  options.validate(model);
+  IdentifyResult result;
+  result.model = std::make_shared<const Model>(model);
+  result.data_name = source.name();
+  result.gmm = options.gmm;
+  DeriveOptions derive_options;
+  derive_options.multipliers = options.multipliers;
+  derive_options.degree = options.degree;
+  result.system = derive(*result.model, derive_options);
+  result.moments = moments_to_estimate(result.system);
+
+  DataOptions data_options;
+  data_options.hold = options.hold;
+  data_options.batches = options.batches;
+  data_options.rename = options.columns;
+  data_options.min_rows = 2 * options.batches;
+  data_options.input_shift = options.input_shift;
+  std::vector<std::string> states, inputs;
+  for (const auto& d : model.states()) states.push_back(d.name);
+  for (const auto& d : model.inputs()) inputs.push_back(d.name);
+  result.data = moments_from_data(source, states, inputs, result.moments, data_options);
+  result.estimate = solve(result.system, result.data.estimates, {.gmm = options.gmm});
+  return result;
+}
+
+std::vector<std::string> warnings(const IdentifyResult& r) {
+  std::vector<std::string> w = smoothness_warnings(r.data);
+  if (r.estimate.status != Estimate::Status::kOk) w.insert(w.begin(), r.estimate.message);
+  w.insert(w.end(), r.estimate.warnings.begin(), r.estimate.warnings.end());
+  return w;
+}
+
 namespace {
 
 std::string number(double x, const char* format = "%.6g") {
@@ -45,20 +108,13 @@ void table(std::ostringstream& out, const std::vector<ParameterEstimate>& parame
   }
 }
 
-std::vector<std::string> all_warnings(const IdentifyReport& r) {
-  std::vector<std::string> w = smoothness_warnings(*r.data);
-  if (r.estimate->status != Estimate::Status::kOk) w.insert(w.begin(), r.estimate->message);
-  w.insert(w.end(), r.estimate->warnings.begin(), r.estimate->warnings.end());
-  return w;
-}
-
 }  // namespace
 
-std::string format_report_text(const IdentifyReport& r) {
-  const Estimate& e = *r.estimate;
-  const DataMoments& d = *r.data;
+std::string format_text(const IdentifyResult& r) {
+  const Estimate& e = r.estimate;
+  const DataMoments& d = r.data;
   std::ostringstream out;
-  out << "model " << r.model->name() << ", data " << r.data_path << ": " << d.rows << " rows in "
+  out << "model " << r.model->name() << ", data " << r.data_name << ": " << d.rows << " rows in "
       << d.runs << (d.runs == 1 ? " run" : " runs");
   if (d.time_step) out << ", dt = " << number(*d.time_step);
   out << ", input hold " << hold_name(d.hold) << "\n\n";
@@ -86,15 +142,15 @@ std::string format_report_text(const IdentifyReport& r) {
           << " (z = " << number(c.z, "%.2f") << ")\n";
     }
   }
-  const std::vector<std::string> warnings = all_warnings(r);
-  if (warnings.empty()) out << "  warnings: none\n";
-  for (const std::string& w : warnings) out << "  warning: " << w << "\n";
+  const std::vector<std::string> all = warnings(r);
+  if (all.empty()) out << "  warnings: none\n";
+  for (const std::string& w : all) out << "  warning: " << w << "\n";
   return out.str();
 }
 
-std::string format_report_json(const IdentifyReport& r) {
-  const Estimate& e = *r.estimate;
-  const DataMoments& d = *r.data;
+std::string format_json(const IdentifyResult& r) {
+  const Estimate& e = r.estimate;
+  const DataMoments& d = r.data;
   auto parameters = [](const std::vector<ParameterEstimate>& list) {
     std::string out = "{";
     for (std::size_t i = 0; i < list.size(); ++i) {
@@ -110,17 +166,15 @@ std::string format_report_json(const IdentifyReport& r) {
   const bool gmm = r.gmm && !e.gmm_parameters.empty();
   std::ostringstream out;
   out << "{\n  \"model\": " << json_string(r.model->name())
-      << ",\n  \"data\": " << json_string(r.data_path)
+      << ",\n  \"data\": " << json_string(r.data_name)
       << ",\n  \"parameters\": " << parameters(gmm ? e.gmm_parameters : e.parameters);
   if (gmm) out << ",\n  \"least_squares\": " << parameters(e.parameters);
-  if (r.moments != nullptr) {
-    out << ",\n  \"moments\": {";
-    for (std::size_t k = 0; k < r.moments->size(); ++k) {
-      out << (k ? ", " : "") << json_string(format_moment(*r.model, (*r.moments)[k])) << ": "
-          << json_number(d.estimates.mean[k]);
-    }
-    out << "}";
+  out << ",\n  \"moments\": {";
+  for (std::size_t k = 0; k < r.moments.size(); ++k) {
+    out << (k ? ", " : "") << json_string(format_moment(*r.model, r.moments[k])) << ": "
+        << json_number(d.estimates.mean[k]);
   }
+  out << "}";
   out << ",\n  \"diagnostics\": {\n    \"status\": "
       << json_string(e.status == Estimate::Status::kOk              ? "ok"
                      : e.status == Estimate::Status::kRankDeficient ? "rank-deficient"
@@ -140,9 +194,9 @@ std::string format_report_json(const IdentifyReport& r) {
         << "}";
   }
   out << "],\n    \"warnings\": [";
-  const std::vector<std::string> warnings = all_warnings(r);
-  for (std::size_t i = 0; i < warnings.size(); ++i) {
-    out << (i ? ", " : "") << json_string(warnings[i]);
+  const std::vector<std::string> all = warnings(r);
+  for (std::size_t i = 0; i < all.size(); ++i) {
+    out << (i ? ", " : "") << json_string(all[i]);
   }
   out << "]\n  }\n}\n";
   return out.str();

@@ -1,0 +1,48 @@
+#pragma once
+
+#include <cstddef>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "momentid/accumulator.hpp"
+#include "momentid/data_pass.hpp"
+#include "momentid/estimate.hpp"
+#include "momentid/model.hpp"
+#include "momentid/reader.hpp"
+
+namespace momentid {
+
+// How to check data (README, "momentid check").
+struct CheckOptions {
+  std::size_t lags = 9;                        // autocorrelations per channel, 1..kMaxLags
+  std::optional<InputHold> hold;               // as IdentifyOptions::hold
+  std::map<std::string, std::string> columns;  // model variable -> data column
+  static constexpr std::size_t kMaxLags = 1000;
+
+  // Throws UsageError for a number of lags out of range.
+  void validate() const;
+};
+
+// Whether a record suits the moment method: each channel's statistics and autocorrelations,
+// warnings about smoothness, and with a model the sample violations of its stationarity
+// identities.
+struct CheckResult {
+  std::string data_name;
+  std::size_t lags = 0;
+  DataMoments data;
+  bool with_model = false;
+  std::vector<std::string> missing_inputs;  // model inputs the data lack: states checked only
+  std::vector<IdentityCheck> identities;    // with a model
+  std::vector<std::string> warnings;
+};
+
+// Reads `source` once. Without a model every column but `t` and `run` is a channel; with one,
+// its states and the inputs the data have. Throws as identify() does.
+CheckResult check(const DataSource& source, const Model* model, const CheckOptions& options = {});
+
+// The report `momentid check` prints.
+std::string format_text(const CheckResult& result);
+
+}  // namespace momentid

@@ -1,0 +1,81 @@
+#pragma once
+
+#include <cstddef>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "momentid/accumulator.hpp"
+#include "momentid/data_pass.hpp"
+#include "momentid/derive.hpp"
+#include "momentid/estimate.hpp"
+#include "momentid/model.hpp"
+#include "momentid/reader.hpp"
+
+namespace momentid {
+
+// How to identify (README, "momentid identify"). The defaults are the command line's.
+struct IdentifyOptions {
+  // Multipliers for every equation; else all monomials up to `degree` (when > 0); else the
+  // model's own or the automatic choice (see DeriveOptions).
+  std::optional<std::vector<Monomial>> multipliers;
+  int degree = 0;
+  // How the inputs were sampled; nullopt: the data's `input-hold` metadata, else kSample.
+  std::optional<InputHold> hold;
+  // Contiguous batches for the standard errors, kMinBatches..kMaxBatches.
+  std::size_t batches = 50;
+  // Two-step optimally weighted estimate (GMM) with the J test, besides least squares.
+  bool gmm = false;
+  // Model variable -> data column, for data whose columns have other names.
+  std::map<std::string, std::string> columns;
+  // Pair input row n with state row n + input_shift, within kMaxInputShift either way.
+  long input_shift = 0;
+
+  static constexpr std::size_t kMinBatches = 2, kMaxBatches = 10000;
+  static constexpr int kMaxDegree = 12;
+  static constexpr long kMaxInputShift = 1000;
+
+  // Throws UsageError naming the first option that is out of range or that names a variable
+  // `model` does not have.
+  void validate(const Model& model) const;
+};
+
+// What an identification yields: the moment equations, the moments estimated from the data, and
+// the estimate with its diagnostics. The result owns everything it holds, a copy of the model
+// included, so it stays valid after the model and the source are gone.
+struct IdentifyResult {
+  std::shared_ptr<const Model> model;
+  MomentSystem system;  // refers to *model
+  std::string data_name;
+  std::vector<Monomial> moments;  // estimated, in the order of data.estimates
+  DataMoments data;
+  Estimate estimate;
+  bool gmm = false;  // the optimally weighted estimate is the main result
+
+  // The main result: the optimally weighted estimate when it was asked for and could be
+  // computed, otherwise least squares.
+  const std::vector<ParameterEstimate>& parameters() const;
+};
+
+// Derives the moment equations of `model`, estimates the moments they need from `source` in one
+// pass, and solves for the parameters. Throws UsageError for invalid options, ModelError,
+// DataError or Error for a model or data that cannot be used. Poor or impossible answers are
+// results: see Estimate::status.
+//
+// Example:
+//   Model model = parse_model_file("models/duffing.mom");
+//   IdentifyResult r = identify(model, DataSource::file("duffing.csv"), {.degree = 3});
+//   std::cout << format_text(r);
+IdentifyResult identify(const Model& model, const DataSource& source,
+                        const IdentifyOptions& options = {});
+
+// A table (parameter, estimate, standard error, 95% interval), then the diagnostics.
+std::string format_text(const IdentifyResult& result);
+// The JSON layout documented in the README ("momentid identify").
+std::string format_json(const IdentifyResult& result);
+// Every warning about the result: its status, the solver's, and the data's smoothness.
+std::vector<std::string> warnings(const IdentifyResult& result);
+
+}  // namespace momentid

@@ -1,0 +1,124 @@
+#include "momentid/check.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include "momentid/derive.hpp"
+
+namespace momentid {
+
+void CheckOptions::validate() const {
+  if (lags < 1 || lags > kMaxLags) {
+    throw UsageError("lags: expected a number from 1 to " + std::to_string(kMaxLags) + ", found " +
+                     std::to_string(lags));
+  }
+}
+
+CheckResult check(const DataSource& source, const Model* model, const CheckOptions& options) {
+  options.validate();
+  CheckResult result;
+  result.data_name = source.name();
+  result.lags = options.lags;
+  result.with_model = model != nullptr;
+  std::vector<std::string> states, inputs;
+  const std::vector<std::string> columns =
+      source.open({.names = {}, .rename = {}, .min_rows = 0})->columns();
+  if (model != nullptr) {
+    for (const auto& d : model->states()) states.push_back(d.name);
+    // The statistics of the states and most identities need no input: inputs missing from the
+    // data are left out rather than refused.
+    for (const auto& d : model->inputs()) {
+      const auto it = options.columns.find(d.name);
+      const std::string column = it == options.columns.end() ? d.name : it->second;
+      if (std::find(columns.begin(), columns.end(), column) == columns.end()) {
+        result.missing_inputs.push_back(d.name);
+      } else {
+        inputs.push_back(d.name);
+      }
+    }
+  } else {
+    for (const std::string& c : columns) {
+      if (!c.empty() && c != "t" && c != "run") states.push_back(c);
+    }
+  }
+  std::optional<MomentSystem> system;
+  std::vector<Monomial> moments;
+  std::vector<Monomial> full_moments;  // over all the model's variables
+  if (model != nullptr) {
+    system = derive(*model);
+    if (!result.missing_inputs.empty()) inputs.clear();  // then the channels are the states only
+    for (const Monomial& m : moments_to_estimate(*system)) {
+      const auto first_input = m.begin() + static_cast<std::ptrdiff_t>(states.size());
+      if (inputs.empty() && std::any_of(first_input, m.end(), [](int e) { return e != 0; })) {
+        continue;
+      }
+      full_moments.push_back(m);
+      moments.emplace_back(m.begin(), inputs.empty() ? first_input : m.end());
+    }
+  }
+  DataOptions data_options;
+  data_options.lags = options.lags;
+  data_options.hold = options.hold;
+  data_options.rename = options.columns;
+  result.data = moments_from_data(source, states, inputs, moments, data_options);
+  if (system) result.identities = check_identities(*system, full_moments, result.data.estimates);
+  result.warnings = smoothness_warnings(result.data);
+  return result;
+}
+
+std::string format_text(const CheckResult& r) {
+  const DataMoments& data = r.data;
+  const int width = static_cast<int>(6 * r.lags);
+  std::string out;
+  char line[512];
+  const auto print = [&](const char* format, auto... values) {
+    std::snprintf(line, sizeof line, format, values...);
+    out += line;
+  };
+  out += "data " + r.data_name + ": ";
+  print("%zu rows in %zu %s", data.rows, data.runs, data.runs == 1 ? "run" : "runs");
+  if (data.time_step) print(", dt = %g", *data.time_step);
+  print("\n\n%-10s %12s %12s  %-*s %s\n", "channel", "mean", "variance", width,
+        "autocorrelation at lags 1, 2, ...", "corr. time");
+  for (const ChannelStatistics& c : data.channels) {
+    std::string lags;
+    for (double rho : c.autocorrelation) {
+      char text[16];
+      std::snprintf(text, sizeof text, "%5.2f ", rho);
+      lags += text;
+    }
+    const std::string time = c.correlation_time > r.lags ? "> " + std::to_string(r.lags)
+                                                         : std::to_string(c.correlation_time);
+    out += c.name.size() < 10 ? c.name + std::string(10 - c.name.size(), ' ') : c.name;
+    print(" %12.5g %12.5g  ", c.mean, c.variance);
+    out += lags.size() < static_cast<std::size_t>(width)
+               ? lags + std::string(static_cast<std::size_t>(width) - lags.size(), ' ')
+               : lags;
+    out += " " + time + "\n";
+  }
+  out += "\n";
+  for (const ChannelStatistics& c : data.channels) {
+    if (!c.is_input || c.autocorrelation.empty()) continue;
+    if (c.autocorrelation[0] >= 0.5) {
+      out += "input " + c.name + " is smooth enough for the moment method ";
+      print("(lag-1 autocorrelation %.3f)\n", c.autocorrelation[0]);
+    }
+  }
+  if (r.with_model) {
+    for (const std::string& name : r.missing_inputs) {
+      out += "input " + name + " is not in the file: only the states are checked\n";
+    }
+    out += r.identities.empty() ? "stationarity identities: none to check\n"
+                                : "stationarity identities (sample violation, z-score):\n";
+    for (const IdentityCheck& c : r.identities) {
+      out += "  " + c.identity + ": ";
+      print("%.3g (z = %.2f)%s\n", c.violation, c.z,
+            std::abs(c.z) > 4 ? "  <- violated: not stationary, or not this model" : "");
+    }
+  }
+  for (const std::string& w : r.warnings) out += "warning: " + w + "\n";
+  return out;
+}
+
+}  // namespace momentid

@@ -1,0 +1,34 @@
+#pragma once
+// The subcommands of the momentid command line, one file each: each adds its options to the
+// application and returns the function that runs it once the command line is parsed. Running
+// returns the exit status (0 success, 3 nothing identifiable); errors are thrown.
+
+#include <CLI/CLI.hpp>
+#include <functional>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "momentid/accumulator.hpp"
+
+namespace momentid::cli {
+
+inline constexpr int kNothingIdentifiable = 3;
+
+struct Command {
+  CLI::App* app = nullptr;
+  std::function<int()> run;
+};
+
+Command add_derive(CLI::App& app);
+Command add_simulate(CLI::App& app);
+Command add_identify(CLI::App& app);
+Command add_check(CLI::App& app);
+
+// `--columns v=velocity,x=force`: the model's names mapped to the data's columns.
+std::map<std::string, std::string> column_map(const std::vector<std::string>& entries);
+// `--input-hold`: nullopt when not given.
+std::optional<InputHold> hold_option(const std::string& text);
+
+}  // namespace momentid::cli

@@ -1,0 +1,74 @@
+// momentid identify MODEL DATA [options]
+
+#include "momentid/identify.hpp"
+
+#include <iostream>
+#include <memory>
+
+#include "cli/commands.hpp"
+#include "momentid/model.hpp"
+
+namespace momentid::cli {
+namespace {
+
+struct IdentifyCommand {
+  std::string model;
+  std::string data;
+  std::optional<std::string> multipliers;
+  IdentifyOptions options;
+  std::string hold;
+  std::string weighting = "ls";
+  std::string format = "text";
+  std::vector<std::string> columns;
+};
+
+int run_identify(IdentifyCommand& command) {
+  const Model model = parse_model_file(command.model);
+  IdentifyOptions& options = command.options;
+  if (command.multipliers) {
+    options.multipliers = parse_multiplier_list(model, *command.multipliers, "--multipliers");
+  }
+  options.hold = hold_option(command.hold);
+  options.gmm = command.weighting == "gmm";
+  options.columns = column_map(command.columns);
+  const IdentifyResult result = identify(model, DataSource::file(command.data), options);
+  std::cout << (command.format == "json" ? format_json(result) : format_text(result));
+  if (result.estimate.status == Estimate::Status::kNothingIdentifiable) {
+    std::cerr << "momentid: nothing identifiable: " << result.estimate.message << "\n";
+    return kNothingIdentifiable;
+  }
+  return 0;
+}
+
+}  // namespace
+
+Command add_identify(CLI::App& app) {
+  auto command = std::make_shared<IdentifyCommand>();
+  IdentifyOptions& options = command->options;
+  CLI::App* sub = app.add_subcommand(
+      "identify", "estimate the parameters of a model from data, with standard errors");
+  sub->add_option("MODEL", command->model, "model file")->required();
+  sub->add_option("DATA", command->data, "data file (CSV or binary)")->required();
+  auto* multipliers =
+      sub->add_option("--multipliers", command->multipliers, "multipliers, as for derive");
+  sub->add_option("--degree", options.degree, "multipliers up to this degree")
+      ->check(CLI::Range(1, IdentifyOptions::kMaxDegree))
+      ->excludes(multipliers);
+  sub->add_option("--input-hold", command->hold,
+                  "how the inputs were sampled (default: the file's metadata, else sample)")
+      ->check(CLI::IsMember({"sample", "zoh"}));
+  sub->add_option("--batches", options.batches, "batches for the standard errors")
+      ->check(CLI::Range(IdentifyOptions::kMinBatches, IdentifyOptions::kMaxBatches));
+  sub->add_option("--weighting", command->weighting, "ls, or gmm for two-step optimal")
+      ->check(CLI::IsMember({"ls", "gmm"}));
+  sub->add_option("--format", command->format, "output format")
+      ->check(CLI::IsMember({"text", "json"}));
+  sub->add_option("--columns", command->columns, "NAME=COLUMN: where a model variable is")
+      ->delimiter(',');
+  sub->add_option("--input-shift", options.input_shift,
+                  "pair input row n with state row n + k (delayed measurements)")
+      ->check(CLI::Range(-IdentifyOptions::kMaxInputShift, IdentifyOptions::kMaxInputShift));
+  return {sub, [command] { return run_identify(*command); }};
+}
+
+}  // namespace momentid::cli

@@ -1,0 +1,107 @@
+// momentid simulate MODEL [options] [-o FILE]
+
+#include "momentid/simulate.hpp"
+
+#include <cmath>
+#include <memory>
+
+#include "cli/commands.hpp"
+#include "momentid/model.hpp"
+
+namespace momentid::cli {
+namespace {
+
+struct SimulateCommand {
+  std::string model;
+  std::vector<std::string> set;
+  std::vector<std::string> inputs;
+  SimulationOptions options;
+  std::string format = "csv";
+  std::string output = "-";
+};
+
+// One spec per model input: `name=SPEC` entries, or a single SPEC when the model has one input.
+std::vector<InputSpec> input_specs(const Model& model, const std::vector<std::string>& given) {
+  const auto& inputs = model.inputs();
+  std::vector<InputSpec> specs(inputs.size());
+  std::vector<bool> seen(inputs.size(), false);
+  for (const std::string& text : given) {
+    std::size_t index = inputs.size();
+    std::string spec = text;
+    const std::size_t eq = text.find('=');
+    for (std::size_t i = 0; i < inputs.size() && eq != std::string::npos; ++i) {
+      if (text.compare(0, eq, inputs[i].name) == 0 && eq == inputs[i].name.size()) {
+        index = i;
+        spec = text.substr(eq + 1);
+      }
+    }
+    if (index == inputs.size()) {
+      if (inputs.size() != 1) {
+        throw UsageError("--input: with several inputs write NAME=SPEC, found '" + text + "'");
+      }
+      index = 0;
+    }
+    if (seen[index]) {
+      throw UsageError("--input: input '" + inputs[index].name + "' is given twice");
+    }
+    seen[index] = true;
+    specs[index] = InputSpec::parse(spec, "--input " + inputs[index].name);
+  }
+  return specs;
+}
+
+int run_simulate(SimulateCommand& command) {
+  const Model model = parse_model_file(command.model);
+  command.options.parameters = parameter_values(model, command.set);
+  command.options.inputs = input_specs(model, command.inputs);
+  simulate_to_file(
+      model, command.options, command.output,
+      command.format == "bin" ? DataWriter::Format::kBinary : DataWriter::Format::kCsv);
+  return 0;
+}
+
+}  // namespace
+
+Command add_simulate(CLI::App& app) {
+  auto command = std::make_shared<SimulateCommand>();
+  SimulationOptions& options = command->options;
+  CLI::App* sub = app.add_subcommand(
+      "simulate", "simulate a model driven by random inputs and write the samples (CSV or binary)");
+  sub->add_option("MODEL", command->model, "model file")->required();
+  sub->add_option("--set", command->set,
+                  "parameter values NAME=VALUE, overriding the model's nominal values")
+      ->delimiter(',');
+  sub->add_option(
+      "--input", command->inputs,
+      "input process [NAME=]SPEC: ma:K=10,w=0.1 | ma:weights=[..] | ou:tau=T | white, with "
+      "sigma= and mean= (default ma:K=10,w=0.1)");
+  sub->add_option("--dt", options.dt, "integration and sampling step")
+      ->check(CLI::Validator(
+          [](const std::string& text) {
+            double dt = 0;
+            try {
+              dt = std::stod(text);
+            } catch (const std::exception&) {
+              dt = 0;
+            }
+            return std::isfinite(dt) && dt >= SimulationOptions::kMinStep &&
+                           dt <= SimulationOptions::kMaxStep
+                       ? std::string()
+                       : "expected a number from 1e-9 to 1e6, found '" + text + "'";
+          },
+          "1e-9 to 1e6"));
+  sub->add_option("--samples", options.samples, "samples per run")
+      ->check(CLI::Range(std::size_t{1}, std::size_t{1} << 40));
+  sub->add_option("--burn-in", options.burn_in, "steps discarded before each run");
+  sub->add_option("--runs", options.runs, "number of runs")
+      ->check(CLI::Range(std::size_t{1}, std::size_t{1} << 30));
+  sub->add_flag("--continue", options.continue_runs,
+                "start each run from the previous run's last state");
+  sub->add_option("--seed", options.seed, "random seed");
+  sub->add_option("--format", command->format, "output format")
+      ->check(CLI::IsMember({"csv", "bin"}));
+  sub->add_option("-o,--output", command->output, "output file, - for standard output");
+  return {sub, [command] { return run_simulate(*command); }};
+}
+
+}  // namespace momentid::cli
