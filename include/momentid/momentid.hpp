@@ -1,0 +1,20 @@
+#pragma once
+// Everything momentid offers, in one header: the model language, the moment equations, data
+// sources and files, the moment accumulator, the solver, the simulator, and the identify and
+// check calls that put them together.
+
+#include "momentid/accumulator.hpp"
+#include "momentid/check.hpp"
+#include "momentid/data_pass.hpp"
+#include "momentid/derive.hpp"
+#include "momentid/error.hpp"
+#include "momentid/estimate.hpp"
+#include "momentid/identify.hpp"
+#include "momentid/input.hpp"
+#include "momentid/metadata.hpp"
+#include "momentid/model.hpp"
+#include "momentid/random.hpp"
+#include "momentid/reader.hpp"
+#include "momentid/simulate.hpp"
+#include "momentid/version.hpp"
+#include "momentid/writer.hpp"
