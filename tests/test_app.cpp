@@ -1,0 +1,193 @@
+// The application layer: identify() and check() over files and columns in memory, options that
+// validate themselves, and results that own what they hold.
+
+#include <doctest/doctest.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "momentid/check.hpp"
+#include "momentid/identify.hpp"
+#include "momentid/simulate.hpp"
+#include "test_support.hpp"
+
+namespace {
+
+using momentid::testing::error_from;
+using momentid::testing::model_file;
+
+// A simulated Duffing record in a CSV file, removed at the end of the test.
+struct DuffingFile {
+  momentid::Model model = model_file("duffing.mom");
+  std::filesystem::path path = std::filesystem::temp_directory_path() /
+                               ("momentid_test_app_" + std::to_string(::getpid()) + ".csv");
+  explicit DuffingFile(std::size_t samples, std::size_t runs = 1) {
+    momentid::SimulationOptions options;
+    options.parameters = momentid::parameter_values(model, {});
+    options.inputs = {momentid::InputSpec::parse("ma:K=10,w=0.1,sigma=20", "test")};
+    options.samples = samples;
+    options.runs = runs;
+    momentid::simulate_to_file(model, options, path.string(), momentid::DataWriter::Format::kCsv);
+  }
+  ~DuffingFile() { std::filesystem::remove(path); }
+};
+
+// The columns of a CSV file without metadata lines, read back whole.
+std::vector<std::vector<double>> read_columns(const std::string& path,
+                                              const std::vector<std::string>& names) {
+  auto reader = momentid::DataReader::open(path, {.names = names});
+  std::vector<std::vector<double>> columns(names.size());
+  momentid::DataBlock block;
+  while (reader->next(block, 4096)) {
+    for (std::size_t r = 0; r < block.rows; ++r) {
+      for (std::size_t c = 0; c < names.size(); ++c) {
+        columns[c].push_back(block.values[r * names.size() + c]);
+      }
+    }
+  }
+  return columns;
+}
+
+}  // namespace
+
+TEST_SUITE("app") {
+  TEST_CASE("identify gives the same numbers from columns in memory as from the file") {
+    const DuffingFile file(20000, 2);
+    const std::vector<std::string> names{"t", "y", "v", "x", "run"};
+    const auto columns = read_columns(file.path.string(), names);
+    momentid::MemoryData data;
+    data.rows = columns[0].size();
+    for (std::size_t c = 0; c < names.size(); ++c) {
+      data.columns.push_back({names[c], columns[c].data()});
+    }
+    data.metadata.add_line({{"input-hold", "zoh"}});
+    const momentid::IdentifyOptions options{.degree = 3, .batches = 20, .gmm = true};
+    const auto from_file =
+        momentid::identify(file.model, momentid::DataSource::file(file.path.string()), options);
+    const auto from_memory =
+        momentid::identify(file.model, momentid::DataSource::memory(std::move(data)), options);
+    CHECK(from_memory.data.rows == 40000);
+    CHECK(from_memory.data.runs == 2);
+    REQUIRE(from_file.estimate.status == momentid::Estimate::Status::kOk);
+    // The same values through the same accumulation: equal to the last bit.
+    for (std::size_t p = 0; p < 3; ++p) {
+      CHECK(from_memory.parameters()[p].estimate == from_file.parameters()[p].estimate);
+      CHECK(from_memory.parameters()[p].std_error == from_file.parameters()[p].std_error);
+    }
+    CHECK(from_memory.data.time_step == from_file.data.time_step);
+  }
+
+  TEST_CASE("columns of a row-major matrix are read in place through their stride") {
+    const DuffingFile file(5000);
+    const auto columns = read_columns(file.path.string(), {"y", "v", "x"});
+    std::vector<double> matrix;
+    for (std::size_t r = 0; r < columns[0].size(); ++r) {
+      for (const auto& column : columns) matrix.push_back(column[r]);
+    }
+    momentid::MemoryData data;
+    data.rows = columns[0].size();
+    data.columns = {
+        {"y", matrix.data(), 3}, {"v", matrix.data() + 1, 3}, {"x", matrix.data() + 2, 3}};
+    data.metadata.add_line({{"dt", "0.01"}, {"input-hold", "zoh"}});
+    const auto strided = momentid::identify(file.model, momentid::DataSource::memory(data));
+    const auto from_file =
+        momentid::identify(file.model, momentid::DataSource::file(file.path.string()));
+    for (std::size_t p = 0; p < 3; ++p) {
+      CHECK(strided.parameters()[p].estimate == from_file.parameters()[p].estimate);
+    }
+    CHECK(strided.data.time_step == 0.01);
+  }
+
+  TEST_CASE("a value that is not finite in memory is located at its row and column") {
+    const std::vector<double> y{1, 2, std::numeric_limits<double>::quiet_NaN(), 4};
+    const std::vector<double> x{0, 1, 0, 1};
+    momentid::MemoryData data;
+    data.rows = 4;
+    data.name = "arrays";
+    data.columns = {{"x", x.data()}, {"y", y.data()}};
+    const momentid::Model model = model_file("kozin_4_1a.mom");
+    const auto e = error_from<momentid::DataError>(
+        [&] { momentid::identify(model, momentid::DataSource::memory(data), {.batches = 2}); });
+    CHECK(std::string(e.what()) == "arrays:3:2: column 'y': expected a finite number, found 'nan'");
+  }
+
+  TEST_CASE("a metadata dt in memory that is not a positive number is refused") {
+    const std::vector<double> y{1, 2, 3, 4};
+    momentid::MemoryData data;
+    data.rows = 4;
+    data.columns = {{"y", y.data()}, {"x", y.data()}};
+    data.metadata.add_line({{"dt", "-1"}});
+    const auto e = error_from<momentid::DataError>([&] {
+      momentid::identify(model_file("kozin_4_1a.mom"), momentid::DataSource::memory(data),
+                         {.batches = 2});
+    });
+    CHECK(std::string(e.what()) ==
+          "<memory>:0:0: metadata dt: expected a positive number, found '-1'");
+  }
+
+  TEST_CASE("options out of range are refused by the library, naming the option") {
+    const momentid::Model model = model_file("duffing.mom");
+    const auto source = momentid::DataSource::file("unused.csv");
+    CHECK(std::string(error_from<momentid::UsageError>([&] {
+                        momentid::identify(model, source, {.batches = 0});
+                      }).what()) == "batches: expected a number from 2 to 10000, found 0");
+    CHECK(std::string(error_from<momentid::UsageError>([&] {
+                        momentid::identify(model, source, {.degree = 13});
+                      }).what()) ==
+          "degree: expected 0 (automatic) or a number from 1 to 12, found 13");
+    CHECK(std::string(error_from<momentid::UsageError>([&] {
+                        momentid::identify(model, source, {.input_shift = 1001});
+                      }).what()) ==
+          "input shift: expected a number from -1000 to 1000, found 1001");
+    CHECK(std::string(error_from<momentid::UsageError>([&] {
+                        momentid::identify(model, source, {.columns = {{"w", "y"}}});
+                      }).what()) == "--columns: 'w' is not a state or input of model duffing");
+    CHECK(std::string(error_from<momentid::UsageError>([&] {
+                        momentid::check(source, &model, {.lags = 0});
+                      }).what()) == "lags: expected a number from 1 to 1000, found 0");
+
+    momentid::SimulationOptions simulation;
+    simulation.parameters = momentid::parameter_values(model, {});
+    simulation.inputs.resize(1);
+    simulation.dt = 0;
+    CHECK(std::string(error_from<momentid::UsageError>([&] {
+                        momentid::simulate_to_file(model, simulation, "unused.csv",
+                                                   momentid::DataWriter::Format::kCsv);
+                      }).what()) == "simulate: dt must be a number from 1e-9 to 1e6, found 0");
+    CHECK_FALSE(std::filesystem::exists("unused.csv"));
+    simulation.dt = 0.01;
+    simulation.inputs.clear();
+    CHECK(std::string(error_from<momentid::UsageError>([&] {
+                        momentid::simulate_to_file(model, simulation, "unused.csv",
+                                                   momentid::DataWriter::Format::kCsv);
+                      }).what()) == "simulate: model duffing needs 1 input processes, found 0");
+  }
+
+  TEST_CASE("a result stays valid after the model it was computed from is gone") {
+    const DuffingFile file(5000);
+    std::optional<momentid::IdentifyResult> result;
+    {
+      const momentid::Model copy = file.model;
+      result = momentid::identify(copy, momentid::DataSource::file(file.path.string()));
+    }
+    CHECK(result->system.model == result->model.get());
+    CHECK(momentid::format_text(*result).starts_with("model duffing, data "));
+    CHECK(momentid::format_json(*result).find("\"E[y^2]\"") != std::string::npos);
+  }
+
+  TEST_CASE("check without a model takes every column but t and run as a channel") {
+    const DuffingFile file(2000, 2);
+    const momentid::CheckResult r =
+        momentid::check(momentid::DataSource::file(file.path.string()), nullptr, {.lags = 3});
+    REQUIRE(r.data.channels.size() == 3);
+    CHECK(r.data.channels[0].name == "y");
+    CHECK(r.data.channels[2].name == "x");
+    CHECK(r.data.runs == 2);
+    CHECK(r.data.channels[0].autocorrelation.size() == 3);
+    CHECK(r.identities.empty());
+  }
+}
