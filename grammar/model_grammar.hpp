@@ -8,12 +8,11 @@
 namespace momentid::grammar {
 
 namespace pegtl = tao::pegtl;
-using pegtl::alnum;
-using pegtl::alpha;
 using pegtl::blank;
 using pegtl::digit;
 using pegtl::eof;
 using pegtl::eol;
+using pegtl::identifier;
 using pegtl::list;
 using pegtl::must;
 using pegtl::not_at;
@@ -41,28 +40,23 @@ struct line_end : seq<sp, opt<comment>, sor<eol, eof>> {};
 // --- Words ----------------------------------------------------------------------------------
 
 // a letter or underscore, then letters, digits and underscores
-struct name : seq<sor<alpha, one<'_'>>, star<sor<alnum, one<'_'>>>> {};
-// a keyword: the word itself, not the start of a longer name
-template <char... Cs>
-struct keyword : seq<string<Cs...>, not_at<sor<alnum, one<'_'>>>> {};
+struct name : identifier {};
 
-struct kw_model : keyword<'m', 'o', 'd', 'e', 'l'> {};
+// A keyword (PEGTL's `keyword`) matches the word itself, not the start of a longer name.
+struct kw_model : TAO_PEGTL_KEYWORD("model") {};
 // `state` or `states`
-struct kw_state : sor<keyword<'s', 't', 'a', 't', 'e', 's'>, keyword<'s', 't', 'a', 't', 'e'>> {};
+struct kw_state : sor<TAO_PEGTL_KEYWORD("states"), TAO_PEGTL_KEYWORD("state")> {};
 // `input` or `inputs`
-struct kw_input : sor<keyword<'i', 'n', 'p', 'u', 't', 's'>, keyword<'i', 'n', 'p', 'u', 't'>> {};
+struct kw_input : sor<TAO_PEGTL_KEYWORD("inputs"), TAO_PEGTL_KEYWORD("input")> {};
 // `param`, `params`, `parameter` or `parameters`
-struct kw_param : sor<keyword<'p', 'a', 'r', 'a', 'm', 'e', 't', 'e', 'r', 's'>,
-                      keyword<'p', 'a', 'r', 'a', 'm', 'e', 't', 'e', 'r'>,
-                      keyword<'p', 'a', 'r', 'a', 'm', 's'>, keyword<'p', 'a', 'r', 'a', 'm'>> {};
+struct kw_param : sor<TAO_PEGTL_KEYWORD("parameters"), TAO_PEGTL_KEYWORD("parameter"),
+                      TAO_PEGTL_KEYWORD("params"), TAO_PEGTL_KEYWORD("param")> {};
 // `const`, `consts`, `constant` or `constants`
-struct kw_const : sor<keyword<'c', 'o', 'n', 's', 't', 'a', 'n', 't', 's'>,
-                      keyword<'c', 'o', 'n', 's', 't', 'a', 'n', 't'>,
-                      keyword<'c', 'o', 'n', 's', 't', 's'>, keyword<'c', 'o', 'n', 's', 't'>> {};
+struct kw_const : sor<TAO_PEGTL_KEYWORD("constants"), TAO_PEGTL_KEYWORD("constant"),
+                      TAO_PEGTL_KEYWORD("consts"), TAO_PEGTL_KEYWORD("const")> {};
 // `multipliers` or `multiplier`
-struct kw_multipliers : sor<keyword<'m', 'u', 'l', 't', 'i', 'p', 'l', 'i', 'e', 'r', 's'>,
-                            keyword<'m', 'u', 'l', 't', 'i', 'p', 'l', 'i', 'e', 'r'>> {};
-struct kw_dot : keyword<'d', 'o', 't'> {};
+struct kw_multipliers : sor<TAO_PEGTL_KEYWORD("multipliers"), TAO_PEGTL_KEYWORD("multiplier")> {};
+struct kw_dot : TAO_PEGTL_KEYWORD("dot") {};
 
 // --- Numbers and strings --------------------------------------------------------------------
 

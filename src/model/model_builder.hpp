@@ -1,0 +1,44 @@
+#pragma once
+// Reads the statements of a parsed model file into a Model.
+
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "model/checks.hpp"
+#include "model/symbols.hpp"
+#include "model/syntax.hpp"
+#include "model/terms.hpp"
+#include "momentid/model.hpp"
+
+namespace momentid {
+
+// Builds a Model from the parse tree of a model file. It reads the statements in the order that
+// decides which problem is reported first: the `model` statement and the declarations in file
+// order, then the equations, then the `multipliers` statements, then the model as a whole.
+// Model befriends it: it is the one place that fills a Model in.
+class ModelBuilder {
+ public:
+  // `text` is what the tree was parsed from and must outlive the builder; `file` names it.
+  ModelBuilder(std::string_view text, std::string file);
+
+  // `statements` are the top-level nodes of the tree, in file order.
+  Model build(const std::vector<SyntaxNode>& statements);
+
+ private:
+  // Reads the `model` statement and the declarations, and sets the equations and `multipliers`
+  // statements aside until every name is declared.
+  void collect(const std::vector<SyntaxNode>& statements);
+  void add_equation(const SyntaxNode& n);
+  void add_multipliers(const SyntaxNode& n);
+
+  Source source_;
+  SymbolTable symbols_;
+  TermBuilder terms_;
+  EquationLabels labels_;
+  Model model_;
+  const SyntaxNode* model_statement_ = nullptr;
+  std::vector<const SyntaxNode*> equation_nodes_, multiplier_nodes_;
+};
+
+}  // namespace momentid

@@ -1,0 +1,181 @@
+#include "model/symbols.hpp"
+
+#include <set>
+
+namespace momentid {
+
+std::string kind_with_article(SymbolKind kind) {
+  return kind == SymbolKind::kInput ? std::string("an input") : "a " + std::string(kind_name(kind));
+}
+
+SymbolTable::SymbolTable(const Source& source, const Model& model)
+    : source_(source),
+      states_(model.states()),
+      inputs_(model.inputs()),
+      parameters_(model.parameters()),
+      constants_(model.constants()),
+      variables_(model.variables()) {
+  for (std::size_t i = 0; i < states_.size(); ++i) {
+    state_symbols_.push_back(model.state_symbol(static_cast<int>(i)));
+    derivative_symbols_.push_back(model.derivative_symbol(static_cast<int>(i)));
+  }
+  for (std::size_t i = 0; i < inputs_.size(); ++i) {
+    input_symbols_.push_back(model.input_symbol(static_cast<int>(i)));
+  }
+  for (std::size_t i = 0; i < parameters_.size(); ++i) {
+    parameter_symbols_.push_back(model.parameter_symbol(static_cast<int>(i)));
+  }
+  index_symbols();
+}
+
+void SymbolTable::declare_all(const SyntaxNode& statement, SymbolKind kind) {
+  for (const SyntaxNode& child : statement.children) {
+    const SyntaxNode* name = &child;
+    const SyntaxNode* value = nullptr;
+    if (child.kind == SyntaxKind::kParamItem || child.kind == SyntaxKind::kConstItem) {
+      name = &child.children.at(0);
+      if (child.children.size() > 1) value = &child.children[1];
+    }
+    if (name->kind != SyntaxKind::kDeclaredName) continue;
+    declare(*name, value, kind);
+  }
+}
+
+void SymbolTable::declare(const SyntaxNode& name_node, const SyntaxNode* value_node,
+                          SymbolKind kind) {
+  const std::string name(name_node.text);
+  static const std::set<std::string> reserved{
+      "model",     "state",      "states",      "input", "inputs", "param",
+      "params",    "parameter",  "parameters",  "const", "consts", "constant",
+      "constants", "multiplier", "multipliers", "dot"};
+  if (reserved.count(name) != 0) {
+    source_.fail(name_node, "'" + name + "' is a reserved word and cannot be declared");
+  }
+  Declaration d{name, kind, std::nullopt, source_.where(name_node)};
+  if (auto [it, fresh] = first_declaration_.emplace(name, d); !fresh) {
+    const Declaration& first = it->second;
+    source_.fail(name_node,
+                 "'" + name + "' is already declared as " + kind_with_article(first.kind) + " at " +
+                     std::to_string(first.where.line) + ":" + std::to_string(first.where.column));
+  }
+  if (value_node != nullptr) {
+    GiNaC::numeric v = 0;
+    bool negative = false;
+    for (const SyntaxNode& part : value_node->children) {
+      if (part.kind == SyntaxKind::kMinusSign) negative = !negative;
+      if (part.kind == SyntaxKind::kNumber) v = source_.number(part);
+    }
+    d.value = negative ? -v : v;
+  }
+  std::vector<Declaration>* list = nullptr;
+  switch (kind) {
+    case SymbolKind::kState:
+      list = &states_;
+      break;
+    case SymbolKind::kInput:
+      list = &inputs_;
+      break;
+    case SymbolKind::kParameter:
+      list = &parameters_;
+      break;
+    case SymbolKind::kConstant:
+      list = &constants_;
+      break;
+  }
+  list->push_back(std::move(d));
+}
+
+void SymbolTable::make_symbols() {
+  for (const Declaration& s : states_) {
+    state_symbols_.emplace_back(s.name);
+    derivative_symbols_.emplace_back(s.name + "'");
+    variables_.push_back(s.name);
+  }
+  for (const Declaration& u : inputs_) {
+    input_symbols_.emplace_back(u.name);
+    variables_.push_back(u.name);
+  }
+  for (const Declaration& p : parameters_) parameter_symbols_.emplace_back(p.name);
+  index_symbols();
+}
+
+void SymbolTable::index_symbols() {
+  declared_.clear();
+  roles_.clear();
+  for (auto* l : {&states_, &inputs_, &parameters_, &constants_}) {
+    for (const Declaration& x : *l) declared_[x.name] = &x;
+  }
+  const int n = static_cast<int>(states_.size());
+  for (int i = 0; i < n; ++i) {
+    roles_.emplace(state_symbols_[i], SymbolRole{SymbolRole::kVariable, i});
+    roles_.emplace(derivative_symbols_[i], SymbolRole{SymbolRole::kDerivative, i});
+  }
+  for (std::size_t i = 0; i < inputs_.size(); ++i) {
+    roles_.emplace(input_symbols_[i], SymbolRole{SymbolRole::kVariable, n + static_cast<int>(i)});
+  }
+  for (std::size_t i = 0; i < parameters_.size(); ++i) {
+    roles_.emplace(parameter_symbols_[i], SymbolRole{SymbolRole::kParameter, static_cast<int>(i)});
+  }
+}
+
+// "declared: states y, v; inputs x; parameters c, k, eps; constants m"
+std::string SymbolTable::declared_list() const {
+  std::string out;
+  auto add = [&](const char* what, const std::vector<Declaration>& list) {
+    if (list.empty()) return;
+    if (!out.empty()) out += "; ";
+    out += what;
+    for (std::size_t i = 0; i < list.size(); ++i) out += (i ? ", " : " ") + list[i].name;
+  };
+  add("states", states_);
+  add("inputs", inputs_);
+  add("parameters", parameters_);
+  add("constants", constants_);
+  return out.empty() ? "nothing is declared" : "declared: " + out;
+}
+
+const Declaration* SymbolTable::find(const std::string& name) const {
+  auto it = declared_.find(name);
+  return it == declared_.end() ? nullptr : it->second;
+}
+
+const Declaration& SymbolTable::lookup(const SyntaxNode& at, const std::string& name) const {
+  const Declaration* d = find(name);
+  if (d == nullptr) source_.fail(at, "'" + name + "' is not declared (" + declared_list() + ")");
+  return *d;
+}
+
+int SymbolTable::index_of(const Declaration& d) const {
+  const std::vector<Declaration>& list = d.kind == SymbolKind::kState       ? states_
+                                         : d.kind == SymbolKind::kInput     ? inputs_
+                                         : d.kind == SymbolKind::kParameter ? parameters_
+                                                                            : constants_;
+  return static_cast<int>(&d - list.data());
+}
+
+GiNaC::ex SymbolTable::value(const SyntaxNode& at, const std::string& name) const {
+  const Declaration& d = lookup(at, name);
+  const int i = index_of(d);
+  switch (d.kind) {
+    case SymbolKind::kState:
+      return state_symbols_[i];
+    case SymbolKind::kInput:
+      return input_symbols_[i];
+    case SymbolKind::kParameter:
+      return parameter_symbols_[i];
+    case SymbolKind::kConstant:
+      return *d.value;
+  }
+  return 0;
+}
+
+GiNaC::ex SymbolTable::derivative(const SyntaxNode& at, const std::string& name) const {
+  const Declaration& d = lookup(at, name);
+  if (d.kind != SymbolKind::kState) {
+    source_.fail(at, "cannot take the time derivative of " + kind_with_article(d.kind) + " '" +
+                         name + "': only states have derivatives");
+  }
+  return derivative_symbols_[index_of(d)];
+}
+
+}  // namespace momentid

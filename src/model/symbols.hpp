@@ -1,0 +1,84 @@
+#pragma once
+// The names a model declares: the declarations themselves, their GiNaC symbols and looking a
+// name up in an expression.
+
+#include <ginac/ginac.h>
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include "model/syntax.hpp"
+#include "momentid/model.hpp"
+
+namespace momentid {
+
+// "a state", "an input", "a parameter" or "a constant", as a message names a declared name.
+std::string kind_with_article(SymbolKind kind);
+
+// What a GiNaC symbol of an equation stands for, so that an expanded term can be taken apart
+// into its parameter, variable and derivative factors.
+struct SymbolRole {
+  enum Kind { kParameter, kVariable, kDerivative } kind;
+  int index;  // into the parameters, the variables (states, then inputs) or the states
+};
+
+// The declarations of one model, in declaration order, and the GiNaC symbols its equations are
+// written in. Names are declared first (each once, none of them a reserved word), then
+// make_symbols() gives every state, derivative, input and parameter its symbol; only then can an
+// expression look names up.
+class SymbolTable {
+ public:
+  explicit SymbolTable(const Source& source) : source_(source) {}
+  // The names of an already built model, to read a `--multipliers` list against it.
+  SymbolTable(const Source& source, const Model& model);
+  // The lookup maps point into the table's own lists.
+  SymbolTable(const SymbolTable&) = delete;
+  SymbolTable& operator=(const SymbolTable&) = delete;
+
+  // Declares every name of a state, input, param or const statement.
+  void declare_all(const SyntaxNode& statement, SymbolKind kind);
+  // Once every name is declared: a name may be used before its declaration.
+  void make_symbols();
+
+  // The declaration of `name`, or nullptr.
+  const Declaration* find(const std::string& name) const;
+  // What `name`, used at `at`, stands for in an expression: its symbol, or a constant's value.
+  GiNaC::ex value(const SyntaxNode& at, const std::string& name) const;
+  // The symbol of the time derivative of state `name`, used at `at`.
+  GiNaC::ex derivative(const SyntaxNode& at, const std::string& name) const;
+  const SymbolRole& role(const GiNaC::ex& symbol) const { return roles_.at(symbol); }
+
+  const std::vector<Declaration>& states() const { return states_; }
+  const std::vector<Declaration>& inputs() const { return inputs_; }
+  const std::vector<Declaration>& parameters() const { return parameters_; }
+  const std::vector<Declaration>& constants() const { return constants_; }
+  const std::vector<std::string>& variables() const { return variables_; }
+  const std::vector<GiNaC::symbol>& state_symbols() const { return state_symbols_; }
+  const std::vector<GiNaC::symbol>& derivative_symbols() const { return derivative_symbols_; }
+  const std::vector<GiNaC::symbol>& input_symbols() const { return input_symbols_; }
+  const std::vector<GiNaC::symbol>& parameter_symbols() const { return parameter_symbols_; }
+
+ private:
+  // `value_node` is the `= value` part, or nullptr.
+  void declare(const SyntaxNode& name_node, const SyntaxNode* value_node, SymbolKind kind);
+  // Fills the lookup maps from the lists.
+  void index_symbols();
+  // Everything declared, by kind: what an error about an undeclared name offers instead.
+  std::string declared_list() const;
+  // The declaration of `name`; an undeclared name is an error at `at`.
+  const Declaration& lookup(const SyntaxNode& at, const std::string& name) const;
+  // The position of `d` in the list of its kind, which is also that of its symbol.
+  int index_of(const Declaration& d) const;
+
+  const Source& source_;
+  std::vector<Declaration> states_, inputs_, parameters_, constants_;
+  std::vector<std::string> variables_;
+  std::vector<GiNaC::symbol> state_symbols_, derivative_symbols_, input_symbols_,
+      parameter_symbols_;
+  std::map<std::string, const Declaration*> declared_;    // after all declarations are collected
+  std::map<std::string, Declaration> first_declaration_;  // while they are
+  std::map<GiNaC::ex, SymbolRole, GiNaC::ex_is_less> roles_;
+};
+
+}  // namespace momentid

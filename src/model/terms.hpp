@@ -1,0 +1,61 @@
+#pragma once
+// From parsed expressions to what the method works with: GiNaC expressions with constants
+// substituted, the terms of an equation, and multipliers as monomials.
+
+#include <ginac/ginac.h>
+
+#include <string>
+#include <vector>
+
+#include "model/symbols.hpp"
+#include "model/syntax.hpp"
+#include "momentid/model.hpp"
+
+namespace momentid {
+
+// Evaluates the expressions of equations and multipliers and refuses those the moment method
+// cannot use: anything that is not a polynomial, terms that are not affine in the parameters or
+// have more than one derivative factor, and degrees or numbers beyond the limits that keep a
+// model small enough to derive and simulate. Every refusal names the place in the source.
+class TermBuilder {
+ public:
+  TermBuilder(const Source& source, const SymbolTable& symbols)
+      : source_(source), symbols_(symbols) {}
+
+  // The two sides of equation `n` and the terms of lhs - rhs; the caller sets label and number.
+  Equation equation(const SyntaxNode& n) const;
+  // Adds multiplier `n`, a monomial in the states, to `out` unless it is there already.
+  void add_monomial(const SyntaxNode& n, std::vector<Monomial>& out) const;
+
+ private:
+  // An expanded term taken apart into its factors, exponents indexed like the declarations.
+  struct SplitTerm {
+    GiNaC::numeric coefficient;
+    std::vector<int> parameters, variables, derivatives;
+  };
+
+  // equation() and add_monomial() without turning GiNaC's exceptions into located errors.
+  Equation equation_checked(const SyntaxNode& n) const;
+  void add_monomial_checked(const SyntaxNode& n, std::vector<Monomial>& out) const;
+
+  // The value of an expression node, with constants replaced by their values.
+  GiNaC::ex eval(const SyntaxNode& n) const;
+  GiNaC::ex eval_sum(const SyntaxNode& n, bool top_level) const;
+  GiNaC::ex eval_product(const SyntaxNode& n) const;
+  GiNaC::ex eval_power(const SyntaxNode& n) const;
+  void check_size(const SyntaxNode& at, const GiNaC::ex& value) const;
+
+  // One term of an expanded expression, or every term of it, taken apart.
+  SplitTerm split(const GiNaC::ex& term) const;
+  std::vector<SplitTerm> split_all(const GiNaC::ex& expanded) const;
+  // The term as a message shows it.
+  std::string format_term(const SplitTerm& t) const;
+  // Every term of `value` must be affine in the parameters and have at most one derivative
+  // factor; a term that is not is reported at `at`.
+  void check_term(const SyntaxNode& at, const GiNaC::ex& value) const;
+
+  const Source& source_;
+  const SymbolTable& symbols_;
+};
+
+}  // namespace momentid
