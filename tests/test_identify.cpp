@@ -8,13 +8,13 @@
 #include <cmath>
 #include <filesystem>
 
-#include "momentid/writer.hpp"
-#include "momentid/derive.hpp"
-#include "momentid/model.hpp"
 #include "momentid/accumulator.hpp"
 #include "momentid/data_pass.hpp"
-#include "momentid/simulate.hpp"
+#include "momentid/derive.hpp"
 #include "momentid/estimate.hpp"
+#include "momentid/model.hpp"
+#include "momentid/simulate.hpp"
+#include "momentid/writer.hpp"
 #include "test_support.hpp"
 
 namespace {
@@ -55,9 +55,12 @@ Estimate identify(const Model& truth, const Case& c, const Model* fitted = nullp
   momentid::DeriveOptions derive_options;
   derive_options.degree = c.degree;
   const momentid::MomentSystem system = momentid::derive(model, derive_options);
-  momentid::MomentAccumulator accumulator(momentid::moments_to_estimate(system),
-                                          model.states().size(), model.inputs().size(), c.hold,
-                                          c.batches);
+  std::vector<momentid::Moment> moments;
+  for (const momentid::Monomial& m : momentid::moments_to_estimate(system)) {
+    moments.push_back(momentid::Moment::from_monomial(m));
+  }
+  momentid::MomentAccumulator accumulator(std::move(moments), model.states().size(),
+                                          model.inputs().size(), c.hold, c.batches);
   momentid::SimulationOptions options;
   options.parameters = momentid::parameter_values(truth, {});
   options.inputs.assign(truth.inputs().size(), momentid::InputSpec::parse(c.input, "test"));
