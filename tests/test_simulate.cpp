@@ -312,29 +312,4 @@ TEST_SUITE("simulate") {
     CHECK(std::abs(var.mean - 4) < 4 * var.error);
     CHECK(std::abs(cov.mean - 4 * std::exp(-0.2)) < 4 * cov.error);
   }
-
-  TEST_CASE("the writer replaces a link's target, and writes to a device directly") {
-    const auto dir = std::filesystem::temp_directory_path() / "momentid_test_writer";
-    std::filesystem::remove_all(dir);
-    std::filesystem::create_directories(dir);
-    std::filesystem::create_symlink("target.csv", dir / "link.csv");
-    {
-      momentid::DataWriter out((dir / "link.csv").string(), momentid::DataWriter::Format::kCsv, {},
-                               {"a"});
-      const double v = 1.5;
-      out.row(&v);
-      out.commit();
-    }
-    CHECK(std::filesystem::is_symlink(dir / "link.csv"));
-    CHECK(read_file(dir / "target.csv") == "a\n1.5\n");
-    {
-      momentid::DataWriter out("/dev/null", momentid::DataWriter::Format::kCsv, {}, {"a"});
-      out.commit();
-    }
-    CHECK(std::filesystem::is_character_file("/dev/null"));
-    std::size_t files = 0;
-    for ([[maybe_unused]] const auto& entry : std::filesystem::directory_iterator(dir)) ++files;
-    CHECK(files == 2);  // no temporary file left behind
-    std::filesystem::remove_all(dir);
-  }
 }

@@ -1,9 +1,12 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
+#include <span>
 #include <vector>
 
-#include "momentid/model.hpp"
+#include "momentid/error.hpp"
+#include "momentid/moment.hpp"
 
 namespace momentid {
 
@@ -14,37 +17,91 @@ namespace momentid {
 //           an input is averaged as u[n] * (g(y_n) + g(y_{n+1})) / 2.
 enum class InputHold { kSample, kZeroOrderHold };
 
-// Time averages of the moments E[monomial] from a time series, in one streaming pass, kept per
+// Time averages of moments E[x^a ...] from a time series, in one streaming pass, kept per
 // contiguous stretch of the record so that their sampling covariance can be estimated from batch
 // means. Each moment is computed from precomputed powers of the channels and averaged over the
 // intervals between consecutive rows of one run, never across runs (see close_interval).
+// Interval n of a run is [row n, row n + 1].
 //
-// Accumulators merge exactly: sums and interval counts add, so shards of a record (or runs) can
-// be accumulated anywhere and combined.
+// Precondition: every moment is at lag 0 (Moment::is_lagged() is false) and names channels
+// below states + inputs; the constructor throws std::invalid_argument naming the offending
+// factor otherwise. Lagged moments come with the lagged moment equations (issue #10).
 //
-// Example:
+// Shards. The state is a value: a record can be cut into shards, each accumulated anywhere,
+// serialised, sent, and merged in record order, and the merged moments are those of one pass
+// over the record (up to the order of the floating-point sums) with the same interval count.
+// A shard is a contiguous range of rows of the record:
+//   - begin it with start_run() if its first row starts a run, else with continue_run();
+//   - add() its rows, calling start_run() where a new run starts inside it;
+//   - if its last run goes on past it, add_lookahead() the next rows of that run: kLookaheadRows
+//     of them, or all there are if the run ends sooner;
+//   - finish().
+// A shard owns the intervals that start at its rows and the one that starts at its first
+// lookahead row, except the first interval of a run it continues: the shard before owns that one,
+// through its lookahead. So every interval of a run is owned by one shard, which closes it with
+// the same rows and weights as one pass (the cubic weights need the rows n - 1 .. n + 2).
+//
+// Example, one pass:
 //   MomentAccumulator acc(moments, /*states=*/2, /*inputs=*/1, InputHold::kZeroOrderHold, 20);
 //   acc.start_run();
 //   acc.add(rows, n);  // n rows of y1, y2, x
-//   MomentEstimates e = acc.estimates(20);
+//   acc.finish();
+//   MomentEstimates e = estimates(acc, 20);
+//
+// Example, rows [a, b) of a run on one machine, the rest of the record elsewhere:
+//   MomentAccumulator shard(moments, 2, 1, InputHold::kZeroOrderHold, 20);
+//   shard.continue_run();
+//   shard.add(rows + a * 3, b - a);
+//   shard.add_lookahead(rows + b * 3, std::min(run_end - b, MomentAccumulator::kLookaheadRows));
+//   shard.finish();
+//   send(shard.serialize());
+//   ...
+//   whole.merge(MomentAccumulator::deserialize(received));  // in record order
 class MomentAccumulator {
  public:
+  // Rows past its end a shard needs to close its last intervals with the cubic weights.
+  static constexpr std::size_t kLookaheadRows = 3;
+
   // `batches`: how many batches the estimates will be split into at most; the accumulator
   // keeps between 2 and 4 times as many stretches, so its memory does not grow with the record.
-  MomentAccumulator(std::vector<Monomial> moments, std::size_t states, std::size_t inputs,
+  MomentAccumulator(std::vector<Moment> moments, std::size_t states, std::size_t inputs,
                     InputHold hold, std::size_t batches);
 
-  // The next rows belong to a new run (a separate record).
+  // The next rows start a new run (a separate record).
   void start_run();
-  // Adds `rows` consecutive rows of the current run, each states then inputs.
+  // The next rows continue a run whose earlier rows went to another shard: the interval from
+  // the first of them to the second belongs to that shard.
+  void continue_run();
+  // Adds `count` consecutive rows of the current run, each states then inputs. Throws
+  // std::logic_error after add_lookahead() until the next start_run(), continue_run() or
+  // finish().
   void add(const double* rows, std::size_t count);
-  // Closes the current run: call after the last rows, before reading the stretches.
+  // Adds rows just past the end of the shard, of the same run, used only to close the intervals
+  // the shard owns. At most kLookaheadRows in all (std::invalid_argument otherwise).
+  void add_lookahead(const double* rows, std::size_t count);
+  // Closes the current run (or the shard): call after the last rows, before reading the
+  // stretches, serialising or merging.
   void finish();
-  // Appends another accumulator's stretches after this one's (same moments and hold).
+  // Appends the stretches of `other` (finished, the shard after this one's rows) after this
+  // one's, closing this one's current run first. Throws Error if `other` is in the middle of a
+  // run or if its moments, hold or channel counts differ.
   void merge(const MomentAccumulator& other);
 
+  // The state of a finished accumulator as bytes, for deserialize() (throws Error in the middle
+  // of a run). Layout version 1, integers and IEEE-754 doubles little-endian:
+  //   "MOMACCUM", u32 version, u64 states, u64 inputs, u8 hold (0 sample, 1 zero-order hold),
+  //   u64 batches, u64 moments, per moment {u64 factors, per factor {i32 channel, i32 power,
+  //   i32 lag}}, u64 stretch length, u64 intervals, u64 stretches, per stretch {u64 intervals,
+  //   f64 sum per moment}.
+  std::vector<std::uint8_t> serialize() const;
+  // The accumulator that serialize() wrote into `bytes`. Throws Error saying what was found and
+  // what was expected for bytes that are not that: a wrong tag or version, truncated or trailing
+  // bytes, counts that do not add up, a moment out of normal form or beyond the limits of a
+  // plausible state (4096 channels, power 1024).
+  static MomentAccumulator deserialize(std::span<const std::uint8_t> bytes);
+
   std::size_t intervals() const { return intervals_; }
-  const std::vector<Monomial>& moments() const { return moments_; }
+  const std::vector<Moment>& moments() const { return moments_; }
 
   // Per stretch of the record: sums of the interval averages and the number of intervals.
   struct Stretch {
@@ -55,13 +112,15 @@ class MomentAccumulator {
   const std::vector<Stretch>& stretches() const { return stretches_; }
 
  private:
+  void push_rows(const double* rows, std::size_t count);
   void finish_run();
   void close_interval(std::size_t n);
   void compact();
 
-  std::vector<Monomial> moments_;
+  std::vector<Moment> moments_;
   std::size_t states_, inputs_;
   InputHold hold_;
+  std::size_t batches_;
   // Moment i's state factors are factors_[first_factor_[2i] .. first_factor_[2i+1]), its input
   // factors follow up to first_factor_[2i+2]; entries index the power table.
   std::vector<std::size_t> factors_, first_factor_;
@@ -71,7 +130,11 @@ class MomentAccumulator {
   std::vector<double> powers_;
   // The state and input parts of every moment at the last four rows of the run (row mod 4).
   std::vector<double> state_ring_, input_ring_;
-  std::size_t run_rows_ = 0;
+  std::size_t run_rows_ = 0;  // rows of the current run in this accumulator, lookahead included
+  // The intervals of the current run this accumulator owns: first_owned_ .. owned_rows_ (local
+  // row indices), where first_owned_ is 1 after continue_run(), and owned_rows_ counts the rows
+  // of the run given to add().
+  std::size_t first_owned_ = 0, owned_rows_ = 0, lookahead_rows_ = 0;
   std::vector<Stretch> stretches_;
   std::size_t max_stretches_;
   std::size_t stretch_length_ = 1;  // intervals per stretch, doubled when there are too many

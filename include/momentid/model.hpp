@@ -8,12 +8,9 @@
 #include <vector>
 
 #include "momentid/error.hpp"
+#include "momentid/moment.hpp"
 
 namespace momentid {
-
-// Exponents of a monomial over the model's variables: the states first, then the inputs, in
-// declaration order (see Model::variables()). `{2, 0, 1}` over (y, v, x) is y^2*x.
-using Monomial = std::vector<int>;
 
 enum class SymbolKind { kState, kInput, kParameter, kConstant };
 

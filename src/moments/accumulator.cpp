@@ -1,19 +1,50 @@
 #include "momentid/accumulator.hpp"
 
 #include <algorithm>
+#include <bit>
+#include <limits>
+#include <optional>
+#include <stdexcept>
+#include <string>
 
 namespace momentid {
+namespace {
 
-MomentAccumulator::MomentAccumulator(std::vector<Monomial> moments, std::size_t states,
+// "1 state", "2 states".
+std::string count_of(std::size_t n, const std::string& noun) {
+  return std::to_string(n) + " " + noun + (n == 1 ? "" : "s");
+}
+
+}  // namespace
+
+MomentAccumulator::MomentAccumulator(std::vector<Moment> moments, std::size_t states,
                                      std::size_t inputs, InputHold hold, std::size_t batches)
     : moments_(std::move(moments)),
       states_(states),
       inputs_(inputs),
       hold_(hold),
+      batches_(batches),
       max_stretches_(4 * std::max<std::size_t>(batches, 2)) {
   const std::size_t variables = states_ + inputs_;
+  std::vector<Monomial> monomials;
+  for (const Moment& m : moments_) {
+    for (const MomentFactor& f : m.factors()) {
+      if (f.lag != 0) {
+        throw std::invalid_argument("moment " + to_string(m) + ": the factor " + to_string(f) +
+                                    " is lagged, and lagged moments are not accumulated yet "
+                                    "(issue #10)");
+      }
+      if (static_cast<std::size_t>(f.channel) >= variables) {
+        throw std::invalid_argument(
+            "moment " + to_string(m) + ": the factor " + to_string(f) + " names channel " +
+            std::to_string(f.channel) + ", expected a channel below " + std::to_string(variables) +
+            " (" + count_of(states_, "state") + ", " + count_of(inputs_, "input") + ")");
+      }
+    }
+    monomials.push_back(m.at_lag(0, variables));
+  }
   max_power_.assign(variables, 1);
-  for (const Monomial& m : moments_) {
+  for (const Monomial& m : monomials) {
     for (std::size_t v = 0; v < variables; ++v) max_power_[v] = std::max(max_power_[v], m[v]);
   }
   std::size_t offset = 0;
@@ -24,8 +55,8 @@ MomentAccumulator::MomentAccumulator(std::vector<Monomial> moments, std::size_t 
   powers_.assign(offset, 1.0);
   // Each moment's state factors, then its input factors, as indices into the power table.
   first_factor_.push_back(0);
-  for (std::size_t i = 0; i < moments_.size(); ++i) {
-    const Monomial& m = moments_[i];
+  for (std::size_t i = 0; i < monomials.size(); ++i) {
+    const Monomial& m = monomials[i];
     bool has_input = false;
     for (std::size_t v = 0; v < states_; ++v) {
       if (m[v] != 0) factors_.push_back(power_offset_[v] + static_cast<std::size_t>(m[v]));
@@ -45,20 +76,45 @@ MomentAccumulator::MomentAccumulator(std::vector<Monomial> moments, std::size_t 
   stretches_.push_back({std::vector<double>(k, 0.0), 0});
 }
 
-void MomentAccumulator::start_run() {
+void MomentAccumulator::start_run() { finish_run(); }
+
+void MomentAccumulator::continue_run() {
   finish_run();
-  run_rows_ = 0;
+  first_owned_ = 1;
 }
 
 void MomentAccumulator::finish() { finish_run(); }
 
-// The last interval of the run, which has no row after it.
+// Closes the interval between the last two rows given, the last of the run unless it lies in
+// the lookahead (then close_interval skips it), and forgets the run.
 void MomentAccumulator::finish_run() {
   if (run_rows_ >= 2) close_interval(run_rows_ - 2);
   run_rows_ = 0;
+  first_owned_ = 0;
+  owned_rows_ = 0;
+  lookahead_rows_ = 0;
 }
 
 void MomentAccumulator::add(const double* rows, std::size_t count) {
+  if (lookahead_rows_ > 0) {
+    throw std::logic_error(
+        "MomentAccumulator::add after add_lookahead: the lookahead rows end the shard");
+  }
+  owned_rows_ += count;
+  push_rows(rows, count);
+}
+
+void MomentAccumulator::add_lookahead(const double* rows, std::size_t count) {
+  if (lookahead_rows_ + count > kLookaheadRows) {
+    throw std::invalid_argument(
+        "MomentAccumulator::add_lookahead: " + std::to_string(lookahead_rows_ + count) +
+        " lookahead rows, expected at most " + std::to_string(kLookaheadRows));
+  }
+  lookahead_rows_ += count;
+  push_rows(rows, count);
+}
+
+void MomentAccumulator::push_rows(const double* rows, std::size_t count) {
   const std::size_t variables = states_ + inputs_;
   const std::size_t k = moments_.size();
   for (std::size_t r = 0; r < count; ++r) {
@@ -95,6 +151,9 @@ void MomentAccumulator::add(const double* rows, std::size_t count) {
 // products are continuous across rows, and the trapezoidal rule's error then only accumulates
 // at the ends of a run.
 void MomentAccumulator::close_interval(std::size_t n) {
+  // The first interval of a continued run belongs to the shard before, and those that start
+  // past the first lookahead row to the shard after.
+  if (n < first_owned_ || n > owned_rows_) return;
   const std::size_t k = moments_.size();
   const std::size_t rows = run_rows_;
   auto state = [&](std::size_t row) { return state_ring_.data() + (row % 4) * k; };
@@ -158,7 +217,50 @@ void MomentAccumulator::compact() {
   stretch_length_ *= 2;
 }
 
+namespace {
+
+const char* hold_name(InputHold hold) {
+  return hold == InputHold::kSample ? "sample" : "zero-order hold";
+}
+
+std::string channel_counts(std::size_t states, std::size_t inputs) {
+  return count_of(states, "state") + " and " + count_of(inputs, "input");
+}
+
+}  // namespace
+
 void MomentAccumulator::merge(const MomentAccumulator& other) {
+  if (this == &other) {
+    // Appending its own stretches would read them while they grow.
+    const MomentAccumulator copy = other;
+    merge(copy);
+    return;
+  }
+  if (other.run_rows_ > 0) {
+    throw Error(
+        "cannot merge a moment accumulator in the middle of a run: call finish() on it first");
+  }
+  if (states_ != other.states_ || inputs_ != other.inputs_) {
+    throw Error("cannot merge moment accumulators over different channels: " +
+                channel_counts(states_, inputs_) + " here, " +
+                channel_counts(other.states_, other.inputs_) + " in the other");
+  }
+  if (hold_ != other.hold_) {
+    throw Error(std::string("cannot merge moment accumulators with different input holds: ") +
+                hold_name(hold_) + " here, " + hold_name(other.hold_) + " in the other");
+  }
+  if (moments_.size() != other.moments_.size()) {
+    throw Error("cannot merge moment accumulators of different moments: " +
+                std::to_string(moments_.size()) + " here, " +
+                std::to_string(other.moments_.size()) + " in the other");
+  }
+  for (std::size_t i = 0; i < moments_.size(); ++i) {
+    if (moments_[i] != other.moments_[i]) {
+      throw Error("cannot merge moment accumulators of different moments: moment " +
+                  std::to_string(i) + " is " + to_string(moments_[i]) + " here, " +
+                  to_string(other.moments_[i]) + " in the other");
+    }
+  }
   finish_run();
   if (stretches_.back().intervals == 0) stretches_.pop_back();
   for (const Stretch& s : other.stretches_) {
@@ -167,6 +269,218 @@ void MomentAccumulator::merge(const MomentAccumulator& other) {
   intervals_ += other.intervals_;
   stretches_.push_back({std::vector<double>(moments_.size(), 0.0), 0});
   while (stretches_.size() > max_stretches_) compact();
+}
+
+namespace {
+
+constexpr char kTag[8] = {'M', 'O', 'M', 'A', 'C', 'C', 'U', 'M'};
+constexpr std::uint32_t kLayoutVersion = 1;
+// Bounds on what deserialize() accepts, so that corrupt counts cannot ask for huge tables.
+constexpr std::uint64_t kMaxChannels = 4096;
+constexpr int kMaxPower = 1024;
+
+class ByteWriter {
+ public:
+  void bytes(const char* data, std::size_t count) { out_.insert(out_.end(), data, data + count); }
+  void u8(std::uint8_t value) { out_.push_back(value); }
+  void u32(std::uint32_t value) { little_endian(value, 4); }
+  void u64(std::uint64_t value) { little_endian(value, 8); }
+  void i32(std::int32_t value) { u32(static_cast<std::uint32_t>(value)); }
+  void f64(double value) { u64(std::bit_cast<std::uint64_t>(value)); }
+  std::vector<std::uint8_t> take() { return std::move(out_); }
+
+ private:
+  void little_endian(std::uint64_t value, int count) {
+    for (int b = 0; b < count; ++b) out_.push_back(static_cast<std::uint8_t>(value >> (8 * b)));
+  }
+  std::vector<std::uint8_t> out_;
+};
+
+// Reads the layout, naming the field being read when the bytes end too soon.
+class ByteReader {
+ public:
+  explicit ByteReader(std::span<const std::uint8_t> bytes) : bytes_(bytes) {}
+
+  std::span<const std::uint8_t> take(std::size_t count, const std::string& what) {
+    need(count, what);
+    const auto out = bytes_.subspan(at_, count);
+    at_ += count;
+    return out;
+  }
+  std::uint8_t u8(const std::string& what) { return take(1, what)[0]; }
+  std::uint32_t u32(const std::string& what) {
+    return static_cast<std::uint32_t>(little_endian(4, what));
+  }
+  std::uint64_t u64(const std::string& what) { return little_endian(8, what); }
+  std::int32_t i32(const std::string& what) { return static_cast<std::int32_t>(u32(what)); }
+  double f64(const std::string& what) { return std::bit_cast<double>(u64(what)); }
+  // A count of entries of at least `bytes_each` bytes, checked against the bytes left.
+  std::size_t count(std::size_t bytes_each, const std::string& what) {
+    const std::uint64_t n = u64("the number of " + what);
+    if (n > (bytes_.size() - at_) / bytes_each) {
+      throw Error("truncated moment accumulator bytes: " + std::to_string(bytes_.size()) +
+                  " bytes, but " + std::to_string(n) + " " + what + " need at least " +
+                  std::to_string(bytes_each) + " bytes each from byte " + std::to_string(at_));
+    }
+    return static_cast<std::size_t>(n);
+  }
+  std::size_t position() const { return at_; }
+
+ private:
+  void need(std::size_t count, const std::string& what) const {
+    if (bytes_.size() - at_ < count) {
+      throw Error("truncated moment accumulator bytes: " + std::to_string(bytes_.size()) +
+                  " bytes, but " + what + " needs " + std::to_string(count) + " bytes from byte " +
+                  std::to_string(at_));
+    }
+  }
+  std::uint64_t little_endian(std::size_t count, const std::string& what) {
+    std::uint64_t value = 0;
+    const auto b = take(count, what);
+    for (std::size_t i = 0; i < count; ++i) value |= std::uint64_t{b[i]} << (8 * i);
+    return value;
+  }
+  std::span<const std::uint8_t> bytes_;
+  std::size_t at_ = 0;
+};
+
+std::string hex(std::span<const std::uint8_t> bytes) {
+  static const char digits[] = "0123456789abcdef";
+  std::string out;
+  for (std::uint8_t b : bytes) {
+    if (!out.empty()) out += ' ';
+    out += digits[b >> 4];
+    out += digits[b & 15];
+  }
+  return out;
+}
+
+}  // namespace
+
+std::vector<std::uint8_t> MomentAccumulator::serialize() const {
+  if (run_rows_ > 0) {
+    throw Error(
+        "cannot serialise a moment accumulator in the middle of a run: call finish() first");
+  }
+  ByteWriter out;
+  out.bytes(kTag, sizeof kTag);
+  out.u32(kLayoutVersion);
+  out.u64(states_);
+  out.u64(inputs_);
+  out.u8(hold_ == InputHold::kSample ? 0 : 1);
+  out.u64(batches_);
+  out.u64(moments_.size());
+  for (const Moment& m : moments_) {
+    out.u64(m.factors().size());
+    for (const MomentFactor& f : m.factors()) {
+      out.i32(f.channel);
+      out.i32(f.power);
+      out.i32(f.lag);
+    }
+  }
+  out.u64(stretch_length_);
+  out.u64(intervals_);
+  out.u64(stretches_.size());
+  for (const Stretch& s : stretches_) {
+    out.u64(s.intervals);
+    for (double x : s.sums) out.f64(x);
+  }
+  return out.take();
+}
+
+MomentAccumulator MomentAccumulator::deserialize(std::span<const std::uint8_t> bytes) {
+  ByteReader in(bytes);
+  const auto tag = in.take(sizeof kTag, "the tag");
+  if (!std::equal(tag.begin(), tag.end(), kTag)) {
+    throw Error("not moment accumulator bytes: they start with " + hex(tag) +
+                ", expected the tag \"MOMACCUM\"");
+  }
+  const std::uint32_t version = in.u32("the layout version");
+  if (version != kLayoutVersion) {
+    throw Error("moment accumulator bytes of layout version " + std::to_string(version) +
+                ", expected version " + std::to_string(kLayoutVersion));
+  }
+  const std::uint64_t states = in.u64("the number of states");
+  const std::uint64_t inputs = in.u64("the number of inputs");
+  if (states > kMaxChannels || inputs > kMaxChannels - states) {
+    throw Error("moment accumulator bytes: " + std::to_string(states) + " states and " +
+                std::to_string(inputs) + " inputs, expected at most " +
+                std::to_string(kMaxChannels) + " channels");
+  }
+  const std::uint8_t hold = in.u8("the input hold");
+  if (hold > 1) {
+    throw Error("moment accumulator bytes: input hold " + std::to_string(hold) +
+                ", expected 0 (sample) or 1 (zero-order hold)");
+  }
+  const std::uint64_t batches = in.u64("the number of batches");
+  if (batches > std::numeric_limits<std::size_t>::max() / 4) {
+    throw Error("moment accumulator bytes: " + std::to_string(batches) +
+                " batches, expected at most " +
+                std::to_string(std::numeric_limits<std::size_t>::max() / 4));
+  }
+  std::optional<MomentAccumulator> out;
+  try {
+    std::vector<Moment> moments(in.count(4, "moments"));
+    for (std::size_t i = 0; i < moments.size(); ++i) {
+      const std::string name = "moment " + std::to_string(i);
+      std::vector<MomentFactor> factors(in.count(12, "factors of " + name));
+      for (MomentFactor& f : factors) {
+        f.channel = in.i32("a factor of " + name);
+        f.power = in.i32("a factor of " + name);
+        f.lag = in.i32("a factor of " + name);
+        if (f.power < 1 || f.power > kMaxPower || f.channel < 0 || f.lag < 0) {
+          throw Error("moment accumulator bytes: " + name + " has the factor channel " +
+                      std::to_string(f.channel) + ", power " + std::to_string(f.power) + ", lag " +
+                      std::to_string(f.lag) +
+                      ", expected a channel and lag from 0 and a power from 1 to " +
+                      std::to_string(kMaxPower));
+        }
+      }
+      moments[i] = Moment(factors);
+      if (moments[i].factors() != factors) {
+        throw Error("moment accumulator bytes: the factors of " + name +
+                    " are not in normal form (expected " + to_string(moments[i]) + ")");
+      }
+    }
+    out.emplace(std::move(moments), states, inputs,
+                hold == 0 ? InputHold::kSample : InputHold::kZeroOrderHold, batches);
+  } catch (const std::invalid_argument& e) {
+    throw Error(std::string("moment accumulator bytes: ") + e.what());
+  }
+  const std::uint64_t length = in.u64("the stretch length");
+  if (!std::has_single_bit(length)) {
+    throw Error("moment accumulator bytes: stretch length " + std::to_string(length) +
+                ", expected a power of two");
+  }
+  const std::uint64_t intervals = in.u64("the number of intervals");
+  const std::size_t k = out->moments_.size();
+  std::vector<Stretch> stretches(in.count(8 * (k + 1), "stretches"));
+  if (stretches.empty()) {
+    throw Error("moment accumulator bytes: no stretches, expected at least the open one");
+  }
+  std::uint64_t counted = 0;
+  for (Stretch& s : stretches) {
+    s.intervals = in.u64("the interval count of a stretch");
+    s.sums.resize(k);
+    for (double& x : s.sums) x = in.f64("a sum of a stretch");
+    if (s.intervals > intervals - counted) {
+      throw Error("moment accumulator bytes: the stretches hold more than the " +
+                  std::to_string(intervals) + " intervals counted");
+    }
+    counted += s.intervals;
+  }
+  if (counted != intervals) {
+    throw Error("moment accumulator bytes: " + std::to_string(intervals) +
+                " intervals counted, but the stretches hold " + std::to_string(counted));
+  }
+  if (in.position() != bytes.size()) {
+    throw Error("moment accumulator bytes: " + count_of(bytes.size() - in.position(), "byte") +
+                " after the end of the layout at byte " + std::to_string(in.position()));
+  }
+  out->stretch_length_ = length;
+  out->intervals_ = intervals;
+  out->stretches_ = std::move(stretches);
+  return std::move(*out);
 }
 
 MomentEstimates estimates(const MomentAccumulator& accumulator, std::size_t batches) {

@@ -199,7 +199,10 @@ DataMoments moments_from_data(const DataSource& source, const std::vector<std::s
     out.hold = hold && *hold == "zoh" ? InputHold::kZeroOrderHold : InputHold::kSample;
   }
   const std::size_t channels = request.names.size();
-  MomentAccumulator accumulator(moments, states.size(), inputs.size(), out.hold, options.batches);
+  std::vector<Moment> keys;
+  for (const Monomial& m : moments) keys.push_back(Moment::from_monomial(m));
+  MomentAccumulator accumulator(std::move(keys), states.size(), inputs.size(), out.hold,
+                                options.batches);
   LagSums lags(channels, options.lags);
   InputShift shift(states.size(), inputs.size(), options.input_shift);
 

@@ -1,0 +1,75 @@
+#pragma once
+
+#include <compare>
+#include <cstddef>
+#include <string>
+#include <vector>
+
+namespace momentid {
+
+// Exponents of a monomial over the model's variables: the states first, then the inputs, in
+// declaration order (see Model::variables()). `{2, 0, 1}` over (y, v, x) is y^2*x.
+using Monomial = std::vector<int>;
+
+// One factor of a moment: channel `channel` (an index into the variables, states then inputs)
+// to the power `power`, taken `lag` samples in the past, at t - lag*dt.
+struct MomentFactor {
+  int channel = 0;
+  int power = 1;
+  int lag = 0;
+
+  friend auto operator<=>(const MomentFactor&, const MomentFactor&) = default;
+};
+
+// The expectation of a product of channel powers, each at its own time offset:
+// E[x_c1(t - l1*dt)^p1 * x_c2(t - l2*dt)^p2 * ...]. The moments of the zero-lag equations have
+// every factor at lag 0 (a Monomial); the lagged moment equations (DESIGN.md §6) pair a channel
+// in the past with the equation at t.
+//
+// A Moment is kept in one normal form, so that equal moments compare equal: factors sorted by
+// lag, then channel; factors of the same channel at the same lag multiplied into one; zero
+// powers dropped; and every lag shifted so that the smallest is 0, since the expectation of a
+// stationary process does not change when all factors are shifted by the same time. The moment
+// without factors is the constant 1. Channels and powers must not be negative.
+//
+// Example:
+//   // E[y(t - 2dt) * y(t - 2dt) * x(t - 5dt)] over (y, v, x) is E[y(t)^2 * x(t - 3dt)]:
+//   Moment m({{0, 1, 2}, {2, 1, 5}, {0, 1, 2}});
+//   m.degree();       // 3
+//   m.max_lag();      // 3
+//   m.at_lag(0, 3);   // {2, 0, 0}
+//   m.at_lag(3, 3);   // {0, 0, 1}
+//   Moment::from_monomial({1, 1, 0}) < m;  // a total order, for maps and sorting
+class Moment {
+ public:
+  // The constant 1.
+  Moment() = default;
+  // Throws std::invalid_argument for a negative channel or power.
+  explicit Moment(std::vector<MomentFactor> factors);
+  // The moment of `monomial` with every factor at lag 0.
+  static Moment from_monomial(const Monomial& monomial);
+
+  // In normal form (see above).
+  const std::vector<MomentFactor>& factors() const { return factors_; }
+  // The sum of the powers.
+  int degree() const;
+  // The largest lag of a factor; 0 for a moment without lags.
+  int max_lag() const;
+  bool is_lagged() const { return max_lag() > 0; }
+  // The exponents of the factors at `lag` over `variables` channels. Throws std::out_of_range
+  // if a factor at that lag names a channel not below `variables`.
+  Monomial at_lag(int lag, std::size_t variables) const;
+
+  friend auto operator<=>(const Moment&, const Moment&) = default;
+  friend bool operator==(const Moment&, const Moment&) = default;
+
+ private:
+  std::vector<MomentFactor> factors_;
+};
+
+// `c1^2`, `c0(t-3)`: channel index, power above 1, and the lag when it is not 0.
+std::string to_string(const MomentFactor& factor);
+// The factors joined by `*`, or `1`: `c0^2*c2(t-3)`.
+std::string to_string(const Moment& moment);
+
+}  // namespace momentid

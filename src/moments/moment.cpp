@@ -1,0 +1,89 @@
+#include "momentid/moment.hpp"
+
+#include <algorithm>
+#include <limits>
+#include <stdexcept>
+
+namespace momentid {
+
+Moment::Moment(std::vector<MomentFactor> factors) {
+  for (const MomentFactor& f : factors) {
+    if (f.channel < 0 || f.power < 0) {
+      throw std::invalid_argument("moment factor " + to_string(f) +
+                                  ": channel and power must not be negative");
+    }
+  }
+  std::erase_if(factors, [](const MomentFactor& f) { return f.power == 0; });
+  std::sort(factors.begin(), factors.end(), [](const MomentFactor& a, const MomentFactor& b) {
+    return a.lag != b.lag ? a.lag < b.lag : a.channel < b.channel;
+  });
+  // Sums and differences in long long: a power or a lag span beyond int is refused, not wrapped.
+  auto narrow = [](long long value, const char* what) {
+    if (value > std::numeric_limits<int>::max()) {
+      throw std::invalid_argument(std::string("moment factors: the ") + what + " " +
+                                  std::to_string(value) + " is beyond int");
+    }
+    return static_cast<int>(value);
+  };
+  for (const MomentFactor& f : factors) {
+    if (!factors_.empty() && factors_.back().channel == f.channel && factors_.back().lag == f.lag) {
+      factors_.back().power = narrow(0LL + factors_.back().power + f.power, "power");
+    } else {
+      factors_.push_back(f);
+    }
+  }
+  if (!factors_.empty()) {
+    const long long first = factors_.front().lag;
+    for (MomentFactor& f : factors_) f.lag = narrow(f.lag - first, "lag");
+  }
+}
+
+Moment Moment::from_monomial(const Monomial& monomial) {
+  std::vector<MomentFactor> factors;
+  for (std::size_t v = 0; v < monomial.size(); ++v) {
+    if (monomial[v] != 0) factors.push_back({static_cast<int>(v), monomial[v], 0});
+  }
+  return Moment(std::move(factors));
+}
+
+int Moment::degree() const {
+  int sum = 0;
+  for (const MomentFactor& f : factors_) sum += f.power;
+  return sum;
+}
+
+int Moment::max_lag() const { return factors_.empty() ? 0 : factors_.back().lag; }
+
+Monomial Moment::at_lag(int lag, std::size_t variables) const {
+  Monomial out(variables, 0);
+  for (const MomentFactor& f : factors_) {
+    if (f.lag != lag) continue;
+    if (static_cast<std::size_t>(f.channel) >= variables) {
+      throw std::out_of_range("moment " + to_string(*this) + " has channel " +
+                              std::to_string(f.channel) + ", expected a channel below " +
+                              std::to_string(variables));
+    }
+    out[static_cast<std::size_t>(f.channel)] = f.power;
+  }
+  return out;
+}
+
+std::string to_string(const MomentFactor& factor) {
+  std::string out = "c" + std::to_string(factor.channel);
+  if (factor.power != 1) out += "^" + std::to_string(factor.power);
+  if (factor.lag > 0) out += "(t-" + std::to_string(factor.lag) + ")";
+  if (factor.lag < 0) out += "(t+" + std::to_string(-static_cast<long long>(factor.lag)) + ")";
+  return out;
+}
+
+std::string to_string(const Moment& moment) {
+  if (moment.factors().empty()) return "1";
+  std::string out;
+  for (const MomentFactor& f : moment.factors()) {
+    if (!out.empty()) out += "*";
+    out += to_string(f);
+  }
+  return out;
+}
+
+}  // namespace momentid

@@ -1,0 +1,396 @@
+// The moment accumulator as a value: shards of a record accumulated apart, serialised and merged
+// give the moments of one pass; the Moment key's normal form; the errors of bad bytes and bad
+// merges, verbatim.
+
+#include <doctest/doctest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <set>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "momentid/accumulator.hpp"
+#include "momentid/moment.hpp"
+#include "momentid/random.hpp"
+#include "test_support.hpp"
+
+namespace {
+
+using momentid::InputHold;
+using momentid::Moment;
+using momentid::MomentAccumulator;
+using momentid::MomentFactor;
+using momentid::testing::error_from;
+
+constexpr std::size_t kStates = 2, kInputs = 1, kChannels = kStates + kInputs;
+constexpr std::size_t kBatches = 4;
+
+// Runs of one record, as rows of y1, y2 (states) and x (input), row-major.
+struct Record {
+  std::vector<double> values;
+  std::vector<std::size_t> run_starts;  // the first row of each run, from 0
+
+  std::size_t rows() const { return values.size() / kChannels; }
+  const double* row(std::size_t r) const { return values.data() + r * kChannels; }
+  bool starts_run(std::size_t r) const {
+    return std::binary_search(run_starts.begin(), run_starts.end(), r);
+  }
+  // One past the last row of the run that holds row r.
+  std::size_t run_end(std::size_t r) const {
+    const auto next = std::upper_bound(run_starts.begin(), run_starts.end(), r);
+    return next == run_starts.end() ? rows() : *next;
+  }
+};
+
+// Smooth channels, sums of sines with fixed phases, plus a little noise; offset from 0 so that
+// every moment is well away from 0 and a relative tolerance is meaningful.
+Record make_record(const std::vector<std::size_t>& run_lengths) {
+  momentid::PortableRandom random(/*seed=*/7, /*stream=*/0);
+  Record record;
+  for (std::size_t length : run_lengths) {
+    record.run_starts.push_back(record.rows());
+    for (std::size_t i = 0; i < length; ++i) {
+      const double t = 0.05 * static_cast<double>(record.rows());
+      record.values.push_back(2.0 + std::sin(1.3 * t + 0.4) + 0.3 * std::sin(3.1 * t + 1.0) +
+                              0.01 * random.normal());
+      record.values.push_back(1.5 + std::cos(0.7 * t + 2.0) + 0.2 * std::sin(5.3 * t) +
+                              0.01 * random.normal());
+      record.values.push_back(1.0 + 0.5 * std::sin(2.3 * t + 0.9) + 0.01 * random.normal());
+    }
+  }
+  return record;
+}
+
+// Every moment of degree 0 to 3 in y1, y2, x.
+std::vector<Moment> all_moments() {
+  std::vector<Moment> out;
+  for (int a = 0; a <= 3; ++a) {
+    for (int b = 0; a + b <= 3; ++b) {
+      for (int c = 0; a + b + c <= 3; ++c) out.push_back(Moment::from_monomial({a, b, c}));
+    }
+  }
+  return out;
+}
+
+MomentAccumulator one_pass(const Record& record, InputHold hold) {
+  MomentAccumulator acc(all_moments(), kStates, kInputs, hold, kBatches);
+  for (std::size_t begin : record.run_starts) {
+    acc.start_run();
+    acc.add(record.row(begin), record.run_end(begin) - begin);
+  }
+  acc.finish();
+  return acc;
+}
+
+// Rows [begin, end) of the record as one shard: a shard may hold the end of one run and the
+// start of the next, and takes the lookahead rows of the run it ends in.
+MomentAccumulator shard(const Record& record, std::size_t begin, std::size_t end, InputHold hold) {
+  MomentAccumulator acc(all_moments(), kStates, kInputs, hold, kBatches);
+  if (record.starts_run(begin)) {
+    acc.start_run();
+  } else {
+    acc.continue_run();
+  }
+  for (std::size_t r = begin; r < end;) {
+    if (r > begin && record.starts_run(r)) acc.start_run();
+    const std::size_t stop = std::min(end, record.run_end(r));
+    acc.add(record.row(r), stop - r);
+    r = stop;
+  }
+  const std::size_t after =
+      std::min(record.run_end(end - 1), end + MomentAccumulator::kLookaheadRows);
+  if (after > end) acc.add_lookahead(record.row(end), after - end);
+  acc.finish();
+  return acc;
+}
+
+// The shards between consecutive cuts (0 and the record's end included), each sent through
+// serialize and deserialize, merged in record order.
+MomentAccumulator merged_shards(const Record& record, std::vector<std::size_t> cuts,
+                                InputHold hold) {
+  cuts.insert(cuts.begin(), 0);
+  cuts.push_back(record.rows());
+  MomentAccumulator whole =
+      MomentAccumulator::deserialize(shard(record, cuts[0], cuts[1], hold).serialize());
+  for (std::size_t i = 1; i + 1 < cuts.size(); ++i) {
+    whole.merge(
+        MomentAccumulator::deserialize(shard(record, cuts[i], cuts[i + 1], hold).serialize()));
+  }
+  return whole;
+}
+
+// `count` distinct cut rows in 1 .. rows - 1, sorted.
+std::vector<std::size_t> random_cuts(momentid::PortableRandom& random, std::size_t rows,
+                                     std::size_t count) {
+  std::set<std::size_t> cuts;
+  while (cuts.size() < count) {
+    cuts.insert(1 + static_cast<std::size_t>(random.uniform() * static_cast<double>(rows - 1)));
+  }
+  return {cuts.begin(), cuts.end()};
+}
+
+void check_same_moments(const MomentAccumulator& got, const MomentAccumulator& want) {
+  CHECK(got.intervals() == want.intervals());
+  const auto g = momentid::estimates(got, kBatches).mean;
+  const auto w = momentid::estimates(want, kBatches).mean;
+  REQUIRE(g.size() == w.size());
+  for (std::size_t i = 0; i < g.size(); ++i) {
+    // The shards add the same interval averages in another order: a few hundred roundings of
+    // 1e-16 each, far below 1e-12.
+    INFO("moment ", momentid::to_string(got.moments()[i]), ": ", g[i], " vs ", w[i]);
+    CHECK(std::abs(g[i] - w[i]) <= 1e-12 * std::abs(w[i]));
+  }
+}
+
+// A tiny accumulator with a fixed layout: one state, the moment c0, three rows (two intervals,
+// each closing a stretch of length 1), 137 bytes.
+std::vector<std::uint8_t> tiny_bytes() {
+  MomentAccumulator acc({Moment::from_monomial({1})}, 1, 0, InputHold::kSample, 1);
+  const double rows[] = {1, 2, 3};
+  acc.add(rows, 3);
+  acc.finish();
+  return acc.serialize();
+}
+
+std::string deserialize_error(const std::vector<std::uint8_t>& bytes) {
+  return error_from<momentid::Error>([&] { MomentAccumulator::deserialize(bytes); }).what();
+}
+
+}  // namespace
+
+TEST_SUITE("accumulator") {
+  TEST_CASE("shards split at any rows, serialised and merged, give the one-pass moments") {
+    // Runs of 1, 2 and 3 rows between longer ones; shards that end and start runs.
+    const Record record = make_record({40, 1, 2, 3, 57, 4, 1, 96, 3, 2, 31});
+    momentid::PortableRandom random(/*seed=*/11, /*stream=*/0);
+    for (InputHold hold : {InputHold::kSample, InputHold::kZeroOrderHold}) {
+      const MomentAccumulator want = one_pass(record, hold);
+      for (std::size_t shards : {2, 3, 7}) {
+        for (int trial = 0; trial < 20; ++trial) {
+          const auto cuts = random_cuts(random, record.rows(), shards - 1);
+          INFO("hold ", static_cast<int>(hold), ", ", shards, " shards, trial ", trial);
+          check_same_moments(merged_shards(record, cuts, hold), want);
+        }
+      }
+    }
+  }
+
+  TEST_CASE("shards of one row each, and shards cut at every run start, give one pass") {
+    const Record record = make_record({5, 1, 2, 3, 9, 4});
+    std::vector<std::size_t> every_row;
+    for (std::size_t r = 1; r < record.rows(); ++r) every_row.push_back(r);
+    const std::vector<std::size_t> run_starts(record.run_starts.begin() + 1,
+                                              record.run_starts.end());
+    for (InputHold hold : {InputHold::kSample, InputHold::kZeroOrderHold}) {
+      const MomentAccumulator want = one_pass(record, hold);
+      check_same_moments(merged_shards(record, every_row, hold), want);
+      check_same_moments(merged_shards(record, run_starts, hold), want);
+    }
+  }
+
+  TEST_CASE("a serialised accumulator deserialises to the same stretches, bit for bit") {
+    const Record record = make_record({300, 2, 77});
+    const MomentAccumulator acc = one_pass(record, InputHold::kZeroOrderHold);
+    const MomentAccumulator copy = MomentAccumulator::deserialize(acc.serialize());
+    CHECK(copy.moments() == acc.moments());
+    CHECK(copy.intervals() == acc.intervals());
+    REQUIRE(copy.stretches().size() == acc.stretches().size());
+    for (std::size_t i = 0; i < acc.stretches().size(); ++i) {
+      CHECK(copy.stretches()[i].intervals == acc.stretches()[i].intervals);
+      CHECK(copy.stretches()[i].sums == acc.stretches()[i].sums);
+    }
+    CHECK(copy.serialize() == acc.serialize());
+  }
+
+  TEST_CASE("a moment is normalised: zero powers dropped, sorted by lag then channel, merged") {
+    const Moment m({{2, 1, 4}, {0, 0, 1}, {1, 1, 3}, {2, 2, 4}, {0, 1, 4}});
+    CHECK(m.factors() == std::vector<MomentFactor>{{1, 1, 0}, {0, 1, 1}, {2, 3, 1}});
+    CHECK(m.degree() == 5);
+    CHECK(m.max_lag() == 1);
+    CHECK(m.is_lagged());
+    CHECK(m.at_lag(0, 3) == momentid::Monomial{0, 1, 0});
+    CHECK(m.at_lag(1, 3) == momentid::Monomial{1, 0, 3});
+    CHECK(momentid::to_string(m) == "c1*c0(t-1)*c2^3(t-1)");
+  }
+
+  TEST_CASE("a moment shifted by a common lag is the same moment") {
+    CHECK(Moment({{0, 1, 3}, {1, 2, 5}}) == Moment({{1, 2, 2}, {0, 1, 0}}));
+    CHECK(Moment({{0, 2, 7}}) == Moment::from_monomial({2}));
+    CHECK_FALSE(Moment({{0, 2, 7}}).is_lagged());
+    CHECK(Moment({{0, 1, 0}, {1, 1, 1}}) != Moment({{0, 1, 1}, {1, 1, 0}}));
+  }
+
+  TEST_CASE("a monomial becomes a moment at lag 0, and equal moments are one key") {
+    const Moment m = Moment::from_monomial({2, 0, 1});
+    CHECK(m.factors() == std::vector<MomentFactor>{{0, 2, 0}, {2, 1, 0}});
+    CHECK(m.degree() == 3);
+    CHECK(m.max_lag() == 0);
+    CHECK(m.at_lag(0, 3) == momentid::Monomial{2, 0, 1});
+    CHECK(Moment::from_monomial({0, 0}) == Moment());
+    CHECK(momentid::to_string(Moment()) == "1");
+    const std::set<Moment> keys{m, Moment({{2, 1, 5}, {0, 1, 5}, {0, 1, 5}}), Moment()};
+    CHECK(keys.size() == 2);
+  }
+
+  TEST_CASE("a negative power or channel is refused, naming the factor") {
+    CHECK(std::string(error_from<std::invalid_argument>([] {
+                        Moment({{0, -1, 0}});
+                      }).what()) == "moment factor c0^-1: channel and power must not be negative");
+    CHECK(std::string(error_from<std::invalid_argument>([] {
+                        Moment({{-2, 1, 3}});
+                      }).what()) ==
+          "moment factor c-2(t-3): channel and power must not be negative");
+  }
+
+  TEST_CASE("the accumulator refuses a lagged moment, naming the lagged factor") {
+    const std::string message = error_from<std::invalid_argument>([] {
+                                  MomentAccumulator({Moment({{0, 1, 0}, {2, 2, 3}})}, kStates,
+                                                    kInputs, InputHold::kSample, kBatches);
+                                }).what();
+    CHECK(message ==
+          "moment c0*c2^2(t-3): the factor c2^2(t-3) is lagged, and lagged moments are not "
+          "accumulated yet (issue #10)");
+  }
+
+  TEST_CASE("the accumulator refuses a moment of a channel it does not have") {
+    const std::string message = error_from<std::invalid_argument>([] {
+                                  MomentAccumulator({Moment::from_monomial({0, 1, 0, 1})}, kStates,
+                                                    kInputs, InputHold::kSample, kBatches);
+                                }).what();
+    CHECK(message ==
+          "moment c1*c3: the factor c3 names channel 3, expected a channel below 3 (2 states, 1 "
+          "input)");
+  }
+
+  TEST_CASE("more than three lookahead rows, or rows added after them, are refused") {
+    MomentAccumulator acc(all_moments(), kStates, kInputs, InputHold::kSample, kBatches);
+    const Record record = make_record({10});
+    acc.continue_run();
+    acc.add(record.row(0), 4);
+    acc.add_lookahead(record.row(4), 2);
+    CHECK(std::string(error_from<std::invalid_argument>([&] {
+                        acc.add_lookahead(record.row(6), 2);
+                      }).what()) ==
+          "MomentAccumulator::add_lookahead: 4 lookahead rows, expected at most 3");
+    CHECK(std::string(error_from<std::logic_error>([&] { acc.add(record.row(6), 1); }).what()) ==
+          "MomentAccumulator::add after add_lookahead: the lookahead rows end the shard");
+  }
+
+  TEST_CASE("the layout is pinned: tag, version, and the size of a tiny accumulator") {
+    const std::vector<std::uint8_t> bytes = tiny_bytes();
+    CHECK(bytes.size() == 137);
+    CHECK(std::string(bytes.begin(), bytes.begin() + 8) == "MOMACCUM");
+    CHECK(bytes[8] == 1);
+  }
+
+  TEST_CASE("truncated bytes are refused, naming the field and where it starts") {
+    std::vector<std::uint8_t> bytes = tiny_bytes();
+    bytes.pop_back();
+    CHECK(deserialize_error(bytes) ==
+          "truncated moment accumulator bytes: 136 bytes, but 3 stretches need at least 16 bytes "
+          "each from byte 89");
+    bytes.resize(40);
+    CHECK(deserialize_error(bytes) ==
+          "truncated moment accumulator bytes: 40 bytes, but the number of moments needs 8 bytes "
+          "from byte 37");
+    bytes.resize(3);
+    CHECK(deserialize_error(bytes) ==
+          "truncated moment accumulator bytes: 3 bytes, but the tag needs 8 bytes from byte 0");
+  }
+
+  TEST_CASE("a count larger than the bytes can hold is refused before anything is allocated") {
+    std::vector<std::uint8_t> bytes = tiny_bytes();
+    bytes[37 + 7] = 0x10;  // the number of moments, 2^60 + 1
+    CHECK(deserialize_error(bytes) ==
+          "truncated moment accumulator bytes: 137 bytes, but 1152921504606846977 moments need at "
+          "least 4 bytes each from byte 45");
+  }
+
+  TEST_CASE("bytes with a wrong tag, version, hold, counts or trailing bytes are refused") {
+    std::vector<std::uint8_t> bytes = tiny_bytes();
+    bytes[0] = 'X';
+    CHECK(deserialize_error(bytes) ==
+          "not moment accumulator bytes: they start with 58 4f 4d 41 43 43 55 4d, expected the "
+          "tag \"MOMACCUM\"");
+    bytes = tiny_bytes();
+    bytes[8] = 2;
+    CHECK(deserialize_error(bytes) ==
+          "moment accumulator bytes of layout version 2, expected version 1");
+    bytes = tiny_bytes();
+    bytes[28] = 7;
+    CHECK(deserialize_error(bytes) ==
+          "moment accumulator bytes: input hold 7, expected 0 (sample) or 1 (zero-order hold)");
+    bytes = tiny_bytes();
+    bytes[73] = 3;  // the interval count
+    CHECK(deserialize_error(bytes) ==
+          "moment accumulator bytes: 3 intervals counted, but the stretches hold 2");
+    bytes = tiny_bytes();
+    bytes.push_back(0);
+    CHECK(deserialize_error(bytes) ==
+          "moment accumulator bytes: 1 byte after the end of the layout at byte 137");
+  }
+
+  TEST_CASE("bytes naming a channel the accumulator does not have are refused") {
+    std::vector<std::uint8_t> bytes = tiny_bytes();
+    bytes[53] = 1;  // the channel of the only factor
+    CHECK(deserialize_error(bytes) ==
+          "moment accumulator bytes: moment c1: the factor c1 names channel 1, expected a "
+          "channel below 1 (1 state, 0 inputs)");
+  }
+
+  TEST_CASE("corrupt bytes throw Error or deserialise, never anything else") {
+    const Record record = make_record({20, 3});
+    const std::vector<std::uint8_t> good = one_pass(record, InputHold::kZeroOrderHold).serialize();
+    momentid::PortableRandom random(/*seed=*/3, /*stream=*/0);
+    for (int trial = 0; trial < 2000; ++trial) {
+      std::vector<std::uint8_t> bytes = good;
+      const std::size_t at = static_cast<std::size_t>(random.uniform() * 120);
+      bytes[at] = static_cast<std::uint8_t>(random.next());
+      if (trial % 2) bytes.resize(static_cast<std::size_t>(random.uniform() * bytes.size()));
+      try {
+        MomentAccumulator::deserialize(bytes);
+      } catch (const momentid::Error&) {
+      }
+    }
+  }
+
+  TEST_CASE("an accumulator in the middle of a run is neither serialised nor merged") {
+    MomentAccumulator acc(all_moments(), kStates, kInputs, InputHold::kSample, kBatches);
+    const Record record = make_record({10});
+    acc.add(record.row(0), 5);
+    CHECK(std::string(error_from<momentid::Error>([&] { acc.serialize(); }).what()) ==
+          "cannot serialise a moment accumulator in the middle of a run: call finish() first");
+    MomentAccumulator other(all_moments(), kStates, kInputs, InputHold::kSample, kBatches);
+    CHECK(std::string(error_from<momentid::Error>([&] { other.merge(acc); }).what()) ==
+          "cannot merge a moment accumulator in the middle of a run: call finish() on it first");
+  }
+
+  TEST_CASE("accumulators of other moments, hold or channels are not merged") {
+    MomentAccumulator acc({Moment::from_monomial({1, 0, 0}), Moment::from_monomial({0, 2, 0})},
+                          kStates, kInputs, InputHold::kSample, kBatches);
+    auto merge_error = [&](const MomentAccumulator& other) {
+      return std::string(error_from<momentid::Error>([&] { acc.merge(other); }).what());
+    };
+    CHECK(merge_error(MomentAccumulator({Moment::from_monomial({1, 0, 0})}, kStates, kInputs,
+                                        InputHold::kSample, kBatches)) ==
+          "cannot merge moment accumulators of different moments: 2 here, 1 in the other");
+    CHECK(merge_error(MomentAccumulator(
+              {Moment::from_monomial({1, 0, 0}), Moment::from_monomial({0, 1, 1})}, kStates,
+              kInputs, InputHold::kSample, kBatches)) ==
+          "cannot merge moment accumulators of different moments: moment 1 is c1^2 here, c1*c2 "
+          "in the other");
+    CHECK(merge_error(MomentAccumulator(
+              {Moment::from_monomial({1, 0, 0}), Moment::from_monomial({0, 2, 0})}, kStates,
+              kInputs, InputHold::kZeroOrderHold, kBatches)) ==
+          "cannot merge moment accumulators with different input holds: sample here, zero-order "
+          "hold in the other");
+    CHECK(merge_error(MomentAccumulator(
+              {Moment::from_monomial({1, 0, 0}), Moment::from_monomial({0, 2, 0})}, 3, 0,
+              InputHold::kSample, kBatches)) ==
+          "cannot merge moment accumulators over different channels: 2 states and 1 input here, "
+          "3 states and 0 inputs in the other");
+  }
+}
