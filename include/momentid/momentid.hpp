@@ -13,6 +13,7 @@
 #include "momentid/input.hpp"
 #include "momentid/metadata.hpp"
 #include "momentid/model.hpp"
+#include "momentid/moment.hpp"
 #include "momentid/random.hpp"
 #include "momentid/reader.hpp"
 #include "momentid/simulate.hpp"

@@ -1,7 +1,5 @@
 #include "data/text.hpp"
 
-#include <fast_float/fast_float.h>
-
 #include <algorithm>
 #include <array>
 #include <cerrno>
@@ -12,35 +10,10 @@
 
 namespace momentid::data {
 
-bool is_blank(char c) { return c == ' ' || c == '\t'; }
-
-const char* skip_blanks(const char* p, const char* end) {
-  while (p != end && is_blank(*p)) ++p;
-  return p;
-}
-
-bool is_blank_line(std::string_view line) {
-  return std::all_of(line.begin(), line.end(), is_blank);
-}
-
 std::string_view trim(std::string_view s) {
   while (!s.empty() && is_blank(s.front())) s.remove_prefix(1);
   while (!s.empty() && is_blank(s.back())) s.remove_suffix(1);
   return s;
-}
-
-const char* parse_number(const char* p, const char* end, double& value) {
-  if (p != end && *p == '+') {
-    ++p;
-    if (p == end || *p == '+' || *p == '-') return nullptr;
-  }
-  const fast_float::from_chars_result result = fast_float::from_chars(p, end, value);
-  if (result.ec == std::errc::result_out_of_range) {
-    value = std::numeric_limits<double>::infinity();
-  } else if (result.ec != std::errc()) {
-    return nullptr;
-  }
-  return result.ptr;
 }
 
 bool is_number(std::string_view text, double& value) {

@@ -2,8 +2,12 @@
 // What the readers of text and binary data files share: a few views on text, numbers as the
 // files write them, and errors located at a line and column.
 
+#include <fast_float/fast_float.h>
+
+#include <algorithm>
 #include <cstddef>
 #include <cstdio>
+#include <limits>
 #include <memory>
 #include <string>
 #include <string_view>
@@ -22,14 +26,35 @@ struct FileCloser {
 };
 using File = std::unique_ptr<std::FILE, FileCloser>;
 
-bool is_blank(char c);
-const char* skip_blanks(const char* p, const char* end);
-bool is_blank_line(std::string_view line);
+// Inline: the readers call these for every field.
+inline bool is_blank(char c) { return c == ' ' || c == '\t'; }
+
+inline const char* skip_blanks(const char* p, const char* end) {
+  while (p != end && is_blank(*p)) ++p;
+  return p;
+}
+
+inline bool is_blank_line(std::string_view line) {
+  return std::all_of(line.begin(), line.end(), is_blank);
+}
+
 std::string_view trim(std::string_view s);
 
 // Parses a number at the start of [p, end) (fast_float, plus an optional leading '+'). Returns
 // the end of the number, or nullptr when there is none. Non-finite values are returned as such.
-const char* parse_number(const char* p, const char* end, double& value);
+inline const char* parse_number(const char* p, const char* end, double& value) {
+  if (p != end && *p == '+') {
+    ++p;
+    if (p == end || *p == '+' || *p == '-') return nullptr;
+  }
+  const fast_float::from_chars_result result = fast_float::from_chars(p, end, value);
+  if (result.ec == std::errc::result_out_of_range) {
+    value = std::numeric_limits<double>::infinity();
+  } else if (result.ec != std::errc()) {
+    return nullptr;
+  }
+  return result.ptr;
+}
 // `text` is exactly one number (finite or not).
 bool is_number(std::string_view text, double& value);
 
