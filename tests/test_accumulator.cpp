@@ -75,8 +75,16 @@ std::vector<Moment> all_moments() {
   return out;
 }
 
-MomentAccumulator one_pass(const Record& record, InputHold hold) {
-  MomentAccumulator acc(all_moments(), kStates, kInputs, hold, kBatches);
+// Moments with factors up to 5 rows back, of states and the input.
+std::vector<Moment> lagged_moments() {
+  return {Moment::from_monomial({1, 0, 0}), Moment({{0, 1, 3}, {1, 1, 0}}),
+          Moment({{0, 1, 0}, {2, 1, 2}}),   Moment({{0, 3, 5}, {0, 1, 0}}),
+          Moment({{1, 2, 1}, {2, 1, 4}}),   Moment({{2, 1, 5}, {0, 1, 0}, {1, 1, 2}})};
+}
+
+MomentAccumulator one_pass(const Record& record, InputHold hold,
+                           const std::vector<Moment>& moments = all_moments()) {
+  MomentAccumulator acc(moments, kStates, kInputs, hold, kBatches);
   for (std::size_t begin : record.run_starts) {
     acc.start_run();
     acc.add(record.row(begin), record.run_end(begin) - begin);
@@ -87,12 +95,18 @@ MomentAccumulator one_pass(const Record& record, InputHold hold) {
 
 // Rows [begin, end) of the record as one shard: a shard may hold the end of one run and the
 // start of the next, and takes the lookahead rows of the run it ends in.
-MomentAccumulator shard(const Record& record, std::size_t begin, std::size_t end, InputHold hold) {
-  MomentAccumulator acc(all_moments(), kStates, kInputs, hold, kBatches);
+MomentAccumulator shard(const Record& record, std::size_t begin, std::size_t end, InputHold hold,
+                        const std::vector<Moment>& moments) {
+  MomentAccumulator acc(moments, kStates, kInputs, hold, kBatches);
   if (record.starts_run(begin)) {
     acc.start_run();
   } else {
     acc.continue_run();
+    // The rows of the run before the shard that its lagged factors reach.
+    std::size_t run_start = begin;
+    while (!record.starts_run(run_start)) --run_start;
+    const std::size_t history = std::min(acc.max_lag(), begin - run_start);
+    if (history > 0) acc.add_history(record.row(begin - history), history);
   }
   for (std::size_t r = begin; r < end;) {
     if (r > begin && record.starts_run(r)) acc.start_run();
@@ -109,15 +123,15 @@ MomentAccumulator shard(const Record& record, std::size_t begin, std::size_t end
 
 // The shards between consecutive cuts (0 and the record's end included), each sent through
 // serialize and deserialize, merged in record order.
-MomentAccumulator merged_shards(const Record& record, std::vector<std::size_t> cuts,
-                                InputHold hold) {
+MomentAccumulator merged_shards(const Record& record, std::vector<std::size_t> cuts, InputHold hold,
+                                const std::vector<Moment>& moments = all_moments()) {
   cuts.insert(cuts.begin(), 0);
   cuts.push_back(record.rows());
   MomentAccumulator whole =
-      MomentAccumulator::deserialize(shard(record, cuts[0], cuts[1], hold).serialize());
+      MomentAccumulator::deserialize(shard(record, cuts[0], cuts[1], hold, moments).serialize());
   for (std::size_t i = 1; i + 1 < cuts.size(); ++i) {
-    whole.merge(
-        MomentAccumulator::deserialize(shard(record, cuts[i], cuts[i + 1], hold).serialize()));
+    whole.merge(MomentAccumulator::deserialize(
+        shard(record, cuts[i], cuts[i + 1], hold, moments).serialize()));
   }
   return whole;
 }
@@ -245,14 +259,55 @@ TEST_SUITE("accumulator") {
           "moment factor c-2(t-3): channel and power must not be negative");
   }
 
-  TEST_CASE("the accumulator refuses a lagged moment, naming the lagged factor") {
-    const std::string message = error_from<std::invalid_argument>([] {
-                                  MomentAccumulator({Moment({{0, 1, 0}, {2, 2, 3}})}, kStates,
-                                                    kInputs, InputHold::kSample, kBatches);
-                                }).what();
-    CHECK(message ==
-          "moment c0*c2^2(t-3): the factor c2^2(t-3) is lagged, and lagged moments are not "
-          "accumulated yet (issue #10)");
+  TEST_CASE("a lagged moment is the trapezoidal average of its lagged products from row L on") {
+    // One run of 200 rows; the largest lag L is 5, so every moment averages intervals 5 .. 199.
+    const Record record = make_record({200});
+    const std::vector<Moment> moments = lagged_moments();
+    const auto got = momentid::estimates(one_pass(record, InputHold::kSample, moments), 1).mean;
+    const std::size_t lag = 5, rows = record.rows();
+    for (std::size_t i = 0; i < moments.size(); ++i) {
+      const auto value = [&](std::size_t n) {
+        double product = 1;
+        for (const MomentFactor& f : moments[i].factors()) {
+          product *= std::pow(record.row(n - static_cast<std::size_t>(f.lag))[f.channel], f.power);
+        }
+        return product;
+      };
+      double sum = 0;
+      for (std::size_t n = lag; n + 1 < rows; ++n) sum += 0.5 * (value(n) + value(n + 1));
+      const double want = sum / static_cast<double>(rows - 1 - lag);
+      INFO(to_string(moments[i]));
+      CHECK(std::abs(got[i] - want) <= 1e-13 * std::abs(want));
+    }
+  }
+
+  TEST_CASE("lagged moments of shards with their history merge to the one-pass moments") {
+    // Runs shorter than the largest lag (they give no interval), cuts inside the first rows of
+    // a run (the history is then the whole run so far), and both holds.
+    const Record record = make_record({301, 3, 6, 7, 180, 1, 95});
+    momentid::PortableRandom random(/*seed=*/11, /*stream=*/0);
+    for (const InputHold hold : {InputHold::kSample, InputHold::kZeroOrderHold}) {
+      const MomentAccumulator want = one_pass(record, hold, lagged_moments());
+      for (const std::size_t shards : {2, 3, 7, 40}) {
+        const auto cuts = random_cuts(random, record.rows(), shards - 1);
+        CAPTURE(shards);
+        check_same_moments(merged_shards(record, cuts, hold, lagged_moments()), want);
+      }
+    }
+  }
+
+  TEST_CASE("history is refused beyond the largest lag or outside a continued run") {
+    MomentAccumulator acc(lagged_moments(), kStates, kInputs, InputHold::kSample, kBatches);
+    const std::vector<double> rows(6 * kChannels, 1.0);
+    CHECK(std::string(error_from<std::invalid_argument>([&] {
+                        acc.start_run();
+                        acc.add_history(rows.data(), 1);
+                      }).what()) ==
+          "MomentAccumulator::add_history: 1 history rows, expected at most 5 (the largest lag), "
+          "right after continue_run()");
+    acc.continue_run();
+    CHECK_THROWS_AS(acc.add_history(rows.data(), 6), std::invalid_argument);
+    acc.add_history(rows.data(), 5);
   }
 
   TEST_CASE("the accumulator refuses a moment of a channel it does not have") {

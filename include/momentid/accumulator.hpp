@@ -23,23 +23,31 @@ enum class InputHold { kSample, kZeroOrderHold };
 // intervals between consecutive rows of one run, never across runs (see close_interval).
 // Interval n of a run is [row n, row n + 1].
 //
-// Precondition: every moment is at lag 0 (Moment::is_lagged() is false) and names channels
-// below states + inputs; the constructor throws std::invalid_argument naming the offending
-// factor otherwise. Lagged moments come with the lagged moment equations (issue #10).
+// Lagged moments. A factor at lag l is taken l rows before the row of its interval: the moment
+// E[y(t - 3) y(t)] averages y[n - 3] y[n] over the intervals. Every moment is averaged over the
+// same intervals, those from row L of each run on, where L is the largest lag: the first L rows
+// of a run only supply the lagged values. (Without lags nothing changes.) With a held input,
+// the input factors are constant over an interval at every lag, and the state part is integrated
+// as it is at lag 0.
+//
+// Precondition: every moment names channels below states + inputs; the constructor throws
+// std::invalid_argument naming the offending factor otherwise.
 //
 // Shards. The state is a value: a record can be cut into shards, each accumulated anywhere,
 // serialised, sent, and merged in record order, and the merged moments are those of one pass
 // over the record (up to the order of the floating-point sums) with the same interval count.
 // A shard is a contiguous range of rows of the record:
-//   - begin it with start_run() if its first row starts a run, else with continue_run();
+//   - begin it with start_run() if its first row starts a run, else with continue_run() and,
+//     with lagged moments, add_history() the L rows before it (all rows of the run before it
+//     when there are fewer);
 //   - add() its rows, calling start_run() where a new run starts inside it;
 //   - if its last run goes on past it, add_lookahead() the next rows of that run: kLookaheadRows
 //     of them, or all there are if the run ends sooner;
 //   - finish().
-// A shard owns the intervals that start at its rows and the one that starts at its first
-// lookahead row, except the first interval of a run it continues: the shard before owns that one,
-// through its lookahead. So every interval of a run is owned by one shard, which closes it with
-// the same rows and weights as one pass (the cubic weights need the rows n - 1 .. n + 2).
+// An interval belongs to the shard that holds the row before it (the first interval of a run:
+// to the shard that started the run). So every interval of a run is owned by one shard, which
+// closes it with the same rows and weights as one pass (the cubic weights need the rows
+// n - 1 .. n + 2, and lagged factors the L rows before).
 //
 // Example, one pass:
 //   MomentAccumulator acc(moments, /*states=*/2, /*inputs=*/1, InputHold::kZeroOrderHold, 20);
@@ -72,6 +80,10 @@ class MomentAccumulator {
   // The next rows continue a run whose earlier rows went to another shard: the interval from
   // the first of them to the second belongs to that shard.
   void continue_run();
+  // After continue_run(): the rows of the run just before the shard, at most the largest lag,
+  // used only for the lagged factors of the shard's intervals (std::invalid_argument
+  // otherwise).
+  void add_history(const double* rows, std::size_t count);
   // Adds `count` consecutive rows of the current run, each states then inputs. Throws
   // std::logic_error after add_lookahead() until the next start_run(), continue_run() or
   // finish().
@@ -101,6 +113,8 @@ class MomentAccumulator {
   static MomentAccumulator deserialize(std::span<const std::uint8_t> bytes);
 
   std::size_t intervals() const { return intervals_; }
+  // The largest lag of the moments, in rows.
+  std::size_t max_lag() const { return max_lag_; }
   const std::vector<Moment>& moments() const { return moments_; }
 
   // Per stretch of the record: sums of the interval averages and the number of intervals.
@@ -121,20 +135,28 @@ class MomentAccumulator {
   std::size_t states_, inputs_;
   InputHold hold_;
   std::size_t batches_;
+  struct FactorRef {
+    std::size_t lag;    // rows back
+    std::size_t index;  // into a row's power table
+  };
   // Moment i's state factors are factors_[first_factor_[2i] .. first_factor_[2i+1]), its input
-  // factors follow up to first_factor_[2i+2]; entries index the power table.
-  std::vector<std::size_t> factors_, first_factor_;
+  // factors follow up to first_factor_[2i+2].
+  std::vector<FactorRef> factors_;
+  std::vector<std::size_t> first_factor_;
+  std::size_t max_lag_ = 0;
   std::vector<std::size_t> held_, plain_;  // moments averaged with a held input, and the others
   std::vector<int> max_power_;
   std::vector<std::size_t> power_offset_;
-  std::vector<double> powers_;
+  std::size_t table_size_ = 0;
+  std::vector<double> powers_;             // max_lag_ + 1 power tables, by row modulo their count
+  std::vector<const double*> row_tables_;  // the table of row n - lag, per lag, for the row n
   // The state and input parts of every moment at the last four rows of the run (row mod 4).
   std::vector<double> state_ring_, input_ring_;
-  std::size_t run_rows_ = 0;  // rows of the current run in this accumulator, lookahead included
-  // The intervals of the current run this accumulator owns: first_owned_ .. owned_rows_ (local
-  // row indices), where first_owned_ is 1 after continue_run(), and owned_rows_ counts the rows
-  // of the run given to add().
-  std::size_t first_owned_ = 0, owned_rows_ = 0, lookahead_rows_ = 0;
+  // Rows of the current run this accumulator saw (history and lookahead included), and those of
+  // them past the first max_lag_, which have their moments' values in the rings.
+  std::size_t seen_rows_ = 0, run_rows_ = 0;
+  bool continued_ = false;  // the current run began before this shard (continue_run())
+  std::size_t history_rows_ = 0, owned_rows_ = 0, lookahead_rows_ = 0;
   std::vector<Stretch> stretches_;
   std::size_t max_stretches_;
   std::size_t stretch_length_ = 1;  // intervals per stretch, doubled when there are too many

@@ -26,50 +26,51 @@ MomentAccumulator::MomentAccumulator(std::vector<Moment> moments, std::size_t st
       batches_(batches),
       max_stretches_(4 * std::max<std::size_t>(batches, 2)) {
   const std::size_t variables = states_ + inputs_;
-  std::vector<Monomial> monomials;
   for (const Moment& m : moments_) {
     for (const MomentFactor& f : m.factors()) {
-      if (f.lag != 0) {
-        throw std::invalid_argument("moment " + to_string(m) + ": the factor " + to_string(f) +
-                                    " is lagged, and lagged moments are not accumulated yet "
-                                    "(issue #10)");
-      }
       if (static_cast<std::size_t>(f.channel) >= variables) {
         throw std::invalid_argument(
             "moment " + to_string(m) + ": the factor " + to_string(f) + " names channel " +
             std::to_string(f.channel) + ", expected a channel below " + std::to_string(variables) +
             " (" + count_of(states_, "state") + ", " + count_of(inputs_, "input") + ")");
       }
+      max_lag_ = std::max(max_lag_, static_cast<std::size_t>(f.lag));
     }
-    monomials.push_back(m.at_lag(0, variables));
   }
   max_power_.assign(variables, 1);
-  for (const Monomial& m : monomials) {
-    for (std::size_t v = 0; v < variables; ++v) max_power_[v] = std::max(max_power_[v], m[v]);
+  for (const Moment& m : moments_) {
+    for (const MomentFactor& f : m.factors()) {
+      max_power_[f.channel] = std::max(max_power_[f.channel], f.power);
+    }
   }
   std::size_t offset = 0;
   for (int p : max_power_) {
     power_offset_.push_back(offset);
     offset += static_cast<std::size_t>(p) + 1;
   }
-  powers_.assign(offset, 1.0);
-  // Each moment's state factors, then its input factors, as indices into the power table.
+  table_size_ = offset;
+  // The powers of the last max_lag_ + 1 rows, so that a factor at lag l reads row n - l.
+  powers_.assign((max_lag_ + 1) * table_size_, 1.0);
+  // Each moment's state factors, then its input factors, as (lag, index into a power table).
   first_factor_.push_back(0);
-  for (std::size_t i = 0; i < monomials.size(); ++i) {
-    const Monomial& m = monomials[i];
+  for (std::size_t i = 0; i < moments_.size(); ++i) {
     bool has_input = false;
-    for (std::size_t v = 0; v < states_; ++v) {
-      if (m[v] != 0) factors_.push_back(power_offset_[v] + static_cast<std::size_t>(m[v]));
+    for (const MomentFactor& f : moments_[i].factors()) {
+      if (static_cast<std::size_t>(f.channel) >= states_) continue;
+      factors_.push_back({static_cast<std::size_t>(f.lag),
+                          power_offset_[f.channel] + static_cast<std::size_t>(f.power)});
     }
     first_factor_.push_back(factors_.size());
-    for (std::size_t v = states_; v < variables; ++v) {
-      if (m[v] == 0) continue;
-      factors_.push_back(power_offset_[v] + static_cast<std::size_t>(m[v]));
+    for (const MomentFactor& f : moments_[i].factors()) {
+      if (static_cast<std::size_t>(f.channel) < states_) continue;
+      factors_.push_back({static_cast<std::size_t>(f.lag),
+                          power_offset_[f.channel] + static_cast<std::size_t>(f.power)});
       has_input = true;
     }
     first_factor_.push_back(factors_.size());
     (hold_ == InputHold::kZeroOrderHold && has_input ? held_ : plain_).push_back(i);
   }
+  row_tables_.assign(max_lag_ + 1, nullptr);
   const std::size_t k = moments_.size();
   state_ring_.assign(4 * k, 0.0);
   input_ring_.assign(4 * k, 0.0);
@@ -80,7 +81,18 @@ void MomentAccumulator::start_run() { finish_run(); }
 
 void MomentAccumulator::continue_run() {
   finish_run();
-  first_owned_ = 1;
+  continued_ = true;
+}
+
+void MomentAccumulator::add_history(const double* rows, std::size_t count) {
+  if (!continued_ || owned_rows_ > 0 || lookahead_rows_ > 0 || history_rows_ + count > max_lag_) {
+    throw std::invalid_argument(
+        "MomentAccumulator::add_history: " + std::to_string(history_rows_ + count) +
+        " history rows, expected at most " + std::to_string(max_lag_) +
+        " (the largest lag), right after continue_run()");
+  }
+  history_rows_ += count;
+  push_rows(rows, count);
 }
 
 void MomentAccumulator::finish() { finish_run(); }
@@ -90,7 +102,9 @@ void MomentAccumulator::finish() { finish_run(); }
 void MomentAccumulator::finish_run() {
   if (run_rows_ >= 2) close_interval(run_rows_ - 2);
   run_rows_ = 0;
-  first_owned_ = 0;
+  seen_rows_ = 0;
+  continued_ = false;
+  history_rows_ = 0;
   owned_rows_ = 0;
   lookahead_rows_ = 0;
 }
@@ -117,22 +131,34 @@ void MomentAccumulator::add_lookahead(const double* rows, std::size_t count) {
 void MomentAccumulator::push_rows(const double* rows, std::size_t count) {
   const std::size_t variables = states_ + inputs_;
   const std::size_t k = moments_.size();
+  const std::size_t depth = max_lag_ + 1;
   for (std::size_t r = 0; r < count; ++r) {
     const double* row = rows + r * variables;
+    double* table = powers_.data() + (seen_rows_ % depth) * table_size_;
     for (std::size_t v = 0; v < variables; ++v) {
-      double* p = &powers_[power_offset_[v]];
+      double* p = table + power_offset_[v];
       p[1] = row[v];
       for (int e = 2; e <= max_power_[v]; ++e) p[e] = p[e - 1] * row[v];
     }
+    ++seen_rows_;
+    // The first max_lag_ rows of a run only fill the lagged power tables.
+    if (seen_rows_ <= max_lag_) continue;
+    for (std::size_t lag = 0; lag < depth; ++lag) {
+      row_tables_[lag] = powers_.data() + ((seen_rows_ - 1 - lag) % depth) * table_size_;
+    }
     double* state = state_ring_.data() + (run_rows_ % 4) * k;
     double* input = input_ring_.data() + (run_rows_ % 4) * k;
-    const std::size_t* factors = factors_.data();
+    const FactorRef* factors = factors_.data();
     const std::size_t* first = first_factor_.data();
-    const double* powers = powers_.data();
+    const double* const* tables = row_tables_.data();
     for (std::size_t i = 0; i < k; ++i) {
       double g = 1, h = 1;
-      for (std::size_t f = first[2 * i]; f < first[2 * i + 1]; ++f) g *= powers[factors[f]];
-      for (std::size_t f = first[2 * i + 1]; f < first[2 * i + 2]; ++f) h *= powers[factors[f]];
+      for (std::size_t f = first[2 * i]; f < first[2 * i + 1]; ++f) {
+        g *= tables[factors[f].lag][factors[f].index];
+      }
+      for (std::size_t f = first[2 * i + 1]; f < first[2 * i + 2]; ++f) {
+        h *= tables[factors[f].lag][factors[f].index];
+      }
       state[i] = g;
       input[i] = h;
     }
@@ -151,9 +177,14 @@ void MomentAccumulator::push_rows(const double* rows, std::size_t count) {
 // products are continuous across rows, and the trapezoidal rule's error then only accumulates
 // at the ends of a run.
 void MomentAccumulator::close_interval(std::size_t n) {
-  // The first interval of a continued run belongs to the shard before, and those that start
-  // past the first lookahead row to the shard after.
-  if (n < first_owned_ || n > owned_rows_) return;
+  // Interval n starts at row j = n + max_lag_ of those this accumulator saw in the run. It
+  // belongs to the shard that holds row j - 1 (the first interval of a run: the shard that
+  // started the run), so that each shard closes its intervals with its own rows, its history
+  // and at most kLookaheadRows rows past its end.
+  const std::size_t j = n + max_lag_;
+  const bool owned =
+      j == 0 ? !continued_ : j - 1 >= history_rows_ && j - 1 < history_rows_ + owned_rows_;
+  if (!owned) return;
   const std::size_t k = moments_.size();
   const std::size_t rows = run_rows_;
   auto state = [&](std::size_t row) { return state_ring_.data() + (row % 4) * k; };
@@ -236,7 +267,7 @@ void MomentAccumulator::merge(const MomentAccumulator& other) {
     merge(copy);
     return;
   }
-  if (other.run_rows_ > 0) {
+  if (other.seen_rows_ > 0) {
     throw Error(
         "cannot merge a moment accumulator in the middle of a run: call finish() on it first");
   }
@@ -358,7 +389,7 @@ std::string hex(std::span<const std::uint8_t> bytes) {
 }  // namespace
 
 std::vector<std::uint8_t> MomentAccumulator::serialize() const {
-  if (run_rows_ > 0) {
+  if (seen_rows_ > 0) {
     throw Error(
         "cannot serialise a moment accumulator in the middle of a run: call finish() first");
   }
