@@ -4,8 +4,10 @@
 
 #include <iostream>
 #include <memory>
+#include <tuple>
 
 #include "cli/commands.hpp"
+#include "momentid/lagged.hpp"
 #include "momentid/model.hpp"
 
 namespace momentid::cli {
@@ -16,10 +18,35 @@ struct DeriveCommand {
   std::optional<std::string> multipliers;
   int degree = 0;
   std::string format = "text";
+  std::optional<std::string> lags;
+  std::optional<std::string> instruments;
+  std::vector<std::string> measured;
 };
+
+int run_lagged(const DeriveCommand& command, const Model& model) {
+  LagOptions options;
+  std::tie(options.first_lag, options.last_lag) = lag_range(*command.lags);
+  if (command.instruments) {
+    options.instruments = monomial_list(model.variables(), *command.instruments, "--instruments");
+  }
+  if (!command.measured.empty()) {
+    options.measured = variable_flags(model.variables(), command.measured, "--measured");
+  }
+  const LaggedSystem system = derive_lagged(model, options);
+  std::cout << (command.format == "latex"  ? format_latex(system)
+                : command.format == "json" ? format_json(system)
+                                           : format_text(system));
+  if (system.equations.empty()) {
+    std::cerr << "momentid: no lagged moment equation could be derived for " << command.model
+              << "\n";
+    return kNothingIdentifiable;
+  }
+  return 0;
+}
 
 int run_derive(const DeriveCommand& command) {
   const Model model = parse_model_file(command.model);
+  if (command.lags) return run_lagged(command, model);
   DeriveOptions options;
   if (command.multipliers) {
     options.multipliers = parse_multiplier_list(model, *command.multipliers, "--multipliers");
@@ -58,6 +85,17 @@ Command add_derive(CLI::App& app) {
       ->excludes(multipliers);
   sub->add_option("--format", command->format, "output format")
       ->check(CLI::IsMember({"text", "latex", "json"}));
+  auto* lags =
+      sub->add_option("--lags", command->lags,
+                      "lagged equations: instruments at lags FIRST..LAST samples, e.g. 3..40")
+          ->excludes(multipliers);
+  sub->add_option("--instruments", command->instruments,
+                  "instruments for --lags: monomials in the measured channels, e.g. \"y, y^3\"")
+      ->needs(lags);
+  sub->add_option("--measured", command->measured,
+                  "the channels the data have, for --lags (default: every state and input)")
+      ->delimiter(',')
+      ->needs(lags);
   return {sub, [command] { return run_derive(*command); }};
 }
 

@@ -1,3 +1,7 @@
+#include <algorithm>
+#include <charconv>
+#include <string_view>
+
 #include "cli/commands.hpp"
 #include "momentid/error.hpp"
 
@@ -19,6 +23,73 @@ std::optional<InputHold> hold_option(const std::string& text) {
   if (text == "zoh") return InputHold::kZeroOrderHold;
   if (text == "sample") return InputHold::kSample;
   return std::nullopt;
+}
+
+std::pair<int, int> lag_range(const std::string& text) {
+  const std::size_t dots = text.find("..");
+  int first = 0, last = 0;
+  const auto number = [&](std::string_view digits, int& value) {
+    const auto [end, error] = std::from_chars(digits.data(), digits.data() + digits.size(), value);
+    return error == std::errc() && end == digits.data() + digits.size() && !digits.empty();
+  };
+  if (dots == std::string::npos || !number(std::string_view(text).substr(0, dots), first) ||
+      !number(std::string_view(text).substr(dots + 2), last)) {
+    throw UsageError("--lags: expected FIRST..LAST in samples, e.g. 3..40, found '" + text + "'");
+  }
+  return {first, last};
+}
+
+std::vector<Monomial> monomial_list(const std::vector<std::string>& variables,
+                                    const std::string& text, const std::string& option) {
+  std::vector<Monomial> out;
+  std::size_t begin = 0;
+  while (begin <= text.size()) {
+    const std::size_t end = std::min(text.find(',', begin), text.size());
+    std::string item = text.substr(begin, end - begin);
+    item.erase(0, item.find_first_not_of(" \t"));
+    item.erase(item.find_last_not_of(" \t") + 1);
+    Monomial m(variables.size(), 0);
+    std::size_t at = 0;
+    while (at <= item.size()) {
+      const std::size_t star = std::min(item.find('*', at), item.size());
+      const std::string factor = item.substr(at, star - at);
+      const std::size_t caret = factor.find('^');
+      const std::string name = factor.substr(0, caret);
+      int power = 1;
+      if (caret != std::string::npos) {
+        const std::string digits = factor.substr(caret + 1);
+        const auto [stop, error] =
+            std::from_chars(digits.data(), digits.data() + digits.size(), power);
+        if (error != std::errc() || stop != digits.data() + digits.size() || power < 1 ||
+            power > 64) {
+          throw UsageError(option + ": expected a power from 1 to 64 in '" + item + "'");
+        }
+      }
+      const auto found = std::find(variables.begin(), variables.end(), name);
+      if (found == variables.end()) {
+        throw UsageError(option + ": '" + name + "' in '" + item +
+                         "' is not a state or input of the model");
+      }
+      m[static_cast<std::size_t>(found - variables.begin())] += power;
+      at = star + 1;
+    }
+    out.push_back(m);
+    begin = end + 1;
+  }
+  return out;
+}
+
+std::vector<bool> variable_flags(const std::vector<std::string>& variables,
+                                 const std::vector<std::string>& names, const std::string& option) {
+  std::vector<bool> out(variables.size(), false);
+  for (const std::string& name : names) {
+    const auto found = std::find(variables.begin(), variables.end(), name);
+    if (found == variables.end()) {
+      throw UsageError(option + ": '" + name + "' is not a state or input of the model");
+    }
+    out[static_cast<std::size_t>(found - variables.begin())] = true;
+  }
+  return out;
 }
 
 }  // namespace momentid::cli

@@ -1,0 +1,97 @@
+#pragma once
+
+#include <ginac/ginac.h>
+
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "momentid/model.hpp"
+#include "momentid/moment.hpp"
+
+namespace momentid {
+
+// A cross-moment function of the lag s, or one of its derivatives in s:
+//   C[ψ;F](s) = E[ψ(t − s)·F(t)],   C'[ψ;F](s) = d/ds C[ψ;F](s),   C''[ψ;F](s), ...
+// with ψ (the instrument) and F monomials over the model's variables. By stationarity
+// E[ψ(t − s)·dF/dt(t)] = C'[ψ;F](s): a time derivative of measured channels becomes a derivative
+// in s of a smooth function that the data give without differentiating any signal.
+struct LagFunction {
+  Monomial instrument;
+  Monomial function;
+  int order = 0;  // derivatives in s
+  friend auto operator<=>(const LagFunction&, const LagFunction&) = default;
+};
+using LagCombination = std::map<LagFunction, GiNaC::numeric>;
+
+// Equation `equation` (index into Model::equations()) at time t times the instrument at t − s,
+// in expectation: sum over p of coefficients[p] * theta_p = rhs, for every lag s of the system.
+struct LaggedEquation {
+  int equation = 0;
+  Monomial instrument;
+  std::vector<LagCombination> coefficients;  // one per parameter
+  LagCombination rhs;
+};
+
+// How to form the lagged moment equations.
+struct LagOptions {
+  // The lags s, in samples. The lag derivatives are taken with central stencils that reach
+  // kStencilReach[order] samples either side, so first_lag must exceed the reach: then no
+  // stencil touches lag 0, where white sensor noise on a channel biases its autocorrelation.
+  int first_lag = 3;
+  int last_lag = 40;
+  // Instruments, monomials in the measured channels; nullopt: each measured state and its
+  // highest power in the equations (y and y^3 for the Duffing oscillator).
+  std::optional<std::vector<Monomial>> instruments;
+  // Per model variable (states, then inputs): whether the data have it. Empty: all.
+  std::vector<bool> measured;
+
+  static constexpr int kMaxLag = 100000;
+  // Throws UsageError naming what is wrong: lags out of order or too small for the stencils, an
+  // instrument in a channel that is not measured.
+  void validate(const Model& model, int max_order) const;
+};
+
+// The lagged moment equations: the linear system of the dynamical moment technique with
+// instruments at earlier times. States without a column are expressed through kinematic
+// equations (v = y' when y' = v), so that a record of displacement and force suffices.
+//
+// Example:
+//   Model model = parse_model_file("models/duffing.mom");
+//   LaggedSystem system = derive_lagged(model, {.measured = {true, false, true}});
+//   std::cout << format_text(system);  // c*C'[y;y](s) + k*C[y;y](s) + eps*C[y;y^3](s) = ...
+struct LaggedSystem {
+  const Model* model = nullptr;  // the model derived from, which must outlive the system
+  int first_lag = 0, last_lag = 0;
+  std::vector<Monomial> instruments;
+  std::vector<LaggedEquation> equations;
+  std::vector<bool> measured;            // per variable, as in LagOptions
+  std::vector<bool> needed;              // per variable: the equations read its column
+  std::vector<std::string> derivatives;  // how unmeasured states are read, e.g. "v = y'"
+  std::vector<std::string> notes;
+  int max_order = 0;  // the highest lag derivative in the equations
+};
+
+// Derives the lagged equations. Throws ModelError at an equation with a term that needs a
+// channel the data lack (v^2 when only y is measured is not a time derivative of y), or naming
+// a state that has no column and that no kinematic equation defines; UsageError for bad options.
+LaggedSystem derive_lagged(const Model& model, const LagOptions& options);
+
+// How far a central stencil for the order-k lag derivative reaches either side (k = 0..3), and
+// its weights w_j for j = -reach..reach: C^(k)(s) ~ sum_j w_j C(s + j) / dt^k, error O(dt^4).
+inline constexpr int kMaxLagOrder = 3;
+inline constexpr int kStencilReach[kMaxLagOrder + 1] = {0, 2, 2, 3};
+std::vector<double> stencil_weights(int order);
+
+// The lagged moments E[ψ(t − s − j)·F(t)] behind C[ψ;F](s + j), as accumulator keys over the
+// model's variables.
+Moment lagged_moment(const Monomial& instrument, const Monomial& function, int lag);
+
+// Text (README, "momentid derive --lags"), LaTeX and JSON forms.
+std::string format_lag_function(const Model& model, const LagFunction& f);
+std::string format_text(const LaggedSystem& system);
+std::string format_latex(const LaggedSystem& system);
+std::string format_json(const LaggedSystem& system);
+
+}  // namespace momentid

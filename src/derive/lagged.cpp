@@ -1,0 +1,501 @@
+// Lagged moment equations: each equation with parameters, at time t, times an instrument at
+// t - s, in expectation. Terms become cross-moment functions C[ψ;F](s) of measured channels and
+// their derivatives in s; states without a column are read through kinematic equations.
+
+#include "momentid/lagged.hpp"
+
+#include <algorithm>
+#include <numeric>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+
+#include "common/json.hpp"
+
+namespace momentid {
+namespace {
+
+using GiNaC::numeric;
+
+// How the data show a model variable: `scale` times the `order`-th time derivative of the
+// measured variable `base`.
+struct Observation {
+  int base = -1;  // -1: the data cannot show it
+  int order = 0;
+  numeric scale = 1;
+  std::string reason;  // why not, when base is -1
+};
+
+std::string number_text(const numeric& q) {
+  std::ostringstream out;
+  out << q;
+  return out.str();
+}
+
+std::string primes(int order) {
+  return order <= 3 ? std::string(static_cast<std::size_t>(order), '\'')
+                    : "^(" + std::to_string(order) + ")";
+}
+
+// A term as written in a model: 2*c*y^3, x, v', ...
+std::string term_text(const Model& model, const Term& t) {
+  std::string out;
+  const numeric a = GiNaC::abs(t.coefficient);
+  if (t.coefficient.is_negative()) out += "-";
+  std::vector<std::string> factors;
+  if (a != 1) factors.push_back(number_text(a));
+  if (t.parameter >= 0) factors.push_back(model.parameters()[t.parameter].name);
+  if (std::any_of(t.monomial.begin(), t.monomial.end(), [](int e) { return e != 0; })) {
+    factors.push_back(format_monomial(model, t.monomial));
+  }
+  if (t.derivative >= 0) factors.push_back(model.states()[t.derivative].name + "'");
+  if (factors.empty()) factors.push_back("1");
+  for (std::size_t i = 0; i < factors.size(); ++i) out += (i ? "*" : "") + factors[i];
+  return out;
+}
+
+class LagDeriver {
+ public:
+  LagDeriver(const Model& model, std::vector<bool> measured)
+      : model_(model),
+        measured_(std::move(measured)),
+        variables_(static_cast<int>(model.variables().size())),
+        states_(static_cast<int>(model.states().size())),
+        observed_(model.variables().size()) {
+    for (int v = 0; v < variables_; ++v) observe(v, 0);
+  }
+
+  const Observation& observation(int v) const { return observed_[v]; }
+
+  // The lag functions of one term, weighted, for instrument ψ: throws ModelError when the term
+  // is not a time derivative of measured channels.
+  std::pair<LagFunction, numeric> lag_function(const Equation& eq, const Term& t,
+                                               const Monomial& instrument) const {
+    Monomial measured(variables_, 0);
+    std::vector<std::pair<int, int>> derivatives;  // (base, order), one per factor
+    numeric scale = t.coefficient;
+    auto unobservable = [&](int v) {
+      throw ModelError(eq.where, "term '" + term_text(model_, t) + "' of equation " + eq.name() +
+                                     " needs " + observed_[v].reason);
+    };
+    for (int v = 0; v < variables_; ++v) {
+      const int e = t.monomial[v];
+      if (e == 0) continue;
+      const Observation& o = observed_[v];
+      if (o.base < 0) unobservable(v);
+      scale *= GiNaC::pow(o.scale, numeric(e));
+      if (o.order == 0) {
+        measured[o.base] += e;
+      } else {
+        derivatives.insert(derivatives.end(), static_cast<std::size_t>(e), {o.base, o.order});
+      }
+    }
+    if (t.derivative >= 0) {
+      const Observation& o = observed_[t.derivative];
+      if (o.base < 0) unobservable(t.derivative);
+      scale *= o.scale;
+      derivatives.emplace_back(o.base, o.order + 1);
+    }
+    if (derivatives.empty()) return {{instrument, measured, 0}, scale};
+    const auto [base, order] = derivatives.front();
+    const int power = measured[base];
+    measured[base] = 0;
+    const bool rest_constant =
+        std::all_of(measured.begin(), measured.end(), [](int e) { return e == 0; });
+    if (derivatives.size() == 1 && rest_constant && (order == 1 || power == 0) &&
+        order <= kMaxLagOrder) {
+      // b^p * b' = d/dt b^(p+1) / (p+1); b^(k) alone is the k-th derivative of b.
+      Monomial function(variables_, 0);
+      function[base] = power + 1;
+      return {{instrument, function, order}, scale / (power + 1)};
+    }
+    // Name the unmeasured variable the term would need, with how the data show it.
+    std::string why = "channels the data lack: it is not a time derivative of measured channels";
+    for (int v = 0; v < variables_; ++v) {
+      if (t.monomial[v] > 0 && observed_[v].order > 0) {
+        why = "a column for " + model_.variables()[v] +
+              ": it is not a time derivative of measured channels (" + definition(v) + ")";
+        break;
+      }
+    }
+    throw ModelError(
+        eq.where, "term '" + term_text(model_, t) + "' of equation " + eq.name() + " needs " + why);
+  }
+
+  // "v = y'" for a state the data show as a derivative.
+  std::string definition(int v) const {
+    const Observation& o = observed_[v];
+    std::string out = model_.variables()[v] + " = ";
+    if (o.scale != 1) out += number_text(o.scale) + "*";
+    return out + model_.variables()[o.base] + primes(o.order);
+  }
+
+ private:
+  // Fills observed_[v]; `depth` guards against kinematic cycles.
+  const Observation& observe(int v, int depth) {
+    Observation& o = observed_[v];
+    if (o.base >= 0 || !o.reason.empty()) return o;
+    const std::string& name = model_.variables()[v];
+    if (measured_[v]) {
+      o.base = v;
+      return o;
+    }
+    o.reason = "a column for " + std::string(v < states_ ? "state " : "input ") + name;
+    if (v >= states_ || depth > states_) return o;
+    // A kinematic equation c_d*a' + c_v*v = 0 (parameter-free, those two terms only) shows v as
+    // a derivative of a.
+    for (const Equation& eq : model_.equations()) {
+      if (eq.terms.size() != 2) continue;
+      const Term* derivative = nullptr;
+      const Term* state = nullptr;
+      for (const Term& t : eq.terms) {
+        if (t.parameter >= 0) break;
+        const int degree = std::accumulate(t.monomial.begin(), t.monomial.end(), 0);
+        if (t.derivative >= 0 && degree == 0) derivative = &t;
+        if (t.derivative < 0 && degree == 1 && t.monomial[v] == 1) state = &t;
+      }
+      if (derivative == nullptr || state == nullptr || derivative->derivative == v) continue;
+      const Observation& a = observe(derivative->derivative, depth + 1);
+      if (a.base < 0) continue;
+      o.base = a.base;
+      o.order = a.order + 1;
+      o.scale = a.scale * (-derivative->coefficient / state->coefficient);
+      o.reason.clear();
+      return o;
+    }
+    o.reason += " (no kinematic equation such as y' = " + name + " defines it)";
+    return o;
+  }
+
+  const Model& model_;
+  std::vector<bool> measured_;
+  int variables_, states_;
+  std::vector<Observation> observed_;
+};
+
+void add_to(LagCombination& into, const LagFunction& f, const numeric& w) {
+  auto [it, inserted] = into.emplace(f, w);
+  if (!inserted) {
+    it->second += w;
+    if (it->second.is_zero()) into.erase(it);
+  }
+}
+
+bool has_parameter(const Equation& eq) {
+  return std::any_of(eq.terms.begin(), eq.terms.end(),
+                     [](const Term& t) { return t.parameter >= 0; });
+}
+
+}  // namespace
+
+void LagOptions::validate(const Model& model, int max_order) const {
+  const int reach = kStencilReach[std::min(max_order, kMaxLagOrder)];
+  if (first_lag <= reach) {
+    throw UsageError("lags: the first lag must be at least " + std::to_string(reach + 1) +
+                     " so that the lag derivatives (stencils reaching " + std::to_string(reach) +
+                     " lags either side) do not touch lag 0, found " + std::to_string(first_lag));
+  }
+  if (last_lag < first_lag || last_lag > kMaxLag) {
+    throw UsageError("lags: expected a last lag from " + std::to_string(first_lag) + " to " +
+                     std::to_string(kMaxLag) + ", found " + std::to_string(last_lag));
+  }
+  if (!instruments) return;
+  for (const Monomial& m : *instruments) {
+    for (std::size_t v = 0; v < m.size(); ++v) {
+      if (m[v] != 0 && !measured.empty() && !measured[v]) {
+        throw UsageError("instruments: " + format_monomial(model, m) + " uses " +
+                         model.variables()[v] + ", which the data do not have");
+      }
+    }
+  }
+}
+
+LaggedSystem derive_lagged(const Model& model, const LagOptions& options) {
+  const std::size_t variables = model.variables().size();
+  std::vector<bool> measured =
+      options.measured.empty() ? std::vector<bool>(variables, true) : options.measured;
+  if (measured.size() != variables) {
+    throw UsageError("lags: expected " + std::to_string(variables) +
+                     " flags for the measured variables, found " + std::to_string(measured.size()));
+  }
+  const LagDeriver deriver(model, measured);
+  const int states = static_cast<int>(model.states().size());
+
+  LaggedSystem system;
+  system.model = &model;
+  system.first_lag = options.first_lag;
+  system.last_lag = options.last_lag;
+  system.measured = measured;
+  for (int v = 0; v < states; ++v) {
+    if (!measured[v] && deriver.observation(v).base >= 0) {
+      system.derivatives.push_back(deriver.definition(v));
+    }
+  }
+  if (options.instruments) {
+    system.instruments = *options.instruments;
+  } else {
+    // Each measured state, and its highest power in the equations' terms.
+    for (int v = 0; v < states; ++v) {
+      if (!measured[v]) continue;
+      int highest = 1;
+      for (const Equation& eq : model.equations()) {
+        if (!has_parameter(eq)) continue;
+        for (const Term& t : eq.terms) highest = std::max(highest, t.monomial[v]);
+      }
+      for (int power : {1, highest}) {
+        Monomial m(variables, 0);
+        m[v] = power;
+        if (std::find(system.instruments.begin(), system.instruments.end(), m) ==
+            system.instruments.end()) {
+          system.instruments.push_back(m);
+        }
+      }
+    }
+  }
+
+  const std::size_t parameters = model.parameters().size();
+  for (std::size_t e = 0; e < model.equations().size(); ++e) {
+    const Equation& eq = model.equations()[e];
+    if (!has_parameter(eq)) continue;
+    for (const Monomial& instrument : system.instruments) {
+      LaggedEquation row;
+      row.equation = static_cast<int>(e);
+      row.instrument = instrument;
+      row.coefficients.resize(parameters);
+      for (const Term& t : eq.terms) {
+        const auto [f, w] = deriver.lag_function(eq, t, instrument);
+        system.max_order = std::max(system.max_order, f.order);
+        if (t.parameter >= 0) {
+          add_to(row.coefficients[t.parameter], f, w);
+        } else {
+          add_to(row.rhs, f, -w);
+        }
+      }
+      // The first parameter's first weight positive, as the zero-lag equations print.
+      for (const LagCombination& c : row.coefficients) {
+        if (c.empty()) continue;
+        if (c.begin()->second.is_negative()) {
+          for (auto& combination : row.coefficients) {
+            for (auto& [f, w] : combination) w = -w;
+          }
+          for (auto& [f, w] : row.rhs) w = -w;
+        }
+        break;
+      }
+      system.equations.push_back(std::move(row));
+    }
+  }
+  options.validate(model, system.max_order);
+
+  system.needed.assign(variables, false);
+  for (const LaggedEquation& row : system.equations) {
+    auto mark = [&](const LagCombination& c) {
+      for (const auto& [f, w] : c) {
+        for (std::size_t v = 0; v < variables; ++v) {
+          if (f.instrument[v] != 0 || f.function[v] != 0) system.needed[v] = true;
+        }
+      }
+    };
+    for (const LagCombination& c : row.coefficients) mark(c);
+    mark(row.rhs);
+  }
+  return system;
+}
+
+std::vector<double> stencil_weights(int order) {
+  switch (order) {
+    case 0:
+      return {1};
+    case 1:
+      return {1.0 / 12, -8.0 / 12, 0, 8.0 / 12, -1.0 / 12};
+    case 2:
+      return {-1.0 / 12, 16.0 / 12, -30.0 / 12, 16.0 / 12, -1.0 / 12};
+    case 3:
+      return {1.0 / 8, -1, 13.0 / 8, 0, -13.0 / 8, 1, -1.0 / 8};
+    default:
+      throw std::invalid_argument("stencil_weights: order " + std::to_string(order) +
+                                  " is beyond " + std::to_string(kMaxLagOrder));
+  }
+}
+
+Moment lagged_moment(const Monomial& instrument, const Monomial& function, int lag) {
+  std::vector<MomentFactor> factors;
+  for (std::size_t v = 0; v < instrument.size(); ++v) {
+    if (instrument[v] != 0) factors.push_back({static_cast<int>(v), instrument[v], lag});
+    if (function[v] != 0) factors.push_back({static_cast<int>(v), function[v], 0});
+  }
+  return Moment(std::move(factors));
+}
+
+std::string format_lag_function(const Model& model, const LagFunction& f) {
+  return "C" + primes(f.order) + "[" + format_monomial(model, f.instrument) + ";" +
+         format_monomial(model, f.function) + "](s)";
+}
+
+namespace {
+
+std::string combination_text(const Model& model, const LagCombination& c) {
+  if (c.empty()) return "0";
+  std::string out;
+  for (const auto& [f, w] : c) {
+    const numeric a = GiNaC::abs(w);
+    const std::string term =
+        (a == 1 ? std::string() : number_text(a) + "*") + format_lag_function(model, f);
+    out += out.empty() ? (w.is_negative() ? "-" : "") + term
+                       : (w.is_negative() ? " - " : " + ") + term;
+  }
+  return out;
+}
+
+std::string left_text(const Model& model, const LaggedEquation& eq) {
+  std::string out;
+  for (std::size_t p = 0; p < eq.coefficients.size(); ++p) {
+    const LagCombination& c = eq.coefficients[p];
+    if (c.empty()) continue;
+    const std::string& name = model.parameters()[p].name;
+    std::string term;
+    bool negative = false;
+    if (c.size() == 1) {
+      const auto& [f, w] = *c.begin();
+      negative = w.is_negative();
+      const numeric a = GiNaC::abs(w);
+      term = (a == 1 ? std::string() : number_text(a) + "*") + name + "*" +
+             format_lag_function(model, f);
+    } else {
+      term = name + "*(" + combination_text(model, c) + ")";
+    }
+    out += out.empty() ? (negative ? "-" : "") + term : (negative ? " - " : " + ") + term;
+  }
+  return out;
+}
+
+std::string channel_list(const Model& model, const std::vector<bool>& flags, bool value) {
+  std::string out;
+  for (std::size_t v = 0; v < flags.size(); ++v) {
+    if (flags[v] == value) out += (out.empty() ? "" : ", ") + model.variables()[v];
+  }
+  return out.empty() ? "none" : out;
+}
+
+}  // namespace
+
+std::string format_text(const LaggedSystem& system) {
+  const Model& model = *system.model;
+  std::ostringstream out;
+  out << "lagged moment equations of " << model.name();
+  if (!model.title().empty()) out << " (" << model.title() << ")";
+  out << ", lags s = " << system.first_lag << ".." << system.last_lag << " samples\n";
+  out << "C[a;b](s) = E[a(t-s)*b(t)]; C'[a;b](s), C''[a;b](s): its derivatives in s\n\n";
+  std::vector<std::string> sources;
+  std::size_t width = 0;
+  for (const LaggedEquation& eq : system.equations) {
+    sources.push_back("[" + model.equations()[eq.equation].name() + "] with " +
+                      format_monomial(model, eq.instrument) + "(t-s)");
+    width = std::max(width, sources.back().size());
+  }
+  const std::size_t number_width = std::to_string(system.equations.size()).size();
+  for (std::size_t i = 0; i < system.equations.size(); ++i) {
+    const std::string number = std::to_string(i + 1);
+    out << std::string(number_width - number.size() + 2, ' ') << number << "  " << sources[i]
+        << std::string(width - sources[i].size() + 3, ' ') << left_text(model, system.equations[i])
+        << " = " << combination_text(model, system.equations[i].rhs) << "\n";
+  }
+  if (system.equations.empty()) out << "  (none)\n";
+  const std::size_t lags = static_cast<std::size_t>(system.last_lag - system.first_lag + 1);
+  out << "\nequations: " << system.equations.size() << " per lag, "
+      << system.equations.size() * lags << " in all\n";
+  out << "channels read: " << channel_list(model, system.needed, true) << "\n";
+  for (const std::string& d : system.derivatives) out << "not measured: " << d << "\n";
+  out << "lag derivatives: central differences in s with error O(dt^4), reaching "
+      << kStencilReach[system.max_order] << " lags either side\n";
+  for (const std::string& note : system.notes) out << "note: " << note << "\n";
+  return out.str();
+}
+
+std::string format_latex(const LaggedSystem& system) {
+  const Model& model = *system.model;
+  auto lag = [&](const LagFunction& f) {
+    return std::string("C") + (f.order == 0 ? "" : "^{(" + std::to_string(f.order) + ")}") + "_{" +
+           format_monomial(model, f.instrument) + ",\\," + format_monomial(model, f.function) +
+           "}(s)";
+  };
+  auto combination = [&](const LagCombination& c) {
+    std::string out;
+    for (const auto& [f, w] : c) {
+      const numeric a = GiNaC::abs(w);
+      const std::string term = (a == 1 ? std::string() : number_text(a) + "\\,") + lag(f);
+      out += out.empty() ? (w.is_negative() ? "-" : "") + term
+                         : (w.is_negative() ? " - " : " + ") + term;
+    }
+    return out.empty() ? std::string("0") : out;
+  };
+  std::ostringstream out;
+  out << "% lagged moment equations of " << model.name() << ", s = " << system.first_lag << ".."
+      << system.last_lag << " samples; C_{a,b}(s) = E[a(t-s) b(t)]\n\\begin{align}\n";
+  for (std::size_t i = 0; i < system.equations.size(); ++i) {
+    const LaggedEquation& eq = system.equations[i];
+    std::string left;
+    for (std::size_t p = 0; p < eq.coefficients.size(); ++p) {
+      if (eq.coefficients[p].empty()) continue;
+      left += (left.empty() ? "" : " + ") + model.parameters()[p].name + "\\,(" +
+              combination(eq.coefficients[p]) + ")";
+    }
+    out << "  " << left << " &= " << combination(eq.rhs)
+        << (i + 1 < system.equations.size() ? " \\\\\n" : "\n");
+  }
+  out << "\\end{align}\n";
+  return out.str();
+}
+
+std::string format_json(const LaggedSystem& system) {
+  const Model& model = *system.model;
+  auto combination = [&](const LagCombination& c) {
+    std::string out = "[";
+    for (const auto& [f, w] : c) {
+      out += (out.size() > 1 ? ", " : "") + std::string("{\"instrument\": ") +
+             json_string(format_monomial(model, f.instrument)) +
+             ", \"function\": " + json_string(format_monomial(model, f.function)) +
+             ", \"order\": " + std::to_string(f.order) +
+             ", \"weight\": " + json_string(number_text(w)) + "}";
+    }
+    return out + "]";
+  };
+  std::ostringstream out;
+  out << "{\n  \"model\": " << json_string(model.name()) << ",\n  \"lags\": [" << system.first_lag
+      << ", " << system.last_lag << "],\n  \"parameters\": [";
+  for (std::size_t p = 0; p < model.parameters().size(); ++p) {
+    out << (p ? ", " : "") << json_string(model.parameters()[p].name);
+  }
+  out << "],\n  \"instruments\": [";
+  for (std::size_t i = 0; i < system.instruments.size(); ++i) {
+    out << (i ? ", " : "") << json_string(format_monomial(model, system.instruments[i]));
+  }
+  out << "],\n  \"equations\": [";
+  for (std::size_t i = 0; i < system.equations.size(); ++i) {
+    const LaggedEquation& eq = system.equations[i];
+    out << (i ? "," : "")
+        << "\n    {\"equation\": " << json_string(model.equations()[eq.equation].name())
+        << ", \"instrument\": " << json_string(format_monomial(model, eq.instrument))
+        << ",\n     \"coefficients\": {";
+    for (std::size_t p = 0; p < eq.coefficients.size(); ++p) {
+      out << (p ? ", " : "") << json_string(model.parameters()[p].name) << ": "
+          << combination(eq.coefficients[p]);
+    }
+    out << "},\n     \"rhs\": " << combination(eq.rhs) << "}";
+  }
+  out << "\n  ],\n  \"channels\": [";
+  bool first = true;
+  for (std::size_t v = 0; v < system.needed.size(); ++v) {
+    if (!system.needed[v]) continue;
+    out << (first ? "" : ", ") << json_string(model.variables()[v]);
+    first = false;
+  }
+  out << "],\n  \"not_measured\": [";
+  for (std::size_t i = 0; i < system.derivatives.size(); ++i) {
+    out << (i ? ", " : "") << json_string(system.derivatives[i]);
+  }
+  out << "]\n}\n";
+  return out.str();
+}
+
+}  // namespace momentid
