@@ -67,4 +67,23 @@ std::vector<IdentityCheck> check_identities(const MomentSystem& system,
 Estimate solve(const MomentSystem& system, const MomentEstimates& estimates,
                const SolveOptions& options = {});
 
+// A linear system in the parameters whose entries are linear in estimated moments: row r reads
+// sum over p of a[r][p] * theta_p = b[r], each entry a constant plus weighted moments (indices
+// into the estimates). The zero-lag and the lagged moment equations both come to this.
+struct MomentRows {
+  struct Entry {
+    double constant = 0;
+    std::vector<std::pair<std::size_t, double>> moments;  // (index, weight)
+  };
+  std::vector<std::vector<Entry>> a;  // rows x parameters
+  std::vector<Entry> b;
+};
+
+// Solves `rows` as solve() does, for parameters named `names`, with `covariance` the moments'
+// covariance (MomentEstimates::covariance()).
+Estimate solve_rows(const MomentRows& rows, const std::vector<std::string>& names,
+                    const MomentEstimates& estimates,
+                    const std::vector<std::vector<double>>& covariance,
+                    const SolveOptions& options = {});
+
 }  // namespace momentid

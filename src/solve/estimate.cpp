@@ -100,22 +100,49 @@ Estimate solve(const MomentSystem& system, const MomentEstimates& estimates,
                const SolveOptions& options) {
   const Model& model = *system.model;
   const std::vector<Monomial> moments = moments_to_estimate(system);
-  std::map<Monomial, Eigen::Index> index;
-  for (std::size_t k = 0; k < moments.size(); ++k) index[moments[k]] = static_cast<Eigen::Index>(k);
+  std::map<Monomial, std::size_t> index;
+  for (std::size_t k = 0; k < moments.size(); ++k) index[moments[k]] = k;
   const Monomial one(model.variables().size(), 0);
-  const auto rows = static_cast<Eigen::Index>(system.equations.size());
-  const auto params = static_cast<Eigen::Index>(model.parameters().size());
-  const auto k_count = static_cast<Eigen::Index>(moments.size());
+  const auto entry = [&](const MomentCombination& c) {
+    MomentRows::Entry out;
+    for (const auto& [m, w] : c) {
+      if (m == one) {
+        out.constant += w.to_double();
+      } else {
+        out.moments.emplace_back(index.at(m), w.to_double());
+      }
+    }
+    return out;
+  };
+  MomentRows rows;
+  for (const MomentEquation& eq : system.equations) {
+    std::vector<MomentRows::Entry> a;
+    for (const MomentCombination& c : eq.coefficients) a.push_back(entry(c));
+    rows.a.push_back(std::move(a));
+    rows.b.push_back(entry(eq.rhs));
+  }
+  std::vector<std::string> names;
+  for (const Declaration& p : model.parameters()) names.push_back(p.name);
+  const auto c = estimates.covariance();
+  Estimate out = solve_rows(rows, names, estimates, c, options);
+  out.identities = identity_checks(system, moments, estimates, c);
+  return out;
+}
+
+Estimate solve_rows(const MomentRows& system, const std::vector<std::string>& names,
+                    const MomentEstimates& estimates, const std::vector<std::vector<double>>& c,
+                    const SolveOptions& options) {
+  const auto rows = static_cast<Eigen::Index>(system.a.size());
+  const auto params = static_cast<Eigen::Index>(names.size());
+  const auto k_count = static_cast<Eigen::Index>(estimates.mean.size());
 
   Estimate out;
-  out.rows = system.equations.size();
+  out.rows = system.a.size();
   out.batches = estimates.batch_means.size();
   out.intervals = estimates.intervals;
-  for (const Declaration& p : model.parameters()) {
-    out.parameters.push_back({p.name, kNaN, kNaN, kNaN, kNaN, /*identifiable=*/false});
+  for (const std::string& name : names) {
+    out.parameters.push_back({name, kNaN, kNaN, kNaN, kNaN, /*identifiable=*/false});
   }
-  const auto c = estimates.covariance();
-  out.identities = identity_checks(system, moments, estimates, c);
   if (rows == 0 || params == 0) {
     out.status = Estimate::Status::kNothingIdentifiable;
     out.message = "the model gives no moment equations";
@@ -134,30 +161,21 @@ Estimate solve(const MomentSystem& system, const MomentEstimates& estimates,
   MatrixXd a = MatrixXd::Zero(rows, params);
   VectorXd b = VectorXd::Zero(rows);
   std::vector<MomentUse> uses(static_cast<std::size_t>(k_count));
+  const auto add = [&](const MomentRows::Entry& e, double& into, auto&& use) {
+    into += e.constant;
+    for (const auto& [k, w] : e.moments) {
+      into += w * mu(static_cast<Eigen::Index>(k));
+      use(k, w);
+    }
+  };
   for (Eigen::Index r = 0; r < rows; ++r) {
-    const MomentEquation& eq = system.equations[static_cast<std::size_t>(r)];
+    const auto& row = system.a[static_cast<std::size_t>(r)];
     for (Eigen::Index p = 0; p < params; ++p) {
-      for (const auto& [m, w] : eq.coefficients[static_cast<std::size_t>(p)]) {
-        const double weight = w.to_double();
-        if (m == one) {
-          a(r, p) += weight;
-          continue;
-        }
-        const Eigen::Index k = index.at(m);
-        a(r, p) += weight * mu(k);
-        uses[static_cast<std::size_t>(k)].a.emplace_back(r, p, weight);
-      }
+      add(row[static_cast<std::size_t>(p)], a(r, p),
+          [&](std::size_t k, double w) { uses[k].a.emplace_back(r, p, w); });
     }
-    for (const auto& [m, w] : eq.rhs) {
-      const double weight = w.to_double();
-      if (m == one) {
-        b(r) += weight;
-        continue;
-      }
-      const Eigen::Index k = index.at(m);
-      b(r) += weight * mu(k);
-      uses[static_cast<std::size_t>(k)].b.emplace_back(r, weight);
-    }
+    add(system.b[static_cast<std::size_t>(r)], b(r),
+        [&](std::size_t k, double w) { uses[k].b.emplace_back(r, w); });
   }
 
   // Columns scaled to unit length: moments of different orders differ by orders of magnitude.
@@ -207,7 +225,7 @@ Estimate solve(const MomentSystem& system, const MomentEstimates& estimates,
         const double w = d(p);
         combo += (combo.empty() ? (w < 0 ? "-" : "") : (w < 0 ? " - " : " + ")) +
                  (std::abs(std::abs(w) - 1) < 1e-9 ? "" : format_number(std::abs(w)) + "*") +
-                 model.parameters()[static_cast<std::size_t>(p)].name;
+                 names[static_cast<std::size_t>(p)];
       }
       combos += (combos.empty() ? "" : "; ") + combo;
     }
@@ -262,7 +280,7 @@ Estimate solve(const MomentSystem& system, const MomentEstimates& estimates,
   }
   // S is estimated from B batch means, so it has rank B - 1 at most: with as many equations or
   // more it is singular and the weighting meaningless.
-  if (out.batches < system.equations.size() + 2) {
+  if (out.batches < system.a.size() + 2) {
     out.warnings.push_back(
         "no optimally weighted estimate: it needs more batches than equations (" +
         std::to_string(out.batches) + " batches for " + std::to_string(rows) +
@@ -300,7 +318,7 @@ Estimate solve(const MomentSystem& system, const MomentEstimates& estimates,
   const VectorXd g = as * theta_gmm_scaled - b;
   const MatrixXd cov_gmm_scaled = ldlt.solve(MatrixXd::Identity(params, params));
   for (Eigen::Index p = 0; p < params; ++p) {
-    ParameterEstimate e{model.parameters()[static_cast<std::size_t>(p)].name};
+    ParameterEstimate e{names[static_cast<std::size_t>(p)]};
     e.estimate = theta_gmm_scaled(p) / scale(p);
     e.std_error = std::sqrt(std::max(0.0, cov_gmm_scaled(p, p))) / scale(p);
     e.ci_low = e.estimate - t975 * e.std_error;
