@@ -281,7 +281,7 @@ TEST_SUITE("simulate") {
     CHECK(InputSpec::parse("ma", "--input").text() == "ma:K=10,w=0.1,sigma=1,mean=0");
     CHECK_THROWS_WITH_AS(InputSpec::parse("pink", "--input x"),
                          "--input x: unknown input process 'pink' (expected ma:K=10,w=0.1, "
-                         "ou:tau=T or white)",
+                         "ou:tau=T, white or multisine:f1=F1,f2=F2,lines=L)",
                          momentid::UsageError);
     CHECK_THROWS_WITH_AS(InputSpec::parse("ou", "--input"),
                          "--input: an ou input needs its correlation time, e.g. ou:tau=0.5",

@@ -13,9 +13,12 @@ namespace momentid {
 // blanks; a key given twice means its last value. The lines are kept as they were read or
 // added, so that metadata copied from one file to another reads the same.
 //
-// Known keys: `dt` (the sample interval, a positive number), `input-hold` (`zoh` or `sample`);
-// `momentid simulate` also writes the model, the seed, the parameter values (`param.NAME`) and
-// the input processes (`input.NAME`).
+// Known keys: `dt` (the sample interval, a positive number), `input-hold` (`zoh` or `sample`;
+// `momentid simulate` writes `mixed` for held and sampled inputs together, with
+// `input-hold.NAME` per input); `momentid simulate` also writes the model, the seed, the
+// parameter values (`param.NAME`), the input processes (`input.NAME`) and, when asked for, the
+// written channels (`observe`) and the measurement noise (`noise.NAME`, relative, and
+// `noise-sd.NAME`, absolute).
 //
 // Example:
 //   DataMetadata m;

@@ -33,5 +33,8 @@ class PortableRandom {
 double portable_log(double x);
 // exp(x) from +, -, *, / only (correct to about 1 ulp for |x| < 700).
 double portable_exp(double x);
+// cos(2 pi turns) for finite `turns`, from +, -, *, / and floor only (correct to a few ulp).
+// The angle is given in turns so that the whole turns drop out exactly.
+double portable_cos_turns(double turns);
 
 }  // namespace momentid

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "momentid/input.hpp"
@@ -111,7 +112,7 @@ class CompiledModel {
 };
 
 // Receives the simulated samples: row n of run r holds t_n = n*dt, the states at t_n and the
-// inputs held over [t_n, t_{n+1}).
+// inputs: a held input's value over [t_n, t_{n+1}), a multisine's value at t_n.
 class SampleSink {
  public:
   virtual ~SampleSink() = default;
@@ -119,23 +120,43 @@ class SampleSink {
   virtual void sample(double t, const double* values, std::size_t run) = 0;
 };
 
-// Writes the samples as rows t, states, inputs[, run] (runs numbered from 1), the layout of
-// `momentid simulate`.
+// Writes the samples as rows t, channels[, run] (runs numbered from 1), the layout of
+// `momentid simulate`: every value (states, then inputs), or the values at `channels`, in that
+// order.
 class SampleRows : public SampleSink {
  public:
   SampleRows(DataWriter& out, std::size_t values, bool with_run)
-      : out_(out), row_(values + 1 + (with_run ? 1 : 0)), with_run_(with_run) {}
+      : SampleRows(out, all_channels(values), with_run) {}
+  SampleRows(DataWriter& out, std::vector<std::size_t> channels, bool with_run)
+      : out_(out),
+        channels_(std::move(channels)),
+        row_(channels_.size() + 1 + (with_run ? 1 : 0)),
+        with_run_(with_run) {}
   void sample(double t, const double* values, std::size_t run) override {
     row_[0] = t;
-    std::copy(values, values + (row_.size() - 1 - (with_run_ ? 1 : 0)), row_.begin() + 1);
+    for (std::size_t c = 0; c < channels_.size(); ++c) row_[c + 1] = values[channels_[c]];
     if (with_run_) row_.back() = static_cast<double>(run + 1);
     out_.row(row_.data());
   }
 
  private:
+  static std::vector<std::size_t> all_channels(std::size_t values) {
+    std::vector<std::size_t> out(values);
+    for (std::size_t c = 0; c < values; ++c) out[c] = c;
+    return out;
+  }
+
   DataWriter& out_;
+  std::vector<std::size_t> channels_;
   std::vector<double> row_;
   bool with_run_;
+};
+
+// White Gaussian measurement noise on one written channel (a state or an input, by name), with
+// standard deviation `relative` times the standard deviation of the clean channel.
+struct ChannelNoise {
+  std::string channel;
+  double relative = 0;
 };
 
 // How to simulate (README, "momentid simulate").
@@ -149,30 +170,68 @@ struct SimulationOptions {
   std::size_t runs = 1;
   bool continue_runs = false;  // start each run from the previous run's last state
   std::uint64_t seed = 1;
+  // Measurement noise, added to the samples after they are simulated: the trajectory does not
+  // see it. The clean channel's standard deviation is taken over all written samples (all runs,
+  // divided by their number), which costs a first, silent run of the same simulation. The noise
+  // on channel c (its index among the states, then inputs) comes from random stream
+  // kNoiseStream + c, independent of the inputs' streams 0, 1, ... and of the other channels.
+  // A relative level of 0 adds nothing.
+  std::vector<ChannelNoise> noise;
+  // The channels simulate_to_file writes, in this order; empty: the states, then the inputs.
+  // A SampleSink always receives every channel.
+  std::vector<std::string> observe;
 
   // Throws UsageError naming the first option that `model` cannot be simulated with: a count of
   // parameter values or input processes that differs from the model's, a dt outside
-  // [kMinStep, kMaxStep] or not finite, no samples or no runs.
+  // [kMinStep, kMaxStep] or not finite, no samples or no runs, an input process that is not
+  // valid at this dt (InputSpec::validate), an unknown or repeated channel in `noise` or
+  // `observe`, a noise level that is negative or not finite, noise on a channel not observed.
   void validate(const Model& model) const;
   static constexpr double kMinStep = 1e-9;
   static constexpr double kMaxStep = 1e6;
+  static constexpr std::uint64_t kNoiseStream = std::uint64_t{1} << 32;
 };
 
-// Integrates the model with the classical fourth-order Runge-Kutta method at a fixed step, each
-// input held constant over a step, from y = 0. Throws Error when a state becomes non-finite or
-// exceeds kBlowUpBound, naming the state, the time, the run and the parameter values.
-// The options are validated first.
+// Parses noise levels `CHANNEL=REL` (`y=0.05`), as `--noise` takes them. Throws UsageError for
+// an item without `=` or a level that is not a number; SimulationOptions::validate checks the
+// channels and the values.
+std::vector<ChannelNoise> parse_noise(const std::vector<std::string>& items);
+
+// Integrates the model with the classical fourth-order Runge-Kutta method at a fixed step from
+// y = 0: a held input is constant over the step, a multisine is evaluated at each stage's time
+// (t, t + dt/2, t + dt). Throws Error when a state becomes non-finite or exceeds kBlowUpBound,
+// naming the state, the time, the run and the parameter values. The options are validated
+// first. With `options.noise`, the sink receives the samples with measurement noise, after a
+// first run that measures the channels' standard deviations (see noise_standard_deviations).
 void simulate(const Model& model, const SimulationOptions& options, SampleSink& sink);
+// The same with the noise standard deviations already known, one per `options.noise` entry
+// (std::invalid_argument otherwise): one run.
+void simulate(const Model& model, const SimulationOptions& options, SampleSink& sink,
+              const std::vector<double>& noise_sd);
 inline constexpr double kBlowUpBound = 1e100;
 
-// The metadata `momentid simulate` writes: model, dt, input-hold=zoh, seed, samples, runs,
-// burn-in and continue on one line; the parameter values (`param.NAME`) on the next; each input
-// process (`input.NAME`) on a line of its own.
-DataMetadata simulation_metadata(const Model& model, const SimulationOptions& options);
+// The absolute standard deviation of each `options.noise` entry: its relative level times the
+// standard deviation of the clean channel over all written samples. Runs the simulation once,
+// without writing, when a level is not 0. The options are validated first.
+std::vector<double> noise_standard_deviations(const Model& model, const SimulationOptions& options);
 
-// Simulates into a data file in the layout of `momentid simulate`: columns t, the states, the
-// inputs and, for several runs, `run` (from 1), after simulation_metadata(); written whole or not
-// at all (see DataWriter). `path` "-" is standard output.
+// The metadata `momentid simulate` writes: model, dt, input-hold, seed, samples, runs, burn-in,
+// continue and, with `observe`, the observed channels (`observe=y,x`) on one line; the parameter
+// values (`param.NAME`) on the next; each input process (`input.NAME`) on a line of its own;
+// with noise, a line with each entry's relative level and absolute standard deviation
+// (`noise.y=0.05 noise-sd.y=0.0231`), for which `noise_sd` holds one value per entry
+// (std::invalid_argument otherwise).
+// `input-hold` is `zoh` when every input is held (or there is none), `sample` when every input
+// is a multisine, and `mixed` otherwise, when each input's line also carries
+// `input-hold.NAME=zoh` or `input-hold.NAME=sample`.
+DataMetadata simulation_metadata(const Model& model, const SimulationOptions& options,
+                                 const std::vector<double>& noise_sd = {});
+
+// Simulates into a data file in the layout of `momentid simulate`: columns t, the observed
+// channels (by default the states, then the inputs) and, for several runs, `run` (from 1), after
+// simulation_metadata(); written whole or not at all (see DataWriter). `path` "-" is standard
+// output. With noise, the simulation runs twice: once to measure the channels' standard
+// deviations, which the metadata records, and once to write.
 void simulate_to_file(const Model& model, const SimulationOptions& options, const std::string& path,
                       DataWriter::Format format);
 

@@ -15,6 +15,7 @@ struct SimulateCommand {
   std::string model;
   std::vector<std::string> set;
   std::vector<std::string> inputs;
+  std::vector<std::string> noise;
   SimulationOptions options;
   std::string format = "csv";
   std::string output = "-";
@@ -54,6 +55,7 @@ int run_simulate(SimulateCommand& command) {
   const Model model = parse_model_file(command.model);
   command.options.parameters = parameter_values(model, command.set);
   command.options.inputs = input_specs(model, command.inputs);
+  command.options.noise = parse_noise(command.noise);
   simulate_to_file(
       model, command.options, command.output,
       command.format == "bin" ? DataWriter::Format::kBinary : DataWriter::Format::kCsv);
@@ -74,7 +76,15 @@ Command add_simulate(CLI::App& app) {
   sub->add_option(
       "--input", command->inputs,
       "input process [NAME=]SPEC: ma:K=10,w=0.1 | ma:weights=[..] | ou:tau=T | white, with "
-      "sigma= and mean= (default ma:K=10,w=0.1)");
+      "sigma= and mean= (default ma:K=10,w=0.1); multisine:f1=F1,f2=F2,lines=L with rms= and "
+      "mean=");
+  sub->add_option("--noise", command->noise,
+                  "measurement noise CHANNEL=REL,...: white noise with REL times the channel's "
+                  "standard deviation, added to the written samples")
+      ->delimiter(',');
+  sub->add_option("--observe", options.observe,
+                  "the channels to write, in this order (default: the states, then the inputs)")
+      ->delimiter(',');
   sub->add_option("--dt", options.dt, "integration and sampling step")
       ->check(CLI::Validator(
           [](const std::string& text) {

@@ -1,7 +1,9 @@
 #include "momentid/input.hpp"
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <optional>
 #include <sstream>
 
 #include "common/decimal.hpp"
@@ -39,6 +41,74 @@ std::vector<std::string> split_items(const std::string& text) {
   return out;
 }
 
+// The smallest m >= 0 that puts the lowest of `lines` odd harmonics of f0 = f2 / (2m + 2 lines - 1)
+// at or above f1, or nothing when m would exceed kMaxOffset (a band too narrow for the lines).
+constexpr double kMaxOffset = 1e9;
+std::optional<std::uint64_t> lowest_harmonic_offset(double f1, double f2, std::uint32_t lines) {
+  const double top = 2.0 * lines - 1;
+  const auto reaches = [&](double m) { return (2 * m + 1) * f2 >= f1 * (2 * m + top); };
+  // (2m + 1) f2 >= f1 (2m + 2L - 1)  <=>  m >= (f1 (2L - 1) - f2) / (2 (f2 - f1)).
+  const double estimate = std::ceil((f1 * top - f2) / (2 * (f2 - f1)));
+  if (!(estimate <= kMaxOffset)) return std::nullopt;
+  double m = std::max(0.0, estimate);
+  while (m > 0 && reaches(m - 1)) --m;
+  while (!reaches(m)) {
+    if (++m > kMaxOffset) return std::nullopt;
+  }
+  return static_cast<std::uint64_t>(m);
+}
+
+// The checks that do not depend on the step; the messages are those of parse().
+void check_values(const InputSpec& spec, const std::string& option) {
+  if (!(std::isfinite(spec.mean))) throw UsageError(option + ": mean must be a finite number");
+  switch (spec.kind) {
+    case InputSpec::Kind::kMovingAverage:
+    case InputSpec::Kind::kOrnsteinUhlenbeck:
+    case InputSpec::Kind::kWhite:
+      if (!(spec.sigma >= 0 && std::isfinite(spec.sigma))) {
+        throw UsageError(option + ": sigma must not be negative");
+      }
+      if (spec.kind == InputSpec::Kind::kMovingAverage && spec.weights.empty()) {
+        throw UsageError(option + ": a moving average needs at least one weight");
+      }
+      if (spec.kind == InputSpec::Kind::kOrnsteinUhlenbeck &&
+          !(spec.tau > 0 && std::isfinite(spec.tau))) {
+        throw UsageError(option + ": tau must be positive");
+      }
+      return;
+    case InputSpec::Kind::kMultisine:
+      if (!(spec.f1 > 0 && std::isfinite(spec.f1))) {
+        throw UsageError(option + ": f1 must be positive");
+      }
+      if (!(spec.f2 > 0 && std::isfinite(spec.f2))) {
+        throw UsageError(option + ": f2 must be positive");
+      }
+      if (!(spec.f1 < spec.f2)) {
+        throw UsageError(option + ": f1 must be below f2, found f1=" + shortest_decimal(spec.f1) +
+                         " and f2=" + shortest_decimal(spec.f2));
+      }
+      if (spec.lines < 1 || spec.lines > InputSpec::kMaxLines) {
+        throw UsageError(option + ": lines must be a whole number from 1 to " +
+                         std::to_string(InputSpec::kMaxLines) + ", found '" +
+                         std::to_string(spec.lines) + "'");
+      }
+      if (!(spec.rms > 0 && std::isfinite(spec.rms))) {
+        throw UsageError(option + ": rms must be positive");
+      }
+      if (!lowest_harmonic_offset(spec.f1, spec.f2, spec.lines)) {
+        throw UsageError(option + ": the band from f1=" + shortest_decimal(spec.f1) +
+                         " to f2=" + shortest_decimal(spec.f2) + " is too narrow for " +
+                         std::to_string(spec.lines) + " lines");
+      }
+      return;
+  }
+}
+
+bool valid_band(const InputSpec& spec) {
+  return spec.kind == InputSpec::Kind::kMultisine && spec.f1 > 0 && spec.f1 < spec.f2 &&
+         std::isfinite(spec.f2) && spec.lines >= 1 && spec.lines <= InputSpec::kMaxLines;
+}
+
 }  // namespace
 
 InputSpec InputSpec::parse(const std::string& text, const std::string& option) {
@@ -52,13 +122,17 @@ InputSpec InputSpec::parse(const std::string& text, const std::string& option) {
     spec.kind = Kind::kOrnsteinUhlenbeck;
   } else if (kind == "white") {
     spec.kind = Kind::kWhite;
+  } else if (kind == "multisine") {
+    spec.kind = Kind::kMultisine;
   } else {
     throw UsageError(option + ": unknown input process '" + kind +
-                     "' (expected ma:K=10,w=0.1, ou:tau=T or white)");
+                     "' (expected ma:K=10,w=0.1, ou:tau=T, white or "
+                     "multisine:f1=F1,f2=F2,lines=L)");
   }
   double equal_weight = 0.1;
   long count = 10;
   bool explicit_weights = false, has_count = false, has_w = false, has_tau = false;
+  bool has_f1 = false, has_f2 = false, has_lines = false;
   if (!rest.empty()) {
     for (const std::string& item : split_items(rest)) {
       const std::size_t eq = item.find('=');
@@ -67,7 +141,8 @@ InputSpec InputSpec::parse(const std::string& text, const std::string& option) {
       }
       const std::string key = item.substr(0, eq), value = item.substr(eq + 1);
       const bool ma = spec.kind == Kind::kMovingAverage;
-      if (key == "sigma") {
+      const bool multisine = spec.kind == Kind::kMultisine;
+      if (!multisine && key == "sigma") {
         spec.sigma = parse_number(value, "sigma", option);
         if (spec.sigma < 0) throw UsageError(option + ": sigma must not be negative");
       } else if (key == "mean") {
@@ -97,6 +172,25 @@ InputSpec InputSpec::parse(const std::string& text, const std::string& option) {
         spec.tau = parse_number(value, "tau", option);
         if (spec.tau <= 0) throw UsageError(option + ": tau must be positive");
         has_tau = true;
+      } else if (multisine && key == "f1") {
+        spec.f1 = parse_number(value, "f1", option);
+        if (spec.f1 <= 0) throw UsageError(option + ": f1 must be positive");
+        has_f1 = true;
+      } else if (multisine && key == "f2") {
+        spec.f2 = parse_number(value, "f2", option);
+        if (spec.f2 <= 0) throw UsageError(option + ": f2 must be positive");
+        has_f2 = true;
+      } else if (multisine && key == "lines") {
+        const double lines = parse_number(value, "lines", option);
+        if (lines < 1 || lines > kMaxLines || lines != std::floor(lines)) {
+          throw UsageError(option + ": lines must be a whole number from 1 to " +
+                           std::to_string(kMaxLines) + ", found '" + value + "'");
+        }
+        spec.lines = static_cast<std::uint32_t>(lines);
+        has_lines = true;
+      } else if (multisine && key == "rms") {
+        spec.rms = parse_number(value, "rms", option);
+        if (spec.rms <= 0) throw UsageError(option + ": rms must be positive");
       } else {
         throw UsageError(option + ": unknown setting '" + key + "' for a " + kind + " input");
       }
@@ -110,6 +204,14 @@ InputSpec InputSpec::parse(const std::string& text, const std::string& option) {
   }
   if (spec.kind == Kind::kOrnsteinUhlenbeck && !has_tau) {
     throw UsageError(option + ": an ou input needs its correlation time, e.g. ou:tau=0.5");
+  }
+  if (spec.kind == Kind::kMultisine) {
+    if (!has_f1 || !has_f2 || !has_lines) {
+      throw UsageError(option +
+                       ": a multisine input needs f1, f2 and lines, e.g. "
+                       "multisine:f1=0.5,f2=5,lines=10");
+    }
+    check_values(spec, option);
   }
   return spec;
 }
@@ -138,9 +240,36 @@ std::string InputSpec::text() const {
     case Kind::kWhite:
       out = "white:";
       break;
+    case Kind::kMultisine:
+      return "multisine:f1=" + shortest_decimal(f1) + ",f2=" + shortest_decimal(f2) +
+             ",lines=" + std::to_string(lines) + ",rms=" + shortest_decimal(rms) +
+             ",mean=" + shortest_decimal(mean);
   }
   if (out.back() != ':') out += ",";
   return out + "sigma=" + shortest_decimal(sigma) + ",mean=" + shortest_decimal(mean);
+}
+
+void InputSpec::validate(const std::string& option, double dt) const {
+  check_values(*this, option);
+  if (kind == Kind::kMultisine && !(f2 < 0.5 / dt)) {
+    throw UsageError(
+        option + ": f2=" + shortest_decimal(f2) +
+        " must be below the Nyquist frequency 1/(2 dt) = " + shortest_decimal(0.5 / dt));
+  }
+}
+
+double InputSpec::base_frequency() const {
+  const auto m = valid_band(*this) ? lowest_harmonic_offset(f1, f2, lines) : std::nullopt;
+  if (!m) return 0;
+  return f2 / static_cast<double>(2 * *m + 2 * lines - 1);
+}
+
+std::vector<std::uint64_t> InputSpec::harmonics() const {
+  const auto m = valid_band(*this) ? lowest_harmonic_offset(f1, f2, lines) : std::nullopt;
+  std::vector<std::uint64_t> out;
+  if (!m) return out;
+  for (std::uint64_t j = 0; j < lines; ++j) out.push_back(2 * *m + 2 * j + 1);
+  return out;
 }
 
 InputProcess::InputProcess(const InputSpec& spec, double dt, std::uint64_t seed,
@@ -159,7 +288,40 @@ InputProcess::InputProcess(const InputSpec& spec, double dt, std::uint64_t seed,
       break;
     case InputSpec::Kind::kWhite:
       break;
+    case InputSpec::Kind::kMultisine: {
+      const double half_step = spec_.base_frequency() * (dt / 2);
+      for (std::uint64_t n : spec_.harmonics()) {
+        cycles_per_half_step_.push_back(static_cast<double>(n) * half_step);
+      }
+      amplitude_ = spec_.rms * std::sqrt(2.0 / static_cast<double>(spec_.lines));
+      draw_phases();
+      break;
+    }
   }
+}
+
+void InputProcess::draw_phases() {
+  phases_.clear();
+  for (std::size_t j = 0; j < cycles_per_half_step_.size(); ++j) {
+    phases_.push_back(random_.uniform());
+  }
+}
+
+void InputProcess::start_record(std::size_t burn_in) {
+  if (spec_.kind != InputSpec::Kind::kMultisine) return;
+  if (records_started_) draw_phases();
+  records_started_ = true;
+  end_clock_ = -1;
+  clock_ = -2 * static_cast<std::int64_t>(burn_in);
+}
+
+double InputProcess::multisine_at(std::int64_t half_steps) const {
+  const double k = static_cast<double>(half_steps);
+  double sum = 0;
+  for (std::size_t j = 0; j < phases_.size(); ++j) {
+    sum += portable_cos_turns(cycles_per_half_step_[j] * k + phases_[j]);
+  }
+  return spec_.mean + amplitude_ * sum;
 }
 
 double InputProcess::next() {
@@ -182,6 +344,15 @@ double InputProcess::next() {
     }
     case InputSpec::Kind::kWhite:
       return spec_.mean + spec_.sigma * random_.normal();
+    case InputSpec::Kind::kMultisine: {
+      // The end of one step is the start of the next: same clock, same value.
+      const double start = end_clock_ == clock_ ? end_ : multisine_at(clock_);
+      middle_ = multisine_at(clock_ + 1);
+      end_ = multisine_at(clock_ + 2);
+      clock_ += 2;
+      end_clock_ = clock_;
+      return start;
+    }
   }
   return 0;
 }

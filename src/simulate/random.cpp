@@ -16,6 +16,20 @@ std::uint64_t splitmix64(std::uint64_t& state) {
 std::uint64_t rotl(std::uint64_t x, int k) { return (x << k) | (x >> (64 - k)); }
 
 constexpr double kLn2 = 0.6931471805599453094;
+constexpr double kTwoPi = 6.283185307179586477;
+// Taylor coefficients (-1)^k / (2k+1)! of sin(x)/x - 1 in powers of x^2, k = 1..10, each the
+// double nearest the exact value; on |x| <= pi/2 the next term is below 2e-18.
+constexpr int kSineTerms = 10;
+constexpr double kSin[kSineTerms] = {-1.0 / 6,
+                                     1.0 / 120,
+                                     -1.0 / 5040,
+                                     1.0 / 362880,
+                                     -1.0 / 39916800,
+                                     1.0 / 6227020800,
+                                     -1.0 / 1307674368000,
+                                     1.0 / 355687428096000,
+                                     -1.0 / 121645100408832000,
+                                     1.0 / 51090942171709440000.0};
 
 }  // namespace
 
@@ -88,6 +102,20 @@ double portable_exp(double x) {
     sum += term;
   }
   return std::ldexp(sum, static_cast<int>(k));
+}
+
+double portable_cos_turns(double turns) {
+  // r = distance to the nearest whole turn, in [0, 1/2]; cos(2 pi r) = -sin(2 pi (r - 1/4)) with
+  // |2 pi (r - 1/4)| <= pi/2. Adding and subtracting 1.5 * 2^52 rounds to the nearest integer
+  // exactly for |turns| < 2^51 without a branch or a library call; beyond, fmod is exact.
+  if (!(std::abs(turns) < 0x1p51)) turns = std::fmod(turns, 1.0);
+  constexpr double kRound = 0x1.8p52;
+  const double r = std::abs(turns - ((turns + kRound) - kRound));
+  const double x = kTwoPi * (r - 0.25);
+  const double x2 = x * x;
+  double series = kSin[kSineTerms - 1];
+  for (int k = kSineTerms - 2; k >= 0; --k) series = kSin[k] + x2 * series;
+  return -(x + x * (x2 * series));
 }
 
 }  // namespace momentid

@@ -1,8 +1,10 @@
 #include "momentid/simulate.hpp"
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <map>
+#include <stdexcept>
 #include <string_view>
 
 #include "common/decimal.hpp"
@@ -30,6 +32,12 @@ bool is_constant(const Terms& t) {
     }
   }
   return true;
+}
+
+std::string join(const std::vector<std::string>& items, const std::string& separator) {
+  std::string out;
+  for (std::size_t i = 0; i < items.size(); ++i) out += (i ? separator : "") + items[i];
+  return out;
 }
 
 std::string parameter_list(const Model& model, const std::vector<numeric>& values) {
@@ -175,21 +183,83 @@ void SimulationOptions::validate(const Model& model) const {
   }
   if (samples == 0) throw UsageError("simulate: the number of samples must be at least 1");
   if (runs == 0) throw UsageError("simulate: the number of runs must be at least 1");
+  for (std::size_t i = 0; i < inputs.size(); ++i) {
+    inputs[i].validate("--input " + model.inputs()[i].name, dt);
+  }
+  const std::vector<std::string>& channels = model.variables();
+  // The index of channel `name`, or a UsageError from `option` listing the channels.
+  const auto channel = [&](const std::string& name, const std::string& option) {
+    const auto it = std::find(channels.begin(), channels.end(), name);
+    if (it == channels.end()) {
+      throw UsageError(option + ": '" + name + "' is not a channel of model " + model.name() +
+                       " (channels: " + join(channels, ", ") + ")");
+    }
+    return static_cast<std::size_t>(it - channels.begin());
+  };
+  std::vector<bool> observed(channels.size(), observe.empty());
+  for (const std::string& name : observe) {
+    const std::size_t c = channel(name, "--observe");
+    if (observed[c]) throw UsageError("--observe: channel '" + name + "' is given twice");
+    observed[c] = true;
+  }
+  std::vector<bool> noisy(channels.size(), false);
+  for (const ChannelNoise& n : noise) {
+    const std::size_t c = channel(n.channel, "--noise");
+    if (noisy[c]) throw UsageError("--noise: channel '" + n.channel + "' is given twice");
+    noisy[c] = true;
+    if (!(std::isfinite(n.relative) && n.relative >= 0)) {
+      throw UsageError("--noise: the level of '" + n.channel +
+                       "' must be a finite number of at least 0, found " +
+                       shortest_decimal(n.relative));
+    }
+    if (!observed[c]) {
+      throw UsageError("--noise: channel '" + n.channel + "' is not observed (--observe " +
+                       join(observe, ",") + ")");
+    }
+  }
 }
 
-void simulate(const Model& model, const SimulationOptions& options, SampleSink& sink) {
-  options.validate(model);
+std::vector<ChannelNoise> parse_noise(const std::vector<std::string>& items) {
+  std::vector<ChannelNoise> out;
+  for (const std::string& item : items) {
+    const std::size_t eq = item.find('=');
+    if (eq == std::string::npos) {
+      throw UsageError("--noise: expected CHANNEL=LEVEL, found '" + item + "'");
+    }
+    ChannelNoise n{item.substr(0, eq), 0};
+    const std::string text = item.substr(eq + 1);
+    const char* end = text.data() + text.size();
+    const auto result = std::from_chars(text.data(), end, n.relative);
+    if (text.empty() || result.ec != std::errc() || result.ptr != end) {
+      throw UsageError("--noise: the level of '" + n.channel + "' must be a number, found '" +
+                       text + "'");
+    }
+    out.push_back(std::move(n));
+  }
+  return out;
+}
+
+namespace {
+
+// The clean simulation: every channel as the model produces it.
+void simulate_clean(const Model& model, const SimulationOptions& options, SampleSink& sink) {
   const CompiledModel f(model, options.parameters);
   const std::size_t n = static_cast<std::size_t>(f.states());
   const std::size_t m = static_cast<std::size_t>(f.inputs());
   std::vector<InputProcess> inputs;
+  bool smooth = false;  // some input is evaluated at each stage rather than held
   for (std::size_t i = 0; i < m; ++i) {
     inputs.emplace_back(options.inputs[i], options.dt, options.seed, i);
+    smooth = smooth || !options.inputs[i].held();
   }
   std::vector<double> k1(n), k2(n), k3(n), k4(n), trial(n);
   std::vector<double> values(n + m);
   double* y = values.data();
   double* u = values.data() + n;
+  // The inputs at the middle and the end of the step: the held values unless an input is smooth.
+  std::vector<double> middle(m), end(m);
+  const double* u_middle = smooth ? middle.data() : u;
+  const double* u_end = smooth ? end.data() : u;
   const double h = options.dt;
   std::size_t run = 0;
   double t = 0;
@@ -203,20 +273,20 @@ void simulate(const Model& model, const SimulationOptions& options, SampleSink& 
                 parameter_list(model, options.parameters) +
                 ": the model is unstable for these values, or the step dt is too large");
   };
-  const auto rates = [&](const double* state, double* out) {
-    if (!f.derivative(state, u, out)) {
+  const auto rates = [&](const double* state, const double* input, double* out) {
+    if (!f.derivative(state, input, out)) {
       fail("met a point where the derivatives cannot be solved for");
     }
   };
-  // One Runge-Kutta step from t to t + h with the inputs u held constant.
+  // One Runge-Kutta step from t to t + h.
   const auto integrate = [&] {
-    rates(y, k1.data());
+    rates(y, u, k1.data());
     for (std::size_t j = 0; j < n; ++j) trial[j] = y[j] + 0.5 * h * k1[j];
-    rates(trial.data(), k2.data());
+    rates(trial.data(), u_middle, k2.data());
     for (std::size_t j = 0; j < n; ++j) trial[j] = y[j] + 0.5 * h * k2[j];
-    rates(trial.data(), k3.data());
+    rates(trial.data(), u_middle, k3.data());
     for (std::size_t j = 0; j < n; ++j) trial[j] = y[j] + h * k3[j];
-    rates(trial.data(), k4.data());
+    rates(trial.data(), u_end, k4.data());
     bool finite = true;
     for (std::size_t j = 0; j < n; ++j) {
       y[j] += h / 6 * (k1[j] + 2 * k2[j] + 2 * k3[j] + k4[j]);
@@ -233,11 +303,18 @@ void simulate(const Model& model, const SimulationOptions& options, SampleSink& 
   };
   const auto draw_inputs = [&] {
     for (std::size_t i = 0; i < m; ++i) u[i] = inputs[i].next();
+    if (!smooth) return;
+    for (std::size_t i = 0; i < m; ++i) {
+      const bool held = options.inputs[i].held();
+      middle[i] = held ? u[i] : inputs[i].middle();
+      end[i] = held ? u[i] : inputs[i].end();
+    }
   };
 
   for (run = 0; run < options.runs; ++run) {
     if (run == 0 || !options.continue_runs) {
       std::fill(y, y + n, 0.0);
+      for (InputProcess& input : inputs) input.start_record(options.burn_in);
       burning_in = true;
       for (std::size_t s = 0; s < options.burn_in; ++s) {
         draw_inputs();
@@ -245,7 +322,7 @@ void simulate(const Model& model, const SimulationOptions& options, SampleSink& 
       }
       burning_in = false;
     }
-    // Row s: the state at t_s and the input held over [t_s, t_s+1).
+    // Row s: the state at t_s and the input held over [t_s, t_s+1) or, smooth, at t_s.
     for (std::size_t s = 0; s < options.samples; ++s) {
       t = static_cast<double>(s) * h;
       draw_inputs();
@@ -253,6 +330,106 @@ void simulate(const Model& model, const SimulationOptions& options, SampleSink& 
       integrate();
     }
   }
+}
+
+// The channel index of each noise entry.
+std::vector<std::size_t> noise_channels(const Model& model, const SimulationOptions& options) {
+  std::vector<std::size_t> out;
+  const std::vector<std::string>& channels = model.variables();
+  for (const ChannelNoise& n : options.noise) {
+    out.push_back(static_cast<std::size_t>(std::find(channels.begin(), channels.end(), n.channel) -
+                                           channels.begin()));
+  }
+  return out;
+}
+
+// Accumulates the mean and variance of some channels over the samples (Welford's update, which
+// keeps its accuracy when the mean is large compared with the spread).
+class ChannelSpread : public SampleSink {
+ public:
+  explicit ChannelSpread(std::vector<std::size_t> channels)
+      : channels_(std::move(channels)), mean_(channels_.size()), squares_(channels_.size()) {}
+  void sample(double, const double* values, std::size_t) override {
+    ++count_;
+    const double weight = 1 / static_cast<double>(count_);
+    for (std::size_t k = 0; k < channels_.size(); ++k) {
+      const double x = values[channels_[k]];
+      const double before = x - mean_[k];
+      mean_[k] += before * weight;
+      squares_[k] += before * (x - mean_[k]);
+    }
+  }
+  // Divided by the number of samples.
+  double standard_deviation(std::size_t k) const {
+    return std::sqrt(squares_[k] / static_cast<double>(count_));
+  }
+
+ private:
+  std::vector<std::size_t> channels_;
+  std::vector<double> mean_, squares_;
+  std::size_t count_ = 0;
+};
+
+// Adds white Gaussian noise to some channels and passes the samples on.
+class NoisySamples : public SampleSink {
+ public:
+  NoisySamples(SampleSink& out, std::size_t values, const std::vector<std::size_t>& channels,
+               const std::vector<double>& sd, std::uint64_t seed)
+      : out_(out), noisy_(values) {
+    for (std::size_t k = 0; k < channels.size(); ++k) {
+      if (!(sd[k] > 0)) continue;
+      channels_.push_back(channels[k]);
+      sd_.push_back(sd[k]);
+      random_.emplace_back(seed, SimulationOptions::kNoiseStream + channels[k]);
+    }
+  }
+  void sample(double t, const double* values, std::size_t run) override {
+    std::copy(values, values + noisy_.size(), noisy_.begin());
+    for (std::size_t k = 0; k < channels_.size(); ++k) {
+      noisy_[channels_[k]] += sd_[k] * random_[k].normal();
+    }
+    out_.sample(t, noisy_.data(), run);
+  }
+
+ private:
+  SampleSink& out_;
+  std::vector<double> noisy_;
+  std::vector<std::size_t> channels_;
+  std::vector<double> sd_;
+  std::vector<PortableRandom> random_;
+};
+
+}  // namespace
+
+std::vector<double> noise_standard_deviations(const Model& model,
+                                              const SimulationOptions& options) {
+  options.validate(model);
+  std::vector<double> out(options.noise.size(), 0.0);
+  bool needed = false;
+  for (const ChannelNoise& n : options.noise) needed = needed || n.relative > 0;
+  if (!needed) return out;
+  ChannelSpread spread(noise_channels(model, options));
+  simulate_clean(model, options, spread);
+  for (std::size_t k = 0; k < out.size(); ++k) {
+    out[k] = options.noise[k].relative * spread.standard_deviation(k);
+  }
+  return out;
+}
+
+void simulate(const Model& model, const SimulationOptions& options, SampleSink& sink,
+              const std::vector<double>& noise_sd) {
+  options.validate(model);
+  if (noise_sd.size() != options.noise.size()) {
+    throw std::invalid_argument("simulate: one noise standard deviation per noise entry needed");
+  }
+  if (options.noise.empty()) return simulate_clean(model, options, sink);
+  NoisySamples noisy(sink, model.variables().size(), noise_channels(model, options), noise_sd,
+                     options.seed);
+  simulate_clean(model, options, noisy);
+}
+
+void simulate(const Model& model, const SimulationOptions& options, SampleSink& sink) {
+  simulate(model, options, sink, noise_standard_deviations(model, options));
 }
 
 namespace {
@@ -325,16 +502,27 @@ std::vector<numeric> parameter_values(const Model& model,
   return out;
 }
 
-DataMetadata simulation_metadata(const Model& model, const SimulationOptions& options) {
+DataMetadata simulation_metadata(const Model& model, const SimulationOptions& options,
+                                 const std::vector<double>& noise_sd) {
+  if (noise_sd.size() != options.noise.size()) {
+    throw std::invalid_argument(
+        "simulation_metadata: one noise standard deviation per noise entry needed");
+  }
+  std::size_t held = 0;
+  for (const InputSpec& input : options.inputs) held += input.held() ? 1 : 0;
+  const bool mixed = held != 0 && held != options.inputs.size();
+  const std::string hold = held == options.inputs.size() ? "zoh" : held == 0 ? "sample" : "mixed";
+  DataMetadata::Line first{{"model", model.name()},
+                           {"dt", shortest_decimal(options.dt)},
+                           {"input-hold", hold},
+                           {"seed", std::to_string(options.seed)},
+                           {"samples", std::to_string(options.samples)},
+                           {"runs", std::to_string(options.runs)},
+                           {"burn-in", std::to_string(options.burn_in)},
+                           {"continue", options.continue_runs ? "yes" : "no"}};
+  if (!options.observe.empty()) first.emplace_back("observe", join(options.observe, ","));
   DataMetadata metadata;
-  metadata.add_line({{"model", model.name()},
-                     {"dt", shortest_decimal(options.dt)},
-                     {"input-hold", "zoh"},
-                     {"seed", std::to_string(options.seed)},
-                     {"samples", std::to_string(options.samples)},
-                     {"runs", std::to_string(options.runs)},
-                     {"burn-in", std::to_string(options.burn_in)},
-                     {"continue", options.continue_runs ? "yes" : "no"}});
+  metadata.add_line(std::move(first));
   DataMetadata::Line parameters;
   for (std::size_t p = 0; p < options.parameters.size(); ++p) {
     parameters.emplace_back("param." + model.parameters()[p].name,
@@ -342,7 +530,19 @@ DataMetadata simulation_metadata(const Model& model, const SimulationOptions& op
   }
   metadata.add_line(std::move(parameters));
   for (std::size_t i = 0; i < options.inputs.size(); ++i) {
-    metadata.add_line({{"input." + model.inputs()[i].name, options.inputs[i].text()}});
+    const std::string& name = model.inputs()[i].name;
+    DataMetadata::Line line{{"input." + name, options.inputs[i].text()}};
+    if (mixed) line.emplace_back("input-hold." + name, options.inputs[i].held() ? "zoh" : "sample");
+    metadata.add_line(std::move(line));
+  }
+  if (!options.noise.empty()) {
+    DataMetadata::Line noise;
+    for (std::size_t k = 0; k < options.noise.size(); ++k) {
+      const std::string& name = options.noise[k].channel;
+      noise.emplace_back("noise." + name, shortest_decimal(options.noise[k].relative));
+      noise.emplace_back("noise-sd." + name, shortest_decimal(noise_sd[k]));
+    }
+    metadata.add_line(std::move(noise));
   }
   return metadata;
 }
@@ -350,13 +550,24 @@ DataMetadata simulation_metadata(const Model& model, const SimulationOptions& op
 void simulate_to_file(const Model& model, const SimulationOptions& options, const std::string& path,
                       DataWriter::Format format) {
   options.validate(model);
+  const std::vector<double> noise_sd = noise_standard_deviations(model, options);
+  const std::vector<std::string>& variables = model.variables();
+  std::vector<std::size_t> channels;
+  if (options.observe.empty()) {
+    for (std::size_t c = 0; c < variables.size(); ++c) channels.push_back(c);
+  } else {
+    for (const std::string& name : options.observe) {
+      channels.push_back(static_cast<std::size_t>(
+          std::find(variables.begin(), variables.end(), name) - variables.begin()));
+    }
+  }
   std::vector<std::string> columns{"t"};
-  for (const std::string& v : model.variables()) columns.push_back(v);
+  for (std::size_t c : channels) columns.push_back(variables[c]);
   const bool with_run = options.runs > 1;
   if (with_run) columns.push_back("run");
-  DataWriter out(path, format, simulation_metadata(model, options), columns);
-  SampleRows rows(out, model.variables().size(), with_run);
-  simulate(model, options, rows);
+  DataWriter out(path, format, simulation_metadata(model, options, noise_sd), columns);
+  SampleRows rows(out, std::move(channels), with_run);
+  simulate(model, options, rows, noise_sd);
   out.commit();
 }
 
