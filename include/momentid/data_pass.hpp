@@ -50,6 +50,10 @@ struct DataMoments {
 DataMoments moments_from_data(const DataSource& source, const std::vector<std::string>& states,
                               const std::vector<std::string>& inputs,
                               const std::vector<Monomial>& moments, const DataOptions& options);
+// The same for moments that may be lagged, over the channels `states` then `inputs` in order.
+DataMoments moments_from_data(const DataSource& source, const std::vector<std::string>& states,
+                              const std::vector<std::string>& inputs, std::vector<Moment> moments,
+                              const DataOptions& options);
 
 }  // namespace momentid
 

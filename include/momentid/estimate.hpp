@@ -6,6 +6,7 @@
 
 #include "momentid/accumulator.hpp"
 #include "momentid/derive.hpp"
+#include "momentid/lagged.hpp"
 
 namespace momentid {
 
@@ -85,5 +86,15 @@ Estimate solve_rows(const MomentRows& rows, const std::vector<std::string>& name
                     const MomentEstimates& estimates,
                     const std::vector<std::vector<double>>& covariance,
                     const SolveOptions& options = {});
+
+// The numbers behind lagged moment equations for data sampled every `dt`: one row per equation
+// and lag, whose entries are lagged moments weighted by the stencils of the lag derivatives,
+// and the moments, over accumulator channels: `channel[v]` is model variable v's channel, or -1
+// for a variable the data lack.
+struct LaggedRows {
+  std::vector<Moment> moments;
+  MomentRows rows;
+};
+LaggedRows lagged_rows(const LaggedSystem& system, double dt, const std::vector<int>& channel);
 
 }  // namespace momentid

@@ -11,6 +11,7 @@
 #include "momentid/data_pass.hpp"
 #include "momentid/derive.hpp"
 #include "momentid/estimate.hpp"
+#include "momentid/lagged.hpp"
 #include "momentid/model.hpp"
 #include "momentid/reader.hpp"
 
@@ -32,6 +33,11 @@ struct IdentifyOptions {
   std::map<std::string, std::string> columns;
   // Pair input row n with state row n + input_shift, within kMaxInputShift either way.
   long input_shift = 0;
+  // Lagged moment equations (README, "Measured data") at lags first..last samples, with these
+  // instruments (nullopt: derive_lagged's choice). They are used when lags are given, and when
+  // the data lack a state's column (then with the default lags).
+  std::optional<std::pair<int, int>> lags;
+  std::optional<std::vector<Monomial>> instruments;
 
   static constexpr std::size_t kMinBatches = 2, kMaxBatches = 10000;
   static constexpr int kMaxDegree = 12;
@@ -47,9 +53,14 @@ struct IdentifyOptions {
 // included, so it stays valid after the model and the source are gone.
 struct IdentifyResult {
   std::shared_ptr<const Model> model;
-  MomentSystem system;  // refers to *model
   std::string data_name;
-  std::vector<Monomial> moments;  // estimated, in the order of data.estimates
+  // The zero-lag equations and their moments, in the order of data.estimates; or
+  MomentSystem system;  // refers to *model
+  std::vector<Monomial> moments;
+  // the lagged equations and their moments, over `channels` (data columns, by model name).
+  std::optional<LaggedSystem> lagged;  // refers to *model
+  std::vector<Moment> lagged_moments;
+  std::vector<std::string> channels;
   DataMoments data;
   Estimate estimate;
   bool gmm = false;  // the optimally weighted estimate is the main result

@@ -73,6 +73,10 @@ struct LaggedSystem {
   int max_order = 0;  // the highest lag derivative in the equations
 };
 
+// Whether the data, having the variables flagged in `measured`, show every variable of `model`:
+// each one measured or, for a state, a derivative of a measured one through kinematic equations.
+bool derivable_from(const Model& model, const std::vector<bool>& measured);
+
 // Derives the lagged equations. Throws ModelError at an equation with a term that needs a
 // channel the data lack (v^2 when only y is measured is not a time derivative of y), or naming
 // a state that has no column and that no kinematic equation defines; UsageError for bad options.

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <sstream>
+#include <tuple>
 
 #include "common/json.hpp"
 
@@ -43,23 +44,74 @@ IdentifyResult identify(const Model& model, const DataSource& source,
   result.model = std::make_shared<const Model>(model);
   result.data_name = source.name();
   result.gmm = options.gmm;
-  DeriveOptions derive_options;
-  derive_options.multipliers = options.multipliers;
-  derive_options.degree = options.degree;
-  result.system = derive(*result.model, derive_options);
-  result.moments = moments_to_estimate(result.system);
-
   DataOptions data_options;
   data_options.hold = options.hold;
   data_options.batches = options.batches;
   data_options.rename = options.columns;
   data_options.min_rows = 2 * options.batches;
   data_options.input_shift = options.input_shift;
+
+  // Which variables the data have: the lagged equations serve data without some state.
+  const std::vector<std::string> columns =
+      source.open({.names = {}, .rename = {}, .min_rows = 0})->columns();
+  std::vector<bool> measured;
+  for (const std::string& v : model.variables()) {
+    const auto renamed = options.columns.find(v);
+    const std::string& column = renamed == options.columns.end() ? v : renamed->second;
+    measured.push_back(std::find(columns.begin(), columns.end(), column) != columns.end());
+  }
+  const bool all_measured = std::all_of(measured.begin(), measured.end(), [](bool m) { return m; });
+  // Without lags asked for, data that cannot show a state (not even as a derivative) get the
+  // zero-lag pass and its message naming the missing column.
+  if (!options.lags && (all_measured || !derivable_from(model, measured))) {
+    DeriveOptions derive_options;
+    derive_options.multipliers = options.multipliers;
+    derive_options.degree = options.degree;
+    result.system = derive(*result.model, derive_options);
+    result.moments = moments_to_estimate(result.system);
+    std::vector<std::string> states, inputs;
+    for (const auto& d : model.states()) states.push_back(d.name);
+    for (const auto& d : model.inputs()) inputs.push_back(d.name);
+    result.data = moments_from_data(source, states, inputs, result.moments, data_options);
+    result.estimate = solve(result.system, result.data.estimates, {.gmm = options.gmm});
+    return result;
+  }
+
+  LagOptions lag_options;
+  if (options.lags) std::tie(lag_options.first_lag, lag_options.last_lag) = *options.lags;
+  lag_options.instruments = options.instruments;
+  lag_options.measured = measured;
+  result.lagged = derive_lagged(*result.model, lag_options);
+  // The channels the equations read, states then inputs, as the accumulator numbers them.
   std::vector<std::string> states, inputs;
-  for (const auto& d : model.states()) states.push_back(d.name);
-  for (const auto& d : model.inputs()) inputs.push_back(d.name);
-  result.data = moments_from_data(source, states, inputs, result.moments, data_options);
-  result.estimate = solve(result.system, result.data.estimates, {.gmm = options.gmm});
+  std::vector<int> channel(model.variables().size(), -1);
+  const std::size_t state_count = model.states().size();
+  for (std::size_t v = 0; v < model.variables().size(); ++v) {
+    if (!result.lagged->needed[v]) continue;
+    (v < state_count ? states : inputs).push_back(model.variables()[v]);
+  }
+  for (std::size_t v = 0, next = 0; v < model.variables().size(); ++v) {
+    if (result.lagged->needed[v] && v < state_count) channel[v] = static_cast<int>(next++);
+  }
+  for (std::size_t v = state_count, next = states.size(); v < model.variables().size(); ++v) {
+    if (result.lagged->needed[v]) channel[v] = static_cast<int>(next++);
+  }
+  result.channels = states;
+  result.channels.insert(result.channels.end(), inputs.begin(), inputs.end());
+  // The stencils need the sample interval, which the data give: accumulate, then build rows.
+  const LaggedRows probe = lagged_rows(*result.lagged, 1.0, channel);
+  result.lagged_moments = probe.moments;
+  result.data = moments_from_data(source, states, inputs, probe.moments, data_options);
+  if (!result.data.time_step) {
+    throw DataError({source.name(), 1, 1, ""},
+                    "the lagged equations need the sample interval: give the data a 't' column "
+                    "or a dt in the metadata");
+  }
+  const LaggedRows rows = lagged_rows(*result.lagged, *result.data.time_step, channel);
+  std::vector<std::string> names;
+  for (const Declaration& p : model.parameters()) names.push_back(p.name);
+  result.estimate = solve_rows(rows.rows, names, result.data.estimates,
+                               result.data.estimates.covariance(), {.gmm = options.gmm});
   return result;
 }
 
@@ -108,6 +160,30 @@ void table(std::ostringstream& out, const std::vector<ParameterEstimate>& parame
   }
 }
 
+// "lagged moment equations at lags 3..40, instruments y, y^3; not measured: v = y'".
+std::string method_text(const IdentifyResult& r) {
+  std::string out = "lagged moment equations at lags " + std::to_string(r.lagged->first_lag) +
+                    ".." + std::to_string(r.lagged->last_lag) + " samples, instruments ";
+  for (std::size_t i = 0; i < r.lagged->instruments.size(); ++i) {
+    out += (i ? ", " : "") + format_monomial(*r.model, r.lagged->instruments[i]);
+  }
+  for (std::size_t i = 0; i < r.lagged->derivatives.size(); ++i) {
+    out += (i ? ", " : "; not measured: ") + r.lagged->derivatives[i];
+  }
+  return out;
+}
+
+// "E[y(t-3)*y^3]": a lagged moment over the named channels.
+std::string lagged_moment_text(const std::vector<std::string>& channels, const Moment& m) {
+  std::string out;
+  for (const MomentFactor& f : m.factors()) {
+    out += (out.empty() ? "" : "*") + channels[static_cast<std::size_t>(f.channel)];
+    if (f.power > 1) out += "^" + std::to_string(f.power);
+    if (f.lag > 0) out += "(t-" + std::to_string(f.lag) + ")";
+  }
+  return "E[" + (out.empty() ? std::string("1") : out) + "]";
+}
+
 }  // namespace
 
 std::string format_text(const IdentifyResult& r) {
@@ -117,7 +193,9 @@ std::string format_text(const IdentifyResult& r) {
   out << "model " << r.model->name() << ", data " << r.data_name << ": " << d.rows << " rows in "
       << d.runs << (d.runs == 1 ? " run" : " runs");
   if (d.time_step) out << ", dt = " << number(*d.time_step);
-  out << ", input hold " << hold_name(d.hold) << "\n\n";
+  out << ", input hold " << hold_name(d.hold) << "\n";
+  if (r.lagged) out << method_text(r) << "\n";
+  out << "\n";
   if (r.gmm && !e.gmm_parameters.empty()) {
     out << "optimally weighted estimate (two-step GMM)\n";
     table(out, e.gmm_parameters);
@@ -169,10 +247,23 @@ std::string format_json(const IdentifyResult& r) {
       << ",\n  \"data\": " << json_string(r.data_name)
       << ",\n  \"parameters\": " << parameters(gmm ? e.gmm_parameters : e.parameters);
   if (gmm) out << ",\n  \"least_squares\": " << parameters(e.parameters);
+  if (r.lagged) {
+    out << ",\n  \"method\": {\"name\": \"lagged\", \"lags\": [" << r.lagged->first_lag << ", "
+        << r.lagged->last_lag << "], \"instruments\": [";
+    for (std::size_t i = 0; i < r.lagged->instruments.size(); ++i) {
+      out << (i ? ", " : "") << json_string(format_monomial(*r.model, r.lagged->instruments[i]));
+    }
+    out << "], \"not_measured\": [";
+    for (std::size_t i = 0; i < r.lagged->derivatives.size(); ++i) {
+      out << (i ? ", " : "") << json_string(r.lagged->derivatives[i]);
+    }
+    out << "]}";
+  }
   out << ",\n  \"moments\": {";
-  for (std::size_t k = 0; k < r.moments.size(); ++k) {
-    out << (k ? ", " : "") << json_string(format_moment(*r.model, r.moments[k])) << ": "
-        << json_number(d.estimates.mean[k]);
+  for (std::size_t k = 0; k < d.estimates.mean.size(); ++k) {
+    const std::string name = r.lagged ? lagged_moment_text(r.channels, r.lagged_moments[k])
+                                      : format_moment(*r.model, r.moments[k]);
+    out << (k ? ", " : "") << json_string(name) << ": " << json_number(d.estimates.mean[k]);
   }
   out << "}";
   out << ",\n  \"diagnostics\": {\n    \"status\": "

@@ -20,6 +20,8 @@ struct IdentifyCommand {
   std::string weighting = "ls";
   std::string format = "text";
   std::vector<std::string> columns;
+  std::optional<std::string> lags;
+  std::optional<std::string> instruments;
 };
 
 int run_identify(IdentifyCommand& command) {
@@ -31,6 +33,10 @@ int run_identify(IdentifyCommand& command) {
   options.hold = hold_option(command.hold);
   options.gmm = command.weighting == "gmm";
   options.columns = column_map(command.columns);
+  if (command.lags) options.lags = lag_range(*command.lags);
+  if (command.instruments) {
+    options.instruments = monomial_list(model.variables(), *command.instruments, "--instruments");
+  }
   const IdentifyResult result = identify(model, DataSource::file(command.data), options);
   std::cout << (command.format == "json" ? format_json(result) : format_text(result));
   if (result.estimate.status == Estimate::Status::kNothingIdentifiable) {
@@ -68,6 +74,12 @@ Command add_identify(CLI::App& app) {
   sub->add_option("--input-shift", options.input_shift,
                   "pair input row n with state row n + k (delayed measurements)")
       ->check(CLI::Range(-IdentifyOptions::kMaxInputShift, IdentifyOptions::kMaxInputShift));
+  sub->add_option("--lags", command->lags,
+                  "lagged moment equations at lags FIRST..LAST samples, e.g. 3..40 (the default "
+                  "when the data lack a state that a kinematic equation defines)")
+      ->excludes(multipliers);
+  sub->add_option("--instruments", command->instruments,
+                  "instruments for the lagged equations, e.g. \"y, y^3\"");
   return {sub, [command] { return run_identify(*command); }};
 }
 

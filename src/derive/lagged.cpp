@@ -188,6 +188,14 @@ bool has_parameter(const Equation& eq) {
 
 }  // namespace
 
+bool derivable_from(const Model& model, const std::vector<bool>& measured) {
+  const LagDeriver deriver(model, measured);
+  for (std::size_t v = 0; v < model.variables().size(); ++v) {
+    if (deriver.observation(static_cast<int>(v)).base < 0) return false;
+  }
+  return true;
+}
+
 void LagOptions::validate(const Model& model, int max_order) const {
   const int reach = kStencilReach[std::min(max_order, kMaxLagOrder)];
   if (first_lag <= reach) {
@@ -253,6 +261,9 @@ LaggedSystem derive_lagged(const Model& model, const LagOptions& options) {
     }
   }
 
+  if (system.instruments.empty()) {
+    throw UsageError("lags: no instruments: the data have none of the model's states");
+  }
   const std::size_t parameters = model.parameters().size();
   for (std::size_t e = 0; e < model.equations().size(); ++e) {
     const Equation& eq = model.equations()[e];

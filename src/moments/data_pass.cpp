@@ -183,6 +183,14 @@ class BlockQueue {
 DataMoments moments_from_data(const DataSource& source, const std::vector<std::string>& states,
                               const std::vector<std::string>& inputs,
                               const std::vector<Monomial>& moments, const DataOptions& options) {
+  std::vector<Moment> keys;
+  for (const Monomial& m : moments) keys.push_back(Moment::from_monomial(m));
+  return moments_from_data(source, states, inputs, std::move(keys), options);
+}
+
+DataMoments moments_from_data(const DataSource& source, const std::vector<std::string>& states,
+                              const std::vector<std::string>& inputs, std::vector<Moment> keys,
+                              const DataOptions& options) {
   ColumnRequest request;
   request.names = states;
   request.names.insert(request.names.end(), inputs.begin(), inputs.end());
@@ -199,8 +207,7 @@ DataMoments moments_from_data(const DataSource& source, const std::vector<std::s
     out.hold = hold && *hold == "zoh" ? InputHold::kZeroOrderHold : InputHold::kSample;
   }
   const std::size_t channels = request.names.size();
-  std::vector<Moment> keys;
-  for (const Monomial& m : moments) keys.push_back(Moment::from_monomial(m));
+  const bool any_moments = !keys.empty();
   MomentAccumulator accumulator(std::move(keys), states.size(), inputs.size(), out.hold,
                                 options.batches);
   LagSums lags(channels, options.lags);
@@ -248,7 +255,14 @@ DataMoments moments_from_data(const DataSource& source, const std::vector<std::s
   if (auto error = queue.error()) std::rethrow_exception(error);
 
   accumulator.finish();
-  if (accumulator.intervals() == 0 && !moments.empty()) {
+  if (accumulator.intervals() == 0 && any_moments && accumulator.max_lag() > 0) {
+    throw Error(source.name() + ": no run has more than " +
+                std::to_string(accumulator.max_lag() + 1) + " rows" +
+                (options.input_shift != 0 ? " after the input shift" : std::string()) +
+                ": the lagged moments reach " + std::to_string(accumulator.max_lag()) +
+                " rows back and need at least one interval after that");
+  }
+  if (accumulator.intervals() == 0 && any_moments) {
     throw Error(source.name() + ": no run has two consecutive rows" +
                 (options.input_shift != 0 ? " after the input shift" : std::string()) +
                 ": the time averages need at least one interval");
