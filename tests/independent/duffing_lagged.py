@@ -1,0 +1,63 @@
+#!/usr/bin/python3
+"""Identifies the Duffing oscillator from a record that numpy and scipy made, not momentid.
+
+The record holds displacement and force only (no velocity), sampled every 0.01 s: the lagged
+moment equations must recover c = 0.5, k = 4, eps = 1. The force is a sum of 60 sinusoids with
+random frequencies and phases, evaluated exactly by the integrator (scipy's DOP853, tolerance
+1e-10), so the samples are those of continuous signals (input hold `sample`).
+
+Usage: duffing_lagged.py MOMENTID MODEL WORKDIR
+"""
+import json
+import subprocess
+import sys
+
+import numpy as np
+from scipy.integrate import solve_ivp
+
+TRUTH = {"c": 0.5, "k": 4.0, "eps": 1.0}
+
+
+def main():
+    momentid, model, workdir = sys.argv[1:4]
+    rng = np.random.default_rng(20261123)
+    omega = rng.uniform(0.3, 6.0, 60)
+    phase = rng.uniform(0, 2 * np.pi, 60)
+    amplitude = 6.0 * np.sqrt(2 / 60)  # force RMS 6
+
+    def force(t):
+        return amplitude * np.cos(np.multiply.outer(t, omega) + phase).sum(axis=-1)
+
+    def rates(t, state):
+        y, v = state
+        return [v, -TRUTH["c"] * v - TRUTH["k"] * y - TRUTH["eps"] * y**3 + force(t)]
+
+    dt, burn_in, samples = 0.01, 100.0, 200000
+    t = burn_in + dt * np.arange(samples)
+    solution = solve_ivp(rates, (0.0, t[-1]), [0.0, 0.0], method="DOP853", t_eval=t,
+                         rtol=1e-10, atol=1e-10)
+    assert solution.success, solution.message
+    path = f"{workdir}/independent_duffing.csv"
+    with open(path, "w") as out:
+        out.write("# momentid: dt=0.01 input-hold=sample\nt,y,x\n")
+        np.savetxt(out, np.column_stack([t, solution.y[0], force(t)]), delimiter=",",
+                   fmt="%.17g")
+
+    result = subprocess.run([momentid, "identify", model, path, "--format", "json"],
+                            capture_output=True, text=True, check=True)
+    report = json.loads(result.stdout)
+    assert report["method"]["name"] == "lagged", report["method"]
+    failed = False
+    for name, truth in TRUTH.items():
+        p = report["parameters"][name]
+        error = p["estimate"] - truth
+        # Four reported standard errors, and 2% as a plain bound on a record of 2*10^5 samples.
+        ok = abs(error) < 4 * p["std_error"] and abs(error) < 0.02 * truth
+        failed |= not ok
+        print(f"{name}: {p['estimate']:.6g} (truth {truth}, std error {p['std_error']:.3g}, "
+              f"relative error {error / truth:+.3%}) {'ok' if ok else 'FAILED'}")
+    sys.exit(1 if failed else 0)
+
+
+if __name__ == "__main__":
+    main()
