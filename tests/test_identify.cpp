@@ -253,4 +253,34 @@ TEST_SUITE("identify") {
       CHECK(std::abs(r.parameters()[p].estimate - truth) < 4 * r.parameters()[p].std_error);
     }
   }
+
+  TEST_CASE("white noise on a state is estimated from its autocorrelation and reported") {
+    // 5% noise on y over 10^6 samples. The estimate of the noise variance mixes the signal with
+    // the noise in its cross products: its relative standard error is about 10% here (5% in
+    // the standard deviation), so 4 of them bound it.
+    const Model model = model_file("duffing.mom");
+    momentid::SimulationOptions options;
+    options.parameters = momentid::parameter_values(model, {});
+    options.inputs = {momentid::InputSpec::parse("ma:K=10,w=0.1,sigma=20", "test")};
+    options.samples = 1000000;
+    options.noise = {{"y", 0.05}};
+    Columns columns(3);
+    momentid::simulate(model, options, columns);
+    momentid::MemoryData data;
+    data.rows = options.samples;
+    data.columns = {{"y", columns.values[0].data()}, {"x", columns.values[2].data()}};
+    data.metadata.add_line({{"dt", "0.01"}, {"input-hold", "zoh"}});
+    const momentid::IdentifyResult r =
+        momentid::identify(model, momentid::DataSource::memory(std::move(data)));
+    const momentid::ChannelStatistics& y = r.data.channels[0];
+    REQUIRE(y.noise_variance.has_value());
+    const double relative = std::sqrt(*y.noise_variance / y.variance);
+    INFO("estimated noise: ", relative);
+    CHECK(relative > 0.05 * (1 - 4 * 0.05));
+    CHECK(relative < 0.05 * (1 + 4 * 0.05));
+    const auto all = momentid::warnings(r);
+    CHECK(std::any_of(all.begin(), all.end(), [](const std::string& w) {
+      return w.starts_with("'y' carries white noise of about 5");
+    }));
+  }
 }

@@ -19,6 +19,10 @@ struct ChannelStatistics {
   std::vector<double> autocorrelation;  // lags 1..L
   // Samples until the autocorrelation first drops below 1/e (L + 1 if it never does).
   std::size_t correlation_time = 0;
+  // The variance of white noise on the channel: the excess of the lag-0 autocovariance over its
+  // extrapolation from lags 1 to 4 (with 4 lags or more). Meaningful for a channel that
+  // is smooth apart from the noise, such as a measured state.
+  std::optional<double> noise_variance;
 };
 
 struct DataOptions {

@@ -9,6 +9,13 @@
 #include "common/json.hpp"
 
 namespace momentid {
+namespace {
+
+// Sensor noise above this fraction of a state's standard deviation is reported. Below it the
+// estimate cannot tell noise from the roughness of a state whose derivative holds a held input.
+constexpr double kNoiseWarning = 0.02;
+
+}  // namespace
 
 void IdentifyOptions::validate(const Model& model) const {
   if (batches < kMinBatches || batches > kMaxBatches) {
@@ -50,6 +57,7 @@ IdentifyResult identify(const Model& model, const DataSource& source,
   data_options.rename = options.columns;
   data_options.min_rows = 2 * options.batches;
   data_options.input_shift = options.input_shift;
+  data_options.lags = 4;  // for the noise estimates
 
   // Which variables the data have: the lagged equations serve data without some state.
   const std::vector<std::string> columns =
@@ -117,6 +125,16 @@ IdentifyResult identify(const Model& model, const DataSource& source,
 
 std::vector<std::string> warnings(const IdentifyResult& r) {
   std::vector<std::string> w = smoothness_warnings(r.data);
+  for (const ChannelStatistics& c : r.data.channels) {
+    if (c.is_input || !c.noise_variance || !(c.variance > 0)) continue;
+    const double relative = std::sqrt(std::max(0.0, *c.noise_variance) / c.variance);
+    if (relative < kNoiseWarning) continue;
+    char text[32];
+    std::snprintf(text, sizeof text, "%.2g%%", 100 * relative);
+    w.push_back("'" + c.name + "' carries white noise of about " + text +
+                " of its standard deviation (the excess of its autocorrelation at lag 0): it "
+                "biases the estimates, and momentid does not yet correct for it");
+  }
   if (r.estimate.status != Estimate::Status::kOk) w.insert(w.begin(), r.estimate.message);
   w.insert(w.end(), r.estimate.warnings.begin(), r.estimate.warnings.end());
   return w;
