@@ -7,6 +7,7 @@
 #include <cmath>
 #include <string>
 
+#include "momentid/estimate.hpp"
 #include "momentid/lagged.hpp"
 #include "test_support.hpp"
 
@@ -121,5 +122,29 @@ TEST_SUITE("lagged") {
     const momentid::Moment m = momentid::lagged_moment({1, 0, 0}, {3, 0, 0}, 7);
     CHECK(to_string(m) == "c0^3*c0(t-7)");
     CHECK(m.max_lag() == 7);
+  }
+
+  TEST_CASE("powers of a noisy channel become Hermite polynomials in its noise variance") {
+    // eps*C[y^3;y^3](s) with noise of variance v on y: E[(y^3 - 3vy)(t-s) (y^3 - 3vy)(t)].
+    const momentid::Model model = model_file("duffing.mom");
+    const std::vector<momentid::Monomial> cube{{3, 0, 0}};
+    const auto system = momentid::derive_lagged(
+        model,
+        {.first_lag = 3, .last_lag = 3, .instruments = cube, .measured = {true, false, true}});
+    const double v = 0.01;
+    // Channels: y is 0, x is 1 (v is not read).
+    const auto rows = momentid::lagged_rows(system, 0.01, {0, -1, 1}, {v, 0});
+    REQUIRE(rows.rows.a.size() == 1);
+    std::map<std::string, double> eps;
+    for (const auto& [k, w] : rows.rows.a[0][2].moments) eps[to_string(rows.moments[k])] += w;
+    CHECK(rows.rows.a[0][2].constant == 0);
+    REQUIRE(eps.size() == 4);
+    CHECK(eps["c0^3*c0^3(t-3)"] == doctest::Approx(1));
+    CHECK(eps["c0*c0^3(t-3)"] == doctest::Approx(-3 * v));
+    CHECK(eps["c0^3*c0(t-3)"] == doctest::Approx(-3 * v));
+    CHECK(eps["c0*c0(t-3)"] == doctest::Approx(9 * v * v));
+    // Without noise the same moments, in the same order, with zero weights for the corrections.
+    const auto clean = momentid::lagged_rows(system, 0.01, {0, -1, 1}, {});
+    CHECK(clean.moments == rows.moments);
   }
 }

@@ -38,6 +38,10 @@ struct IdentifyOptions {
   // the data lack a state's column (then with the default lags).
   std::optional<std::pair<int, int>> lags;
   std::optional<std::vector<Monomial>> instruments;
+  // White sensor noise on the states, for the lagged equations, which replace powers of noisy
+  // channels by their Hermite polynomials: nullopt estimates each measured state's noise
+  // variance from its autocorrelation; a map gives the variances by name (absent: none).
+  std::optional<std::map<std::string, double>> noise;
 
   static constexpr std::size_t kMinBatches = 2, kMaxBatches = 10000;
   static constexpr int kMaxDegree = 12;
@@ -61,6 +65,7 @@ struct IdentifyResult {
   std::optional<LaggedSystem> lagged;  // refers to *model
   std::vector<Moment> lagged_moments;
   std::vector<std::string> channels;
+  std::vector<double> noise;  // the noise variance used per channel (lagged equations)
   DataMoments data;
   Estimate estimate;
   bool gmm = false;  // the optimally weighted estimate is the main result

@@ -107,7 +107,7 @@ IdentifyResult identify(const Model& model, const DataSource& source,
   result.channels = states;
   result.channels.insert(result.channels.end(), inputs.begin(), inputs.end());
   // The stencils need the sample interval, which the data give: accumulate, then build rows.
-  const LaggedRows probe = lagged_rows(*result.lagged, 1.0, channel);
+  const LaggedRows probe = lagged_rows(*result.lagged, 1.0, channel, {});
   result.lagged_moments = probe.moments;
   result.data = moments_from_data(source, states, inputs, probe.moments, data_options);
   if (!result.data.time_step) {
@@ -115,7 +115,19 @@ IdentifyResult identify(const Model& model, const DataSource& source,
                     "the lagged equations need the sample interval: give the data a 't' column "
                     "or a dt in the metadata");
   }
-  const LaggedRows rows = lagged_rows(*result.lagged, *result.data.time_step, channel);
+  // The noise on each state channel: given, or estimated from its autocorrelation (inputs are
+  // taken as measured without noise).
+  result.noise.assign(result.channels.size(), 0.0);
+  for (std::size_t c = 0; c < states.size(); ++c) {
+    if (options.noise) {
+      const auto given = options.noise->find(states[c]);
+      if (given != options.noise->end()) result.noise[c] = given->second;
+    } else if (const auto& v = result.data.channels[c].noise_variance) {
+      result.noise[c] = std::max(0.0, *v);
+    }
+  }
+  const LaggedRows rows =
+      lagged_rows(*result.lagged, *result.data.time_step, channel, result.noise);
   std::vector<std::string> names;
   for (const Declaration& p : model.parameters()) names.push_back(p.name);
   result.estimate = solve_rows(rows.rows, names, result.data.estimates,
@@ -132,8 +144,11 @@ std::vector<std::string> warnings(const IdentifyResult& r) {
     char text[32];
     std::snprintf(text, sizeof text, "%.2g%%", 100 * relative);
     w.push_back("'" + c.name + "' carries white noise of about " + text +
-                " of its standard deviation (the excess of its autocorrelation at lag 0): it "
-                "biases the estimates, and momentid does not yet correct for it");
+                " of its standard deviation (the excess of its autocorrelation at lag 0): " +
+                (r.lagged ? "the lagged equations correct its powers, but the estimates are "
+                            "less certain and may still be biased"
+                          : "it biases the zero-lag estimates (the lagged equations, --lags, "
+                            "correct for it in part)"));
   }
   if (r.estimate.status != Estimate::Status::kOk) w.insert(w.begin(), r.estimate.message);
   w.insert(w.end(), r.estimate.warnings.begin(), r.estimate.warnings.end());
@@ -188,6 +203,14 @@ std::string method_text(const IdentifyResult& r) {
   for (std::size_t i = 0; i < r.lagged->derivatives.size(); ++i) {
     out += (i ? ", " : "; not measured: ") + r.lagged->derivatives[i];
   }
+  std::string noise;
+  for (std::size_t c = 0; c < r.noise.size(); ++c) {
+    if (r.noise[c] == 0) continue;
+    char text[32];
+    std::snprintf(text, sizeof text, "%.3g", r.noise[c]);
+    noise += (noise.empty() ? "" : ", ") + r.channels[c] + " " + text;
+  }
+  if (!noise.empty()) out += "\nnoise variances, corrected for in powers of the channels: " + noise;
   return out;
 }
 
@@ -275,7 +298,11 @@ std::string format_json(const IdentifyResult& r) {
     for (std::size_t i = 0; i < r.lagged->derivatives.size(); ++i) {
       out << (i ? ", " : "") << json_string(r.lagged->derivatives[i]);
     }
-    out << "]}";
+    out << "], \"noise_variance\": {";
+    for (std::size_t c = 0; c < r.noise.size(); ++c) {
+      out << (c ? ", " : "") << json_string(r.channels[c]) << ": " << json_number(r.noise[c]);
+    }
+    out << "}}";
   }
   out << ",\n  \"moments\": {";
   for (std::size_t k = 0; k < d.estimates.mean.size(); ++k) {

@@ -29,6 +29,9 @@ Command add_check(CLI::App& app);
 
 // `--columns v=velocity,x=force`: the model's names mapped to the data's columns.
 std::map<std::string, std::string> column_map(const std::vector<std::string>& entries);
+// `NAME=VALUE,NAME=VALUE` for `option`, whose entries are described as `expected`.
+std::map<std::string, std::string> column_map_of(const std::string& text, const std::string& option,
+                                                 const std::string& expected);
 // `--input-hold`: nullopt when not given.
 std::optional<InputHold> hold_option(const std::string& text);
 // `--lags 3..40`: the first and last lag.

@@ -2,6 +2,9 @@
 
 #include "momentid/identify.hpp"
 
+#include <algorithm>
+#include <charconv>
+#include <cmath>
 #include <iostream>
 #include <memory>
 
@@ -22,7 +25,31 @@ struct IdentifyCommand {
   std::vector<std::string> columns;
   std::optional<std::string> lags;
   std::optional<std::string> instruments;
+  std::string noise = "auto";
 };
+
+// `--noise auto|none|NAME=VARIANCE,...`.
+std::optional<std::map<std::string, double>> noise_option(const Model& model,
+                                                          const std::string& text) {
+  if (text == "auto") return std::nullopt;
+  std::map<std::string, double> out;
+  if (text == "none") return out;
+  for (const auto& [name, value] : column_map_of(text, "--noise", "NAME=VARIANCE")) {
+    const auto& states = model.states();
+    if (std::none_of(states.begin(), states.end(), [&](const auto& d) { return d.name == name; })) {
+      throw UsageError("--noise: '" + name + "' is not a state of model " + model.name());
+    }
+    double variance = 0;
+    const auto [end, error] = std::from_chars(value.data(), value.data() + value.size(), variance);
+    if (error != std::errc() || end != value.data() + value.size() || !std::isfinite(variance) ||
+        variance < 0) {
+      throw UsageError("--noise: expected a variance of at least 0 for '" + name + "', found '" +
+                       value + "'");
+    }
+    out[name] = variance;
+  }
+  return out;
+}
 
 int run_identify(IdentifyCommand& command) {
   const Model model = parse_model_file(command.model);
@@ -34,6 +61,7 @@ int run_identify(IdentifyCommand& command) {
   options.gmm = command.weighting == "gmm";
   options.columns = column_map(command.columns);
   if (command.lags) options.lags = lag_range(*command.lags);
+  options.noise = noise_option(model, command.noise);
   if (command.instruments) {
     options.instruments = monomial_list(model.variables(), *command.instruments, "--instruments");
   }
@@ -80,6 +108,9 @@ Command add_identify(CLI::App& app) {
       ->excludes(multipliers);
   sub->add_option("--instruments", command->instruments,
                   "instruments for the lagged equations, e.g. \"y, y^3\"");
+  sub->add_option("--noise", command->noise,
+                  "white sensor noise on the states for the lagged equations: auto (estimated), "
+                  "none, or NAME=VARIANCE,...");
   return {sub, [command] { return run_identify(*command); }};
 }
 

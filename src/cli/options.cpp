@@ -10,11 +10,25 @@ namespace momentid::cli {
 std::map<std::string, std::string> column_map(const std::vector<std::string>& entries) {
   std::map<std::string, std::string> out;
   for (const std::string& e : entries) {
+    for (const auto& pair : column_map_of(e, "--columns", "NAME=COLUMN"))
+      out.insert_or_assign(pair.first, pair.second);
+  }
+  return out;
+}
+
+std::map<std::string, std::string> column_map_of(const std::string& text, const std::string& option,
+                                                 const std::string& expected) {
+  std::map<std::string, std::string> out;
+  std::size_t begin = 0;
+  while (begin <= text.size()) {
+    const std::size_t end = std::min(text.find(',', begin), text.size());
+    const std::string e = text.substr(begin, end - begin);
     const std::size_t eq = e.find('=');
     if (eq == std::string::npos || eq == 0 || eq + 1 == e.size()) {
-      throw UsageError("--columns: expected NAME=COLUMN, found '" + e + "'");
+      throw UsageError(option + ": expected " + expected + ", found '" + e + "'");
     }
     out[e.substr(0, eq)] = e.substr(eq + 1);
+    begin = end + 1;
   }
   return out;
 }

@@ -1,5 +1,6 @@
 #include "momentid/writer.hpp"
 
+#include <pthread.h>
 #include <unistd.h>
 
 #include <bit>
@@ -44,15 +45,23 @@ DataWriter::DataWriter(const std::string& path, Format format, const DataMetadat
       path_ = (target.is_absolute() ? target : link.parent_path() / target).string();
     }
     temporary_ = path_ + ".partial-XXXXXX";
+    // An interrupt between creating the temporary file and remembering it would leave the file
+    // behind: hold the signals that remove it until it is remembered.
+    sigset_t interrupts, previous;
+    sigemptyset(&interrupts);
+    for (int signal : {SIGINT, SIGTERM, SIGHUP}) sigaddset(&interrupts, signal);
+    pthread_sigmask(SIG_BLOCK, &interrupts, &previous);
     const int fd = mkstemp(temporary_.data());
+    if (fd >= 0) remember_temporary();
+    pthread_sigmask(SIG_SETMASK, &previous, nullptr);
     if (fd < 0) throw Error(path_ + ": cannot create the output file: " + std::strerror(errno));
     file_ = fdopen(fd, "wb");
     if (file_ == nullptr) {
       ::close(fd);
       std::remove(temporary_.c_str());
+      forget_temporary();
       throw Error(path_ + ": cannot write the output file: " + std::strerror(errno));
     }
-    remember_temporary();
   }
   const std::string header = data::header_text(metadata, columns);
   if (format_ == Format::kBinary) {

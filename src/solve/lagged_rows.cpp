@@ -1,11 +1,52 @@
+// The lagged moment equations as numbers: stencils for the lag derivatives, and powers of noisy
+// channels replaced by their Hermite polynomials in the noise variance.
+
 #include <cmath>
 #include <map>
 
 #include "momentid/estimate.hpp"
 
 namespace momentid {
+namespace {
 
-LaggedRows lagged_rows(const LaggedSystem& system, double dt, const std::vector<int>& channel) {
+// E[(y + e)^p] over white Gaussian e of variance v is the expectation of y^p plus lower powers;
+// the Hermite polynomial He_p(y; v) = sum_k (-1)^k p! / (k! (p - 2k)! 2^k) v^k y^(p - 2k) has
+// E[He_p(y + e; v)] = E[y^p]. Returns the terms (power, weight) of He_p.
+std::vector<std::pair<int, double>> hermite(int p, double v) {
+  std::vector<std::pair<int, double>> out;
+  double weight = 1;  // (-1)^k p! / (k! (p - 2k)! 2^k) v^k, by recurrence in k
+  for (int k = 0; 2 * k <= p; ++k) {
+    out.emplace_back(p - 2 * k, weight);
+    weight *= -v * (p - 2 * k) * (p - 2 * k - 1) / (2.0 * (k + 1));
+  }
+  return out;
+}
+
+// The monomial (over channels) with every noisy channel's power replaced by its Hermite
+// polynomial: the terms of the product, each a monomial with its weight. Channels are
+// independent, so the product of their polynomials is the polynomial of the product.
+std::vector<std::pair<Monomial, double>> corrected(const Monomial& m,
+                                                   const std::vector<double>& noise) {
+  std::vector<std::pair<Monomial, double>> terms{{Monomial(m.size(), 0), 1.0}};
+  for (std::size_t c = 0; c < m.size(); ++c) {
+    if (m[c] == 0) continue;
+    std::vector<std::pair<Monomial, double>> next;
+    for (const auto& [power, w] : hermite(m[c], c < noise.size() ? noise[c] : 0.0)) {
+      for (const auto& [term, weight] : terms) {
+        Monomial t = term;
+        t[c] = power;
+        next.emplace_back(t, weight * w);
+      }
+    }
+    terms = std::move(next);
+  }
+  return terms;
+}
+
+}  // namespace
+
+LaggedRows lagged_rows(const LaggedSystem& system, double dt, const std::vector<int>& channel,
+                       const std::vector<double>& noise) {
   LaggedRows out;
   std::map<Moment, std::size_t> index;
   const auto remap = [&](const Monomial& m) {
@@ -15,21 +56,35 @@ LaggedRows lagged_rows(const LaggedSystem& system, double dt, const std::vector<
     }
     return out_m;
   };
-  // C^(k)[ψ;F](s) ~ sum_j w_j C[ψ;F](s + j) / dt^k.
+  // C^(k)[ψ;F](s) ~ sum_j w_j C[ψ;F](s + j) / dt^k, each C with ψ and F noise-corrected. The
+  // moments enter in the same order whatever the noise variances (zero weights included), so
+  // that the list can be made before the pass that estimates them.
   const auto entry = [&](const LagCombination& c, int s) {
     MomentRows::Entry e;
     for (const auto& [f, weight] : c) {
       const std::vector<double> w = stencil_weights(f.order);
       const int reach = kStencilReach[f.order];
       const double scale = weight.to_double() / std::pow(dt, f.order);
-      const Monomial instrument = remap(f.instrument), function = remap(f.function);
+      const auto instruments = corrected(remap(f.instrument), noise);
+      const auto functions = corrected(remap(f.function), noise);
       for (int j = -reach; j <= reach; ++j) {
         const double wj = w[static_cast<std::size_t>(j + reach)];
         if (wj == 0) continue;
-        const Moment m = lagged_moment(instrument, function, s + j);
-        const auto [it, inserted] = index.emplace(m, out.moments.size());
-        if (inserted) out.moments.push_back(m);
-        e.moments.emplace_back(it->second, scale * wj);
+        for (const auto& [instrument, wi] : instruments) {
+          for (const auto& [function, wf] : functions) {
+            const bool constant =
+                std::all_of(instrument.begin(), instrument.end(), [](int p) { return p == 0; }) &&
+                std::all_of(function.begin(), function.end(), [](int p) { return p == 0; });
+            if (constant) {
+              e.constant += scale * wj * wi * wf;
+              continue;
+            }
+            const Moment m = lagged_moment(instrument, function, s + j);
+            const auto [it, inserted] = index.emplace(m, out.moments.size());
+            if (inserted) out.moments.push_back(m);
+            e.moments.emplace_back(it->second, scale * wj * wi * wf);
+          }
+        }
       }
     }
     return e;
