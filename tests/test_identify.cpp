@@ -72,6 +72,23 @@ Estimate identify(const Model& truth, const Case& c, const Model* fitted = nullp
       .estimate;
 }
 
+// Simulates 10^6 samples of the Duffing model with `noise` (relative) on y and identifies it from
+// y and x alone, from memory.
+momentid::IdentifyResult identify_from_displacement(const Model& model, double noise) {
+  momentid::SimulationOptions options;
+  options.parameters = momentid::parameter_values(model, {});
+  options.inputs = {momentid::InputSpec::parse("ma:K=10,w=0.1,sigma=20", "test")};
+  options.samples = 1000000;
+  if (noise > 0) options.noise = {{"y", noise}};
+  Columns columns(3);
+  momentid::simulate(model, options, columns);
+  momentid::MemoryData data;
+  data.rows = options.samples;
+  data.columns = {{"y", columns.values[0].data()}, {"x", columns.values[2].data()}};
+  data.metadata.add_line({{"dt", "0.01"}, {"input-hold", "zoh"}});
+  return momentid::identify(model, momentid::DataSource::memory(std::move(data)));
+}
+
 double truth_of(const Model& model, std::size_t p) {
   return model.parameters()[p].value->to_double();
 }
@@ -231,18 +248,7 @@ TEST_SUITE("identify") {
     // No velocity column: the lagged equations read v = y' as lag derivatives of C[y;y](s).
     // 10^6 samples without noise; the acceptance bound of the measured-data method is 0.1%.
     const Model model = model_file("duffing.mom");
-    momentid::SimulationOptions options;
-    options.parameters = momentid::parameter_values(model, {});
-    options.inputs = {momentid::InputSpec::parse("ma:K=10,w=0.1,sigma=20", "test")};
-    options.samples = 1000000;
-    Columns columns(3);
-    momentid::simulate(model, options, columns);
-    momentid::MemoryData data;
-    data.rows = options.samples;
-    data.columns = {{"y", columns.values[0].data()}, {"x", columns.values[2].data()}};
-    data.metadata.add_line({{"dt", "0.01"}, {"input-hold", "zoh"}});
-    const momentid::IdentifyResult r =
-        momentid::identify(model, momentid::DataSource::memory(std::move(data)));
+    const momentid::IdentifyResult r = identify_from_displacement(model, 0);
     REQUIRE(r.lagged.has_value());
     CHECK(r.lagged->derivatives == std::vector<std::string>{"v = y'"});
     REQUIRE(r.estimate.status == Estimate::Status::kOk);
@@ -259,19 +265,7 @@ TEST_SUITE("identify") {
     // the noise in its cross products: its relative standard error is about 10% here (5% in
     // the standard deviation), so 4 of them bound it.
     const Model model = model_file("duffing.mom");
-    momentid::SimulationOptions options;
-    options.parameters = momentid::parameter_values(model, {});
-    options.inputs = {momentid::InputSpec::parse("ma:K=10,w=0.1,sigma=20", "test")};
-    options.samples = 1000000;
-    options.noise = {{"y", 0.05}};
-    Columns columns(3);
-    momentid::simulate(model, options, columns);
-    momentid::MemoryData data;
-    data.rows = options.samples;
-    data.columns = {{"y", columns.values[0].data()}, {"x", columns.values[2].data()}};
-    data.metadata.add_line({{"dt", "0.01"}, {"input-hold", "zoh"}});
-    const momentid::IdentifyResult r =
-        momentid::identify(model, momentid::DataSource::memory(std::move(data)));
+    const momentid::IdentifyResult r = identify_from_displacement(model, 0.05);
     const momentid::ChannelStatistics& y = r.data.channels[0];
     REQUIRE(y.noise_variance.has_value());
     const double relative = std::sqrt(*y.noise_variance / y.variance);

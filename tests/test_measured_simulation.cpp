@@ -22,24 +22,7 @@ using momentid::InputSpec;
 using momentid::Model;
 using momentid::SimulationOptions;
 using momentid::testing::model_file;
-
-// Keeps every sample: rows[n] = t, states, inputs, run (from 0).
-struct Recorder : momentid::SampleSink {
-  std::vector<std::vector<double>> rows;
-  std::size_t width = 0;
-  explicit Recorder(std::size_t values) : width(values) {}
-  void sample(double t, const double* values, std::size_t run) override {
-    std::vector<double> row{t};
-    row.insert(row.end(), values, values + width);
-    row.push_back(static_cast<double>(run));
-    rows.push_back(std::move(row));
-  }
-  std::vector<double> column(std::size_t c) const {
-    std::vector<double> out;
-    for (const auto& row : rows) out.push_back(row[c]);
-    return out;
-  }
-};
+using momentid::testing::Recorder;
 
 SimulationOptions options_for(const Model& model, std::size_t samples, std::uint64_t seed) {
   SimulationOptions options;

@@ -18,19 +18,7 @@ using momentid::testing::model_file;
 using momentid::InputSpec;
 using momentid::Model;
 using momentid::SimulationOptions;
-
-// Keeps every sample: values[row][column], columns t, states, inputs, run.
-struct Recorder : momentid::SampleSink {
-  std::vector<std::vector<double>> rows;
-  std::size_t width = 0;
-  explicit Recorder(std::size_t values) : width(values) {}
-  void sample(double t, const double* values, std::size_t run) override {
-    std::vector<double> row{t};
-    row.insert(row.end(), values, values + width);
-    row.push_back(static_cast<double>(run));
-    rows.push_back(std::move(row));
-  }
-};
+using momentid::testing::Recorder;
 
 SimulationOptions options_for(const Model& model, std::size_t samples, std::uint64_t seed) {
   SimulationOptions options;

@@ -6,10 +6,30 @@
 #include <exception>
 #include <string>
 #include <typeinfo>
+#include <vector>
 
 #include "momentid/model.hpp"
+#include "momentid/simulate.hpp"
 
 namespace momentid::testing {
+
+// Keeps every simulated sample: rows[n] = t, states, inputs, run (from 0).
+struct Recorder : SampleSink {
+  std::vector<std::vector<double>> rows;
+  std::size_t width = 0;
+  explicit Recorder(std::size_t values) : width(values) {}
+  void sample(double t, const double* values, std::size_t run) override {
+    std::vector<double> row{t};
+    row.insert(row.end(), values, values + width);
+    row.push_back(static_cast<double>(run));
+    rows.push_back(std::move(row));
+  }
+  std::vector<double> column(std::size_t c) const {
+    std::vector<double> out;
+    for (const auto& row : rows) out.push_back(row[c]);
+    return out;
+  }
+};
 
 // A model from the project's models/ folder.
 inline Model model_file(const std::string& name) {
