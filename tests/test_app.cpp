@@ -190,4 +190,28 @@ TEST_SUITE("app") {
     CHECK(r.data.channels[0].autocorrelation.size() == 3);
     CHECK(r.identities.empty());
   }
+
+  TEST_CASE("the lagged equations need the sample interval and take no multipliers") {
+    std::vector<double> y(200), x(200);
+    for (std::size_t n = 0; n < y.size(); ++n) {
+      y[n] = std::sin(0.05 * static_cast<double>(n));
+      x[n] = std::cos(0.07 * static_cast<double>(n));
+    }
+    momentid::MemoryData data;
+    data.rows = y.size();
+    data.name = "arrays";
+    data.columns = {{"y", y.data()}, {"x", x.data()}};
+    const momentid::Model model = model_file("duffing.mom");
+    const auto source = momentid::DataSource::memory(data);
+    CHECK(std::string(error_from<momentid::DataError>([&] {
+                        momentid::identify(model, source, {.batches = 2});
+                      }).what()) ==
+          "arrays:1:1: the lagged equations need the sample interval: give the data a 't' "
+          "column or a dt in the metadata");
+    CHECK(std::string(error_from<momentid::UsageError>([&] {
+                        momentid::identify(model, source, {.degree = 3, .batches = 2});
+                      }).what()) ==
+          "multipliers and a degree choose zero-lag equations, but the data lack v: the lagged "
+          "equations take instruments instead");
+  }
 }

@@ -85,6 +85,16 @@ IdentifyResult identify(const Model& model, const DataSource& source,
     return result;
   }
 
+  if (options.multipliers || options.degree > 0) {
+    std::string missing;
+    for (std::size_t v = 0; v < measured.size(); ++v) {
+      if (!measured[v]) missing += (missing.empty() ? "" : ", ") + model.variables()[v];
+    }
+    throw UsageError(
+        "multipliers and a degree choose zero-lag equations, but " +
+        (options.lags ? std::string("lags were asked for") : "the data lack " + missing) +
+        ": the lagged equations take instruments instead");
+  }
   LagOptions lag_options;
   if (options.lags) std::tie(lag_options.first_lag, lag_options.last_lag) = *options.lags;
   lag_options.instruments = options.instruments;
