@@ -419,7 +419,6 @@ std::string format_text(const LaggedSystem& system) {
   for (const std::string& d : system.derivatives) out << "not measured: " << d << "\n";
   out << "lag derivatives: central differences in s with error O(dt^4), reaching "
       << kStencilReach[system.max_order] << " lags either side\n";
-  for (const std::string& note : system.notes) out << "note: " << note << "\n";
   return out.str();
 }
 
