@@ -69,7 +69,7 @@ struct LaggedSystem {
   std::vector<bool> measured;            // per variable, as in LagOptions
   std::vector<bool> needed;              // per variable: the equations read its column
   std::vector<std::string> derivatives;  // how unmeasured states are read, e.g. "v = y'"
-  int max_order = 0;  // the highest lag derivative in the equations
+  int max_order = 0;                     // the highest lag derivative in the equations
 };
 
 // Whether the data, having the variables flagged in `measured`, show every variable of `model`:

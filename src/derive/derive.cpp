@@ -2,13 +2,13 @@
 // states, take expectations, and reduce every derivative moment E[y^a * yj'] with kinematic
 // equations and the stationarity identities E[d/dt y^b] = 0.
 
+#include "momentid/derive.hpp"
+
 #include <Eigen/Dense>
 #include <algorithm>
 #include <optional>
 #include <random>
 #include <set>
-
-#include "momentid/derive.hpp"
 
 namespace momentid {
 namespace {
