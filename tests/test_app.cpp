@@ -214,4 +214,23 @@ TEST_SUITE("app") {
           "multipliers and a degree choose zero-lag equations, but the data lack v: the lagged "
           "equations take instruments instead");
   }
+
+  TEST_CASE("check leaves out a state that the data show only as a derivative") {
+    const momentid::Model model = model_file("duffing.mom");
+    std::vector<double> y(500), x(500);
+    for (std::size_t n = 0; n < y.size(); ++n) {
+      y[n] = std::sin(0.05 * static_cast<double>(n));
+      x[n] = std::cos(0.07 * static_cast<double>(n));
+    }
+    momentid::MemoryData data;
+    data.rows = y.size();
+    data.columns = {{"y", y.data()}, {"x", x.data()}};
+    const momentid::CheckResult r = momentid::check(momentid::DataSource::memory(data), &model);
+    CHECK(r.missing_states == std::vector<std::string>{"v"});
+    CHECK(r.missing_inputs.empty());
+    REQUIRE(r.data.channels.size() == 2);
+    CHECK(r.data.channels[0].name == "y");
+    CHECK(r.data.channels[1].name == "x");
+    CHECK(momentid::format_text(r).find("state v is not in the file") != std::string::npos);
+  }
 }

@@ -34,7 +34,9 @@ struct CheckResult {
   DataMoments data;
   bool with_model = false;
   std::vector<std::string> missing_inputs;  // model inputs the data lack: states checked only
-  std::vector<IdentityCheck> identities;    // with a model
+  // Model states the data lack but show as derivatives (v when y' = v): left out.
+  std::vector<std::string> missing_states;
+  std::vector<IdentityCheck> identities;  // with a model
   std::vector<std::string> warnings;
 };
 

@@ -5,6 +5,7 @@
 #include <cstdio>
 
 #include "momentid/derive.hpp"
+#include "momentid/lagged.hpp"
 
 namespace momentid {
 
@@ -24,18 +25,38 @@ CheckResult check(const DataSource& source, const Model* model, const CheckOptio
   std::vector<std::string> states, inputs;
   const std::vector<std::string> columns =
       source.open({.names = {}, .rename = {}, .min_rows = 0})->columns();
+  // Per model variable: whether the check reads it.
+  std::vector<bool> kept;
   if (model != nullptr) {
-    for (const auto& d : model->states()) states.push_back(d.name);
+    std::vector<bool> present;
+    for (const std::string& v : model->variables()) {
+      const auto it = options.columns.find(v);
+      const std::string& column = it == options.columns.end() ? v : it->second;
+      present.push_back(std::find(columns.begin(), columns.end(), column) != columns.end());
+    }
     // The statistics of the states and most identities need no input: inputs missing from the
-    // data are left out rather than refused.
-    for (const auto& d : model->inputs()) {
-      const auto it = options.columns.find(d.name);
-      const std::string column = it == options.columns.end() ? d.name : it->second;
-      if (std::find(columns.begin(), columns.end(), column) == columns.end()) {
-        result.missing_inputs.push_back(d.name);
+    // data are left out rather than refused (all of them, so that the channels are the states).
+    // So are states the data show only as derivatives (v when y' = v and y is measured); any
+    // other missing state is requested, and reported as a missing column.
+    const bool derivable = derivable_from(*model, present);
+    const std::size_t state_count = model->states().size();
+    for (std::size_t v = 0; v < present.size(); ++v) {
+      const std::string& name = model->variables()[v];
+      if (v < state_count && !present[v] && derivable) {
+        result.missing_states.push_back(name);
+        kept.push_back(false);
+      } else if (v >= state_count && !present[v]) {
+        result.missing_inputs.push_back(name);
+        kept.push_back(false);
       } else {
-        inputs.push_back(d.name);
+        kept.push_back(true);
       }
+    }
+    for (std::size_t v = state_count; v < kept.size() && !result.missing_inputs.empty(); ++v) {
+      kept[v] = false;
+    }
+    for (std::size_t v = 0; v < kept.size(); ++v) {
+      if (kept[v]) (v < state_count ? states : inputs).push_back(model->variables()[v]);
     }
   } else {
     for (const std::string& c : columns) {
@@ -47,14 +68,19 @@ CheckResult check(const DataSource& source, const Model* model, const CheckOptio
   std::vector<Monomial> full_moments;  // over all the model's variables
   if (model != nullptr) {
     system = derive(*model);
-    if (!result.missing_inputs.empty()) inputs.clear();  // then the channels are the states only
     for (const Monomial& m : moments_to_estimate(*system)) {
-      const auto first_input = m.begin() + static_cast<std::ptrdiff_t>(states.size());
-      if (inputs.empty() && std::any_of(first_input, m.end(), [](int e) { return e != 0; })) {
-        continue;
+      Monomial over_kept;
+      bool readable = true;
+      for (std::size_t v = 0; v < m.size(); ++v) {
+        if (kept[v]) {
+          over_kept.push_back(m[v]);
+        } else if (m[v] != 0) {
+          readable = false;
+        }
       }
+      if (!readable) continue;
       full_moments.push_back(m);
-      moments.emplace_back(m.begin(), inputs.empty() ? first_input : m.end());
+      moments.push_back(std::move(over_kept));
     }
   }
   DataOptions data_options;
@@ -106,6 +132,10 @@ std::string format_text(const CheckResult& r) {
     }
   }
   if (r.with_model) {
+    for (const std::string& name : r.missing_states) {
+      out += "state " + name +
+             " is not in the file: the statistics and identities that need it are left out\n";
+    }
     for (const std::string& name : r.missing_inputs) {
       out += "input " + name + " is not in the file: only the states are checked\n";
     }
