@@ -88,7 +88,7 @@ TEST_SUITE("lagged") {
           "2 lags either side) do not touch lag 0, found 2");
     CHECK(std::string(error_from<momentid::UsageError>([&] {
                         momentid::derive_lagged(model, {.first_lag = 5, .last_lag = 4});
-                      }).what()) == "lags: expected a last lag from 5 to 100000, found 4");
+                      }).what()) == "lags: expected a last lag from 5 to 10000, found 4");
     CHECK(std::string(
               error_from<momentid::UsageError>([&] {
                 const std::vector<momentid::Monomial> v{{0, 1, 0}};

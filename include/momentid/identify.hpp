@@ -46,6 +46,9 @@ struct IdentifyOptions {
   static constexpr std::size_t kMinBatches = 2, kMaxBatches = 10000;
   static constexpr int kMaxDegree = 12;
   static constexpr long kMaxInputShift = 1000;
+  // The lagged equations may need at most this many moments: their covariance is a square
+  // matrix of that size.
+  static constexpr std::size_t kMaxLaggedMoments = 3000;
 
   // Throws UsageError naming the first option that is out of range or that names a variable
   // `model` does not have.

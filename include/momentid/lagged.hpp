@@ -47,7 +47,7 @@ struct LagOptions {
   // Per model variable (states, then inputs): whether the data have it. Empty: all.
   std::vector<bool> measured;
 
-  static constexpr int kMaxLag = 100000;
+  static constexpr int kMaxLag = 10000;
   // Throws UsageError naming what is wrong: lags out of order or too small for the stencils, an
   // instrument in a channel that is not measured.
   void validate(const Model& model, int max_order) const;

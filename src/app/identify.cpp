@@ -118,6 +118,14 @@ IdentifyResult identify(const Model& model, const DataSource& source,
   result.channels.insert(result.channels.end(), inputs.begin(), inputs.end());
   // The stencils need the sample interval, which the data give: accumulate, then build rows.
   const LaggedRows probe = lagged_rows(*result.lagged, 1.0, channel, {});
+  if (probe.moments.size() > IdentifyOptions::kMaxLaggedMoments) {
+    throw UsageError("lags " + std::to_string(result.lagged->first_lag) + ".." +
+                     std::to_string(result.lagged->last_lag) + " with " +
+                     std::to_string(result.lagged->instruments.size()) + " instruments need " +
+                     std::to_string(probe.moments.size()) + " moments, more than " +
+                     std::to_string(IdentifyOptions::kMaxLaggedMoments) +
+                     ": use fewer lags or instruments");
+  }
   result.lagged_moments = probe.moments;
   result.data = moments_from_data(source, states, inputs, probe.moments, data_options);
   if (!result.data.time_step) {
