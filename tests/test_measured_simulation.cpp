@@ -22,17 +22,8 @@ using momentid::InputSpec;
 using momentid::Model;
 using momentid::SimulationOptions;
 using momentid::testing::model_file;
+using momentid::testing::options_for;
 using momentid::testing::Recorder;
-
-SimulationOptions options_for(const Model& model, std::size_t samples, std::uint64_t seed) {
-  SimulationOptions options;
-  options.parameters = momentid::parameter_values(model, {});
-  options.inputs.assign(model.inputs().size(), InputSpec{});
-  options.samples = samples;
-  options.burn_in = 2000;
-  options.seed = seed;
-  return options;
-}
 
 double mean_of(const std::vector<double>& x) {
   double s = 0;

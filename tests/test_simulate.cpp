@@ -18,17 +18,8 @@ using momentid::testing::model_file;
 using momentid::InputSpec;
 using momentid::Model;
 using momentid::SimulationOptions;
+using momentid::testing::options_for;
 using momentid::testing::Recorder;
-
-SimulationOptions options_for(const Model& model, std::size_t samples, std::uint64_t seed) {
-  SimulationOptions options;
-  options.parameters = momentid::parameter_values(model, {});
-  options.inputs.assign(model.inputs().size(), InputSpec{});
-  options.samples = samples;
-  options.burn_in = 2000;
-  options.seed = seed;
-  return options;
-}
 
 // Mean of the samples and its standard error from the spread of `batches` batch means.
 struct MeanWithError {

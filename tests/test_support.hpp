@@ -31,6 +31,17 @@ struct Recorder : SampleSink {
   }
 };
 
+// Nominal parameters, the default input process for every input, 2000 steps of burn-in.
+inline SimulationOptions options_for(const Model& model, std::size_t samples, std::uint64_t seed) {
+  SimulationOptions options;
+  options.parameters = parameter_values(model, {});
+  options.inputs.assign(model.inputs().size(), InputSpec{});
+  options.samples = samples;
+  options.burn_in = 2000;
+  options.seed = seed;
+  return options;
+}
+
 // A model from the project's models/ folder.
 inline Model model_file(const std::string& name) {
   return parse_model_file(std::string(MOMENTID_SOURCE_DIR) + "/models/" + name);

@@ -111,6 +111,10 @@ Model parse_model(std::string_view text, const std::string& file);
 // `--multipliers`. `source` names the list in messages (e.g. "--multipliers").
 std::vector<Monomial> parse_multiplier_list(const Model& model, std::string_view text,
                                             const std::string& source);
+// The same for instruments of the lagged equations (`--instruments`): monomials over the states
+// and inputs, e.g. "y, y^3, x".
+std::vector<Monomial> parse_instrument_list(const Model& model, std::string_view text,
+                                            const std::string& source);
 
 // Writes a monomial as `y1^2*y2*x` (factors in declaration order), or `1`.
 std::string format_monomial(const Model& model, const Monomial& monomial);

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "app/variables.hpp"
 #include "momentid/derive.hpp"
 #include "momentid/lagged.hpp"
 
@@ -23,17 +24,10 @@ CheckResult check(const DataSource& source, const Model* model, const CheckOptio
   result.lags = options.lags;
   result.with_model = model != nullptr;
   std::vector<std::string> states, inputs;
-  const std::vector<std::string> columns =
-      source.open({.names = {}, .rename = {}, .min_rows = 0})->columns();
   // Per model variable: whether the check reads it.
   std::vector<bool> kept;
   if (model != nullptr) {
-    std::vector<bool> present;
-    for (const std::string& v : model->variables()) {
-      const auto it = options.columns.find(v);
-      const std::string& column = it == options.columns.end() ? v : it->second;
-      present.push_back(std::find(columns.begin(), columns.end(), column) != columns.end());
-    }
+    const std::vector<bool> present = variables_present(*model, source, options.columns);
     // The statistics of the states and most identities need no input: inputs missing from the
     // data are left out rather than refused (all of them, so that the channels are the states).
     // So are states the data show only as derivatives (v when y' = v and y is measured); any
@@ -59,6 +53,8 @@ CheckResult check(const DataSource& source, const Model* model, const CheckOptio
       if (kept[v]) (v < state_count ? states : inputs).push_back(model->variables()[v]);
     }
   } else {
+    const std::vector<std::string> columns =
+        source.open({.names = {}, .rename = {}, .min_rows = 0})->columns();
     for (const std::string& c : columns) {
       if (!c.empty() && c != "t" && c != "run") states.push_back(c);
     }

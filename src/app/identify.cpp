@@ -6,6 +6,7 @@
 #include <sstream>
 #include <tuple>
 
+#include "app/variables.hpp"
 #include "common/json.hpp"
 
 namespace momentid {
@@ -60,14 +61,7 @@ IdentifyResult identify(const Model& model, const DataSource& source,
   data_options.lags = 4;  // for the noise estimates
 
   // Which variables the data have: the lagged equations serve data without some state.
-  const std::vector<std::string> columns =
-      source.open({.names = {}, .rename = {}, .min_rows = 0})->columns();
-  std::vector<bool> measured;
-  for (const std::string& v : model.variables()) {
-    const auto renamed = options.columns.find(v);
-    const std::string& column = renamed == options.columns.end() ? v : renamed->second;
-    measured.push_back(std::find(columns.begin(), columns.end(), column) != columns.end());
-  }
+  const std::vector<bool> measured = variables_present(model, source, options.columns);
   const bool all_measured = std::all_of(measured.begin(), measured.end(), [](bool m) { return m; });
   // Without lags asked for, data that cannot show a state (not even as a derivative) get the
   // zero-lag pass and its message naming the missing column.
@@ -102,16 +96,14 @@ IdentifyResult identify(const Model& model, const DataSource& source,
   result.lagged = derive_lagged(*result.model, lag_options);
   // The channels the equations read, states then inputs, as the accumulator numbers them.
   std::vector<std::string> states, inputs;
-  std::vector<int> channel(model.variables().size(), -1);
   const std::size_t state_count = model.states().size();
   for (std::size_t v = 0; v < model.variables().size(); ++v) {
-    if (!result.lagged->needed[v]) continue;
-    (v < state_count ? states : inputs).push_back(model.variables()[v]);
+    if (result.lagged->needed[v])
+      (v < state_count ? states : inputs).push_back(model.variables()[v]);
   }
+  std::vector<int> channel(model.variables().size(), -1);
   for (std::size_t v = 0, next = 0; v < model.variables().size(); ++v) {
-    if (result.lagged->needed[v] && v < state_count) channel[v] = static_cast<int>(next++);
-  }
-  for (std::size_t v = state_count, next = states.size(); v < model.variables().size(); ++v) {
+    // States come first among the channels, and the variables are in that order too.
     if (result.lagged->needed[v]) channel[v] = static_cast<int>(next++);
   }
   result.channels = states;

@@ -36,10 +36,7 @@ std::map<std::string, std::string> column_map_of(const std::string& text, const 
 std::optional<InputHold> hold_option(const std::string& text);
 // `--lags 3..40`: the first and last lag.
 std::pair<int, int> lag_range(const std::string& text);
-// `--instruments "y, y^3, x"` and `--measured y,x`: monomials and names over `variables` (a
-// model's states, then inputs).
-std::vector<Monomial> monomial_list(const std::vector<std::string>& variables,
-                                    const std::string& text, const std::string& option);
+// `--measured y,x`: flags over `variables` (a model's states, then inputs).
 std::vector<bool> variable_flags(const std::vector<std::string>& variables,
                                  const std::vector<std::string>& names, const std::string& option);
 

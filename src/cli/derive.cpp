@@ -27,7 +27,7 @@ int run_lagged(const DeriveCommand& command, const Model& model) {
   LagOptions options;
   std::tie(options.first_lag, options.last_lag) = lag_range(*command.lags);
   if (command.instruments) {
-    options.instruments = monomial_list(model.variables(), *command.instruments, "--instruments");
+    options.instruments = parse_instrument_list(model, *command.instruments, "--instruments");
   }
   if (!command.measured.empty()) {
     options.measured = variable_flags(model.variables(), command.measured, "--measured");

@@ -63,7 +63,7 @@ int run_identify(IdentifyCommand& command) {
   if (command.lags) options.lags = lag_range(*command.lags);
   options.noise = noise_option(model, command.noise);
   if (command.instruments) {
-    options.instruments = monomial_list(model.variables(), *command.instruments, "--instruments");
+    options.instruments = parse_instrument_list(model, *command.instruments, "--instruments");
   }
   const IdentifyResult result = identify(model, DataSource::file(command.data), options);
   std::cout << (command.format == "json" ? format_json(result) : format_text(result));

@@ -53,46 +53,6 @@ std::pair<int, int> lag_range(const std::string& text) {
   return {first, last};
 }
 
-std::vector<Monomial> monomial_list(const std::vector<std::string>& variables,
-                                    const std::string& text, const std::string& option) {
-  std::vector<Monomial> out;
-  std::size_t begin = 0;
-  while (begin <= text.size()) {
-    const std::size_t end = std::min(text.find(',', begin), text.size());
-    std::string item = text.substr(begin, end - begin);
-    item.erase(0, item.find_first_not_of(" \t"));
-    item.erase(item.find_last_not_of(" \t") + 1);
-    Monomial m(variables.size(), 0);
-    std::size_t at = 0;
-    while (at <= item.size()) {
-      const std::size_t star = std::min(item.find('*', at), item.size());
-      const std::string factor = item.substr(at, star - at);
-      const std::size_t caret = factor.find('^');
-      const std::string name = factor.substr(0, caret);
-      int power = 1;
-      if (caret != std::string::npos) {
-        const std::string digits = factor.substr(caret + 1);
-        const auto [stop, error] =
-            std::from_chars(digits.data(), digits.data() + digits.size(), power);
-        if (error != std::errc() || stop != digits.data() + digits.size() || power < 1 ||
-            power > 64) {
-          throw UsageError(option + ": expected a power from 1 to 64 in '" + item + "'");
-        }
-      }
-      const auto found = std::find(variables.begin(), variables.end(), name);
-      if (found == variables.end()) {
-        throw UsageError(option + ": '" + name + "' in '" + item +
-                         "' is not a state or input of the model");
-      }
-      m[static_cast<std::size_t>(found - variables.begin())] += power;
-      at = star + 1;
-    }
-    out.push_back(m);
-    begin = end + 1;
-  }
-  return out;
-}
-
 std::vector<bool> variable_flags(const std::vector<std::string>& variables,
                                  const std::vector<std::string>& names, const std::string& option) {
   std::vector<bool> out(variables.size(), false);

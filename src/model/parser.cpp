@@ -248,8 +248,10 @@ Model parse_model_file(const std::string& path) {
   return parse_model(text.str(), path);
 }
 
-std::vector<Monomial> parse_multiplier_list(const Model& model, std::string_view text,
-                                            const std::string& source) {
+namespace {
+
+std::vector<Monomial> parse_monomial_list(const Model& model, std::string_view text,
+                                          const std::string& source, bool inputs) {
   pegtl::memory_input in(text.data(), text.size(), source);
   std::unique_ptr<Node> root = parse_tree<g::multiplier_option>(in, text, source);
   if (!root) throw ParseError({source, 1, 1, std::string(text)}, "expected multipliers");
@@ -259,9 +261,21 @@ std::vector<Monomial> parse_multiplier_list(const Model& model, std::string_view
   const TermBuilder terms(where, symbols);
   std::vector<Monomial> out;
   for (const SyntaxNode& item : items) {
-    if (item.kind == SyntaxKind::kMultiplier) terms.add_monomial(item, out);
+    if (item.kind == SyntaxKind::kMultiplier) terms.add_monomial(item, out, inputs);
   }
   return out;
+}
+
+}  // namespace
+
+std::vector<Monomial> parse_multiplier_list(const Model& model, std::string_view text,
+                                            const std::string& source) {
+  return parse_monomial_list(model, text, source, /*inputs=*/false);
+}
+
+std::vector<Monomial> parse_instrument_list(const Model& model, std::string_view text,
+                                            const std::string& source) {
+  return parse_monomial_list(model, text, source, /*inputs=*/true);
 }
 
 std::string format_monomial(const Model& model, const Monomial& monomial) {

@@ -93,9 +93,9 @@ Equation TermBuilder::equation_checked(const SyntaxNode& n) const {
   return eq;
 }
 
-void TermBuilder::add_monomial(const SyntaxNode& n, std::vector<Monomial>& out) const {
+void TermBuilder::add_monomial(const SyntaxNode& n, std::vector<Monomial>& out, bool inputs) const {
   try {
-    add_monomial_checked(n, out);
+    add_monomial_checked(n, out, inputs);
   } catch (const LocatedError&) {
     throw;
   } catch (const std::exception& e) {
@@ -103,16 +103,25 @@ void TermBuilder::add_monomial(const SyntaxNode& n, std::vector<Monomial>& out) 
   }
 }
 
-void TermBuilder::add_monomial_checked(const SyntaxNode& n, std::vector<Monomial>& out) const {
+void TermBuilder::add_monomial_checked(const SyntaxNode& n, std::vector<Monomial>& out,
+                                       bool inputs) const {
   const GiNaC::ex value = eval_sum(n, false).expand();
   const std::vector<SplitTerm> terms = split_all(value);
   const std::string text(n.text);
   if (terms.size() != 1 || terms[0].coefficient != 1 || total(terms[0].parameters) != 0 ||
       total(terms[0].derivatives) != 0) {
-    source_.fail(n, "a multiplier must be a monomial in the states, such as y or y^2*v, found '" +
-                        text + "'");
+    source_.fail(n, inputs ? "an instrument must be a monomial in the states and inputs, such as "
+                             "y or y^3, found '" +
+                                 text + "'"
+                           : "a multiplier must be a monomial in the states, such as y or y^2*v, "
+                             "found '" +
+                                 text + "'");
   }
   const Monomial& m = terms[0].variables;
+  if (inputs) {
+    if (std::find(out.begin(), out.end(), m) == out.end()) out.push_back(m);
+    return;
+  }
   const std::size_t states = symbols_.states().size();
   for (std::size_t i = states; i < m.size(); ++i) {
     if (m[i] != 0) {

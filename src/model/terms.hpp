@@ -24,8 +24,9 @@ class TermBuilder {
 
   // The two sides of equation `n` and the terms of lhs - rhs; the caller sets label and number.
   Equation equation(const SyntaxNode& n) const;
-  // Adds multiplier `n`, a monomial in the states, to `out` unless it is there already.
-  void add_monomial(const SyntaxNode& n, std::vector<Monomial>& out) const;
+  // Adds multiplier `n`, a monomial in the states (with `inputs`: in the states and inputs, as
+  // an instrument), to `out` unless it is there already.
+  void add_monomial(const SyntaxNode& n, std::vector<Monomial>& out, bool inputs = false) const;
 
  private:
   // An expanded term taken apart into its factors, exponents indexed like the declarations.
@@ -36,7 +37,7 @@ class TermBuilder {
 
   // equation() and add_monomial() without turning GiNaC's exceptions into located errors.
   Equation equation_checked(const SyntaxNode& n) const;
-  void add_monomial_checked(const SyntaxNode& n, std::vector<Monomial>& out) const;
+  void add_monomial_checked(const SyntaxNode& n, std::vector<Monomial>& out, bool inputs) const;
 
   // The value of an expression node, with constants replaced by their values.
   GiNaC::ex eval(const SyntaxNode& n) const;
