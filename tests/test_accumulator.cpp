@@ -259,8 +259,9 @@ TEST_SUITE("accumulator") {
           "moment factor c-2(t-3): channel and power must not be negative");
   }
 
-  TEST_CASE("a lagged moment is the trapezoidal average of its lagged products from row L on") {
-    // One run of 200 rows; the largest lag L is 5, so every moment averages intervals 5 .. 199.
+  TEST_CASE("a lagged moment is the trapezoidal average of its products from row L on") {
+    // One run of 200 rows; the largest lag L is 5, so every moment averages intervals 5 .. 199,
+    // each read with its most lagged factor L rows back (a moment at lag 3 is shifted by 2).
     const Record record = make_record({200});
     const std::vector<Moment> moments = lagged_moments();
     const auto got = momentid::estimates(one_pass(record, InputHold::kSample, moments), 1).mean;
@@ -268,8 +269,10 @@ TEST_SUITE("accumulator") {
     for (std::size_t i = 0; i < moments.size(); ++i) {
       const auto value = [&](std::size_t n) {
         double product = 1;
+        const std::size_t shift = lag - static_cast<std::size_t>(moments[i].max_lag());
         for (const MomentFactor& f : moments[i].factors()) {
-          product *= std::pow(record.row(n - static_cast<std::size_t>(f.lag))[f.channel], f.power);
+          product *= std::pow(record.row(n - shift - static_cast<std::size_t>(f.lag))[f.channel],
+                              f.power);
         }
         return product;
       };

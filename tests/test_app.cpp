@@ -192,7 +192,7 @@ TEST_SUITE("app") {
   }
 
   TEST_CASE("the lagged equations need the sample interval and take no multipliers") {
-    std::vector<double> y(200), x(200);
+    std::vector<double> y(1000), x(1000);
     for (std::size_t n = 0; n < y.size(); ++n) {
       y[n] = std::sin(0.05 * static_cast<double>(n));
       x[n] = std::cos(0.07 * static_cast<double>(n));

@@ -41,7 +41,6 @@ TEST_SUITE("lagged") {
           "c*C'[y^3;y](s) + k*C[y^3;y](s) + eps*C[y^3;y^3](s) = C[y^3;x](s) - C''[y^3;y](s)");
     CHECK(system.needed == std::vector<bool>{true, false, true});
     CHECK(system.derivatives == std::vector<std::string>{"v = y'"});
-    CHECK(system.max_order == 2);
   }
 
   TEST_CASE("a power of y times y' becomes the lag derivative of a higher power") {
@@ -56,7 +55,7 @@ TEST_SUITE("lagged") {
 
   TEST_CASE("with every channel measured, derivative terms are lag derivatives of the columns") {
     const momentid::Model model = model_file("kozin_4_1a.mom");
-    const auto system = momentid::derive_lagged(model, {.first_lag = 3, .last_lag = 5});
+    const auto system = momentid::derive_lagged(model, {.first_lag = 3, .last_lag = 42});
     REQUIRE(system.equations.size() == 1);
     CHECK(equation_text(system, 0) == "a*C[y;y](s) = C[y;x](s) - C'[y;y](s)");
   }
@@ -79,16 +78,17 @@ TEST_SUITE("lagged") {
           "such as y' = y2 defines it)");
   }
 
-  TEST_CASE("lags that the stencils would take to lag 0 are refused") {
+  TEST_CASE("lags that reach lag 0 or are too few for the test functions are refused") {
     const momentid::Model model = model_file("duffing.mom");
     CHECK(std::string(error_from<momentid::UsageError>([&] {
-                        momentid::derive_lagged(model, {.first_lag = 2, .last_lag = 9});
+                        momentid::derive_lagged(model, {.first_lag = 0, .last_lag = 60});
                       }).what()) ==
-          "lags: the first lag must be at least 3 so that the lag derivatives (stencils reaching "
-          "2 lags either side) do not touch lag 0, found 2");
+          "lags: the first lag must be at least 1 (white sensor noise biases lag 0), found 0");
     CHECK(std::string(error_from<momentid::UsageError>([&] {
-                        momentid::derive_lagged(model, {.first_lag = 5, .last_lag = 4});
-                      }).what()) == "lags: expected a last lag from 5 to 10000, found 4");
+                        momentid::derive_lagged(model, {.first_lag = 5, .last_lag = 43});
+                      }).what()) ==
+          "lags: expected a last lag from 44 to 10000 (at least 40 lags, for the test functions "
+          "to resolve), found 43");
     CHECK(std::string(
               error_from<momentid::UsageError>([&] {
                 const std::vector<momentid::Monomial> v{{0, 1, 0}};
@@ -96,9 +96,52 @@ TEST_SUITE("lagged") {
               }).what()) == "instruments: v uses v, which the data do not have");
   }
 
+  TEST_CASE("the test functions are smooth bumps kept a stencil's reach inside the lags") {
+    const auto functions = momentid::lag_test_functions(3, 300);
+    REQUIRE(functions.size() == 26);  // 20 across the window, 6 over its first fifth
+    for (const momentid::LagTestFunction& phi : functions) {
+      CHECK(phi.centre - phi.half_width >= 5 - 1e-9);
+      CHECK(phi.centre + phi.half_width <= 298 + 1e-9);
+      CHECK(phi(phi.centre) == doctest::Approx(1));
+      CHECK(phi(phi.centre - phi.half_width) == doctest::Approx(0));
+      CHECK(phi(phi.centre + phi.half_width + 0.5) == 0);
+    }
+    // (1 - u^2)^8 at u = 1/2: 0.75^8.
+    const momentid::LagTestFunction phi{.centre = 40, .half_width = 20, .power = 8};
+    CHECK(phi(50) == doctest::Approx(std::pow(0.75, 8)).epsilon(1e-14));
+    // A window too narrow for the narrow functions has only the wide ones.
+    CHECK(momentid::lag_test_functions(3, 100).size() == 17);
+  }
+
+  TEST_CASE("each row is the equation summed over lags, the stencils moved onto the test function") {
+    // Row 0 (instrument y, first test function), coefficient of c: C'[y;y](s) summed with
+    // weight phi(s), that is C[y;y](s) with weight sum_j w_j phi(s - j) / dt.
+    const momentid::Model model = model_file("duffing.mom");
+    const auto system = momentid::derive_lagged(model, {.measured = {true, false, true}});
+    const double dt = 0.01;
+    const auto rows = momentid::lagged_rows(system, dt, {0, -1, 1}, {});
+    const momentid::LagTestFunction& phi = system.test_functions[0];
+    const std::vector<double> w = momentid::stencil_weights(1);
+    std::map<int, double> got;
+    for (const auto& [k, weight] : rows.rows.a[0][0].moments) {
+      CHECK(to_string(rows.moments[k]).find("c0*c0(t-") == 0);
+      got[rows.moments[k].max_lag()] += weight;
+    }
+    double sum_by_lag = 0, sum_by_parts = 0;
+    for (int s = 3; s <= 300; ++s) {
+      double want = 0;
+      for (int j = -2; j <= 2; ++j) want += w[static_cast<std::size_t>(j + 2)] * phi(s - j) / dt;
+      CHECK(got[s] == doctest::Approx(want).epsilon(1e-12).scale(1e-9));
+      // The same for C(s) = cos(0.05 s): the sum of phi times the stencil of C.
+      double stencil = 0;
+      for (int j = -2; j <= 2; ++j) stencil += w[static_cast<std::size_t>(j + 2)] * std::cos(0.05 * (s + j)) / dt;
+      sum_by_lag += phi(s) * stencil;
+      sum_by_parts += got[s] * std::cos(0.05 * s);
+    }
+    CHECK(sum_by_parts == doctest::Approx(sum_by_lag).epsilon(1e-12));
+  }
+
   TEST_CASE("the stencils differentiate polynomials of degree 4 exactly") {
-    // Central stencils of error O(h^4) are exact for polynomials up to degree 4 (order 3:
-    // degree 5 less its order... checked up to 4 for all).
     for (int order = 0; order <= momentid::kMaxLagOrder; ++order) {
       const std::vector<double> w = momentid::stencil_weights(order);
       const int reach = momentid::kStencilReach[order];
@@ -130,19 +173,25 @@ TEST_SUITE("lagged") {
     const std::vector<momentid::Monomial> cube{{3, 0, 0}};
     const auto system = momentid::derive_lagged(
         model,
-        {.first_lag = 3, .last_lag = 3, .instruments = cube, .measured = {true, false, true}});
+        {.first_lag = 3, .last_lag = 60, .instruments = cube, .measured = {true, false, true}});
     const double v = 0.01;
     // Channels: y is 0, x is 1 (v is not read).
     const auto rows = momentid::lagged_rows(system, 0.01, {0, -1, 1}, {v, 0});
-    REQUIRE(rows.rows.a.size() == 1);
+    REQUIRE(rows.rows.a.size() == system.test_functions.size());
+    // The row of the first test function at a lag where it is not zero, divided by phi there.
+    const momentid::LagTestFunction& phi = system.test_functions[0];
+    const int lag = static_cast<int>(phi.centre);
     std::map<std::string, double> eps;
-    for (const auto& [k, w] : rows.rows.a[0][2].moments) eps[to_string(rows.moments[k])] += w;
+    for (const auto& [k, w] : rows.rows.a[0][2].moments) {
+      if (rows.moments[k].max_lag() == lag) eps[to_string(rows.moments[k])] += w / phi(lag);
+    }
     CHECK(rows.rows.a[0][2].constant == 0);
     REQUIRE(eps.size() == 4);
-    CHECK(eps["c0^3*c0^3(t-3)"] == doctest::Approx(1));
-    CHECK(eps["c0*c0^3(t-3)"] == doctest::Approx(-3 * v));
-    CHECK(eps["c0^3*c0(t-3)"] == doctest::Approx(-3 * v));
-    CHECK(eps["c0*c0(t-3)"] == doctest::Approx(9 * v * v));
+    const std::string at = "(t-" + std::to_string(lag) + ")";
+    CHECK(eps["c0^3*c0^3" + at] == doctest::Approx(1));
+    CHECK(eps["c0*c0^3" + at] == doctest::Approx(-3 * v));
+    CHECK(eps["c0^3*c0" + at] == doctest::Approx(-3 * v));
+    CHECK(eps["c0*c0" + at] == doctest::Approx(9 * v * v));
     // Without noise the same moments, in the same order, with zero weights for the corrections.
     const auto clean = momentid::lagged_rows(system, 0.01, {0, -1, 1}, {});
     CHECK(clean.moments == rows.moments);

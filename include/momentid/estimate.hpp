@@ -50,6 +50,9 @@ struct Estimate {
 
 struct SolveOptions {
   bool gmm = false;
+  // Each row divided by the length of its coefficients (at the estimated moments), so that
+  // equations of different sizes count alike; the delta method takes these weights as fixed.
+  bool normalise_rows = false;
 };
 
 // The moments the solver needs estimates of, in the order `solve` expects them: the system's
@@ -87,10 +90,10 @@ Estimate solve_rows(const MomentRows& rows, const std::vector<std::string>& name
                     const std::vector<std::vector<double>>& covariance,
                     const SolveOptions& options = {});
 
-// The numbers behind lagged moment equations for data sampled every `dt`: one row per equation
-// and lag, whose entries are lagged moments weighted by the stencils of the lag derivatives,
-// and the moments, over accumulator channels: `channel[v]` is model variable v's channel, or -1
-// for a variable the data lack. `noise[c]` is the variance of white noise on channel c (absent
+// The numbers behind lagged moment equations for data sampled every `dt`: one row per test
+// function and equation, whose entries are lagged moments weighted by the test function (its
+// derivatives for the lag derivatives, by parts), and the moments, over accumulator channels:
+// `channel[v]` is model variable v's channel, or -1 for a variable the data lack. `noise[c]` is the variance of white noise on channel c (absent
 // or 0: none); every power of a noisy channel is replaced by its Hermite polynomial in that
 // variance (y^3 by y^3 - 3 v y), whose expectation over the noise is the clean power. The list
 // of moments does not depend on the variances.

@@ -34,13 +34,27 @@ struct LaggedEquation {
   LagCombination rhs;
 };
 
+// A test function of the lag, in samples: φ(s) = (1 − u²)^p with u = (s − centre)/half_width,
+// on |u| < 1. Each equation is summed over lags with weight φ(s); a lag derivative, taken by a
+// central stencil, moves onto φ by summation by parts, which is exact over whole lags:
+//   Σ_s φ(s) Σ_j w_j C(s + j) = Σ_s C(s) Σ_j w_j φ(s − j),
+// and the weights on C are smooth (about (−1)^k φ^(k)), so that noise in the estimates of C is
+// averaged, not differenced.
+struct LagTestFunction {
+  double centre = 0;
+  double half_width = 1;
+  int power = 8;
+
+  double operator()(double s) const;  // 0 outside the support
+};
+
 // How to form the lagged moment equations.
 struct LagOptions {
-  // The lags s, in samples. The lag derivatives are taken with central stencils that reach
-  // kStencilReach[order] samples either side, so first_lag must exceed the reach: then no
-  // stencil touches lag 0, where white sensor noise on a channel biases its autocorrelation.
+  // The lags s, in samples, whose cross-moments the equations read: the test functions and the
+  // stencils they carry stay within first_lag..last_lag. The first lag must be at least 1:
+  // white sensor noise on a channel biases its autocorrelation at lag 0 only.
   int first_lag = 3;
-  int last_lag = 40;
+  int last_lag = 300;
   // Instruments, monomials in the measured channels; nullopt: each measured state and its
   // highest power in the equations (y and y^3 for the Duffing oscillator).
   std::optional<std::vector<Monomial>> instruments;
@@ -48,9 +62,11 @@ struct LagOptions {
   std::vector<bool> measured;
 
   static constexpr int kMaxLag = 10000;
-  // Throws UsageError naming what is wrong: lags out of order or too small for the stencils, an
-  // instrument in a channel that is not measured.
-  void validate(const Model& model, int max_order) const;
+  // The narrowest window: the test functions must span enough lags to be resolved.
+  static constexpr int kMinSpan = 40;
+  // Throws UsageError naming what is wrong: lags out of order, too few, or starting at lag 0;
+  // an instrument in a channel that is not measured.
+  void validate(const Model& model) const;
 };
 
 // The lagged moment equations: the linear system of the dynamical moment technique with
@@ -64,12 +80,12 @@ struct LagOptions {
 struct LaggedSystem {
   const Model* model = nullptr;  // the model derived from, which must outlive the system
   int first_lag = 0, last_lag = 0;
+  std::vector<LagTestFunction> test_functions;  // each equation is taken with each of them
   std::vector<Monomial> instruments;
   std::vector<LaggedEquation> equations;
   std::vector<bool> measured;            // per variable, as in LagOptions
   std::vector<bool> needed;              // per variable: the equations read its column
   std::vector<std::string> derivatives;  // how unmeasured states are read, e.g. "v = y'"
-  int max_order = 0;                     // the highest lag derivative in the equations
 };
 
 // Whether the data, having the variables flagged in `measured`, show every variable of `model`:
@@ -87,7 +103,13 @@ inline constexpr int kMaxLagOrder = 3;
 inline constexpr int kStencilReach[kMaxLagOrder + 1] = {0, 2, 2, 3};
 std::vector<double> stencil_weights(int order);
 
-// The lagged moments E[ψ(t − s − j)·F(t)] behind C[ψ;F](s + j), as accumulator keys over the
+// The test functions for the lags first..last (at least LagOptions::kMinSpan of them), kept
+// kStencilReach[3] lags inside the window: twenty overlapping ones across it, where the damping
+// shows, and six narrower ones over its first fifth, where the instantaneous stiffness shows,
+// when that fifth is wide enough to resolve them (half supports of at least 10 lags).
+std::vector<LagTestFunction> lag_test_functions(int first_lag, int last_lag);
+
+// The lagged moments E[ψ(t − s)·F(t)] behind C[ψ;F](s), as accumulator keys over the
 // model's variables.
 Moment lagged_moment(const Monomial& instrument, const Monomial& function, int lag);
 

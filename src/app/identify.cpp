@@ -108,7 +108,7 @@ IdentifyResult identify(const Model& model, const DataSource& source,
   }
   result.channels = states;
   result.channels.insert(result.channels.end(), inputs.begin(), inputs.end());
-  // The stencils need the sample interval, which the data give: accumulate, then build rows.
+  // The rows need the sample interval, which the data give: accumulate, then build rows.
   const LaggedRows probe = lagged_rows(*result.lagged, 1.0, channel, {});
   if (probe.moments.size() > IdentifyOptions::kMaxLaggedMoments) {
     throw UsageError("lags " + std::to_string(result.lagged->first_lag) + ".." +
@@ -141,7 +141,8 @@ IdentifyResult identify(const Model& model, const DataSource& source,
   std::vector<std::string> names;
   for (const Declaration& p : model.parameters()) names.push_back(p.name);
   result.estimate = solve_rows(rows.rows, names, result.data.estimates,
-                               result.data.estimates.covariance(), {.gmm = options.gmm});
+                               result.data.estimates.covariance(),
+                               {.gmm = options.gmm, .normalise_rows = true});
   return result;
 }
 

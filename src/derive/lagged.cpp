@@ -5,11 +5,13 @@
 #include "momentid/lagged.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <numeric>
 #include <set>
 #include <sstream>
 #include <stdexcept>
 
+#include "common/decimal.hpp"
 #include "common/json.hpp"
 
 namespace momentid {
@@ -196,16 +198,16 @@ bool derivable_from(const Model& model, const std::vector<bool>& measured) {
   return true;
 }
 
-void LagOptions::validate(const Model& model, int max_order) const {
-  const int reach = kStencilReach[std::min(max_order, kMaxLagOrder)];
-  if (first_lag <= reach) {
-    throw UsageError("lags: the first lag must be at least " + std::to_string(reach + 1) +
-                     " so that the lag derivatives (stencils reaching " + std::to_string(reach) +
-                     " lags either side) do not touch lag 0, found " + std::to_string(first_lag));
+void LagOptions::validate(const Model& model) const {
+  if (first_lag < 1) {
+    throw UsageError("lags: the first lag must be at least 1 (white sensor noise biases lag 0), "
+                     "found " + std::to_string(first_lag));
   }
-  if (last_lag < first_lag || last_lag > kMaxLag) {
-    throw UsageError("lags: expected a last lag from " + std::to_string(first_lag) + " to " +
-                     std::to_string(kMaxLag) + ", found " + std::to_string(last_lag));
+  if (last_lag < first_lag + kMinSpan - 1 || last_lag > kMaxLag) {
+    throw UsageError("lags: expected a last lag from " + std::to_string(first_lag + kMinSpan - 1) +
+                     " to " + std::to_string(kMaxLag) + " (at least " + std::to_string(kMinSpan) +
+                     " lags, for the test functions to resolve), found " +
+                     std::to_string(last_lag));
   }
   if (!instruments) return;
   for (const Monomial& m : *instruments) {
@@ -275,7 +277,6 @@ LaggedSystem derive_lagged(const Model& model, const LagOptions& options) {
       row.coefficients.resize(parameters);
       for (const Term& t : eq.terms) {
         const auto [f, w] = deriver.lag_function(eq, t, instrument);
-        system.max_order = std::max(system.max_order, f.order);
         if (t.parameter >= 0) {
           add_to(row.coefficients[t.parameter], f, w);
         } else {
@@ -296,7 +297,8 @@ LaggedSystem derive_lagged(const Model& model, const LagOptions& options) {
       system.equations.push_back(std::move(row));
     }
   }
-  options.validate(model, system.max_order);
+  options.validate(model);
+  system.test_functions = lag_test_functions(system.first_lag, system.last_lag);
 
   system.needed.assign(variables, false);
   for (const LaggedEquation& row : system.equations) {
@@ -311,6 +313,55 @@ LaggedSystem derive_lagged(const Model& model, const LagOptions& options) {
     mark(row.rhs);
   }
   return system;
+}
+
+namespace {
+
+// The coefficients of (1 − u²)^p in powers of u (odd ones zero), and of its derivatives.
+std::vector<double> bump_polynomial(int power) {
+  std::vector<double> c(static_cast<std::size_t>(2 * power + 1), 0.0);
+  double binomial = 1;  // C(p, k)
+  for (int k = 0; k <= power; ++k) {
+    c[static_cast<std::size_t>(2 * k)] = (k % 2 ? -1 : 1) * binomial;
+    binomial = binomial * (power - k) / (k + 1);
+  }
+  return c;
+}
+
+double horner(const std::vector<double>& c, double u) {
+  double out = 0;
+  for (auto it = c.rbegin(); it != c.rend(); ++it) out = out * u + *it;
+  return out;
+}
+
+}  // namespace
+
+double LagTestFunction::operator()(double s) const {
+  const double u = (s - centre) / half_width;
+  return std::abs(u) < 1 ? horner(bump_polynomial(power), u) : 0.0;
+}
+
+std::vector<LagTestFunction> lag_test_functions(int first_lag, int last_lag) {
+  // Evenly spread functions whose supports, each 4/(count + 1) of the window, overlap.
+  std::vector<LagTestFunction> out;
+  const auto spread = [&](double low, double high, int count, int power) {
+    const double half_width = 2 * (high - low) / (count + 1);
+    for (int i = 0; i < count; ++i) {
+      const double centre =
+          count == 1 ? (low + high) / 2
+                     : low + half_width + i * (high - low - 2 * half_width) / (count - 1);
+      out.push_back({centre, half_width, power});
+    }
+  };
+  // The supports end where the functions vanish, the widest stencil's reach inside the lags.
+  const double low = first_lag - 1 + kStencilReach[kMaxLagOrder];
+  const double high = last_lag + 1 - kStencilReach[kMaxLagOrder];
+  constexpr double kMinHalfWidth = 10;  // samples: finer ones the sums over lags do not resolve
+  const int wide = std::clamp(static_cast<int>(2 * (high - low) / kMinHalfWidth) - 1, 1, 20);
+  spread(low, high, wide, 10);
+  const double first_fifth = (high - low) / 5;
+  if (2 * first_fifth / 7 >= kMinHalfWidth) spread(low, low + first_fifth, 6, 8);
+  return out;
 }
 
 std::vector<double> stencil_weights(int order) {
@@ -412,13 +463,14 @@ std::string format_text(const LaggedSystem& system) {
         << " = " << combination_text(model, system.equations[i].rhs) << "\n";
   }
   if (system.equations.empty()) out << "  (none)\n";
-  const std::size_t lags = static_cast<std::size_t>(system.last_lag - system.first_lag + 1);
-  out << "\nequations: " << system.equations.size() << " per lag, "
-      << system.equations.size() * lags << " in all\n";
+  const std::size_t tests = system.test_functions.size();
+  out << "\nequations: " << system.equations.size() << " for every lag, taken with " << tests
+      << " test functions phi(s) over lags " << system.first_lag << ".." << system.last_lag
+      << ": " << system.equations.size() * tests << " in all\n";
   out << "channels read: " << channel_list(model, system.needed, true) << "\n";
   for (const std::string& d : system.derivatives) out << "not measured: " << d << "\n";
-  out << "lag derivatives: central differences in s with error O(dt^4), reaching "
-      << kStencilReach[system.max_order] << " lags either side\n";
+  out << "lag derivatives: central differences in s with error O(dt^4), moved by parts onto "
+         "phi(s) = (1-u^2)^p\n";
   return out.str();
 }
 
@@ -479,6 +531,12 @@ std::string format_json(const LaggedSystem& system) {
   out << "],\n  \"instruments\": [";
   for (std::size_t i = 0; i < system.instruments.size(); ++i) {
     out << (i ? ", " : "") << json_string(format_monomial(model, system.instruments[i]));
+  }
+  out << "],\n  \"test_functions\": [";
+  for (std::size_t i = 0; i < system.test_functions.size(); ++i) {
+    const LagTestFunction& f = system.test_functions[i];
+    out << (i ? ", " : "") << "{\"centre\": " << shortest_decimal(f.centre)
+        << ", \"half_width\": " << shortest_decimal(f.half_width) << ", \"power\": " << f.power << "}";
   }
   out << "],\n  \"equations\": [";
   for (std::size_t i = 0; i < system.equations.size(); ++i) {

@@ -52,18 +52,24 @@ MomentAccumulator::MomentAccumulator(std::vector<Moment> moments, std::size_t st
   // The powers of the last max_lag_ + 1 rows, so that a factor at lag l reads row n - l.
   powers_.assign((max_lag_ + 1) * table_size_, 1.0);
   // Each moment's state factors, then its input factors, as (lag, index into a power table).
+  // A moment is read with its most lagged factor max_lag_ rows back: the products at every lag
+  // then share one window of times for that factor (the instrument), and a stencil over lags
+  // of C[ψ;F](s) = E[ψ(t − s) F(t)] is exactly the stencil applied to F at each instrument
+  // time, with no end effects; reading F at a fixed window instead would leave end terms that
+  // a derivative in s multiplies by 1/dt^2.
   first_factor_.push_back(0);
   for (std::size_t i = 0; i < moments_.size(); ++i) {
     bool has_input = false;
+    const std::size_t shift = max_lag_ - static_cast<std::size_t>(moments_[i].max_lag());
     for (const MomentFactor& f : moments_[i].factors()) {
       if (static_cast<std::size_t>(f.channel) >= states_) continue;
-      factors_.push_back({static_cast<std::size_t>(f.lag),
+      factors_.push_back({static_cast<std::size_t>(f.lag) + shift,
                           power_offset_[f.channel] + static_cast<std::size_t>(f.power)});
     }
     first_factor_.push_back(factors_.size());
     for (const MomentFactor& f : moments_[i].factors()) {
       if (static_cast<std::size_t>(f.channel) < states_) continue;
-      factors_.push_back({static_cast<std::size_t>(f.lag),
+      factors_.push_back({static_cast<std::size_t>(f.lag) + shift,
                           power_offset_[f.channel] + static_cast<std::size_t>(f.power)});
       has_input = true;
     }

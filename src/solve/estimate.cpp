@@ -178,6 +178,19 @@ Estimate solve_rows(const MomentRows& system, const std::vector<std::string>& na
         [&](std::size_t k, double w) { uses[k].b.emplace_back(r, w); });
   }
 
+  if (options.normalise_rows) {
+    VectorXd weight = VectorXd::Ones(rows);
+    for (Eigen::Index r = 0; r < rows; ++r) {
+      if (const double norm = a.row(r).norm(); norm > 0) weight(r) = 1 / norm;
+    }
+    a = weight.asDiagonal() * a;
+    b = b.cwiseProduct(weight);
+    for (MomentUse& use : uses) {
+      for (auto& [r, p, w] : use.a) w *= weight(r);
+      for (auto& [r, w] : use.b) w *= weight(r);
+    }
+  }
+
   // Columns scaled to unit length: moments of different orders differ by orders of magnitude.
   VectorXd scale(params);
   for (Eigen::Index p = 0; p < params; ++p) {

@@ -1,7 +1,9 @@
-// The lagged moment equations as numbers: stencils for the lag derivatives, and powers of noisy
-// channels replaced by their Hermite polynomials in the noise variance.
+// The lagged moment equations as numbers: each equation integrated against each test function
+// of the lag, the lag derivatives moved onto the test function, and powers of noisy channels
+// replaced by their Hermite polynomials in the noise variance.
 
 #include <cmath>
+#include <algorithm>
 #include <map>
 
 #include "momentid/estimate.hpp"
@@ -56,10 +58,14 @@ LaggedRows lagged_rows(const LaggedSystem& system, double dt, const std::vector<
     }
     return out_m;
   };
-  // C^(k)[ψ;F](s) ~ sum_j w_j C[ψ;F](s + j) / dt^k, each C with ψ and F noise-corrected. The
-  // moments enter in the same order whatever the noise variances (zero weights included), so
-  // that the list can be made before the pass that estimates them.
-  const auto entry = [&](const LagCombination& c, int s) {
+  // Σ_s φ(s) C^(k)[ψ;F](s) with C^(k)(s) ~ Σ_j w_j C(s + j) / dt^k is Σ_s C(s) Σ_j w_j φ(s − j)
+  // / dt^k: the stencil applied to F at each instrument time, as the accumulator reads the
+  // moments, so that the sums are the equations at the samples, weighted. (A held input needs
+  // nothing more: the accumulator's moments of it already carry, at each sample, the mean input
+  // that the stencil of a state it drives sees.) Each C with ψ and F noise-corrected; the
+  // moments enter in the same order whatever the noise variances, so that the list can be made
+  // before the pass.
+  const auto entry = [&](const LagCombination& c, const LagTestFunction& phi) {
     MomentRows::Entry e;
     for (const auto& [f, weight] : c) {
       const std::vector<double> w = stencil_weights(f.order);
@@ -67,34 +73,37 @@ LaggedRows lagged_rows(const LaggedSystem& system, double dt, const std::vector<
       const double scale = weight.to_double() / std::pow(dt, f.order);
       const auto instruments = corrected(remap(f.instrument), noise);
       const auto functions = corrected(remap(f.function), noise);
-      for (int j = -reach; j <= reach; ++j) {
-        const double wj = w[static_cast<std::size_t>(j + reach)];
-        if (wj == 0) continue;
+      for (int s = system.first_lag; s <= system.last_lag; ++s) {
+        double ws = 0;
+        for (int j = -reach; j <= reach; ++j) {
+          ws += w[static_cast<std::size_t>(j + reach)] * phi(s - j);
+        }
+        if (ws == 0) continue;
         for (const auto& [instrument, wi] : instruments) {
           for (const auto& [function, wf] : functions) {
             const bool constant =
                 std::all_of(instrument.begin(), instrument.end(), [](int p) { return p == 0; }) &&
                 std::all_of(function.begin(), function.end(), [](int p) { return p == 0; });
             if (constant) {
-              e.constant += scale * wj * wi * wf;
+              e.constant += scale * ws * wi * wf;
               continue;
             }
-            const Moment m = lagged_moment(instrument, function, s + j);
+            const Moment m = lagged_moment(instrument, function, s);
             const auto [it, inserted] = index.emplace(m, out.moments.size());
             if (inserted) out.moments.push_back(m);
-            e.moments.emplace_back(it->second, scale * wj * wi * wf);
+            e.moments.emplace_back(it->second, scale * ws * wi * wf);
           }
         }
       }
     }
     return e;
   };
-  for (int s = system.first_lag; s <= system.last_lag; ++s) {
+  for (const LagTestFunction& phi : system.test_functions) {
     for (const LaggedEquation& eq : system.equations) {
       std::vector<MomentRows::Entry> a;
-      for (const LagCombination& c : eq.coefficients) a.push_back(entry(c, s));
+      for (const LagCombination& c : eq.coefficients) a.push_back(entry(c, phi));
       out.rows.a.push_back(std::move(a));
-      out.rows.b.push_back(entry(eq.rhs, s));
+      out.rows.b.push_back(entry(eq.rhs, phi));
     }
   }
   return out;
