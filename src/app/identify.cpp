@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <map>
 #include <sstream>
 #include <tuple>
 
@@ -44,6 +45,45 @@ void IdentifyOptions::validate(const Model& model) const {
 const std::vector<ParameterEstimate>& IdentifyResult::parameters() const {
   return gmm && !estimate.gmm_parameters.empty() ? estimate.gmm_parameters : estimate.parameters;
 }
+
+namespace {
+
+// The last lag that spans five correlation times (lags until the autocorrelation first falls
+// below 1/e) of the slowest measured state, from the lagged moments C[y;y](s) of a pass; four
+// times the window when a state stays correlated across it. Kept within the bounds of the lag
+// options and of the number of moments identify takes.
+int lag_window(const IdentifyResult& r, const std::vector<int>& channel) {
+  const LaggedSystem& system = *r.lagged;
+  std::map<Moment, std::size_t> index;
+  for (std::size_t k = 0; k < r.lagged_moments.size(); ++k) index.emplace(r.lagged_moments[k], k);
+  int wanted = 0;
+  const std::size_t states = r.model->states().size();
+  for (std::size_t v = 0; v < states; ++v) {
+    if (channel[v] < 0 || !system.measured[v]) continue;
+    const ChannelStatistics& c = r.data.channels[static_cast<std::size_t>(channel[v])];
+    if (!(c.variance > 0)) continue;
+    Monomial y(channel.size(), 0);
+    y[static_cast<std::size_t>(channel[v])] = 1;
+    int tau = 0;
+    for (int s = system.first_lag; s <= system.last_lag && tau == 0; ++s) {
+      const auto it = index.find(lagged_moment(y, y, s));
+      if (it == index.end()) continue;
+      const double rho = (r.data.estimates.mean[it->second] - c.mean * c.mean) / c.variance;
+      if (rho < std::exp(-1.0)) tau = s;
+    }
+    wanted = std::max(wanted, tau > 0 ? 5 * tau : 4 * system.last_lag);
+  }
+  if (wanted == 0) return system.last_lag;
+  // The moments grow with the number of lags.
+  const double per_lag = static_cast<double>(r.lagged_moments.size()) /
+                         (system.last_lag - system.first_lag + 1);
+  const int most = system.first_lag - 1 +
+                   static_cast<int>(IdentifyOptions::kMaxLaggedMoments / std::max(per_lag, 1.0));
+  return std::clamp(std::min(wanted, most), system.first_lag + LagOptions::kMinSpan - 1,
+                    LagOptions::kMaxLag);
+}
+
+}  // namespace
 
 IdentifyResult identify(const Model& model, const DataSource& source,
                         const IdentifyOptions& options) {
@@ -93,37 +133,53 @@ IdentifyResult identify(const Model& model, const DataSource& source,
   if (options.lags) std::tie(lag_options.first_lag, lag_options.last_lag) = *options.lags;
   lag_options.instruments = options.instruments;
   lag_options.measured = measured;
-  result.lagged = derive_lagged(*result.model, lag_options);
   // The channels the equations read, states then inputs, as the accumulator numbers them.
   std::vector<std::string> states, inputs;
-  const std::size_t state_count = model.states().size();
-  for (std::size_t v = 0; v < model.variables().size(); ++v) {
-    if (result.lagged->needed[v])
-      (v < state_count ? states : inputs).push_back(model.variables()[v]);
-  }
   std::vector<int> channel(model.variables().size(), -1);
-  for (std::size_t v = 0, next = 0; v < model.variables().size(); ++v) {
-    // States come first among the channels, and the variables are in that order too.
-    if (result.lagged->needed[v]) channel[v] = static_cast<int>(next++);
-  }
-  result.channels = states;
-  result.channels.insert(result.channels.end(), inputs.begin(), inputs.end());
-  // The rows need the sample interval, which the data give: accumulate, then build rows.
-  const LaggedRows probe = lagged_rows(*result.lagged, 1.0, channel, {});
-  if (probe.moments.size() > IdentifyOptions::kMaxLaggedMoments) {
-    throw UsageError("lags " + std::to_string(result.lagged->first_lag) + ".." +
-                     std::to_string(result.lagged->last_lag) + " with " +
-                     std::to_string(result.lagged->instruments.size()) + " instruments need " +
-                     std::to_string(probe.moments.size()) + " moments, more than " +
-                     std::to_string(IdentifyOptions::kMaxLaggedMoments) +
-                     ": use fewer lags or instruments");
-  }
-  result.lagged_moments = probe.moments;
-  result.data = moments_from_data(source, states, inputs, probe.moments, data_options);
-  if (!result.data.time_step) {
-    throw DataError({source.name(), 1, 1, ""},
-                    "the lagged equations need the sample interval: give the data a 't' column "
-                    "or a dt in the metadata");
+  // Derives the equations for the lags of lag_options and makes the pass over the data.
+  const auto pass = [&] {
+    result.lagged = derive_lagged(*result.model, lag_options);
+    states.clear();
+    inputs.clear();
+    const std::size_t state_count = model.states().size();
+    for (std::size_t v = 0; v < model.variables().size(); ++v) {
+      if (result.lagged->needed[v])
+        (v < state_count ? states : inputs).push_back(model.variables()[v]);
+    }
+    for (std::size_t v = 0, next = 0; v < model.variables().size(); ++v) {
+      // States come first among the channels, and the variables are in that order too.
+      channel[v] = result.lagged->needed[v] ? static_cast<int>(next++) : -1;
+    }
+    result.channels = states;
+    result.channels.insert(result.channels.end(), inputs.begin(), inputs.end());
+    // The rows need the sample interval, which the data give: accumulate, then build rows.
+    const LaggedRows probe = lagged_rows(*result.lagged, 1.0, channel, {});
+    if (probe.moments.size() > IdentifyOptions::kMaxLaggedMoments) {
+      throw UsageError("lags " + std::to_string(result.lagged->first_lag) + ".." +
+                       std::to_string(result.lagged->last_lag) + " with " +
+                       std::to_string(result.lagged->instruments.size()) + " instruments need " +
+                       std::to_string(probe.moments.size()) + " moments, more than " +
+                       std::to_string(IdentifyOptions::kMaxLaggedMoments) +
+                       ": use fewer lags or instruments");
+    }
+    result.lagged_moments = probe.moments;
+    result.data = moments_from_data(source, states, inputs, probe.moments, data_options);
+    if (!result.data.time_step) {
+      throw DataError({source.name(), 1, 1, ""},
+                      "the lagged equations need the sample interval: give the data a 't' "
+                      "column or a dt in the metadata");
+    }
+  };
+  pass();
+  // The default lags span about five correlation times of the measured states: when the
+  // first pass shows them far from that, a second pass takes the lags the data call for.
+  if (!options.lags) {
+    const int wanted = lag_window(result, channel);
+    const int last = result.lagged->last_lag;
+    if (wanted > 2 * last || 2 * wanted < last) {
+      lag_options.last_lag = wanted;
+      pass();
+    }
   }
   // The noise on each state channel: given, or estimated from its autocorrelation (inputs are
   // taken as measured without noise).
