@@ -130,28 +130,37 @@ class MomentAccumulator {
   void finish_run();
   void close_interval(std::size_t n);
   void compact();
+  void flush();
 
   std::vector<Moment> moments_;
   std::size_t states_, inputs_;
   InputHold hold_;
   std::size_t batches_;
-  struct FactorRef {
-    std::size_t lag;    // rows back
-    std::size_t index;  // into a row's power table
+  // Blocks of moments (in working order, positions begin .. begin + size) whose m-th member's
+  // factor f reads the history at offset + step * m rows past the newest: each a product of
+  // contiguous rows. The state factors come first.
+  struct BlockFactor {
+    std::size_t offset;  // power-table index * 2 (max_lag_ + 1) + lag of the first member
+    int step;            // -1, 0 or 1
   };
-  // Moment i's state factors are factors_[first_factor_[2i] .. first_factor_[2i+1]), its input
-  // factors follow up to first_factor_[2i+2].
-  std::vector<FactorRef> factors_;
-  std::vector<std::size_t> first_factor_;
+  struct Block {
+    std::size_t begin, size, state_factors;
+    std::vector<BlockFactor> factors;
+  };
+  std::vector<Block> blocks_;
+  std::vector<std::size_t> order_;  // working position -> moment; the held ones first
+  std::size_t held_count_ = 0;      // moments averaged with a held input
   std::size_t max_lag_ = 0;
-  std::vector<std::size_t> held_, plain_;  // moments averaged with a held input, and the others
   std::vector<int> max_power_;
   std::vector<std::size_t> power_offset_;
   std::size_t table_size_ = 0;
-  std::vector<double> powers_;             // max_lag_ + 1 power tables, by row modulo their count
-  std::vector<const double*> row_tables_;  // the table of row n - lag, per lag, for the row n
-  // The state and input parts of every moment at the last four rows of the run (row mod 4).
-  std::vector<double> state_ring_, input_ring_;
+  // Per power-table index, its values over the last max_lag_ + 1 rows twice over, the newest at
+  // history_pos_.
+  std::vector<double> history_;
+  std::size_t history_pos_ = 0;
+  // The state and input parts of every moment at the last four rows of the run (row mod 4),
+  // and the sums of the open stretch, in working order.
+  std::vector<double> state_ring_, input_ring_, open_sums_;
   // Rows of the current run this accumulator saw (history and lookahead included), and those of
   // them past the first max_lag_, which have their moments' values in the rings.
   std::size_t seen_rows_ = 0, run_rows_ = 0;

@@ -6,6 +6,7 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <tuple>
 
 namespace momentid {
 namespace {
@@ -49,37 +50,84 @@ MomentAccumulator::MomentAccumulator(std::vector<Moment> moments, std::size_t st
     offset += static_cast<std::size_t>(p) + 1;
   }
   table_size_ = offset;
-  // The powers of the last max_lag_ + 1 rows, so that a factor at lag l reads row n - l.
-  powers_.assign((max_lag_ + 1) * table_size_, 1.0);
-  // Each moment's state factors, then its input factors, as (lag, index into a power table).
-  // A moment is read with its most lagged factor max_lag_ rows back: the products at every lag
-  // then share one window of times for that factor (the instrument), and a stencil over lags
-  // of C[ψ;F](s) = E[ψ(t − s) F(t)] is exactly the stencil applied to F at each instrument
-  // time, with no end effects; reading F at a fixed window instead would leave end terms that
-  // a derivative in s multiplies by 1/dt^2.
-  first_factor_.push_back(0);
+  const std::size_t depth = max_lag_ + 1;
+  // Every power of every channel over the last max_lag_ + 1 rows, newest first, stored twice
+  // in a row so that the rows back from any start are contiguous.
+  history_.assign(table_size_ * 2 * depth, 1.0);
+
+  // Each moment's factors as (lag, power-table index), state factors first. A moment is read
+  // with its most lagged factor max_lag_ rows back: the products at every lag then share one
+  // window of times for that factor (the instrument), and a stencil over lags of
+  // C[ψ;F](s) = E[ψ(t − s) F(t)] is exactly the stencil applied to F at each instrument time,
+  // with no end effects; reading F at a fixed window instead would leave end terms that a
+  // derivative in s multiplies by 1/dt^2.
+  struct Layout {
+    bool held = false;
+    std::size_t state_factors = 0;
+    std::vector<std::size_t> indices, lags;
+  };
+  std::vector<Layout> layouts(moments_.size());
   for (std::size_t i = 0; i < moments_.size(); ++i) {
-    bool has_input = false;
+    Layout& l = layouts[i];
     const std::size_t shift = max_lag_ - static_cast<std::size_t>(moments_[i].max_lag());
-    for (const MomentFactor& f : moments_[i].factors()) {
-      if (static_cast<std::size_t>(f.channel) >= states_) continue;
-      factors_.push_back({static_cast<std::size_t>(f.lag) + shift,
-                          power_offset_[f.channel] + static_cast<std::size_t>(f.power)});
+    bool has_input = false;
+    for (bool state_part : {true, false}) {
+      for (const MomentFactor& f : moments_[i].factors()) {
+        if ((static_cast<std::size_t>(f.channel) < states_) != state_part) continue;
+        l.indices.push_back(power_offset_[f.channel] + static_cast<std::size_t>(f.power));
+        l.lags.push_back(static_cast<std::size_t>(f.lag) + shift);
+        has_input = has_input || !state_part;
+      }
+      if (state_part) l.state_factors = l.indices.size();
     }
-    first_factor_.push_back(factors_.size());
-    for (const MomentFactor& f : moments_[i].factors()) {
-      if (static_cast<std::size_t>(f.channel) < states_) continue;
-      factors_.push_back({static_cast<std::size_t>(f.lag) + shift,
-                          power_offset_[f.channel] + static_cast<std::size_t>(f.power)});
-      has_input = true;
-    }
-    first_factor_.push_back(factors_.size());
-    (hold_ == InputHold::kZeroOrderHold && has_input ? held_ : plain_).push_back(i);
+    l.held = hold_ == InputHold::kZeroOrderHold && has_input;
   }
-  row_tables_.assign(max_lag_ + 1, nullptr);
+  // The moments are worked on in an order that puts the held ones first and lines up the same
+  // factors at successive lags, so that blocks of them are products of contiguous rows.
+  order_.resize(moments_.size());
+  for (std::size_t i = 0; i < order_.size(); ++i) order_[i] = i;
+  std::stable_sort(order_.begin(), order_.end(), [&](std::size_t x, std::size_t y) {
+    const Layout& a = layouts[x];
+    const Layout& b = layouts[y];
+    if (a.held != b.held) return a.held;
+    return std::tie(a.state_factors, a.indices, a.lags) <
+           std::tie(b.state_factors, b.indices, b.lags);
+  });
+  held_count_ = static_cast<std::size_t>(
+      std::count_if(layouts.begin(), layouts.end(), [](const Layout& l) { return l.held; }));
+  const std::size_t span = 2 * depth;
+  for (std::size_t q = 0; q < order_.size();) {
+    const Layout& first = layouts[order_[q]];
+    std::vector<long> steps;
+    std::size_t end = q + 1;
+    for (; end < order_.size(); ++end) {
+      const Layout& prev = layouts[order_[end - 1]];
+      const Layout& next = layouts[order_[end]];
+      if (next.held != first.held || next.state_factors != first.state_factors ||
+          next.indices != first.indices) {
+        break;
+      }
+      std::vector<long> d(next.lags.size());
+      bool unit = true;
+      for (std::size_t f = 0; f < d.size(); ++f) {
+        d[f] = static_cast<long>(next.lags[f]) - static_cast<long>(prev.lags[f]);
+        unit = unit && d[f] >= -1 && d[f] <= 1;
+      }
+      if (!unit || (end > q + 1 && d != steps)) break;
+      steps = d;
+    }
+    Block block{q, end - q, first.state_factors, {}};
+    for (std::size_t f = 0; f < first.indices.size(); ++f) {
+      block.factors.push_back({first.indices[f] * span + first.lags[f],
+                               steps.empty() ? 0 : static_cast<int>(steps[f])});
+    }
+    blocks_.push_back(std::move(block));
+    q = end;
+  }
   const std::size_t k = moments_.size();
   state_ring_.assign(4 * k, 0.0);
   input_ring_.assign(4 * k, 0.0);
+  open_sums_.assign(k, 0.0);
   stretches_.push_back({std::vector<double>(k, 0.0), 0});
 }
 
@@ -107,6 +155,7 @@ void MomentAccumulator::finish() { finish_run(); }
 // the lookahead (then close_interval skips it), and forgets the run.
 void MomentAccumulator::finish_run() {
   if (run_rows_ >= 2) close_interval(run_rows_ - 2);
+  flush();
   run_rows_ = 0;
   seen_rows_ = 0;
   continued_ = false;
@@ -138,35 +187,57 @@ void MomentAccumulator::push_rows(const double* rows, std::size_t count) {
   const std::size_t variables = states_ + inputs_;
   const std::size_t k = moments_.size();
   const std::size_t depth = max_lag_ + 1;
+  const std::size_t span = 2 * depth;
   for (std::size_t r = 0; r < count; ++r) {
     const double* row = rows + r * variables;
-    double* table = powers_.data() + (seen_rows_ % depth) * table_size_;
+    history_pos_ = (history_pos_ + depth - 1) % depth;
     for (std::size_t v = 0; v < variables; ++v) {
-      double* p = table + power_offset_[v];
-      p[1] = row[v];
-      for (int e = 2; e <= max_power_[v]; ++e) p[e] = p[e - 1] * row[v];
+      double power = row[v];
+      for (int e = 1; e <= max_power_[v]; ++e) {
+        double* at = history_.data() + (power_offset_[v] + static_cast<std::size_t>(e)) * span;
+        at[history_pos_] = power;
+        at[history_pos_ + depth] = power;
+        power *= row[v];
+      }
     }
     ++seen_rows_;
-    // The first max_lag_ rows of a run only fill the lagged power tables.
+    // The first max_lag_ rows of a run only fill the history.
     if (seen_rows_ <= max_lag_) continue;
-    for (std::size_t lag = 0; lag < depth; ++lag) {
-      row_tables_[lag] = powers_.data() + ((seen_rows_ - 1 - lag) % depth) * table_size_;
-    }
     double* state = state_ring_.data() + (run_rows_ % 4) * k;
     double* input = input_ring_.data() + (run_rows_ % 4) * k;
-    const FactorRef* factors = factors_.data();
-    const std::size_t* first = first_factor_.data();
-    const double* const* tables = row_tables_.data();
-    for (std::size_t i = 0; i < k; ++i) {
-      double g = 1, h = 1;
-      for (std::size_t f = first[2 * i]; f < first[2 * i + 1]; ++f) {
-        g *= tables[factors[f].lag][factors[f].index];
+    const double* history = history_.data() + history_pos_;
+    for (const Block& b : blocks_) {
+      // A held moment keeps its state and input parts apart (the state part is integrated
+      // over the interval, the input held); any other moment is the product of all factors.
+      const bool held = b.begin < held_count_;
+      double* g = state + b.begin;
+      double* h = held ? input + b.begin : g;
+      if (held && b.state_factors == 0) std::fill(g, g + b.size, 1.0);
+      if (held ? b.state_factors == b.factors.size() : b.factors.empty()) {
+        std::fill(h, h + b.size, 1.0);
       }
-      for (std::size_t f = first[2 * i + 1]; f < first[2 * i + 2]; ++f) {
-        h *= tables[factors[f].lag][factors[f].index];
+      for (std::size_t f = 0; f < b.factors.size(); ++f) {
+        double* out = f < b.state_factors ? g : h;
+        // The first factor of a part sets it, the others multiply it.
+        const bool first = f == 0 || (held && f == b.state_factors);
+        const double* p = history + b.factors[f].offset;
+        const int step = b.factors[f].step;
+        if (first) {
+          if (step == 0) {
+            std::fill(out, out + b.size, p[0]);
+          } else if (step == 1) {
+            for (std::size_t m = 0; m < b.size; ++m) out[m] = p[m];
+          } else {
+            for (std::size_t m = 0; m < b.size; ++m) out[m] = *(p - m);
+          }
+        } else if (step == 0) {
+          for (std::size_t m = 0; m < b.size; ++m) out[m] *= p[0];
+        } else if (step == 1) {
+          for (std::size_t m = 0; m < b.size; ++m) out[m] *= p[m];
+        } else {
+          for (std::size_t m = 0; m < b.size; ++m) out[m] *= *(p - m);
+        }
       }
-      state[i] = g;
-      input[i] = h;
     }
     ++run_rows_;
     // With rows up to m = run_rows_ - 1 known, the interval [m - 2, m - 1] can be closed.
@@ -198,7 +269,6 @@ void MomentAccumulator::close_interval(std::size_t n) {
   const double* g0 = state(n);
   const double* g1 = state(n + 1);
   const double* h0 = input(n);
-  const double* h1 = input(n + 1);
   // Weights of g at rows n - 1, n, n + 1, n + 2 for the integral over [n, n + 1] / dt.
   double w[4] = {0, 0.5, 0.5, 0};
   if (n >= 1 && n + 2 < rows) {
@@ -217,17 +287,28 @@ void MomentAccumulator::close_interval(std::size_t n) {
   }
   const double* gm = n >= 1 ? state(n - 1) : g0;
   const double* g2 = n + 2 < rows ? state(n + 2) : g1;
-  Stretch& stretch = stretches_.back();
-  double* sums = stretch.sums.data();
-  for (std::size_t i : held_) {
+  double* sums = open_sums_.data();
+  for (std::size_t i = 0; i < held_count_; ++i) {
     sums[i] += h0[i] * (w[0] * gm[i] + w[1] * g0[i] + w[2] * g1[i] + w[3] * g2[i]);
   }
-  for (std::size_t i : plain_) sums[i] += 0.5 * (g0[i] * h0[i] + g1[i] * h1[i]);
+  // The other moments are whole products, kept in the state ring.
+  for (std::size_t i = held_count_; i < k; ++i) sums[i] += 0.5 * (g0[i] + g1[i]);
+  Stretch& stretch = stretches_.back();
   ++stretch.intervals;
   ++intervals_;
   if (stretch.intervals >= stretch_length_) {
+    flush();
     stretches_.push_back({std::vector<double>(k, 0.0), 0});
     if (stretches_.size() > max_stretches_) compact();
+  }
+}
+
+// Adds the sums of the open stretch, kept in working order, to its stretch.
+void MomentAccumulator::flush() {
+  std::vector<double>& sums = stretches_.back().sums;
+  for (std::size_t i = 0; i < open_sums_.size(); ++i) {
+    sums[order_[i]] += open_sums_[i];
+    open_sums_[i] = 0;
   }
 }
 
