@@ -93,7 +93,8 @@ Estimate solve_rows(const MomentRows& rows, const std::vector<std::string>& name
 // The numbers behind lagged moment equations for data sampled every `dt`: one row per test
 // function and equation, whose entries are lagged moments weighted by the test function (its
 // derivatives for the lag derivatives, by parts), and the moments, over accumulator channels:
-// `channel[v]` is model variable v's channel, or -1 for a variable the data lack. `noise[c]` is the variance of white noise on channel c (absent
+// `channel[v]` is model variable v's channel, or -1 for a variable the data lack. `stencil`:
+// the reach of the lag-derivative stencils (stencil_weights). `noise[c]` is the variance of white noise on channel c (absent
 // or 0: none); every power of a noisy channel is replaced by its Hermite polynomial in that
 // variance (y^3 by y^3 - 3 v y), whose expectation over the noise is the clean power. The list
 // of moments does not depend on the variances.
@@ -102,6 +103,6 @@ struct LaggedRows {
   MomentRows rows;
 };
 LaggedRows lagged_rows(const LaggedSystem& system, double dt, const std::vector<int>& channel,
-                       const std::vector<double>& noise);
+                       const std::vector<double>& noise, int stencil = kStencilReach);
 
 }  // namespace momentid

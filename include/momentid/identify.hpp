@@ -69,6 +69,7 @@ struct IdentifyResult {
   std::vector<Moment> lagged_moments;
   std::vector<std::string> channels;
   std::vector<double> noise;  // the noise variance used per channel (lagged equations)
+  int stencil_reach = 0;      // of the lag-derivative stencils (lagged equations)
   DataMoments data;
   Estimate estimate;
   bool gmm = false;  // the optimally weighted estimate is the main result

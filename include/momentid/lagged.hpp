@@ -97,14 +97,21 @@ bool derivable_from(const Model& model, const std::vector<bool>& measured);
 // a state that has no column and that no kinematic equation defines; UsageError for bad options.
 LaggedSystem derive_lagged(const Model& model, const LagOptions& options);
 
-// How far a central stencil for the order-k lag derivative reaches either side (k = 0..3), and
-// its weights w_j for j = -reach..reach: C^(k)(s) ~ sum_j w_j C(s + j) / dt^k, error O(dt^4).
+// Central stencils for the order-k lag derivative (k = 0..3): C^(k)(s) ~ sum_j w_j C(s + j) /
+// dt^k over j = -reach..reach, exact for polynomials of degree 2 reach (Fornberg's weights).
+// The reach is `reach` for orders up to 2 and one more for order 3, so that the error is
+// O(dt^(2 reach)) for every order. Reach 2 (error O(dt^4)) suits records with inputs held over
+// each sample, whose states have kinks at the samples that a wider stencil would straddle;
+// band-limited records take a wider one (kWideStencilReach: O(dt^12)), which keeps its accuracy
+// at a few samples per period.
 inline constexpr int kMaxLagOrder = 3;
-inline constexpr int kStencilReach[kMaxLagOrder + 1] = {0, 2, 2, 3};
-std::vector<double> stencil_weights(int order);
+inline constexpr int kStencilReach = 2;
+inline constexpr int kWideStencilReach = 6;
+int stencil_reach(int order, int reach);
+std::vector<double> stencil_weights(int order, int reach = kStencilReach);
 
 // The test functions for the lags first..last (at least LagOptions::kMinSpan of them), kept
-// kStencilReach[3] lags inside the window: twenty overlapping ones across it, where the damping
+// the widest stencil's reach inside the window: twenty overlapping ones across it, where the damping
 // shows, and six narrower ones over its first fifth, where the instantaneous stiffness shows,
 // when that fifth is wide enough to resolve them (half supports of at least 10 lags).
 std::vector<LagTestFunction> lag_test_functions(int first_lag, int last_lag);

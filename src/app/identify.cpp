@@ -192,8 +192,12 @@ IdentifyResult identify(const Model& model, const DataSource& source,
       result.noise[c] = std::max(0.0, *v);
     }
   }
-  const LaggedRows rows =
-      lagged_rows(*result.lagged, *result.data.time_step, channel, result.noise);
+  // Inputs held over each sample put kinks into the states at the samples, which only the
+  // five-point stencils match; band-limited records take the wide ones.
+  result.stencil_reach =
+      result.data.hold == InputHold::kSample ? kWideStencilReach : kStencilReach;
+  const LaggedRows rows = lagged_rows(*result.lagged, *result.data.time_step, channel,
+                                      result.noise, result.stencil_reach);
   std::vector<std::string> names;
   for (const Declaration& p : model.parameters()) names.push_back(p.name);
   result.estimate = solve_rows(rows.rows, names, result.data.estimates,
@@ -260,7 +264,8 @@ void table(std::ostringstream& out, const std::vector<ParameterEstimate>& parame
   }
 }
 
-// "lagged moment equations at lags 3..40, instruments y, y^3; not measured: v = y'".
+// "lagged moment equations at lags 3..300 samples, instruments y, y^3; not measured: v = y';
+// 5-point lag stencils".
 std::string method_text(const IdentifyResult& r) {
   std::string out = "lagged moment equations at lags " + std::to_string(r.lagged->first_lag) +
                     ".." + std::to_string(r.lagged->last_lag) + " samples, instruments ";
@@ -270,6 +275,7 @@ std::string method_text(const IdentifyResult& r) {
   for (std::size_t i = 0; i < r.lagged->derivatives.size(); ++i) {
     out += (i ? ", " : "; not measured: ") + r.lagged->derivatives[i];
   }
+  out += "; " + std::to_string(2 * r.stencil_reach + 1) + "-point lag stencils";
   std::string noise;
   for (std::size_t c = 0; c < r.noise.size(); ++c) {
     if (r.noise[c] == 0) continue;
@@ -357,7 +363,8 @@ std::string format_json(const IdentifyResult& r) {
   if (gmm) out << ",\n  \"least_squares\": " << parameters(e.parameters);
   if (r.lagged) {
     out << ",\n  \"method\": {\"name\": \"lagged\", \"lags\": [" << r.lagged->first_lag << ", "
-        << r.lagged->last_lag << "], \"instruments\": [";
+        << r.lagged->last_lag << "], \"stencil_points\": " << 2 * r.stencil_reach + 1
+        << ", \"instruments\": [";
     for (std::size_t i = 0; i < r.lagged->instruments.size(); ++i) {
       out << (i ? ", " : "") << json_string(format_monomial(*r.model, r.lagged->instruments[i]));
     }

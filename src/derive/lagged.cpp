@@ -354,8 +354,9 @@ std::vector<LagTestFunction> lag_test_functions(int first_lag, int last_lag) {
     }
   };
   // The supports end where the functions vanish, the widest stencil's reach inside the lags.
-  const double low = first_lag - 1 + kStencilReach[kMaxLagOrder];
-  const double high = last_lag + 1 - kStencilReach[kMaxLagOrder];
+  const int inset = stencil_reach(kMaxLagOrder, kWideStencilReach);
+  const double low = first_lag - 1 + inset;
+  const double high = last_lag + 1 - inset;
   constexpr double kMinHalfWidth = 10;  // samples: finer ones the sums over lags do not resolve
   const int wide = std::clamp(static_cast<int>(2 * (high - low) / kMinHalfWidth) - 1, 1, 20);
   spread(low, high, wide, 10);
@@ -364,20 +365,46 @@ std::vector<LagTestFunction> lag_test_functions(int first_lag, int last_lag) {
   return out;
 }
 
-std::vector<double> stencil_weights(int order) {
-  switch (order) {
-    case 0:
-      return {1};
-    case 1:
-      return {1.0 / 12, -8.0 / 12, 0, 8.0 / 12, -1.0 / 12};
-    case 2:
-      return {-1.0 / 12, 16.0 / 12, -30.0 / 12, 16.0 / 12, -1.0 / 12};
-    case 3:
-      return {1.0 / 8, -1, 13.0 / 8, 0, -13.0 / 8, 1, -1.0 / 8};
-    default:
-      throw std::invalid_argument("stencil_weights: order " + std::to_string(order) +
-                                  " is beyond " + std::to_string(kMaxLagOrder));
+int stencil_reach(int order, int reach) { return order == 3 ? reach + 1 : reach; }
+
+std::vector<double> stencil_weights(int order, int reach) {
+  if (order < 0 || order > kMaxLagOrder || reach < 1) {
+    throw std::invalid_argument("stencil_weights: order " + std::to_string(order) + ", reach " +
+                                std::to_string(reach) + ": expected an order from 0 to " +
+                                std::to_string(kMaxLagOrder) + " and a reach from 1");
   }
+  // Fornberg's recursion for the weights at the points -R..R of every derivative up to `order`
+  // at 0 (B. Fornberg, Math. Comp. 51 (1988) 699-706).
+  const int r = stencil_reach(order, reach);
+  const int n = 2 * r + 1;
+  std::vector<std::vector<double>> c(static_cast<std::size_t>(order + 1),
+                                     std::vector<double>(static_cast<std::size_t>(n), 0.0));
+  const auto x = [&](int i) { return static_cast<double>(i - r); };
+  c[0][0] = 1;
+  double c1 = 1;
+  for (int i = 1; i < n; ++i) {
+    const int top = std::min(i, order);
+    double c2 = 1;
+    for (int j = 0; j < i; ++j) {
+      const double c3 = x(i) - x(j);
+      c2 *= c3;
+      const auto ui = static_cast<std::size_t>(i), uj = static_cast<std::size_t>(j);
+      if (j == i - 1) {
+        for (int k = top; k >= 1; --k) {
+          const auto uk = static_cast<std::size_t>(k);
+          c[uk][ui] = c1 * (k * c[uk - 1][ui - 1] - x(i - 1) * c[uk][ui - 1]) / c2;
+        }
+        c[0][ui] = -c1 * x(i - 1) * c[0][ui - 1] / c2;
+      }
+      for (int k = top; k >= 1; --k) {
+        const auto uk = static_cast<std::size_t>(k);
+        c[uk][uj] = (x(i) * c[uk][uj] - k * c[uk - 1][uj]) / c3;
+      }
+      c[0][uj] = x(i) * c[0][uj] / c3;
+    }
+    c1 = c2;
+  }
+  return c[static_cast<std::size_t>(order)];
 }
 
 Moment lagged_moment(const Monomial& instrument, const Monomial& function, int lag) {
@@ -469,8 +496,8 @@ std::string format_text(const LaggedSystem& system) {
       << ": " << system.equations.size() * tests << " in all\n";
   out << "channels read: " << channel_list(model, system.needed, true) << "\n";
   for (const std::string& d : system.derivatives) out << "not measured: " << d << "\n";
-  out << "lag derivatives: central differences in s with error O(dt^4), moved by parts onto "
-         "phi(s) = (1-u^2)^p\n";
+  out << "lag derivatives: central differences in s (error O(dt^4), O(dt^12) for band-limited "
+         "records), moved by parts onto phi(s) = (1-u^2)^p\n";
   return out.str();
 }
 

@@ -48,7 +48,7 @@ std::vector<std::pair<Monomial, double>> corrected(const Monomial& m,
 }  // namespace
 
 LaggedRows lagged_rows(const LaggedSystem& system, double dt, const std::vector<int>& channel,
-                       const std::vector<double>& noise) {
+                       const std::vector<double>& noise, int stencil) {
   LaggedRows out;
   std::map<Moment, std::size_t> index;
   const auto remap = [&](const Monomial& m) {
@@ -62,14 +62,14 @@ LaggedRows lagged_rows(const LaggedSystem& system, double dt, const std::vector<
   // / dt^k: the stencil applied to F at each instrument time, as the accumulator reads the
   // moments, so that the sums are the equations at the samples, weighted. (A held input needs
   // nothing more: the accumulator's moments of it already carry, at each sample, the mean input
-  // that the stencil of a state it drives sees.) Each C with ψ and F noise-corrected; the
-  // moments enter in the same order whatever the noise variances, so that the list can be made
-  // before the pass.
+  // that the five-point stencil of a state it drives sees.) Each C with ψ and F noise-corrected.
+  // Every lag of the window is listed, zero weights too: the moments enter in the same order
+  // whatever the noise variances and the stencil, so that the list can be made before the pass.
   const auto entry = [&](const LagCombination& c, const LagTestFunction& phi) {
     MomentRows::Entry e;
     for (const auto& [f, weight] : c) {
-      const std::vector<double> w = stencil_weights(f.order);
-      const int reach = kStencilReach[f.order];
+      const std::vector<double> w = stencil_weights(f.order, stencil);
+      const int reach = stencil_reach(f.order, stencil);
       const double scale = weight.to_double() / std::pow(dt, f.order);
       const auto instruments = corrected(remap(f.instrument), noise);
       const auto functions = corrected(remap(f.function), noise);
@@ -78,7 +78,6 @@ LaggedRows lagged_rows(const LaggedSystem& system, double dt, const std::vector<
         for (int j = -reach; j <= reach; ++j) {
           ws += w[static_cast<std::size_t>(j + reach)] * phi(s - j);
         }
-        if (ws == 0) continue;
         for (const auto& [instrument, wi] : instruments) {
           for (const auto& [function, wf] : functions) {
             const bool constant =
