@@ -47,8 +47,8 @@ void write_data(const momentid::Model& model, const std::string& path, std::size
   momentid::simulate_to_file(model, options, path, momentid::DataWriter::Format::kCsv);
 }
 
-// `lagged`: the lagged equations at lags 3..42 (40 lags) with the instruments y, y^2, y^3 and x, on a file
-// without the velocity; otherwise the zero-lag equations of degree 3.
+// `lagged`: the lagged equations at lags 3..42 (40 lags) with the instruments y, y^2, y^3 and x, on
+// a file without the velocity; otherwise the zero-lag equations of degree 3.
 int one_pass(const std::string& path, bool lagged) {
   const momentid::Model model = momentid::parse_model(kModel, "duffing.mom");
   momentid::IdentifyOptions options;

@@ -271,8 +271,8 @@ TEST_SUITE("accumulator") {
         double product = 1;
         const std::size_t shift = lag - static_cast<std::size_t>(moments[i].max_lag());
         for (const MomentFactor& f : moments[i].factors()) {
-          product *= std::pow(record.row(n - shift - static_cast<std::size_t>(f.lag))[f.channel],
-                              f.power);
+          product *=
+              std::pow(record.row(n - shift - static_cast<std::size_t>(f.lag))[f.channel], f.power);
         }
         return product;
       };

@@ -76,8 +76,7 @@ Estimate identify(const Model& truth, const Case& c, const Model* fitted = nullp
 // Simulates 10^6 samples of the Duffing model with `noise` (relative) on y and identifies it from
 // y and x alone, from memory.
 momentid::IdentifyResult identify_from_displacement(const Model& model, double noise,
-                                                    double dt = 0.01,
-                                                    std::size_t samples = 1000000,
+                                                    double dt = 0.01, std::size_t samples = 1000000,
                                                     const momentid::IdentifyOptions& o = {}) {
   momentid::SimulationOptions options;
   options.parameters = momentid::parameter_values(model, {});

@@ -113,7 +113,8 @@ TEST_SUITE("lagged") {
     CHECK(momentid::lag_test_functions(3, 100).size() == 16);
   }
 
-  TEST_CASE("each row is the equation summed over lags, the stencils moved onto the test function") {
+  TEST_CASE(
+      "each row is the equation summed over lags, the stencils moved onto the test function") {
     // Row 0 (instrument y, first test function), coefficient of c: C'[y;y](s) summed with
     // weight phi(s), that is C[y;y](s) with weight sum_j w_j phi(s - j) / dt.
     const momentid::Model model = model_file("duffing.mom");
@@ -135,7 +136,8 @@ TEST_SUITE("lagged") {
       CHECK(got[s] == doctest::Approx(want).epsilon(1e-12).scale(1e-9));
       // The same for C(s) = cos(0.05 s): the sum of phi times the stencil of C.
       double stencil = 0;
-      for (int j = -2; j <= 2; ++j) stencil += w[static_cast<std::size_t>(j + 2)] * std::cos(0.05 * (s + j)) / dt;
+      for (int j = -2; j <= 2; ++j)
+        stencil += w[static_cast<std::size_t>(j + 2)] * std::cos(0.05 * (s + j)) / dt;
       sum_by_lag += phi(s) * stencil;
       sum_by_parts += got[s] * std::cos(0.05 * s);
     }

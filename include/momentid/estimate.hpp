@@ -94,10 +94,10 @@ Estimate solve_rows(const MomentRows& rows, const std::vector<std::string>& name
 // function and equation, whose entries are lagged moments weighted by the test function (its
 // derivatives for the lag derivatives, by parts), and the moments, over accumulator channels:
 // `channel[v]` is model variable v's channel, or -1 for a variable the data lack. `stencil`:
-// the reach of the lag-derivative stencils (stencil_weights). `noise[c]` is the variance of white noise on channel c (absent
-// or 0: none); every power of a noisy channel is replaced by its Hermite polynomial in that
-// variance (y^3 by y^3 - 3 v y), whose expectation over the noise is the clean power. The list
-// of moments does not depend on the variances.
+// the reach of the lag-derivative stencils (stencil_weights). `noise[c]` is the variance of white
+// noise on channel c (absent or 0: none); every power of a noisy channel is replaced by its Hermite
+// polynomial in that variance (y^3 by y^3 - 3 v y), whose expectation over the noise is the clean
+// power. The list of moments does not depend on the variances.
 struct LaggedRows {
   std::vector<Moment> moments;
   MomentRows rows;

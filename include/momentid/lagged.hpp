@@ -111,9 +111,9 @@ int stencil_reach(int order, int reach);
 std::vector<double> stencil_weights(int order, int reach = kStencilReach);
 
 // The test functions for the lags first..last (at least LagOptions::kMinSpan of them), kept
-// the widest stencil's reach inside the window: twenty overlapping ones across it, where the damping
-// shows, and six narrower ones over its first fifth, where the instantaneous stiffness shows,
-// when that fifth is wide enough to resolve them (half supports of at least 10 lags).
+// the widest stencil's reach inside the window: twenty overlapping ones across it, where the
+// damping shows, and six narrower ones over its first fifth, where the instantaneous stiffness
+// shows, when that fifth is wide enough to resolve them (half supports of at least 10 lags).
 std::vector<LagTestFunction> lag_test_functions(int first_lag, int last_lag);
 
 // The lagged moments E[ψ(t − s)·F(t)] behind C[ψ;F](s), as accumulator keys over the

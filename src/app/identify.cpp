@@ -75,8 +75,8 @@ int lag_window(const IdentifyResult& r, const std::vector<int>& channel) {
   }
   if (wanted == 0) return system.last_lag;
   // The moments grow with the number of lags.
-  const double per_lag = static_cast<double>(r.lagged_moments.size()) /
-                         (system.last_lag - system.first_lag + 1);
+  const double per_lag =
+      static_cast<double>(r.lagged_moments.size()) / (system.last_lag - system.first_lag + 1);
   const int most = system.first_lag - 1 +
                    static_cast<int>(IdentifyOptions::kMaxLaggedMoments / std::max(per_lag, 1.0));
   return std::clamp(std::min(wanted, most), system.first_lag + LagOptions::kMinSpan - 1,
@@ -194,15 +194,14 @@ IdentifyResult identify(const Model& model, const DataSource& source,
   }
   // Inputs held over each sample put kinks into the states at the samples, which only the
   // five-point stencils match; band-limited records take the wide ones.
-  result.stencil_reach =
-      result.data.hold == InputHold::kSample ? kWideStencilReach : kStencilReach;
-  const LaggedRows rows = lagged_rows(*result.lagged, *result.data.time_step, channel,
-                                      result.noise, result.stencil_reach);
+  result.stencil_reach = result.data.hold == InputHold::kSample ? kWideStencilReach : kStencilReach;
+  const LaggedRows rows = lagged_rows(*result.lagged, *result.data.time_step, channel, result.noise,
+                                      result.stencil_reach);
   std::vector<std::string> names;
   for (const Declaration& p : model.parameters()) names.push_back(p.name);
-  result.estimate = solve_rows(rows.rows, names, result.data.estimates,
-                               result.data.estimates.covariance(),
-                               {.gmm = options.gmm, .normalise_rows = true});
+  result.estimate =
+      solve_rows(rows.rows, names, result.data.estimates, result.data.estimates.covariance(),
+                 {.gmm = options.gmm, .normalise_rows = true});
   return result;
 }
 

@@ -200,8 +200,10 @@ bool derivable_from(const Model& model, const std::vector<bool>& measured) {
 
 void LagOptions::validate(const Model& model) const {
   if (first_lag < 1) {
-    throw UsageError("lags: the first lag must be at least 1 (white sensor noise biases lag 0), "
-                     "found " + std::to_string(first_lag));
+    throw UsageError(
+        "lags: the first lag must be at least 1 (white sensor noise biases lag 0), "
+        "found " +
+        std::to_string(first_lag));
   }
   if (last_lag < first_lag + kMinSpan - 1 || last_lag > kMaxLag) {
     throw UsageError("lags: expected a last lag from " + std::to_string(first_lag + kMinSpan - 1) +
@@ -492,8 +494,8 @@ std::string format_text(const LaggedSystem& system) {
   if (system.equations.empty()) out << "  (none)\n";
   const std::size_t tests = system.test_functions.size();
   out << "\nequations: " << system.equations.size() << " for every lag, taken with " << tests
-      << " test functions phi(s) over lags " << system.first_lag << ".." << system.last_lag
-      << ": " << system.equations.size() * tests << " in all\n";
+      << " test functions phi(s) over lags " << system.first_lag << ".." << system.last_lag << ": "
+      << system.equations.size() * tests << " in all\n";
   out << "channels read: " << channel_list(model, system.needed, true) << "\n";
   for (const std::string& d : system.derivatives) out << "not measured: " << d << "\n";
   out << "lag derivatives: central differences in s (error O(dt^4), O(dt^12) for band-limited "
@@ -563,7 +565,8 @@ std::string format_json(const LaggedSystem& system) {
   for (std::size_t i = 0; i < system.test_functions.size(); ++i) {
     const LagTestFunction& f = system.test_functions[i];
     out << (i ? ", " : "") << "{\"centre\": " << shortest_decimal(f.centre)
-        << ", \"half_width\": " << shortest_decimal(f.half_width) << ", \"power\": " << f.power << "}";
+        << ", \"half_width\": " << shortest_decimal(f.half_width) << ", \"power\": " << f.power
+        << "}";
   }
   out << "],\n  \"equations\": [";
   for (std::size_t i = 0; i < system.equations.size(); ++i) {

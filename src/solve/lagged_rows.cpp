@@ -2,8 +2,8 @@
 // of the lag, the lag derivatives moved onto the test function, and powers of noisy channels
 // replaced by their Hermite polynomials in the noise variance.
 
-#include <cmath>
 #include <algorithm>
+#include <cmath>
 #include <map>
 
 #include "momentid/estimate.hpp"
