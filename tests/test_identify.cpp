@@ -283,6 +283,20 @@ TEST_SUITE("identify") {
     }
   }
 
+  TEST_CASE("a state correlated across the longest window the moments allow is warned about") {
+    // dt = 0.001: y stays above 1/e for some 600 lags, beyond the 502 lags that 3000 moments
+    // allow with two instruments.
+    const Model model = model_file("duffing.mom");
+    const momentid::IdentifyResult r = identify_from_displacement(model, 0, 0.001, 100000);
+    REQUIRE(r.lagged.has_value());
+    CHECK(r.lagged->last_lag == 502);
+    CHECK(r.correlation_lags.at("y") == 0);
+    const auto all = momentid::warnings(r);
+    CHECK(std::any_of(all.begin(), all.end(), [](const std::string& w) {
+      return w.starts_with("'y' stays correlated across lags 3..502");
+    }));
+  }
+
   TEST_CASE("white noise on a state is estimated from its autocorrelation and reported") {
     // 5% noise on y over 10^6 samples. The estimate of the noise variance mixes the signal with
     // the noise in its cross products: its relative standard error is about 10% here (5% in

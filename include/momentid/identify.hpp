@@ -70,6 +70,9 @@ struct IdentifyResult {
   std::vector<std::string> channels;
   std::vector<double> noise;  // the noise variance used per channel (lagged equations)
   int stencil_reach = 0;      // of the lag-derivative stencils (lagged equations)
+  // Per measured state the lagged equations read: the lag at which its autocorrelation first
+  // falls below 1/e, 0 if it stays above across the lags.
+  std::map<std::string, int> correlation_lags;
   DataMoments data;
   Estimate estimate;
   bool gmm = false;  // the optimally weighted estimate is the main result

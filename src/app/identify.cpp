@@ -48,17 +48,16 @@ const std::vector<ParameterEstimate>& IdentifyResult::parameters() const {
 
 namespace {
 
-// The last lag that spans five correlation times (lags until the autocorrelation first falls
-// below 1/e) of the slowest measured state, from the lagged moments C[y;y](s) of a pass; four
-// times the window when a state stays correlated across it. Kept within the bounds of the lag
-// options and of the number of moments identify takes.
-int lag_window(const IdentifyResult& r, const std::vector<int>& channel) {
+// Per measured state that the lagged equations read: the lag at which its autocorrelation first
+// falls below 1/e, from the lagged moments C[y;y](s) of the pass; 0 when it stays above across
+// the window.
+std::map<std::string, int> correlation_lags(const IdentifyResult& r,
+                                            const std::vector<int>& channel) {
   const LaggedSystem& system = *r.lagged;
   std::map<Moment, std::size_t> index;
   for (std::size_t k = 0; k < r.lagged_moments.size(); ++k) index.emplace(r.lagged_moments[k], k);
-  int wanted = 0;
-  const std::size_t states = r.model->states().size();
-  for (std::size_t v = 0; v < states; ++v) {
+  std::map<std::string, int> out;
+  for (std::size_t v = 0; v < r.model->states().size(); ++v) {
     if (channel[v] < 0 || !system.measured[v]) continue;
     const ChannelStatistics& c = r.data.channels[static_cast<std::size_t>(channel[v])];
     if (!(c.variance > 0)) continue;
@@ -71,6 +70,18 @@ int lag_window(const IdentifyResult& r, const std::vector<int>& channel) {
       const double rho = (r.data.estimates.mean[it->second] - c.mean * c.mean) / c.variance;
       if (rho < std::exp(-1.0)) tau = s;
     }
+    out[c.name] = tau;
+  }
+  return out;
+}
+
+// The last lag that spans five correlation times of the slowest measured state; four times the
+// window when a state stays correlated across it. Kept within the bounds of the lag options and
+// of the number of moments identify takes.
+int lag_window(const IdentifyResult& r) {
+  const LaggedSystem& system = *r.lagged;
+  int wanted = 0;
+  for (const auto& [name, tau] : r.correlation_lags) {
     wanted = std::max(wanted, tau > 0 ? 5 * tau : 4 * system.last_lag);
   }
   if (wanted == 0) return system.last_lag;
@@ -169,14 +180,16 @@ IdentifyResult identify(const Model& model, const DataSource& source,
                       "the lagged equations need the sample interval: give the data a 't' "
                       "column or a dt in the metadata");
     }
+    result.correlation_lags = correlation_lags(result, channel);
   };
   pass();
   // The default lags span about five correlation times of the measured states: when the
-  // first pass shows them far from that, a second pass takes the lags the data call for.
+  // first pass shows them far from that (more than 1.5 times longer or 2 times shorter), a
+  // second pass takes the lags the data call for.
   if (!options.lags) {
-    const int wanted = lag_window(result, channel);
+    const int wanted = lag_window(result);
     const int last = result.lagged->last_lag;
-    if (wanted > 2 * last || 2 * wanted < last) {
+    if (2 * wanted > 3 * last || 2 * wanted < last) {
       lag_options.last_lag = wanted;
       pass();
     }
@@ -219,6 +232,14 @@ std::vector<std::string> warnings(const IdentifyResult& r) {
                             "less certain and may still be biased"
                           : "it biases the zero-lag estimates (the lagged equations, --lags, "
                             "correct for it in part)"));
+  }
+  for (const auto& [name, tau] : r.correlation_lags) {
+    if (tau > 0) continue;
+    w.push_back("'" + name + "' stays correlated across lags " +
+                std::to_string(r.lagged->first_lag) + ".." + std::to_string(r.lagged->last_lag) +
+                " (its autocorrelation stays above 1/e): the lagged equations see less than a "
+                "correlation time of it; give --lags a longer window (with fewer instruments if "
+                "the moments run out) or keep every n-th sample of the record");
   }
   if (r.estimate.status != Estimate::Status::kOk) w.insert(w.begin(), r.estimate.message);
   w.insert(w.end(), r.estimate.warnings.begin(), r.estimate.warnings.end());
