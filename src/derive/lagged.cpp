@@ -317,30 +317,9 @@ LaggedSystem derive_lagged(const Model& model, const LagOptions& options) {
   return system;
 }
 
-namespace {
-
-// The coefficients of (1 − u²)^p in powers of u (odd ones zero), and of its derivatives.
-std::vector<double> bump_polynomial(int power) {
-  std::vector<double> c(static_cast<std::size_t>(2 * power + 1), 0.0);
-  double binomial = 1;  // C(p, k)
-  for (int k = 0; k <= power; ++k) {
-    c[static_cast<std::size_t>(2 * k)] = (k % 2 ? -1 : 1) * binomial;
-    binomial = binomial * (power - k) / (k + 1);
-  }
-  return c;
-}
-
-double horner(const std::vector<double>& c, double u) {
-  double out = 0;
-  for (auto it = c.rbegin(); it != c.rend(); ++it) out = out * u + *it;
-  return out;
-}
-
-}  // namespace
-
 double LagTestFunction::operator()(double s) const {
   const double u = (s - centre) / half_width;
-  return std::abs(u) < 1 ? horner(bump_polynomial(power), u) : 0.0;
+  return std::abs(u) < 1 ? std::pow(1 - u * u, power) : 0.0;
 }
 
 std::vector<LagTestFunction> lag_test_functions(int first_lag, int last_lag) {
