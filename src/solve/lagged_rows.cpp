@@ -1,6 +1,6 @@
-// The lagged moment equations as numbers: each equation summed over lags against each test function
-// of the lag, the lag derivatives moved onto the test function, and powers of noisy channels
-// replaced by their Hermite polynomials in the noise variance.
+// The lagged moment equations as numbers: each equation summed over lags against each test
+// function of the lag, the lag derivatives moved onto the test function, and powers of noisy
+// channels replaced by their Hermite polynomials in the noise variance.
 
 #include <algorithm>
 #include <cmath>
