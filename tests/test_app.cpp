@@ -52,6 +52,22 @@ std::vector<std::vector<double>> read_columns(const std::string& path,
   return columns;
 }
 
+// Displacement and force as arrays without a time column: y = sin(0.05 n), x = cos(0.07 n).
+struct SineArrays {
+  std::vector<double> y, x;
+  momentid::MemoryData data;
+  SineArrays(const SineArrays&) = delete;  // data points into y and x
+  explicit SineArrays(std::size_t rows) : y(rows), x(rows) {
+    for (std::size_t n = 0; n < rows; ++n) {
+      y[n] = std::sin(0.05 * static_cast<double>(n));
+      x[n] = std::cos(0.07 * static_cast<double>(n));
+    }
+    data.rows = rows;
+    data.name = "arrays";
+    data.columns = {{"y", y.data()}, {"x", x.data()}};
+  }
+};
+
 }  // namespace
 
 TEST_SUITE("app") {
@@ -192,17 +208,9 @@ TEST_SUITE("app") {
   }
 
   TEST_CASE("the lagged equations need the sample interval and take no multipliers") {
-    std::vector<double> y(1000), x(1000);
-    for (std::size_t n = 0; n < y.size(); ++n) {
-      y[n] = std::sin(0.05 * static_cast<double>(n));
-      x[n] = std::cos(0.07 * static_cast<double>(n));
-    }
-    momentid::MemoryData data;
-    data.rows = y.size();
-    data.name = "arrays";
-    data.columns = {{"y", y.data()}, {"x", x.data()}};
+    const SineArrays arrays(1000);
     const momentid::Model model = model_file("duffing.mom");
-    const auto source = momentid::DataSource::memory(data);
+    const auto source = momentid::DataSource::memory(arrays.data);
     CHECK(std::string(error_from<momentid::DataError>([&] {
                         momentid::identify(model, source, {.batches = 2});
                       }).what()) ==
@@ -217,15 +225,9 @@ TEST_SUITE("app") {
 
   TEST_CASE("check leaves out a state that the data show only as a derivative") {
     const momentid::Model model = model_file("duffing.mom");
-    std::vector<double> y(500), x(500);
-    for (std::size_t n = 0; n < y.size(); ++n) {
-      y[n] = std::sin(0.05 * static_cast<double>(n));
-      x[n] = std::cos(0.07 * static_cast<double>(n));
-    }
-    momentid::MemoryData data;
-    data.rows = y.size();
-    data.columns = {{"y", y.data()}, {"x", x.data()}};
-    const momentid::CheckResult r = momentid::check(momentid::DataSource::memory(data), &model);
+    const SineArrays arrays(500);
+    const momentid::CheckResult r =
+        momentid::check(momentid::DataSource::memory(arrays.data), &model);
     CHECK(r.missing_states == std::vector<std::string>{"v"});
     CHECK(r.missing_inputs.empty());
     REQUIRE(r.data.channels.size() == 2);

@@ -153,13 +153,13 @@ class MomentAccumulator {
   std::size_t max_lag_ = 0;
   std::vector<int> max_power_;
   std::vector<std::size_t> power_offset_;
-  std::size_t table_size_ = 0;
   // Per power-table index, its values over the last max_lag_ + 1 rows twice over, the newest at
   // history_pos_.
   std::vector<double> history_;
   std::size_t history_pos_ = 0;
-  // The state and input parts of every moment at the last four rows of the run (row mod 4),
-  // and the sums of the open stretch, in working order.
+  // At the last four rows of the run (row mod 4), in working order: the state part of every
+  // moment (the whole product of one without a held input) and the input part of the held
+  // ones; and the sums of the open stretch.
   std::vector<double> state_ring_, input_ring_, open_sums_;
   // Rows of the current run this accumulator saw (history and lookahead included), and those of
   // them past the first max_lag_, which have their moments' values in the rings.

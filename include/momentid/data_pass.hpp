@@ -23,6 +23,9 @@ struct ChannelStatistics {
   // extrapolation from lags 1 to 4 (with 4 lags or more). Meaningful for a channel that
   // is smooth apart from the noise, such as a measured state.
   std::optional<double> noise_variance;
+  // The noise's standard deviation as a fraction of the channel's (a negative estimate counts
+  // as none); nullopt without an estimate or a variance.
+  std::optional<double> noise_fraction() const;
 };
 
 struct DataOptions {

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <optional>
 
 #include "app/variables.hpp"
 #include "momentid/derive.hpp"
@@ -123,14 +124,15 @@ std::string format_text(const CheckResult& r) {
   // White sensor noise on a state, smooth apart from it: the lag-0 excess (with a model, which
   // tells the states from the inputs), when it is at least 1% of the standard deviation.
   for (const ChannelStatistics& c : data.channels) {
-    if (!r.with_model || c.is_input || !c.noise_variance || !(c.variance > 0)) continue;
+    if (!r.with_model || c.is_input) continue;
     // Below 1% the estimate cannot tell noise from the roughness of a state driven by a held
     // input.
-    if (*c.noise_variance < 1e-4 * c.variance) continue;
-    print("%s: white noise of about %.2g%% of its standard deviation (variance %.3g), if it is "
-          "otherwise smooth\n",
-          c.name.c_str(), 100 * std::sqrt(std::max(0.0, *c.noise_variance) / c.variance),
-          std::max(0.0, *c.noise_variance));
+    const std::optional<double> fraction = c.noise_fraction();
+    if (!fraction || *fraction < 0.01) continue;
+    print(
+        "%s: white noise of about %.2g%% of its standard deviation (variance %.3g), if it is "
+        "otherwise smooth\n",
+        c.name.c_str(), 100 * *fraction, *c.noise_variance);
   }
   for (const ChannelStatistics& c : data.channels) {
     if (!c.is_input || c.autocorrelation.empty()) continue;

@@ -221,11 +221,10 @@ IdentifyResult identify(const Model& model, const DataSource& source,
 std::vector<std::string> warnings(const IdentifyResult& r) {
   std::vector<std::string> w = smoothness_warnings(r.data);
   for (const ChannelStatistics& c : r.data.channels) {
-    if (c.is_input || !c.noise_variance || !(c.variance > 0)) continue;
-    const double relative = std::sqrt(std::max(0.0, *c.noise_variance) / c.variance);
-    if (relative < kNoiseWarning) continue;
+    const std::optional<double> fraction = c.noise_fraction();
+    if (c.is_input || !fraction || *fraction < kNoiseWarning) continue;
     char text[32];
-    std::snprintf(text, sizeof text, "%.2g%%", 100 * relative);
+    std::snprintf(text, sizeof text, "%.2g%%", 100 * *fraction);
     w.push_back("'" + c.name + "' carries white noise of about " + text +
                 " of its standard deviation (the excess of its autocorrelation at lag 0): " +
                 (r.lagged ? "the lagged equations correct its powers, but the estimates are "

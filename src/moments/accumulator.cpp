@@ -49,11 +49,10 @@ MomentAccumulator::MomentAccumulator(std::vector<Moment> moments, std::size_t st
     power_offset_.push_back(offset);
     offset += static_cast<std::size_t>(p) + 1;
   }
-  table_size_ = offset;
   const std::size_t depth = max_lag_ + 1;
   // Every power of every channel over the last max_lag_ + 1 rows, newest first, stored twice
   // in a row so that the rows back from any start are contiguous.
-  history_.assign(table_size_ * 2 * depth, 1.0);
+  history_.assign(offset * 2 * depth, 1.0);
 
   // Each moment's factors as (lag, power-table index), state factors first. A moment is read
   // with its most lagged factor max_lag_ rows back: the products at every lag then share one
@@ -126,7 +125,7 @@ MomentAccumulator::MomentAccumulator(std::vector<Moment> moments, std::size_t st
   }
   const std::size_t k = moments_.size();
   state_ring_.assign(4 * k, 0.0);
-  input_ring_.assign(4 * k, 0.0);
+  input_ring_.assign(4 * held_count_, 0.0);
   open_sums_.assign(k, 0.0);
   stretches_.push_back({std::vector<double>(k, 0.0), 0});
 }
@@ -204,7 +203,7 @@ void MomentAccumulator::push_rows(const double* rows, std::size_t count) {
     // The first max_lag_ rows of a run only fill the history.
     if (seen_rows_ <= max_lag_) continue;
     double* state = state_ring_.data() + (run_rows_ % 4) * k;
-    double* input = input_ring_.data() + (run_rows_ % 4) * k;
+    double* input = input_ring_.data() + (run_rows_ % 4) * held_count_;
     const double* history = history_.data() + history_pos_;
     for (const Block& b : blocks_) {
       // A held moment keeps its state and input parts apart (the state part is integrated
@@ -265,10 +264,9 @@ void MomentAccumulator::close_interval(std::size_t n) {
   const std::size_t k = moments_.size();
   const std::size_t rows = run_rows_;
   auto state = [&](std::size_t row) { return state_ring_.data() + (row % 4) * k; };
-  auto input = [&](std::size_t row) { return input_ring_.data() + (row % 4) * k; };
   const double* g0 = state(n);
   const double* g1 = state(n + 1);
-  const double* h0 = input(n);
+  const double* h0 = input_ring_.data() + (n % 4) * held_count_;
   // Weights of g at rows n - 1, n, n + 1, n + 2 for the integral over [n, n + 1] / dt.
   double w[4] = {0, 0.5, 0.5, 0};
   if (n >= 1 && n + 2 < rows) {

@@ -1,5 +1,6 @@
 #include "momentid/data_pass.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <condition_variable>
 #include <cstdio>
@@ -289,6 +290,11 @@ DataMoments moments_from_data(const DataSource& source, const std::vector<std::s
 }  // namespace momentid
 
 namespace momentid {
+
+std::optional<double> ChannelStatistics::noise_fraction() const {
+  if (!noise_variance || !(variance > 0)) return std::nullopt;
+  return std::sqrt(std::max(0.0, *noise_variance) / variance);
+}
 
 std::vector<std::string> smoothness_warnings(const DataMoments& data) {
   std::vector<std::string> out;
