@@ -284,6 +284,53 @@ TEST_SUITE("accumulator") {
     }
   }
 
+  TEST_CASE("every stretch holds the trapezoidal sums of its own intervals") {
+    // Sampled inputs: every moment is a whole product averaged by the trapezoidal rule. The
+    // stretches (4 batches: 8 to 16 of them, their length doubled as the record grows) cut runs
+    // anywhere, so the sums of each must be those of exactly its intervals, also for shards.
+    const Record record = make_record({301, 3, 6, 7, 180, 1, 95, 2, 40});
+    const std::vector<Moment> moments = lagged_moments();
+    const std::size_t lag = 5;
+    // The intervals of the record in order: (run start, n), n from the largest lag on.
+    std::vector<std::pair<std::size_t, std::size_t>> intervals;
+    for (std::size_t begin : record.run_starts) {
+      for (std::size_t n = begin + lag; n + 1 < record.run_end(begin); ++n) {
+        intervals.emplace_back(begin, n);
+      }
+    }
+    const auto value = [&](const Moment& moment, std::size_t row) {
+      double product = 1;
+      const std::size_t shift = lag - static_cast<std::size_t>(moment.max_lag());
+      for (const MomentFactor& f : moment.factors()) {
+        product *=
+            std::pow(record.row(row - shift - static_cast<std::size_t>(f.lag))[f.channel], f.power);
+      }
+      return product;
+    };
+    momentid::PortableRandom random(/*seed=*/3, /*stream=*/0);
+    for (const std::size_t shards : {1, 5, 40}) {
+      const MomentAccumulator acc =
+          shards == 1 ? one_pass(record, InputHold::kSample, moments)
+                      : merged_shards(record, random_cuts(random, record.rows(), shards - 1),
+                                      InputHold::kSample, moments);
+      REQUIRE(acc.intervals() == intervals.size());
+      std::size_t next = 0;
+      for (const MomentAccumulator::Stretch& stretch : acc.stretches()) {
+        for (std::size_t i = 0; i < moments.size(); ++i) {
+          double want = 0;
+          for (std::size_t q = next; q < next + stretch.intervals; ++q) {
+            const std::size_t n = intervals[q].second;
+            want += 0.5 * (value(moments[i], n) + value(moments[i], n + 1));
+          }
+          INFO(shards, " shards, stretch from interval ", next, ", ", to_string(moments[i]));
+          CHECK(std::abs(stretch.sums[i] - want) <= 1e-12 * std::abs(want));
+        }
+        next += stretch.intervals;
+      }
+      CHECK(next == intervals.size());
+    }
+  }
+
   TEST_CASE("lagged moments of shards with their history merge to the one-pass moments") {
     // Runs shorter than the largest lag (they give no interval), cuts inside the first rows of
     // a run (the history is then the whole run so far), and both holds.

@@ -128,7 +128,11 @@ class MomentAccumulator {
  private:
   void push_rows(const double* rows, std::size_t count);
   void finish_run();
+  bool owns(std::size_t n) const;
   void close_interval(std::size_t n);
+  void add_plain_products(const double* history);
+  void plain_products(double* out, const double* history) const;
+  void add_plain(const std::vector<double>& row, double weight);
   void compact();
   void flush();
 
@@ -148,19 +152,25 @@ class MomentAccumulator {
     std::vector<BlockFactor> factors;
   };
   std::vector<Block> blocks_;
+  static void product(double* out, const Block& b, const double* history, std::size_t first,
+                      std::size_t last);
   std::vector<std::size_t> order_;  // working position -> moment; the held ones first
   std::size_t held_count_ = 0;      // moments averaged with a held input
   std::size_t max_lag_ = 0;
   std::vector<int> max_power_;
   std::vector<std::size_t> power_offset_;
-  // Per power-table index, its values over the last max_lag_ + 1 rows twice over, the newest at
+  // Per power-table index, its values over the last max_lag_ + 2 rows twice over, the newest at
   // history_pos_.
   std::vector<double> history_;
   std::size_t history_pos_ = 0;
-  // At the last four rows of the run (row mod 4), in working order: the state part of every
-  // moment (the whole product of one without a held input) and the input part of the held
-  // ones; and the sums of the open stretch.
-  std::vector<double> state_ring_, input_ring_, open_sums_;
+  // At the last four rows of the run (row mod 4), in working order: the state part and the
+  // input part of the held moments. The products of the other moments at the newest row and
+  // the one before, computed only where needed (and as scratch). The sums of the open stretch.
+  std::vector<double> state_ring_, input_ring_, row_, previous_row_, open_sums_;
+  // The plain sums (of the moments without a held input) hold an interval whose successor may
+  // follow: the last row added has weight 1 in them, and 1/2 if the run or the shard's
+  // intervals end there (see push_rows).
+  bool plain_open_ = false;
   // Rows of the current run this accumulator saw (history and lookahead included), and those of
   // them past the first max_lag_, which have their moments' values in the rings.
   std::size_t seen_rows_ = 0, run_rows_ = 0;

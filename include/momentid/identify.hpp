@@ -25,10 +25,13 @@ struct IdentifyOptions {
   int degree = 0;
   // How the inputs were sampled; nullopt: the data's `input-hold` metadata, else kSample.
   std::optional<InputHold> hold;
-  // Contiguous batches for the standard errors, kMinBatches..kMaxBatches.
-  std::size_t batches = 50;
-  // Two-step optimally weighted estimate (GMM) with the J test, besides least squares.
-  bool gmm = false;
+  // Contiguous batches for the standard errors, kMinBatches..kMaxBatches; nullopt: 50 for the
+  // zero-lag equations, and four per lagged equation (at least 50) for the lagged ones, which
+  // the optimal weighting needs.
+  std::optional<std::size_t> batches;
+  // Two-step optimally weighted estimate (GMM) with the J test, besides least squares; nullopt:
+  // for the lagged equations only, whose many strongly correlated rows it weights.
+  std::optional<bool> gmm;
   // Model variable -> data column, for data whose columns have other names.
   std::map<std::string, std::string> columns;
   // Pair input row n with state row n + input_shift, within kMaxInputShift either way.
@@ -43,7 +46,7 @@ struct IdentifyOptions {
   // variance from its autocorrelation; a map gives the variances by name (absent: none).
   std::optional<std::map<std::string, double>> noise;
 
-  static constexpr std::size_t kMinBatches = 2, kMaxBatches = 10000;
+  static constexpr std::size_t kMinBatches = 2, kMaxBatches = 10000, kDefaultBatches = 50;
   static constexpr int kMaxDegree = 12;
   static constexpr long kMaxInputShift = 1000;
   // The lagged equations may need at most this many moments: their covariance is a square

@@ -17,12 +17,14 @@ namespace {
 // estimate cannot tell noise from the roughness of a state whose derivative holds a held input.
 constexpr double kNoiseWarning = 0.02;
 
+constexpr std::size_t kBatchesPerLaggedEquation = 4;
+
 }  // namespace
 
 void IdentifyOptions::validate(const Model& model) const {
-  if (batches < kMinBatches || batches > kMaxBatches) {
+  if (batches && (*batches < kMinBatches || *batches > kMaxBatches)) {
     throw UsageError("batches: expected a number from " + std::to_string(kMinBatches) + " to " +
-                     std::to_string(kMaxBatches) + ", found " + std::to_string(batches));
+                     std::to_string(kMaxBatches) + ", found " + std::to_string(*batches));
   }
   if (degree < 0 || degree > kMaxDegree) {
     throw UsageError("degree: expected 0 (automatic) or a number from 1 to " +
@@ -102,12 +104,11 @@ IdentifyResult identify(const Model& model, const DataSource& source,
   IdentifyResult result;
   result.model = std::make_shared<const Model>(model);
   result.data_name = source.name();
-  result.gmm = options.gmm;
   DataOptions data_options;
   data_options.hold = options.hold;
-  data_options.batches = options.batches;
+  data_options.batches = options.batches.value_or(IdentifyOptions::kDefaultBatches);
   data_options.rename = options.columns;
-  data_options.min_rows = 2 * options.batches;
+  data_options.min_rows = 2 * data_options.batches;
   data_options.input_shift = options.input_shift;
   data_options.lags = 4;  // for the noise estimates
 
@@ -126,7 +127,8 @@ IdentifyResult identify(const Model& model, const DataSource& source,
     for (const auto& d : model.states()) states.push_back(d.name);
     for (const auto& d : model.inputs()) inputs.push_back(d.name);
     result.data = moments_from_data(source, states, inputs, result.moments, data_options);
-    result.estimate = solve(result.system, result.data.estimates, {.gmm = options.gmm});
+    result.gmm = options.gmm.value_or(false);
+    result.estimate = solve(result.system, result.data.estimates, {.gmm = result.gmm});
     return result;
   }
 
@@ -174,6 +176,13 @@ IdentifyResult identify(const Model& model, const DataSource& source,
                        ": use fewer lags or instruments");
     }
     result.lagged_moments = probe.moments;
+    // The optimal weighting estimates the equations' covariance from the batches: with four
+    // batches per equation its finite-sample correction (see solve_rows) stays below 1.5.
+    if (!options.batches) {
+      data_options.batches =
+          std::clamp(kBatchesPerLaggedEquation * probe.rows.a.size(),
+                     IdentifyOptions::kDefaultBatches, IdentifyOptions::kMaxBatches);
+    }
     result.data = moments_from_data(source, states, inputs, probe.moments, data_options);
     if (!result.data.time_step) {
       throw DataError({source.name(), 1, 1, ""},
@@ -212,9 +221,10 @@ IdentifyResult identify(const Model& model, const DataSource& source,
                                       result.stencil_reach);
   std::vector<std::string> names;
   for (const Declaration& p : model.parameters()) names.push_back(p.name);
+  result.gmm = options.gmm.value_or(true);
   result.estimate =
       solve_rows(rows.rows, names, result.data.estimates, result.data.estimates.covariance(),
-                 {.gmm = options.gmm, .normalise_rows = true});
+                 {.gmm = result.gmm, .normalise_rows = true});
   return result;
 }
 

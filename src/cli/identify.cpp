@@ -20,7 +20,7 @@ struct IdentifyCommand {
   std::optional<std::string> multipliers;
   IdentifyOptions options;
   std::string hold;
-  std::string weighting = "ls";
+  std::string weighting = "auto";
   std::string format = "text";
   std::vector<std::string> columns;
   std::optional<std::string> lags;
@@ -58,7 +58,7 @@ int run_identify(IdentifyCommand& command) {
     options.multipliers = parse_multiplier_list(model, *command.multipliers, "--multipliers");
   }
   options.hold = hold_option(command.hold);
-  options.gmm = command.weighting == "gmm";
+  if (command.weighting != "auto") options.gmm = command.weighting == "gmm";
   options.columns = column_map(command.columns);
   if (command.lags) options.lags = lag_range(*command.lags);
   options.noise = noise_option(model, command.noise);
@@ -91,10 +91,14 @@ Command add_identify(CLI::App& app) {
   sub->add_option("--input-hold", command->hold,
                   "how the inputs were sampled (default: the file's metadata, else sample)")
       ->check(CLI::IsMember({"sample", "zoh"}));
-  sub->add_option("--batches", options.batches, "batches for the standard errors")
+  sub->add_option("--batches", options.batches,
+                  "batches for the standard errors (default 50; for the lagged equations 4 per "
+                  "equation)")
       ->check(CLI::Range(IdentifyOptions::kMinBatches, IdentifyOptions::kMaxBatches));
-  sub->add_option("--weighting", command->weighting, "ls, or gmm for two-step optimal")
-      ->check(CLI::IsMember({"ls", "gmm"}));
+  sub->add_option("--weighting", command->weighting,
+                  "ls (least squares), gmm (two-step optimal), or auto: gmm for the lagged "
+                  "equations, ls for the zero-lag ones")
+      ->check(CLI::IsMember({"auto", "ls", "gmm"}));
   sub->add_option("--format", command->format, "output format")
       ->check(CLI::IsMember({"text", "json"}));
   sub->add_option("--columns", command->columns, "NAME=COLUMN: where a model variable is")

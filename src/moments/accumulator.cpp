@@ -1,5 +1,6 @@
 #include "momentid/accumulator.hpp"
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <bit>
 #include <limits>
@@ -7,6 +8,14 @@
 #include <stdexcept>
 #include <string>
 #include <tuple>
+
+// The per-row kernels are also built for AVX2, chosen when the program loads on a processor
+// that has it. Without fused multiply-adds both builds compute the same numbers.
+#if defined(__x86_64__) && defined(__gnu_linux__)
+#define MOMENTID_KERNEL __attribute__((target_clones("avx2", "default")))
+#else
+#define MOMENTID_KERNEL
+#endif
 
 namespace momentid {
 namespace {
@@ -49,9 +58,10 @@ MomentAccumulator::MomentAccumulator(std::vector<Moment> moments, std::size_t st
     power_offset_.push_back(offset);
     offset += static_cast<std::size_t>(p) + 1;
   }
-  const std::size_t depth = max_lag_ + 1;
-  // Every power of every channel over the last max_lag_ + 1 rows, newest first, stored twice
-  // in a row so that the rows back from any start are contiguous.
+  // Every power of every channel over the last max_lag_ + 2 rows (the moments of the row before
+  // the newest are recomputed at the ends of the stretches), newest first, stored twice in a row
+  // so that the rows back from any start are contiguous.
+  const std::size_t depth = max_lag_ + 2;
   history_.assign(offset * 2 * depth, 1.0);
 
   // Each moment's factors as (lag, power-table index), state factors first. A moment is read
@@ -124,8 +134,10 @@ MomentAccumulator::MomentAccumulator(std::vector<Moment> moments, std::size_t st
     q = end;
   }
   const std::size_t k = moments_.size();
-  state_ring_.assign(4 * k, 0.0);
+  state_ring_.assign(4 * held_count_, 0.0);
   input_ring_.assign(4 * held_count_, 0.0);
+  row_.assign(k, 0.0);
+  previous_row_.assign(k, 0.0);
   open_sums_.assign(k, 0.0);
   stretches_.push_back({std::vector<double>(k, 0.0), 0});
 }
@@ -153,6 +165,12 @@ void MomentAccumulator::finish() { finish_run(); }
 // Closes the interval between the last two rows given, the last of the run unless it lies in
 // the lookahead (then close_interval skips it), and forgets the run.
 void MomentAccumulator::finish_run() {
+  if (plain_open_) {
+    // The last row of the run ends the last interval of the plain sums: it has weight 1/2.
+    plain_products(row_.data(), history_.data() + history_pos_);
+    add_plain(row_, -0.5);
+    plain_open_ = false;
+  }
   if (run_rows_ >= 2) close_interval(run_rows_ - 2);
   flush();
   run_rows_ = 0;
@@ -182,10 +200,97 @@ void MomentAccumulator::add_lookahead(const double* rows, std::size_t count) {
   push_rows(rows, count);
 }
 
+namespace {
+
+// The m-th value of a block factor at `p`: the same row for step 0, successive rows for 1 and
+// -1 (newer and older).
+constexpr double kOne = 1.0;
+
+template <int Step>
+[[gnu::always_inline]] inline double factor_at(const double* p, std::size_t m) {
+  if constexpr (Step == 0) {
+    return p[0];
+  } else if constexpr (Step == 1) {
+    return p[m];
+  } else {
+    return *(p - m);
+  }
+}
+
+// out[m] = p(m) or out[m] = p(m) * q(m) (with Add: out[m] += ...), or out[m] *= p(m), for
+// m < n.
+template <bool Add, int S>
+[[gnu::always_inline]] inline void set(double* out, const double* p, std::size_t n) {
+  for (std::size_t m = 0; m < n; ++m) {
+    if constexpr (Add) {
+      out[m] += factor_at<S>(p, m);
+    } else {
+      out[m] = factor_at<S>(p, m);
+    }
+  }
+}
+template <bool Add, int S, int T>
+[[gnu::always_inline]] inline void set(double* out, const double* p, const double* q,
+                                       std::size_t n) {
+  for (std::size_t m = 0; m < n; ++m) {
+    if constexpr (Add) {
+      out[m] += factor_at<S>(p, m) * factor_at<T>(q, m);
+    } else {
+      out[m] = factor_at<S>(p, m) * factor_at<T>(q, m);
+    }
+  }
+}
+template <int S>
+[[gnu::always_inline]] inline void multiply(double* out, const double* p, std::size_t n) {
+  for (std::size_t m = 0; m < n; ++m) out[m] *= factor_at<S>(p, m);
+}
+
+// out[m] (+)= the product of one or two factors at p and q (q null with one).
+template <bool Add>
+[[gnu::always_inline]] inline void set(double* out, int s, const double* p, int t, const double* q,
+                                       std::size_t n) {
+  if (q == nullptr) {
+    if (s == 0) set<Add, 0>(out, p, n);
+    if (s == 1) set<Add, 1>(out, p, n);
+    if (s == -1) set<Add, -1>(out, p, n);
+    return;
+  }
+  if (s == 0 && t == 0) set<Add, 0, 0>(out, p, q, n);
+  if (s == 0 && t == 1) set<Add, 0, 1>(out, p, q, n);
+  if (s == 0 && t == -1) set<Add, 0, -1>(out, p, q, n);
+  if (s == 1 && t == 0) set<Add, 1, 0>(out, p, q, n);
+  if (s == 1 && t == 1) set<Add, 1, 1>(out, p, q, n);
+  if (s == 1 && t == -1) set<Add, 1, -1>(out, p, q, n);
+  if (s == -1 && t == 0) set<Add, -1, 0>(out, p, q, n);
+  if (s == -1 && t == 1) set<Add, -1, 1>(out, p, q, n);
+  if (s == -1 && t == -1) set<Add, -1, -1>(out, p, q, n);
+}
+
+}  // namespace
+
+// out[m] = the product of the block's factors [first, last) for its m-th member, 1 with none;
+// the first two factors in one sweep, since most moments have two.
+MOMENTID_KERNEL void MomentAccumulator::product(double* out, const Block& b, const double* history,
+                                                std::size_t first, std::size_t last) {
+  const auto at = [&](std::size_t f) { return history + b.factors[f].offset; };
+  if (first == last) {
+    std::fill(out, out + b.size, 1.0);
+    return;
+  }
+  const bool two = first + 1 < last;
+  set<false>(out, b.factors[first].step, at(first), two ? b.factors[first + 1].step : 0,
+             two ? at(first + 1) : nullptr, b.size);
+  for (std::size_t f = first + 2; f < last; ++f) {
+    const int u = b.factors[f].step;
+    if (u == 0) multiply<0>(out, at(f), b.size);
+    if (u == 1) multiply<1>(out, at(f), b.size);
+    if (u == -1) multiply<-1>(out, at(f), b.size);
+  }
+}
+
 void MomentAccumulator::push_rows(const double* rows, std::size_t count) {
   const std::size_t variables = states_ + inputs_;
-  const std::size_t k = moments_.size();
-  const std::size_t depth = max_lag_ + 1;
+  const std::size_t depth = max_lag_ + 2;
   const std::size_t span = 2 * depth;
   for (std::size_t r = 0; r < count; ++r) {
     const double* row = rows + r * variables;
@@ -202,68 +307,83 @@ void MomentAccumulator::push_rows(const double* rows, std::size_t count) {
     ++seen_rows_;
     // The first max_lag_ rows of a run only fill the history.
     if (seen_rows_ <= max_lag_) continue;
-    double* state = state_ring_.data() + (run_rows_ % 4) * k;
-    double* input = input_ring_.data() + (run_rows_ % 4) * held_count_;
+    const std::size_t m = run_rows_;
     const double* history = history_.data() + history_pos_;
+    // A held moment keeps its state and input parts apart (the state part is integrated over
+    // the interval, the input held), in the rings for close_interval.
+    double* state = state_ring_.data() + (m % 4) * held_count_;
+    double* input = input_ring_.data() + (m % 4) * held_count_;
     for (const Block& b : blocks_) {
-      // A held moment keeps its state and input parts apart (the state part is integrated
-      // over the interval, the input held); any other moment is the product of all factors.
-      const bool held = b.begin < held_count_;
-      double* g = state + b.begin;
-      double* h = held ? input + b.begin : g;
-      if (held && b.state_factors == 0) std::fill(g, g + b.size, 1.0);
-      if (held ? b.state_factors == b.factors.size() : b.factors.empty()) {
-        std::fill(h, h + b.size, 1.0);
+      if (b.begin >= held_count_) break;
+      product(state + b.begin, b, history, 0, b.state_factors);
+      product(input + b.begin, b, history, b.state_factors, b.factors.size());
+    }
+    // Any other moment is the product of all its factors, averaged over the intervals by the
+    // trapezoidal rule as the rows arrive: over consecutive intervals added to the same sums,
+    // each row but the first and the last has weight 1. Row m ends interval m - 1.
+    if (m >= 1 && owns(m - 1)) {
+      if (!plain_open_) {
+        plain_products(previous_row_.data(), history + 1);
+        add_plain(previous_row_, 0.5);
+        plain_open_ = true;
       }
-      for (std::size_t f = 0; f < b.factors.size(); ++f) {
-        double* out = f < b.state_factors ? g : h;
-        // The first factor of a part sets it, the others multiply it.
-        const bool first = f == 0 || (held && f == b.state_factors);
-        const double* p = history + b.factors[f].offset;
-        const int step = b.factors[f].step;
-        if (first) {
-          if (step == 0) {
-            std::fill(out, out + b.size, p[0]);
-          } else if (step == 1) {
-            for (std::size_t m = 0; m < b.size; ++m) out[m] = p[m];
-          } else {
-            for (std::size_t m = 0; m < b.size; ++m) out[m] = *(p - m);
-          }
-        } else if (step == 0) {
-          for (std::size_t m = 0; m < b.size; ++m) out[m] *= p[0];
-        } else if (step == 1) {
-          for (std::size_t m = 0; m < b.size; ++m) out[m] *= p[m];
-        } else {
-          for (std::size_t m = 0; m < b.size; ++m) out[m] *= *(p - m);
-        }
-      }
+      add_plain_products(history);
+    } else if (plain_open_) {
+      plain_products(previous_row_.data(), history + 1);
+      add_plain(previous_row_, -0.5);
+      plain_open_ = false;
     }
     ++run_rows_;
-    // With rows up to m = run_rows_ - 1 known, the interval [m - 2, m - 1] can be closed.
-    if (run_rows_ >= 3) close_interval(run_rows_ - 3);
+    // With rows up to m known, the interval [m - 2, m - 1] can be closed.
+    if (m >= 2) close_interval(m - 2);
   }
 }
 
-// Adds the average over the interval between rows n and n + 1 of the run. A product with a held
-// input is u[n] times the integral of g(y) over the interval; the trapezoidal rule would leave an
-// error -dt^2/12 * E[u g''] that does not average out, so g is integrated by the cubic through
-// the rows n - 1 .. n + 2 (one-sided at the ends of a run). Where g has a kink at every row (a
-// state whose derivative contains the held input) an O(dt^2) remainder stays, smaller than the
-// trapezoidal rule's: this is the bias of coarse sampling that `identify` warns about. Other
-// products are continuous across rows, and the trapezoidal rule's error then only accumulates
-// at the ends of a run.
-void MomentAccumulator::close_interval(std::size_t n) {
-  // Interval n starts at row j = n + max_lag_ of those this accumulator saw in the run. It
-  // belongs to the shard that holds row j - 1 (the first interval of a run: the shard that
-  // started the run), so that each shard closes its intervals with its own rows, its history
-  // and at most kLookaheadRows rows past its end.
+// Adds the products of the moments without a held input at the row `history` starts at to the
+// open sums, the products of one or two factors (most) without storing them.
+MOMENTID_KERNEL void MomentAccumulator::add_plain_products(const double* history) {
+  double* sums = open_sums_.data();
+  for (const Block& b : blocks_) {
+    if (b.begin < held_count_) continue;
+    const std::size_t n = b.factors.size();
+    if (n <= 2) {
+      const auto at = [&](std::size_t f) { return history + b.factors[f].offset; };
+      set<true>(sums + b.begin, n > 0 ? b.factors[0].step : 0, n > 0 ? at(0) : &kOne,
+                n > 1 ? b.factors[1].step : 0, n > 1 ? at(1) : nullptr, b.size);
+    } else {
+      double* row = row_.data() + b.begin;
+      product(row, b, history, 0, n);
+      for (std::size_t m = 0; m < b.size; ++m) sums[b.begin + m] += row[m];
+    }
+  }
+}
+
+MOMENTID_KERNEL void MomentAccumulator::plain_products(double* out, const double* history) const {
+  for (const Block& b : blocks_) {
+    if (b.begin >= held_count_) product(out + b.begin, b, history, 0, b.factors.size());
+  }
+}
+
+MOMENTID_KERNEL void MomentAccumulator::add_plain(const std::vector<double>& row, double weight) {
+  double* sums = open_sums_.data();
+  for (std::size_t i = held_count_; i < row.size(); ++i) sums[i] += weight * row[i];
+}
+
+// Interval n starts at row j = n + max_lag_ of those this accumulator saw in the run. It
+// belongs to the shard that holds row j - 1 (the first interval of a run: the shard that
+// started the run), so that each shard closes its intervals with its own rows, its history and
+// at most kLookaheadRows rows past its end.
+bool MomentAccumulator::owns(std::size_t n) const {
   const std::size_t j = n + max_lag_;
-  const bool owned =
-      j == 0 ? !continued_ : j - 1 >= history_rows_ && j - 1 < history_rows_ + owned_rows_;
-  if (!owned) return;
-  const std::size_t k = moments_.size();
+  return j == 0 ? !continued_ : j - 1 >= history_rows_ && j - 1 < history_rows_ + owned_rows_;
+}
+
+// Closes interval n: adds its held moments to the open sums (the plain ones are added as the
+// rows arrive) and counts it.
+MOMENTID_KERNEL void MomentAccumulator::close_interval(std::size_t n) {
+  if (!owns(n)) return;
   const std::size_t rows = run_rows_;
-  auto state = [&](std::size_t row) { return state_ring_.data() + (row % 4) * k; };
+  auto state = [&](std::size_t row) { return state_ring_.data() + (row % 4) * held_count_; };
   const double* g0 = state(n);
   const double* g1 = state(n + 1);
   const double* h0 = input_ring_.data() + (n % 4) * held_count_;
@@ -289,16 +409,26 @@ void MomentAccumulator::close_interval(std::size_t n) {
   for (std::size_t i = 0; i < held_count_; ++i) {
     sums[i] += h0[i] * (w[0] * gm[i] + w[1] * g0[i] + w[2] * g1[i] + w[3] * g2[i]);
   }
-  // The other moments are whole products, kept in the state ring.
-  for (std::size_t i = held_count_; i < k; ++i) sums[i] += 0.5 * (g0[i] + g1[i]);
   Stretch& stretch = stretches_.back();
   ++stretch.intervals;
   ++intervals_;
-  if (stretch.intervals >= stretch_length_) {
-    flush();
-    stretches_.push_back({std::vector<double>(k, 0.0), 0});
-    if (stretches_.size() > max_stretches_) compact();
+  if (stretch.intervals < stretch_length_) return;
+  // The stretch is full. The plain sums may hold interval n + 1 already (the newest row n + 2
+  // and half of row n + 1, which began it): that goes to the next stretch.
+  const bool carry = plain_open_;
+  if (carry) {
+    plain_products(row_.data(), history_.data() + history_pos_);
+    plain_products(previous_row_.data(), history_.data() + history_pos_ + 1);
+    add_plain(row_, -1.0);
+    add_plain(previous_row_, -0.5);
   }
+  flush();
+  if (carry) {
+    add_plain(row_, 1.0);
+    add_plain(previous_row_, 0.5);
+  }
+  stretches_.push_back({std::vector<double>(moments_.size(), 0.0), 0});
+  if (stretches_.size() > max_stretches_) compact();
 }
 
 // Adds the sums of the open stretch, kept in working order, to its stretch.
@@ -642,18 +772,21 @@ std::vector<std::vector<double>> MomentEstimates::covariance() const {
   const std::size_t k = mean.size(), b = batch_means.size();
   std::vector<std::vector<double>> c(k, std::vector<double>(k, 0.0));
   if (b < 2) return c;
-  std::vector<double> center(k, 0.0);
-  for (const auto& m : batch_means) {
-    for (std::size_t i = 0; i < k; ++i) center[i] += m[i] / static_cast<double>(b);
-  }
-  for (const auto& m : batch_means) {
+  // The batch means as the rows of a matrix, centred; the covariance is its Gram matrix.
+  Eigen::MatrixXd d(static_cast<Eigen::Index>(b), static_cast<Eigen::Index>(k));
+  for (std::size_t r = 0; r < b; ++r) {
     for (std::size_t i = 0; i < k; ++i) {
-      for (std::size_t j = 0; j < k; ++j) c[i][j] += (m[i] - center[i]) * (m[j] - center[j]);
+      d(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(i)) = batch_means[r][i];
     }
   }
+  d.rowwise() -= d.colwise().mean();
   const double scale = 1.0 / (static_cast<double>(b - 1) * static_cast<double>(b));
-  for (auto& row : c) {
-    for (double& x : row) x *= scale;
+  Eigen::MatrixXd gram = Eigen::MatrixXd::Zero(d.cols(), d.cols());
+  gram.selfadjointView<Eigen::Lower>().rankUpdate(d.transpose(), scale);
+  for (std::size_t i = 0; i < k; ++i) {
+    for (std::size_t j = 0; j <= i; ++j) {
+      c[i][j] = c[j][i] = gram(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j));
+    }
   }
   return c;
 }

@@ -329,7 +329,17 @@ Estimate solve_rows(const MomentRows& system, const std::vector<std::string>& na
   Eigen::LDLT<MatrixXd> ldlt(information);
   const VectorXd theta_gmm_scaled = ldlt.solve(as.transpose() * w * b);
   const VectorXd g = as * theta_gmm_scaled - b;
-  const MatrixXd cov_gmm_scaled = ldlt.solve(MatrixXd::Identity(params, params));
+  // S comes from the same B batches as the estimate. With n = B - 1 degrees of freedom, m
+  // equations and q parameters, Gaussian batch means give (A' S^-1 A)^-1 a Wishart law of
+  // n - m + q degrees of freedom: its mean is (n - m + q) / n times the true covariance of the
+  // optimally weighted estimate. And the noise in the weights costs efficiency: the estimate's
+  // covariance is (n - 1) / (n - m + q - 1) times that optimum (generalised least squares with
+  // an estimated covariance). Both factors are undone here.
+  const auto n = static_cast<double>(out.batches - 1);
+  const auto m = static_cast<double>(s_rank);
+  const auto q = static_cast<double>(params);
+  const double finite_sample = n * (n - 1) / ((n - m + q) * (n - m + q - 1));
+  const MatrixXd cov_gmm_scaled = finite_sample * ldlt.solve(MatrixXd::Identity(params, params));
   for (Eigen::Index p = 0; p < params; ++p) {
     ParameterEstimate e{names[static_cast<std::size_t>(p)]};
     e.estimate = theta_gmm_scaled(p) / scale(p);
@@ -340,8 +350,12 @@ Estimate solve_rows(const MomentRows& system, const std::vector<std::string>& na
   }
   out.j_dof = static_cast<int>(s_rank - params);
   if (out.j_dof > 0) {
+    // With S from the batches, J is Hotelling's T^2 of the d = m - q combinations of the
+    // equations that do not involve the parameters: J (n - d + 1) / (n d) ~ F(d, n - d + 1) for
+    // Gaussian batch means (chi-square in d only as n grows).
     out.j_statistic = g.dot(w * g);
-    out.j_pvalue = chi_square_upper_tail(*out.j_statistic, out.j_dof);
+    const auto d = static_cast<double>(out.j_dof);
+    out.j_pvalue = f_upper_tail(*out.j_statistic * (n - d + 1) / (n * d), d, n - d + 1);
   } else {
     out.warnings.push_back("no J test: as many equations as parameters (add multipliers)");
   }
