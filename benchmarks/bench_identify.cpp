@@ -97,6 +97,7 @@ int main(int argc, char** argv) {
   if (argc == 3 && std::string(argv[1]) == "--lagged-pass") return one_pass(argv[2], true);
   const std::size_t rows = argc > 1 ? std::strtoull(argv[1], nullptr, 10) : 10000000;
   const std::filesystem::path dir = argc > 2 ? argv[2] : "/tmp";
+  std::filesystem::create_directories(dir);
   const bool baseline = !(argc > 3 && std::string(argv[3]) == "--no-baseline");
   const momentid::Model model = momentid::parse_model(kModel, "duffing.mom");
   const std::string big = (dir / "bench_identify_big.csv").string();
