@@ -1,14 +1,13 @@
-#!/usr/bin/env python3
+#!/usr/bin/python3
 """Identifies the Duffing oscillator (c = 0.5, k = 4, eps = 1) from records of increasing length
 and shows how the estimates and their 95% intervals shrink.
 
-  sweep.py [--max N] [--svg OUT.svg]
+  sweep.py [--max N] [--plot OUT.png]
 
-Prints a table; with --svg also draws it. Needs only the Python standard library and the
-momentid executable (build/momentid, or the MOMENTID environment variable).
+Prints a table; with --plot also draws it (matplotlib; the file's extension picks the format).
+Uses the momentid executable (build/momentid, or the MOMENTID environment variable).
 """
 import json
-import math
 import os
 import subprocess
 import sys
@@ -59,50 +58,34 @@ def table(rows):
     return "\n".join(lines)
 
 
-def svg(rows, path):
+def plot(rows, path):
     """Three log-log panels: each parameter's |error| and 95% half-width against the record
-    length, with lines of slope -1/2 and -1 for comparison."""
-    w, h, left = 330, 280, 60
-    out = [f'<svg xmlns="http://www.w3.org/2000/svg" width="{3 * w + left}" height="{h + 70}" '
-           'font-family="sans-serif" font-size="11">',
-           f'<rect width="{3 * w + left}" height="{h + 70}" fill="white"/>']
-    nmin, nmax = rows[0][0] / 1.5, rows[-1][0] * 1.5
-    for i, (p, truth) in enumerate(TRUTH.items()):
-        half = [(n, (r[p]["ci95"][1] - r[p]["ci95"][0]) / 2 / truth) for n, r in rows]
-        error = [(n, max(abs(r[p]["estimate"] - truth) / truth, 1e-7)) for n, r in rows]
-        vmin = 10 ** math.floor(math.log10(min(v for _, v in half + error)))
-        vmax = 10 ** math.ceil(math.log10(max(v for _, v in half + error)))
-        x0, y0, pw, ph = left + i * w, 25, w - 50, h - 50
-        fx = lambda n: x0 + pw * (math.log(n) - math.log(nmin)) / (math.log(nmax) - math.log(nmin))
-        fy = lambda v: y0 + ph * (1 - (math.log10(v) - math.log10(vmin)) / (math.log10(vmax) - math.log10(vmin)))
-        out.append(f'<rect x="{x0}" y="{y0}" width="{pw}" height="{ph}" fill="none" stroke="#444"/>')
-        out.append(f'<text x="{x0 + pw / 2}" y="{y0 - 8}" text-anchor="middle">{p}: relative to the true value {truth:g}</text>')
-        e = math.log10(vmin)
-        while e <= math.log10(vmax) + 1e-9:
-            y = fy(10 ** e)
-            out.append(f'<line x1="{x0}" x2="{x0 + pw}" y1="{y:.1f}" y2="{y:.1f}" stroke="#eee"/>')
-            out.append(f'<text x="{x0 - 4}" y="{y + 4:.1f}" text-anchor="end">1e{int(round(e))}</text>')
-            e += 1
-        for k in range(3, 7):
-            if nmin <= 10 ** k <= nmax:
-                out.append(f'<text x="{fx(10 ** k):.1f}" y="{y0 + ph + 14}" text-anchor="middle">1e{k}</text>')
-        out.append(f'<text x="{x0 + pw / 2}" y="{y0 + ph + 30}" text-anchor="middle">samples</text>')
-        n0, v0 = half[0]
-        for slope, dash in ((-0.5, "6,3"), (-1.0, "2,3")):
-            n1 = rows[-1][0]
-            v1 = v0 * (n1 / n0) ** slope
-            out.append(f'<line x1="{fx(n0):.1f}" y1="{fy(v0):.1f}" x2="{fx(n1):.1f}" y2="{fy(max(v1, vmin)):.1f}" '
-                       f'stroke="#888" stroke-dasharray="{dash}"/>')
-        for series, color in ((half, "#2471a3"), (error, "#c0392b")):
-            pts = " ".join(f"{fx(n):.1f},{fy(v):.1f}" for n, v in series)
-            out.append(f'<polyline points="{pts}" fill="none" stroke="{color}" stroke-width="2"/>')
-            for n, v in series:
-                out.append(f'<circle cx="{fx(n):.1f}" cy="{fy(v):.1f}" r="3" fill="{color}"/>')
-    out.append(f'<text x="{left}" y="{h + 40}">blue: half-width of the 95% interval; red: |estimate - truth|; '
-               'both divided by the true value. Grey: slopes -1/2 (dashed) and -1 (dotted).</text>')
-    out.append("</svg>")
-    with open(path, "w") as f:
-        f.write("\n".join(out) + "\n")
+    length, both relative to the true value, with lines of slope -1/2 and -1 for comparison."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    figure, axes = plt.subplots(1, len(TRUTH), figsize=(9, 3.8))
+    sizes = [n for n, _ in rows]
+    for ax, (p, truth) in zip(axes, TRUTH.items()):
+        half = [(r[p]["ci95"][1] - r[p]["ci95"][0]) / 2 / truth for _, r in rows]
+        error = [max(abs(r[p]["estimate"] - truth) / truth, 1e-7) for _, r in rows]
+        for slope, style, label in ((-0.5, "--", "slope -1/2"), (-1.0, ":", "slope -1")):
+            ax.plot([sizes[0], sizes[-1]], [half[0], half[0] * (sizes[-1] / sizes[0]) ** slope],
+                    style, color="grey", label=label)
+        ax.plot(sizes, half, "o-", color="#2471a3", label="half-width of the 95% interval")
+        ax.plot(sizes, error, "o-", color="#c0392b", label="|estimate - truth|")
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_title(f"{p}: relative to the true value {truth:g}", fontsize=10)
+        ax.set_xlabel("samples")
+        ax.grid(True, which="major", color="#eee")
+    axes[0].set_ylabel("divided by the true value")
+    handles, labels = axes[0].get_legend_handles_labels()
+    figure.legend(handles[2:] + handles[:2], labels[2:] + labels[:2], loc="lower center", ncol=4,
+                  fontsize=9, frameon=False)
+    figure.tight_layout(rect=(0, 0.07, 1, 1))
+    figure.savefig(path, dpi=100)
+    plt.close(figure)
 
 
 def main():
@@ -110,8 +93,8 @@ def main():
     max_samples = int(args[args.index("--max") + 1]) if "--max" in args else 1000000
     rows = sweep(max_samples)
     print(table(rows))
-    if "--svg" in args:
-        svg(rows, args[args.index("--svg") + 1])
+    if "--plot" in args:
+        plot(rows, args[args.index("--plot") + 1])
 
 
 if __name__ == "__main__":

@@ -1,17 +1,17 @@
-#!/usr/bin/env python3
+#!/usr/bin/python3
 """Reproduces the numerical study of Kozin & Kozin (1967), section IV, with momentid.
 
   study.py tables [--long N]   Figures 1-3 in the report's layout, next to the report's values,
                                then the same systems identified from N samples (default 10^6)
   study.py bias [--samples N]  the bias study: relative bias against the moving-average length K
                                for three ways of pairing the held input with the state
-  study.py plot BIAS.json OUT.svg   draws the bias study as an SVG line plot
+  study.py plot BIAS.json OUT.png   draws the bias study (matplotlib; the file's extension picks
+                                   the format)
 
-Needs only the Python standard library and the momentid executable (build/momentid, or the
-MOMENTID environment variable). The report's values quoted below are from its Figures 1-3.
+Uses the momentid executable (build/momentid, or the MOMENTID environment variable); the plot
+needs matplotlib. The report's values quoted below are from its Figures 1-3.
 """
 import json
-import math
 import os
 import subprocess
 import sys
@@ -224,53 +224,54 @@ def bias(samples):
     return {"K": ks, "samples": samples, "dt": DT, "bias": results}
 
 
-def plot(bias_json, svg_path):
-    """A log-log plot of |relative bias| against K: one panel per system, a line per pairing."""
-    data = json.load(open(bias_json))
-    colors = {"end": "#c0392b", "start": "#2471a3", "consistent": "#1e8449"}
+def plot(bias_json, out_path):
+    """A log-log plot of |relative bias| against K: one panel per system and parameter, a line
+    per pairing; circles mark estimates biased up, squares estimates biased down."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.lines import Line2D
+    with open(bias_json) as f:
+        data = json.load(f)
+    pairings = {"end": ("#c0392b", "x_n with y_(n+1) (the report's program)"),
+                "start": ("#2471a3", "x_n with y_n"),
+                "consistent": ("#1e8449", "x_n with the interval's y (zoh)")}
     panels = [("kozin_4_1a", "a", "(4.1a) first order, a"), ("kozin_4_1b", "a", "(4.1b) oscillator, a"),
               ("kozin_4_1b", "b", "(4.1b) oscillator, b"), ("kozin_4_1c", "a", "(4.1c) oscillator, a"),
               ("kozin_4_1c", "b", "(4.1c) oscillator, b")]
-    w, h, pad = 300, 240, 50
-    width = w * len(panels) + pad
-    svg = [f'<svg xmlns="http://www.w3.org/2000/svg" width="{width}" height="{h + 70}" '
-           'font-family="sans-serif" font-size="11">', f'<rect width="{width}" height="{h + 70}" fill="white"/>']
-    kmin, kmax, bmin, bmax = 2, 50, 1e-5, 1.0
-    for i, (model, name, title) in enumerate(panels):
-        x0, y0 = pad + i * w, 20
-        pw, ph = w - 60, h - 40
-        fx = lambda k: x0 + pw * (math.log(k) - math.log(kmin)) / (math.log(kmax) - math.log(kmin))
-        fy = lambda b: y0 + ph * (1 - (math.log10(max(b, bmin)) - math.log10(bmin)) / (math.log10(bmax) - math.log10(bmin)))
-        svg.append(f'<rect x="{x0}" y="{y0}" width="{pw}" height="{ph}" fill="none" stroke="#444"/>')
-        svg.append(f'<text x="{x0 + pw / 2}" y="{y0 - 6}" text-anchor="middle">{title}</text>')
-        for k in data["K"]:
-            svg.append(f'<text x="{fx(k)}" y="{y0 + ph + 14}" text-anchor="middle">{k}</text>')
-        svg.append(f'<text x="{x0 + pw / 2}" y="{y0 + ph + 28}" text-anchor="middle">K (samples averaged)</text>')
-        for e in range(-5, 1):
-            y = fy(10 ** e)
-            svg.append(f'<line x1="{x0}" x2="{x0 + pw}" y1="{y}" y2="{y}" stroke="#ddd"/>')
-            if i == 0:
-                svg.append(f'<text x="{x0 - 4}" y="{y + 4}" text-anchor="end">1e{e}</text>')
-        for pairing, color in colors.items():
+    floor = 1e-5
+    figure, axes = plt.subplots(2, 3, figsize=(9, 5.6), sharey=True)
+    for ax, (model, name, title) in zip(axes.flat, panels):
+        for pairing, (color, _) in pairings.items():
             points = data["bias"][f"{model}:{name}:{pairing}"]
-            path = " ".join(f"{fx(k):.1f},{fy(abs(b)):.1f}" for k, b in points)
-            svg.append(f'<polyline points="{path}" fill="none" stroke="{color}" stroke-width="2"/>')
-            for k, b in points:
-                marker = "circle" if b >= 0 else "rect"
-                if marker == "circle":
-                    svg.append(f'<circle cx="{fx(k):.1f}" cy="{fy(abs(b)):.1f}" r="3" fill="{color}"/>')
-                else:
-                    svg.append(f'<rect x="{fx(k) - 3:.1f}" y="{fy(abs(b)) - 3:.1f}" width="6" height="6" fill="{color}"/>')
-    ly = h + 45
-    svg.append(f'<text x="{pad}" y="{ly}">|relative bias| (log scale); circle: biased up, square: biased down.</text>')
-    for j, (pairing, color) in enumerate(colors.items()):
-        label = {"end": "x_n with y_(n+1) (the report's program)", "start": "x_n with y_n",
-                 "consistent": "x_n with the interval's y (zoh)"}[pairing]
-        svg.append(f'<line x1="{pad + 460 + j * 300}" x2="{pad + 490 + j * 300}" y1="{ly - 4}" y2="{ly - 4}" '
-                   f'stroke="{color}" stroke-width="3"/><text x="{pad + 495 + j * 300}" y="{ly}">{label}</text>')
-    svg.append("</svg>")
-    with open(svg_path, "w") as f:
-        f.write("\n".join(svg) + "\n")
+            ks = [k for k, _ in points]
+            ax.plot(ks, [max(abs(b), floor) for _, b in points], color=color, linewidth=1.5)
+            for marker, up in (("o", True), ("s", False)):
+                chosen = [(k, max(abs(b), floor)) for k, b in points if (b >= 0) == up]
+                ax.plot([k for k, _ in chosen], [v for _, v in chosen], marker, color=color, markersize=5)
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_xlim(data["K"][0] / 1.15, data["K"][-1] * 1.15)
+        ax.set_ylim(floor, 1)
+        ax.set_xticks(data["K"])
+        ax.set_xticks([], minor=True)
+        ax.set_xticklabels([str(k) for k in data["K"]])
+        ax.set_title(title, fontsize=10)
+        ax.grid(True, which="major", color="#ddd")
+    for ax in (axes[0, 2], axes[1, 0], axes[1, 1]):
+        ax.set_xlabel("K (samples averaged)")
+    for ax in axes[:, 0]:
+        ax.set_ylabel("|relative bias|")
+    legend = axes.flat[-1]
+    legend.axis("off")
+    handles = [Line2D([], [], color=color, linewidth=2, label=label) for color, label in pairings.values()]
+    handles += [Line2D([], [], marker="o", linestyle="", color="black", label="biased up"),
+                Line2D([], [], marker="s", linestyle="", color="black", label="biased down")]
+    legend.legend(handles=handles, loc="center", fontsize=9, frameon=False,
+                  title=f"{data['samples']} samples, dt = {data['dt']:g}", title_fontsize=9)
+    figure.tight_layout()
+    figure.savefig(out_path, dpi=100)
+    plt.close(figure)
 
 
 def main():
