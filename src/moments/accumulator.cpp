@@ -202,10 +202,10 @@ void MomentAccumulator::add_lookahead(const double* rows, std::size_t count) {
 
 namespace {
 
+constexpr double kOne = 1.0;  // the value of a moment without factors
+
 // The m-th value of a block factor at `p`: the same row for step 0, successive rows for 1 and
 // -1 (newer and older).
-constexpr double kOne = 1.0;
-
 template <int Step>
 [[gnu::always_inline]] inline double factor_at(const double* p, std::size_t m) {
   if constexpr (Step == 0) {
@@ -378,8 +378,15 @@ bool MomentAccumulator::owns(std::size_t n) const {
   return j == 0 ? !continued_ : j - 1 >= history_rows_ && j - 1 < history_rows_ + owned_rows_;
 }
 
-// Closes interval n: adds its held moments to the open sums (the plain ones are added as the
-// rows arrive) and counts it.
+// Closes interval n, between rows n and n + 1 of the run: adds the averages of its held moments
+// to the open sums and counts it. A product with a held input is u[n] times the integral of g(y)
+// over the interval; the trapezoidal rule would leave an error -dt^2/12 * E[u g''] that does not
+// average out, so g is integrated by the cubic through the rows n - 1 .. n + 2 (one-sided at the
+// ends of a run). Where g has a kink at every row (a state whose derivative contains the held
+// input) an O(dt^2) remainder stays, smaller than the trapezoidal rule's: this is the bias of
+// coarse sampling that `identify` warns about. The other products are continuous across rows:
+// push_rows adds them by the trapezoidal rule, whose error then only accumulates at the ends of
+// a run.
 MOMENTID_KERNEL void MomentAccumulator::close_interval(std::size_t n) {
   if (!owns(n)) return;
   const std::size_t rows = run_rows_;
