@@ -42,8 +42,8 @@ struct Case {
   std::string input = "ma:K=10,w=0.1";
   InputHold hold = InputHold::kZeroOrderHold;
   int degree = 0;
-  bool gmm = false;
-  std::size_t batches = 50;
+  std::optional<bool> gmm;  // nullopt: identify's defaults
+  std::optional<std::size_t> batches;
 };
 
 // Simulates `truth` (its nominal values) into memory and identifies `fitted` (by default the
@@ -98,6 +98,16 @@ momentid::IdentifyResult identify_from_displacement(
 
 double truth_of(const Model& model, std::size_t p) {
   return model.parameters()[p].value->to_double();
+}
+
+// Every parameter within four standard errors of its true value and within `relative` of it.
+void check_near_truth(const Model& model, const momentid::IdentifyResult& r, double relative) {
+  for (std::size_t p = 0; p < model.parameters().size(); ++p) {
+    const momentid::ParameterEstimate& e = r.parameters()[p];
+    INFO(e.name, " = ", e.estimate, " +- ", e.std_error);
+    CHECK(std::abs(e.estimate - truth_of(model, p)) < 4 * e.std_error);
+    CHECK(std::abs(e.estimate - truth_of(model, p)) < relative * truth_of(model, p));
+  }
 }
 
 }  // namespace
@@ -244,35 +254,16 @@ TEST_SUITE("identify") {
     REQUIRE(r.lagged.has_value());
     CHECK(r.stencil_reach == 6);  // thirteen points
     REQUIRE(r.estimate.gmm_parameters.size() == 3);
-    for (std::size_t p = 0; p < 3; ++p) {
-      const momentid::ParameterEstimate& e = r.parameters()[p];
-      INFO(e.name, " = ", e.estimate, " +- ", e.std_error);
-      CHECK(std::abs(e.estimate - truth_of(model, p)) < 4 * e.std_error);
-      CHECK(std::abs(e.estimate - truth_of(model, p)) < 0.005 * truth_of(model, p));
-    }
+    check_near_truth(model, r, 0.005);
   }
 
   TEST_CASE("by default the zero-lag equations are solved by least squares with 50 batches") {
-    const Model model = model_file("duffing.mom");
-    momentid::SimulationOptions options;
-    options.parameters = momentid::parameter_values(model, {});
-    options.inputs = {momentid::InputSpec::parse("ma:K=10,w=0.1,sigma=20", "test")};
-    options.samples = 20000;
-    options.dt = 0.01;
-    Columns columns(3);
-    momentid::simulate(model, options, columns);
-    momentid::MemoryData data;
-    data.rows = options.samples;
-    data.columns = {{"y", columns.values[0].data()},
-                    {"v", columns.values[1].data()},
-                    {"x", columns.values[2].data()}};
-    data.metadata.add_line({{"dt", "0.01"}, {"input-hold", "zoh"}});
-    const momentid::IdentifyResult r =
-        momentid::identify(model, momentid::DataSource::memory(std::move(data)), {});
-    CHECK_FALSE(r.lagged.has_value());
-    CHECK_FALSE(r.gmm);
-    CHECK(r.estimate.gmm_parameters.empty());
-    CHECK(r.estimate.batches == 50);
+    Case c;
+    c.samples = 20000;
+    c.input = "ma:K=10,w=0.1,sigma=20";
+    const Estimate e = identify(model_file("duffing.mom"), c);
+    CHECK(e.gmm_parameters.empty());
+    CHECK(e.batches == 50);
   }
 
   TEST_CASE("no optimally weighted estimate when there are not more batches than equations") {
@@ -374,12 +365,7 @@ TEST_SUITE("identify") {
     REQUIRE(r.lagged.has_value());
     CHECK(r.estimate.batches == 4 * r.estimate.rows);
     REQUIRE(r.estimate.gmm_parameters.size() == 3);
-    for (std::size_t p = 0; p < 3; ++p) {
-      const momentid::ParameterEstimate& e = r.parameters()[p];
-      INFO(e.name, " = ", e.estimate, " +- ", e.std_error);
-      CHECK(std::abs(e.estimate - truth_of(model, p)) < 4 * e.std_error);
-      CHECK(std::abs(e.estimate - truth_of(model, p)) < 0.003 * truth_of(model, p));
-    }
+    check_near_truth(model, r, 0.003);
     REQUIRE(r.estimate.j_pvalue.has_value());
     CHECK(*r.estimate.j_pvalue > 0.01);  // the right model, at the 1% level
   }

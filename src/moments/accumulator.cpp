@@ -358,13 +358,13 @@ MOMENTID_KERNEL void MomentAccumulator::add_plain_products(const double* history
   }
 }
 
-MOMENTID_KERNEL void MomentAccumulator::plain_products(double* out, const double* history) const {
+void MomentAccumulator::plain_products(double* out, const double* history) const {
   for (const Block& b : blocks_) {
     if (b.begin >= held_count_) product(out + b.begin, b, history, 0, b.factors.size());
   }
 }
 
-MOMENTID_KERNEL void MomentAccumulator::add_plain(const std::vector<double>& row, double weight) {
+void MomentAccumulator::add_plain(const std::vector<double>& row, double weight) {
   double* sums = open_sums_.data();
   for (std::size_t i = held_count_; i < row.size(); ++i) sums[i] += weight * row[i];
 }

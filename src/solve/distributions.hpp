@@ -4,12 +4,8 @@ namespace momentid {
 
 // Distribution functions for the statistics momentid reports (Boost.Math).
 
-// P(X > x) for X ~ chi-square with `dof` degrees of freedom.
-double chi_square_upper_tail(double x, double dof);
 // P(X > x) for X ~ F with `dof1` and `dof2` degrees of freedom.
 double f_upper_tail(double x, double dof1, double dof2);
-// P(T <= t) for T ~ Student's t with `dof` degrees of freedom.
-double student_t_cdf(double t, double dof);
 // The q-quantile (0 < q < 1) of Student's t with `dof` degrees of freedom.
 double student_t_quantile(double q, double dof);
 
