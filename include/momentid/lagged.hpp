@@ -92,6 +92,18 @@ struct LaggedSystem {
 // each one measured or, for a state, a derivative of a measured one through kinematic equations.
 bool derivable_from(const Model& model, const std::vector<bool>& measured);
 
+// How data with the variables flagged in `measured` show each variable of `model` (states, then
+// inputs): `scale` times the `order`-th time derivative of the measured variable `base` (the
+// variable itself, order 0, when measured; v = y' when y' = v and y is measured); base -1 when
+// they do not show it.
+struct VariableReading {
+  int base = -1;
+  int order = 0;
+  double scale = 1;
+};
+std::vector<VariableReading> variable_readings(const Model& model,
+                                               const std::vector<bool>& measured);
+
 // Derives the lagged equations. Throws ModelError at an equation with a term that needs a
 // channel the data lack (v^2 when only y is measured is not a time derivative of y), or naming
 // a state that has no column and that no kinematic equation defines; UsageError for bad options.

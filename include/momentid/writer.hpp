@@ -9,10 +9,36 @@
 
 namespace momentid {
 
+// A file written whole or not at all: the bytes go to a temporary file beside the target, which
+// commit() renames into place; an OutputFile destroyed without commit() removes it. The path "-"
+// is standard output; a device or a pipe is written to directly; through a symbolic link, its
+// target is replaced. Throws Error when the file cannot be created.
+class OutputFile {
+ public:
+  explicit OutputFile(const std::string& path);
+  ~OutputFile();
+  OutputFile(const OutputFile&) = delete;
+  OutputFile& operator=(const OutputFile&) = delete;
+
+  void write(const char* data, std::size_t size);
+  // Flushes, closes and moves the file into place. Throws Error if anything failed.
+  void commit();
+
+ private:
+  void remember_temporary();
+  void forget_temporary();
+
+  std::string path_, temporary_;
+  std::FILE* file_ = nullptr;
+  bool failed_ = false;
+  bool direct_ = false;  // writing straight to a device or pipe, not through a temporary file
+};
+
+// Writes `contents` to `path` as an OutputFile does.
+void write_whole_file(const std::string& path, const std::string& contents);
+
 // Writes a data file in the layouts DataReader reads (CSV or binary, see data.hpp), whole or not
-// at all: rows go to a temporary file beside the target, which commit() renames into place; a
-// writer destroyed without commit() removes it. The path "-" writes to standard output; a
-// device or a pipe is written to directly; through a symbolic link, its target is replaced.
+// at all (an OutputFile): a writer destroyed without commit() leaves nothing.
 //
 // Example:
 //   DataMetadata metadata;
@@ -37,20 +63,15 @@ class DataWriter {
 
  private:
   void flush();
-  void remember_temporary();
-  void forget_temporary();
 
-  std::string path_, temporary_;
+  OutputFile file_;
   Format format_;
   std::size_t columns_;
-  std::FILE* file_ = nullptr;
   std::vector<char> buffer_;
   std::size_t used_ = 0;
-  bool failed_ = false;
-  bool direct_ = false;  // writing straight to a device or pipe, not through a temporary file
 };
 
-// Makes SIGINT, SIGTERM and SIGHUP delete the temporary file a DataWriter is filling before the
+// Makes SIGINT, SIGTERM and SIGHUP delete the temporary file an OutputFile is filling before the
 // process ends, so that an interrupted run leaves nothing behind. For programs that write files.
 void remove_partial_output_on_interrupt();
 

@@ -22,9 +22,7 @@ constexpr std::size_t kBufferSize = 1 << 20;
 
 }  // namespace
 
-DataWriter::DataWriter(const std::string& path, Format format, const DataMetadata& metadata,
-                       const std::vector<std::string>& columns)
-    : path_(path), format_(format), columns_(columns.size()), buffer_(kBufferSize) {
+OutputFile::OutputFile(const std::string& path) : path_(path) {
   std::error_code error;
   const auto status = std::filesystem::status(path_, error);
   if (path_ == "-") {
@@ -63,19 +61,9 @@ DataWriter::DataWriter(const std::string& path, Format format, const DataMetadat
       throw Error(path_ + ": cannot write the output file: " + std::strerror(errno));
     }
   }
-  const std::string header = data::header_text(metadata, columns);
-  if (format_ == Format::kBinary) {
-    std::fwrite(data::kMagic.data(), 1, data::kMagic.size(), file_);
-    const auto length = static_cast<std::uint32_t>(header.size());
-    const unsigned char bytes[4] = {
-        static_cast<unsigned char>(length), static_cast<unsigned char>(length >> 8),
-        static_cast<unsigned char>(length >> 16), static_cast<unsigned char>(length >> 24)};
-    std::fwrite(bytes, 1, 4, file_);
-  }
-  std::fwrite(header.data(), 1, header.size(), file_);
 }
 
-DataWriter::~DataWriter() {
+OutputFile::~OutputFile() {
   if (file_ != nullptr && file_ != stdout) {
     std::fclose(file_);
     if (!direct_) std::remove(temporary_.c_str());
@@ -83,32 +71,11 @@ DataWriter::~DataWriter() {
   forget_temporary();
 }
 
-void DataWriter::flush() {
-  if (used_ > 0 && std::fwrite(buffer_.data(), 1, used_, file_) != used_) failed_ = true;
-  used_ = 0;
+void OutputFile::write(const char* data, std::size_t size) {
+  if (size > 0 && std::fwrite(data, 1, size, file_) != size) failed_ = true;
 }
 
-void DataWriter::row(const double* values) {
-  if (buffer_.size() - used_ < columns_ * 32 + 2) flush();
-  char* out = buffer_.data() + used_;
-  if (format_ == Format::kBinary) {
-    for (std::size_t c = 0; c < columns_; ++c) {
-      std::uint64_t bits = std::bit_cast<std::uint64_t>(values[c]);
-      for (int b = 0; b < 8; ++b) *out++ = static_cast<char>(bits >> (8 * b));
-    }
-  } else {
-    char* const end = buffer_.data() + buffer_.size();
-    for (std::size_t c = 0; c < columns_; ++c) {
-      if (c) *out++ = ',';
-      out = std::to_chars(out, end, values[c]).ptr;
-    }
-    *out++ = '\n';
-  }
-  used_ = static_cast<std::size_t>(out - buffer_.data());
-}
-
-void DataWriter::commit() {
-  flush();
+void OutputFile::commit() {
   if (std::fflush(file_) != 0 || std::ferror(file_)) failed_ = true;
   if (file_ == stdout) {
     if (failed_) throw Error("cannot write to standard output");
@@ -140,7 +107,58 @@ void DataWriter::commit() {
   forget_temporary();
 }
 
-// The temporary file being written, for remove_partial_output() to delete from a signal
+void write_whole_file(const std::string& path, const std::string& contents) {
+  OutputFile out(path);
+  out.write(contents.data(), contents.size());
+  out.commit();
+}
+
+DataWriter::DataWriter(const std::string& path, Format format, const DataMetadata& metadata,
+                       const std::vector<std::string>& columns)
+    : file_(path), format_(format), columns_(columns.size()), buffer_(kBufferSize) {
+  const std::string header = data::header_text(metadata, columns);
+  if (format_ == Format::kBinary) {
+    file_.write(data::kMagic.data(), data::kMagic.size());
+    const auto length = static_cast<std::uint32_t>(header.size());
+    const char bytes[4] = {static_cast<char>(length), static_cast<char>(length >> 8),
+                           static_cast<char>(length >> 16), static_cast<char>(length >> 24)};
+    file_.write(bytes, 4);
+  }
+  file_.write(header.data(), header.size());
+}
+
+DataWriter::~DataWriter() = default;
+
+void DataWriter::flush() {
+  file_.write(buffer_.data(), used_);
+  used_ = 0;
+}
+
+void DataWriter::row(const double* values) {
+  if (buffer_.size() - used_ < columns_ * 32 + 2) flush();
+  char* out = buffer_.data() + used_;
+  if (format_ == Format::kBinary) {
+    for (std::size_t c = 0; c < columns_; ++c) {
+      std::uint64_t bits = std::bit_cast<std::uint64_t>(values[c]);
+      for (int b = 0; b < 8; ++b) *out++ = static_cast<char>(bits >> (8 * b));
+    }
+  } else {
+    char* const end = buffer_.data() + buffer_.size();
+    for (std::size_t c = 0; c < columns_; ++c) {
+      if (c) *out++ = ',';
+      out = std::to_chars(out, end, values[c]).ptr;
+    }
+    *out++ = '\n';
+  }
+  used_ = static_cast<std::size_t>(out - buffer_.data());
+}
+
+void DataWriter::commit() {
+  flush();
+  file_.commit();
+}
+
+// The temporary file being written, for remove_partial_output_on_interrupt() to delete from a signal
 // handler: a fixed buffer, since a handler may not allocate.
 namespace {
 char g_temporary[4096];
@@ -153,14 +171,14 @@ extern "C" void remove_and_reraise(int signal) {
 }
 }  // namespace
 
-void DataWriter::remember_temporary() {
+void OutputFile::remember_temporary() {
   if (temporary_.size() < sizeof g_temporary) {
     std::memcpy(g_temporary, temporary_.c_str(), temporary_.size() + 1);
     g_has_temporary = 1;
   }
 }
 
-void DataWriter::forget_temporary() { g_has_temporary = 0; }
+void OutputFile::forget_temporary() { g_has_temporary = 0; }
 
 void remove_partial_output_on_interrupt() {
   std::signal(SIGINT, remove_and_reraise);

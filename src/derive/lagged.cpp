@@ -190,6 +190,17 @@ bool has_parameter(const Equation& eq) {
 
 }  // namespace
 
+std::vector<VariableReading> variable_readings(const Model& model,
+                                               const std::vector<bool>& measured) {
+  const LagDeriver deriver(model, measured);
+  std::vector<VariableReading> out;
+  for (std::size_t v = 0; v < model.variables().size(); ++v) {
+    const Observation& o = deriver.observation(static_cast<int>(v));
+    out.push_back({o.base, o.order, o.scale.to_double()});
+  }
+  return out;
+}
+
 bool derivable_from(const Model& model, const std::vector<bool>& measured) {
   const LagDeriver deriver(model, measured);
   for (std::size_t v = 0; v < model.variables().size(); ++v) {

@@ -9,6 +9,7 @@
 
 #include "common/decimal.hpp"
 #include "momentid/error.hpp"
+#include "simulate/step.hpp"
 
 namespace momentid {
 namespace {
@@ -37,15 +38,6 @@ bool is_constant(const Terms& t) {
 std::string join(const std::vector<std::string>& items, const std::string& separator) {
   std::string out;
   for (std::size_t i = 0; i < items.size(); ++i) out += (i ? separator : "") + items[i];
-  return out;
-}
-
-std::string parameter_list(const Model& model, const std::vector<numeric>& values) {
-  std::string out;
-  for (std::size_t p = 0; p < values.size(); ++p) {
-    out += (p ? ", " : "") + model.parameters()[p].name + "=" +
-           shortest_decimal(values[p].to_double());
-  }
   return out;
 }
 
@@ -252,7 +244,7 @@ void simulate_clean(const Model& model, const SimulationOptions& options, Sample
     inputs.emplace_back(options.inputs[i], options.dt, options.seed, i);
     smooth = smooth || !options.inputs[i].held();
   }
-  std::vector<double> k1(n), k2(n), k3(n), k4(n), trial(n);
+  RungeKuttaStep step(f);
   std::vector<double> values(n + m);
   double* y = values.data();
   double* u = values.data() + n;
@@ -273,32 +265,16 @@ void simulate_clean(const Model& model, const SimulationOptions& options, Sample
                 parameter_list(model, options.parameters) +
                 ": the model is unstable for these values, or the step dt is too large");
   };
-  const auto rates = [&](const double* state, const double* input, double* out) {
-    if (!f.derivative(state, input, out)) {
-      fail("met a point where the derivatives cannot be solved for");
-    }
-  };
   // One Runge-Kutta step from t to t + h.
   const auto integrate = [&] {
-    rates(y, u, k1.data());
-    for (std::size_t j = 0; j < n; ++j) trial[j] = y[j] + 0.5 * h * k1[j];
-    rates(trial.data(), u_middle, k2.data());
-    for (std::size_t j = 0; j < n; ++j) trial[j] = y[j] + 0.5 * h * k2[j];
-    rates(trial.data(), u_middle, k3.data());
-    for (std::size_t j = 0; j < n; ++j) trial[j] = y[j] + h * k3[j];
-    rates(trial.data(), u_end, k4.data());
-    bool finite = true;
-    for (std::size_t j = 0; j < n; ++j) {
-      y[j] += h / 6 * (k1[j] + 2 * k2[j] + 2 * k3[j] + k4[j]);
-      finite = finite && std::abs(y[j]) <= kBlowUpBound;
+    if (!step(y, u, u_middle, u_end, h)) {
+      fail("met a point where the derivatives cannot be solved for");
     }
-    if (!finite) {
+    const int blown = step.blown_up(y);
+    if (blown >= 0) {
       t += h;
-      for (std::size_t j = 0; j < n; ++j) {
-        if (!(std::abs(y[j]) <= kBlowUpBound)) {
-          fail("blew up: state '" + model.states()[j].name + "' reached " + shortest_decimal(y[j]));
-        }
-      }
+      fail("blew up: state '" + model.states()[static_cast<std::size_t>(blown)].name +
+           "' reached " + shortest_decimal(y[blown]));
     }
   };
   const auto draw_inputs = [&] {

@@ -1,0 +1,153 @@
+#pragma once
+
+#include <ginac/ginac.h>
+
+#include <cstddef>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "momentid/metadata.hpp"
+#include "momentid/model.hpp"
+#include "momentid/reader.hpp"
+#include "momentid/simulate.hpp"
+#include "momentid/writer.hpp"
+
+namespace momentid {
+
+// A record in memory, run by run: the `t` column and the columns of the model's variables that
+// the data have, for driving a model with its inputs (`validate`, `simulate --input-file`).
+struct RecordRun {
+  long number = 0;                           // the `run` column's value, 0 without one
+  std::vector<double> time;                  // the `t` column; empty without one
+  std::vector<std::vector<double>> columns;  // one per Record::variables entry
+  std::size_t rows() const { return columns.empty() ? time.size() : columns.front().size(); }
+};
+struct Record {
+  std::string name;
+  std::vector<std::size_t> variables;  // the model variables the data have: states, then inputs
+  std::vector<std::string> columns;    // their names in the data, in the same order
+  bool has_time = false, has_run = false;
+  double dt = 0;
+  DataMetadata metadata;
+  std::vector<RecordRun> runs;
+  // The index in `variables` of model variable v, or -1.
+  int column_of(std::size_t v) const;
+};
+
+// How to drive a model with a record's inputs (README, "momentid validate").
+struct ReplayOptions {
+  std::vector<GiNaC::numeric> parameters;  // one per model parameter
+  // Model variable -> data column, for data whose columns have other names.
+  std::map<std::string, std::string> columns;
+  // nullopt: per input, kHold when the metadata say it was held (`input-hold=zoh`), else kSinc.
+  std::optional<Interpolation> interpolation;
+  // The sample interval; nullopt: the record's (`t` column or `dt` metadata).
+  std::optional<double> dt;
+};
+
+// A record and the model's response to its inputs, run by run. Each run starts from its own
+// initial state: a state with a column from its first sample; a state the data show as a
+// derivative (v when y' = v) from the derivative at the start of a cubic fitted by least squares
+// to the first kStartSamples samples; any other state from 0.
+struct Replay {
+  Record record;
+  std::vector<Interpolation> interpolation;  // per model input
+  std::vector<std::string> initial_how;      // per state, how its initial value was found
+  std::vector<std::vector<double>> initial;  // per run, per state
+  // simulated[r][j][n]: state j at row n of run r.
+  std::vector<std::vector<std::vector<double>>> simulated;
+
+  static constexpr std::size_t kStartSamples = 7;
+};
+
+// Reads the record and simulates the model through its inputs. Throws UsageError for invalid
+// options, DataError for a record that lacks an input or gives no sample interval, and Error
+// naming the time, run and state when the simulation blows up.
+Replay replay(const Model& model, const DataSource& source, const ReplayOptions& options);
+
+// Writes the replay in the record's layout (`simulate --input-file`): its `t` column, the columns
+// of the model's variables it has, with the states replaced by the simulated ones, and its `run`
+// column; whole or not at all.
+void write_replay(const Model& model, const Replay& replay, const std::string& path,
+                  DataWriter::Format format);
+
+// The parameter values of an `identify --format json` result: one per model parameter, in
+// declaration order. Throws DataError located in the file for text that is not JSON, estimates
+// of another model, or a parameter missing or without a numeric estimate.
+std::vector<GiNaC::numeric> read_estimates(const Model& model, const std::string& path);
+
+// How to validate (README, "momentid validate").
+struct ValidateOptions {
+  ReplayOptions replay;
+  // Rows left out at the start of each run; nullopt: until the model has forgotten its initial
+  // state (see ValidateResult::skip).
+  std::optional<std::size_t> skip;
+  // Lags of the correlation checks: 1..lags for the error's autocorrelation, -lags..lags for its
+  // cross-correlation with each input.
+  int lags = 25;
+
+  static constexpr int kMaxLags = 1000;
+  void validate() const;
+};
+
+// A correlation function of the simulation error with its 99% band: values at lags first_lag,
+// first_lag + 1, ... Under the hypothesis that the error is white (autocorrelation) or
+// independent of the input (cross-correlation; Bartlett's variance from both series'
+// autocorrelations), 1% of the values fall outside +-band.
+struct CorrelationCheck {
+  std::string with;  // the input's name, empty for the autocorrelation
+  int first_lag = 0;
+  std::vector<double> values;
+  double band = 0;
+  std::size_t outside() const;
+};
+
+// How well one measured state is reproduced, over the rows compared (all runs, after the skip).
+struct OutputFit {
+  std::string name;
+  std::size_t samples = 0;
+  double rms = 0;  // root mean square of measured - simulated
+  // 100 (1 - |y - y_sim| / |y - mean(y)|): 100 for a perfect reproduction, 0 for the mean.
+  double fit = 0;
+  double rms_start = 0;  // over the first 10% of each run's compared rows
+  double rms_rest = 0;   // over the rest
+  // Empty when the error is zero throughout (nothing to correlate).
+  std::optional<CorrelationCheck> autocorrelation;
+  std::vector<CorrelationCheck> cross;
+};
+
+struct ValidateResult {
+  std::shared_ptr<const Model> model;
+  std::vector<GiNaC::numeric> parameters;
+  std::string parameters_from;  // "the model's nominal values", a file name, ...
+  Replay replay;
+  // Rows left out at the start of each run. Chosen (skip_chosen): the first row after which a
+  // perturbation of the initial state by 10% of each state's spread stays below 1% of its size
+  // in the simulation, searched over the first half of the run.
+  std::vector<std::size_t> skip;
+  bool skip_chosen = false;
+  std::vector<OutputFit> outputs;  // the measured states, in model order
+  std::vector<std::string> warnings;
+};
+
+// Simulates the model through the record's inputs and compares the states the record has.
+// Throws as replay(), and DataError when a run has no row left to compare after the skip.
+ValidateResult validate(const Model& model, const DataSource& source,
+                        const ValidateOptions& options);
+
+std::string format_text(const ValidateResult& result);
+// The JSON layout documented in the README ("momentid validate").
+std::string format_json(const ValidateResult& result);
+
+// Draws the comparison as SVG (README, "momentid validate --plot"): per output, the measured and
+// simulated series over the window [from, to] (times; nullopt: the first 2000 compared rows of the
+// first run) and their difference below; then the correlation checks with their bands. Written
+// whole or not at all. Throws UsageError for a window that holds no compared row.
+void write_plot(const ValidateResult& result, const std::string& path,
+                std::optional<std::pair<double, double>> window = std::nullopt);
+
+}  // namespace momentid
