@@ -18,5 +18,6 @@
 #include "momentid/random.hpp"
 #include "momentid/reader.hpp"
 #include "momentid/simulate.hpp"
+#include "momentid/validate.hpp"
 #include "momentid/version.hpp"
 #include "momentid/writer.hpp"

@@ -288,5 +288,9 @@ class RecordSimulator {
 // ModelError naming a parameter that has no value.
 std::vector<GiNaC::numeric> parameter_values(const Model& model,
                                              const std::vector<std::string>& assignments);
+// The same starting from `base` (one value per parameter) instead of the nominal values.
+std::vector<GiNaC::numeric> parameter_values(const Model& model,
+                                             const std::vector<std::string>& assignments,
+                                             const std::vector<GiNaC::numeric>& base);
 
 }  // namespace momentid

@@ -109,6 +109,7 @@ struct CorrelationCheck {
 // How well one measured state is reproduced, over the rows compared (all runs, after the skip).
 struct OutputFit {
   std::string name;
+  std::size_t state = 0;  // its index among the model's states
   std::size_t samples = 0;
   double rms = 0;  // root mean square of measured - simulated
   // 100 (1 - |y - y_sim| / |y - mean(y)|): 100 for a perfect reproduction, 0 for the mean.

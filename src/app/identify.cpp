@@ -264,13 +264,6 @@ std::string number(double x, const char* format = "%.6g") {
   return text;
 }
 
-std::string json_number(double x) {
-  if (!std::isfinite(x)) return "null";
-  char text[64];
-  std::snprintf(text, sizeof text, "%.17g", x);
-  return text;
-}
-
 const char* hold_name(InputHold hold) {
   return hold == InputHold::kZeroOrderHold ? "zoh" : "sample";
 }

@@ -26,6 +26,7 @@ Command add_derive(CLI::App& app);
 Command add_simulate(CLI::App& app);
 Command add_identify(CLI::App& app);
 Command add_check(CLI::App& app);
+Command add_validate(CLI::App& app);
 
 // `--columns v=velocity,x=force`: the model's names mapped to the data's columns.
 std::map<std::string, std::string> column_map(const std::vector<std::string>& entries);

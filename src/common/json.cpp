@@ -1,5 +1,6 @@
 #include "common/json.hpp"
 
+#include <cmath>
 #include <cstdio>
 
 namespace momentid {
@@ -63,6 +64,13 @@ std::string json_string(std::string_view s) {
     }
   }
   return out + "\"";
+}
+
+std::string json_number(double x) {
+  if (!std::isfinite(x)) return "null";
+  char text[64];
+  std::snprintf(text, sizeof text, "%.17g", x);
+  return text;
 }
 
 }  // namespace momentid

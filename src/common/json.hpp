@@ -7,5 +7,7 @@ namespace momentid {
 
 // `s` as a JSON string literal, quotes included: `"`, `\` and control characters escaped.
 std::string json_string(std::string_view s);
+// `x` as a JSON number with 17 significant digits, or `null` when it is not finite.
+std::string json_number(double x);
 
 }  // namespace momentid

@@ -435,10 +435,10 @@ bool is_decimal(std::string_view text) {
 
 }  // namespace
 
-std::vector<numeric> parameter_values(const Model& model,
-                                      const std::vector<std::string>& assignments) {
-  std::vector<std::optional<numeric>> values;
-  for (const Declaration& p : model.parameters()) values.push_back(p.value);
+namespace {
+
+std::vector<numeric> assign(const Model& model, const std::vector<std::string>& assignments,
+                            std::vector<std::optional<numeric>> values) {
   for (const std::string& a : assignments) {
     const std::size_t eq = a.find('=');
     if (eq == std::string::npos) {
@@ -476,6 +476,24 @@ std::vector<numeric> parameter_values(const Model& model,
     out.push_back(*values[p]);
   }
   return out;
+}
+
+}  // namespace
+
+std::vector<numeric> parameter_values(const Model& model,
+                                      const std::vector<std::string>& assignments) {
+  std::vector<std::optional<numeric>> values;
+  for (const Declaration& p : model.parameters()) values.push_back(p.value);
+  return assign(model, assignments, std::move(values));
+}
+
+std::vector<numeric> parameter_values(const Model& model,
+                                      const std::vector<std::string>& assignments,
+                                      const std::vector<numeric>& base) {
+  if (base.size() != model.parameters().size()) {
+    throw std::invalid_argument("parameter_values: one base value per parameter needed");
+  }
+  return assign(model, assignments, std::vector<std::optional<numeric>>(base.begin(), base.end()));
 }
 
 DataMetadata simulation_metadata(const Model& model, const SimulationOptions& options,
