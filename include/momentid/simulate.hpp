@@ -243,8 +243,8 @@ void simulate_to_file(const Model& model, const SimulationOptions& options, cons
 //   kCubic   the cubic through the four nearest samples: at the midpoint, a sinusoid with
 //            omega*dt = w comes out with the gain (9 cos(w/2) - cos(3w/2))/8, about
 //            1 - 3 w^4/128 (0.35% low at ten samples per period, 5% at five);
-//   kSinc    band-limited: a Kaiser-windowed sinc (beta 8) over the 32 nearest samples, whose
-//            gain is within 2e-4 of 1 up to 0.8 times the Nyquist frequency.
+//   kSinc    band-limited: a Kaiser-windowed sinc (beta 14) over the 48 nearest samples, whose
+//            gain is within 3e-7 of 1 up to 0.8 times the Nyquist frequency.
 // Intervals too near an end of the record for the stencil take the widest one that fits
 // (cubic, then the quadratic through three samples, then linear).
 enum class Interpolation { kHold, kLinear, kCubic, kSinc };

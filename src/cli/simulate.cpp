@@ -7,6 +7,7 @@
 
 #include "cli/commands.hpp"
 #include "momentid/model.hpp"
+#include "momentid/validate.hpp"
 
 namespace momentid::cli {
 namespace {
@@ -19,6 +20,11 @@ struct SimulateCommand {
   SimulationOptions options;
   std::string format = "csv";
   std::string output = "-";
+  // The response to a recorded input instead.
+  std::string input_file;
+  std::string interpolation;
+  std::vector<std::string> columns;
+  std::optional<double> record_dt;  // --dt with --input-file: overrides the record's interval
 };
 
 // One spec per model input: `name=SPEC` entries, or a single SPEC when the model has one input.
@@ -53,12 +59,24 @@ std::vector<InputSpec> input_specs(const Model& model, const std::vector<std::st
 
 int run_simulate(SimulateCommand& command) {
   const Model model = parse_model_file(command.model);
+  const DataWriter::Format format =
+      command.format == "bin" ? DataWriter::Format::kBinary : DataWriter::Format::kCsv;
+  if (!command.input_file.empty()) {
+    ReplayOptions options;
+    options.parameters = parameter_values(model, command.set);
+    options.columns = column_map(command.columns);
+    options.dt = command.record_dt;
+    if (!command.interpolation.empty()) {
+      options.interpolation = parse_interpolation(command.interpolation, "--interpolation");
+    }
+    write_replay(model, replay(model, DataSource::file(command.input_file), options),
+                 command.output, format);
+    return 0;
+  }
   command.options.parameters = parameter_values(model, command.set);
   command.options.inputs = input_specs(model, command.inputs);
   command.options.noise = parse_noise(command.noise);
-  simulate_to_file(
-      model, command.options, command.output,
-      command.format == "bin" ? DataWriter::Format::kBinary : DataWriter::Format::kCsv);
+  simulate_to_file(model, command.options, command.output, format);
   return 0;
 }
 
@@ -73,6 +91,18 @@ Command add_simulate(CLI::App& app) {
   sub->add_option("--set", command->set,
                   "parameter values NAME=VALUE, overriding the model's nominal values")
       ->delimiter(',');
+  auto* input_file = sub->add_option(
+      "--input-file", command->input_file,
+      "simulate the response to the inputs of this record instead, from its initial state, "
+      "and write it in the record's columns");
+  sub->add_option("--interpolation", command->interpolation,
+                  "with --input-file: the inputs between samples, zoh, foh, cubic or sinc "
+                  "(default: zoh for held inputs, sinc otherwise)")
+      ->needs(input_file);
+  sub->add_option("--columns", command->columns,
+                  "with --input-file: NAME=COLUMN, where a model variable is")
+      ->delimiter(',')
+      ->needs(input_file);
   sub->add_option(
       "--input", command->inputs,
       "input process [NAME=]SPEC: ma:K=10,w=0.1 | ma:weights=[..] | ou:tau=T | white, with "
@@ -111,7 +141,17 @@ Command add_simulate(CLI::App& app) {
   sub->add_option("--format", command->format, "output format")
       ->check(CLI::IsMember({"csv", "bin"}));
   sub->add_option("-o,--output", command->output, "output file, - for standard output");
-  return {sub, [command] { return run_simulate(*command); }};
+  for (const char* name :
+       {"--input", "--noise", "--observe", "--samples", "--burn-in", "--runs", "--continue",
+        "--seed"}) {
+    sub->get_option(name)->excludes(input_file);
+  }
+  return {sub, [command, sub] {
+            if (!command->input_file.empty() && sub->count("--dt") > 0) {
+              command->record_dt = command->options.dt;
+            }
+            return run_simulate(*command);
+          }};
 }
 
 }  // namespace momentid::cli

@@ -12,10 +12,10 @@
 namespace momentid {
 namespace {
 
-constexpr int kSincHalfWidth = 16;
-constexpr double kSincBeta = 8;
+constexpr int kSincHalfWidth = 24;
+constexpr double kSincBeta = 14;
 
-// The weights of samples n - 15 .. n + 16 for the value at the middle of interval n: a sinc
+// The weights of samples n - 23 .. n + 24 for the value at the middle of interval n: a sinc
 // through the half-sample offsets under a Kaiser window, scaled to sum to 1.
 std::vector<double> sinc_weights() {
   std::vector<double> w;

@@ -1,0 +1,258 @@
+// The replay of recorded inputs and `validate`: interpolation, exact reproduction, fit figures
+// against their theoretical values, the chosen skip, correlation checks and blow-ups.
+
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <fstream>
+#include <numeric>
+
+#include "momentid/validate.hpp"
+#include "test_support.hpp"
+
+namespace momentid {
+namespace {
+
+using testing::error_from;
+using testing::model_file;
+using testing::options_for;
+using testing::Recorder;
+
+// A simulated record held in memory: t, then the chosen model variables by name.
+struct MemoryRecord {
+  std::vector<std::vector<double>> columns;
+  MemoryData data;
+  MemoryRecord(const Model& model, const Recorder& recorder, const std::vector<std::string>& names,
+               const std::string& hold) {
+    columns.push_back(recorder.column(0));
+    data.columns.push_back({"t", nullptr, 1});
+    const auto& variables = model.variables();
+    for (const std::string& name : names) {
+      const auto v = static_cast<std::size_t>(
+          std::find(variables.begin(), variables.end(), name) - variables.begin());
+      columns.push_back(recorder.column(v + 1));
+      data.columns.push_back({name, nullptr, 1});
+    }
+    for (std::size_t c = 0; c < columns.size(); ++c) data.columns[c].values = columns[c].data();
+    data.rows = recorder.rows.size();
+    data.metadata.add_line({{"input-hold", hold}});
+  }
+  DataSource source() const { return DataSource::memory(data); }
+};
+
+Recorder simulated(const Model& model, const SimulationOptions& options,
+                   const std::vector<double>& noise_sd = {}) {
+  Recorder recorder(model.variables().size());
+  simulate(model, options, recorder, noise_sd);
+  return recorder;
+}
+
+SimulationOptions duffing_options(const Model& model, std::size_t samples) {
+  SimulationOptions options = options_for(model, samples, 7);
+  options.inputs[0] = InputSpec::parse("ma:K=10,w=0.1,sigma=20", "--input");
+  return options;
+}
+
+ValidateOptions with_parameters(const Model& model, const std::vector<std::string>& set) {
+  ValidateOptions options;
+  options.replay.parameters = parameter_values(model, set);
+  return options;
+}
+
+TEST_SUITE("validate") {
+  TEST_CASE("each interpolation gives a sampled sinusoid the documented midpoint gain") {
+    for (const double w : {0.2 * M_PI, 0.5 * M_PI, 0.8 * M_PI}) {
+      std::vector<double> u;
+      for (int n = 0; n < 200; ++n) u.push_back(std::cos(w * n + 0.3));
+      const auto hold = interval_midpoints(u, Interpolation::kHold);
+      const auto line = interval_midpoints(u, Interpolation::kLinear);
+      const auto cubic = interval_midpoints(u, Interpolation::kCubic);
+      const auto sinc = interval_midpoints(u, Interpolation::kSinc);
+      REQUIRE(cubic.size() == 199);
+      const double cubic_gain = (9 * std::cos(w / 2) - std::cos(3 * w / 2)) / 8;
+      for (std::size_t n = 24; n + 25 < u.size(); ++n) {
+        const double exact = std::cos(w * (n + 0.5) + 0.3);
+        CHECK(hold[n] == u[n]);
+        CHECK(std::abs(line[n] - std::cos(w / 2) * exact) < 1e-12);
+        CHECK(std::abs(cubic[n] - cubic_gain * exact) < 1e-12);
+        CHECK(std::abs(sinc[n] - exact) < 3e-7);
+      }
+    }
+  }
+
+  TEST_CASE("intervals near the ends take the widest stencil that fits") {
+    // A quadratic: the cubic and the three-point stencils are exact for it.
+    std::vector<double> u;
+    for (int n = 0; n < 40; ++n) u.push_back(1 + 2.0 * n - 0.25 * n * n);
+    for (const Interpolation method : {Interpolation::kCubic, Interpolation::kSinc}) {
+      const auto mid = interval_midpoints(u, method);
+      for (std::size_t n : {0UL, 1UL, 2UL, 36UL, 37UL, 38UL}) {
+        const double x = n + 0.5;
+        CHECK(mid[n] == doctest::Approx(1 + 2 * x - 0.25 * x * x).epsilon(1e-12));
+      }
+    }
+    CHECK(interval_midpoints({1.0, 3.0}, Interpolation::kSinc) == std::vector<double>{2.0});
+    CHECK(interval_midpoints({1.0}, Interpolation::kCubic).empty());
+  }
+
+  TEST_CASE("a record of held inputs is reproduced bit for bit with its own parameters") {
+    const Model model = model_file("duffing.mom");
+    const Recorder recorder = simulated(model, duffing_options(model, 3000));
+    const MemoryRecord record(model, recorder, {"y", "v", "x"}, "zoh");
+    ReplayOptions options;
+    options.parameters = parameter_values(model, {});
+    const Replay replay = momentid::replay(model, record.source(), options);
+    REQUIRE(replay.interpolation == std::vector<Interpolation>{Interpolation::kHold});
+    REQUIRE(replay.simulated.size() == 1);
+    CHECK(replay.simulated[0][0] == recorder.column(1));
+    CHECK(replay.simulated[0][1] == recorder.column(2));
+    CHECK(replay.initial_how == std::vector<std::string>{"its first sample", "its first sample"});
+  }
+
+  TEST_CASE("a multisine record is reproduced through band-limited interpolation") {
+    // The simulator evaluates the multisine exactly at every stage; the replay sees its samples
+    // only, ten per period of the highest line. Compared after the first 1000 rows (50 s, a
+    // dozen decay times), where the start's short stencils no longer show, and before the
+    // last 50, whose stencils are short too.
+    const Model model = model_file("duffing.mom");
+    SimulationOptions options = options_for(model, 4000, 3);
+    options.dt = 0.05;
+    options.inputs[0] = InputSpec::parse("multisine:f1=0.05,f2=2,lines=40,rms=5", "--input");
+    const Recorder recorder = simulated(model, options);
+    const MemoryRecord record(model, recorder, {"y", "v", "x"}, "sample");
+    ReplayOptions replay_options;
+    replay_options.parameters = parameter_values(model, {});
+    const std::vector<double> y = recorder.column(1);
+    double spread = 0, worst_sinc = 0, worst_cubic = 0;
+    for (double v : y) spread = std::max(spread, std::abs(v));
+    for (const Interpolation method : {Interpolation::kSinc, Interpolation::kCubic}) {
+      replay_options.interpolation = method;
+      const Replay replay = momentid::replay(model, record.source(), replay_options);
+      double worst = 0;
+      for (std::size_t n = 1000; n + 50 < y.size(); ++n) {
+        worst = std::max(worst, std::abs(replay.simulated[0][0][n] - y[n]));
+      }
+      (method == Interpolation::kSinc ? worst_sinc : worst_cubic) = worst / spread;
+    }
+    MESSAGE("largest error relative to the largest |y|: sinc " << worst_sinc << ", cubic "
+                                                              << worst_cubic);
+    CHECK(worst_sinc < 1e-6);
+    CHECK(worst_sinc < worst_cubic);
+  }
+
+  TEST_CASE("the true parameters fit above 99.9% without a velocity column, 20% off well below") {
+    const Model model = model_file("duffing.mom");
+    const Recorder recorder = simulated(model, duffing_options(model, 20000));
+    const MemoryRecord record(model, recorder, {"y", "x"}, "zoh");
+    const ValidateResult truth = validate(model, record.source(), with_parameters(model, {}));
+    REQUIRE(truth.outputs.size() == 1);
+    CHECK(truth.replay.initial_how[1].find("y' at the start") == 0);
+    CHECK(truth.outputs[0].fit > 99.9);
+    CHECK(truth.warnings.empty());
+    const ValidateResult off =
+        validate(model, record.source(), with_parameters(model, {"c=0.6", "k=4.8", "eps=1.2"}));
+    MESSAGE("fit with the truth " << truth.outputs[0].fit << "%, 20% off "
+                                  << off.outputs[0].fit << "%");
+    CHECK(off.outputs[0].fit < 80);
+    REQUIRE(off.outputs[0].autocorrelation);
+    CHECK(off.outputs[0].autocorrelation->outside() > 20);
+  }
+
+  TEST_CASE("with 1% sensor noise the fit is its theoretical value and the checks pass") {
+    const Model model = model_file("duffing.mom");
+    SimulationOptions options = duffing_options(model, 100000);
+    options.noise = {{"y", 0.01}};
+    const std::vector<double> sd = noise_standard_deviations(model, options);
+    const Recorder recorder = simulated(model, options, sd);
+    const MemoryRecord record(model, recorder, {"y", "v", "x"}, "zoh");
+    const ValidateResult result = validate(model, record.source(), with_parameters(model, {}));
+    const OutputFit& y = result.outputs[0];
+    // Over the compared rows: the error is the noise, sd[0] per sample.
+    const std::vector<double> measured = recorder.column(1);
+    const std::size_t skip = result.skip[0];
+    const double count = static_cast<double>(measured.size() - skip);
+    const double mean =
+        std::accumulate(measured.begin() + static_cast<long>(skip), measured.end(), 0.0) / count;
+    double spread = 0;
+    for (std::size_t n = skip; n < measured.size(); ++n) {
+      spread += (measured[n] - mean) * (measured[n] - mean);
+    }
+    const double theory = 100 * (1 - sd[0] * std::sqrt(count) / std::sqrt(spread));
+    MESSAGE("fit " << y.fit << "%, theoretical " << theory << "%");
+    CHECK(std::abs(y.fit - theory) < 0.1);
+    CHECK(std::abs(y.rms / sd[0] - 1) < 0.02);
+    // Nothing but white noise is left: 1% of the lags fall outside by chance.
+    REQUIRE(y.autocorrelation);
+    CHECK(y.autocorrelation->outside() <= 2);
+    REQUIRE(y.cross.size() == 1);
+    CHECK(y.cross[0].outside() <= 3);
+    CHECK(std::abs(y.rms_rest / y.rms_start - 1) < 0.1);
+  }
+
+  TEST_CASE("the chosen skip is where a linear oscillator's transient falls to 1%") {
+    // c = 0.5, m = 1: the envelope decays as exp(-c t / 2), to 1% after 2 ln(100) / c s.
+    const Model model = model_file("duffing.mom");
+    SimulationOptions options = duffing_options(model, 20000);
+    options.parameters = parameter_values(model, {"eps=0"});
+    const Recorder recorder = simulated(model, options);
+    const MemoryRecord record(model, recorder, {"y", "v", "x"}, "zoh");
+    const ValidateResult result =
+        validate(model, record.source(), with_parameters(model, {"eps=0"}));
+    const double expected = 2 * std::log(100.0) / 0.5 / options.dt;
+    MESSAGE("skip " << result.skip[0] << " rows, envelope " << expected);
+    CHECK(std::abs(result.skip[0] / expected - 1) < 0.1);
+    CHECK(result.skip_chosen);
+  }
+
+  TEST_CASE("a model barely damped for its record is said to depend on its start") {
+    const Model model = model_file("duffing.mom");
+    SimulationOptions options = duffing_options(model, 2000);
+    const Recorder recorder = simulated(model, options);
+    const MemoryRecord record(model, recorder, {"y", "v", "x"}, "zoh");
+    const ValidateResult result =
+        validate(model, record.source(), with_parameters(model, {"c=0.01"}));
+    REQUIRE(result.warnings.size() >= 1);
+    CHECK(result.warnings[0].find("still depends on its initial state") != std::string::npos);
+    CHECK(result.skip[0] == 1000);
+  }
+
+  TEST_CASE("an unstable model ends with the time, the run and the state") {
+    const Model model = model_file("duffing.mom");
+    const Recorder recorder = simulated(model, duffing_options(model, 5000));
+    const MemoryRecord record(model, recorder, {"y", "v", "x"}, "zoh");
+    const Error e = error_from<Error>(
+        [&] { validate(model, record.source(), with_parameters(model, {"eps=-1"})); });
+    const std::string what = e.what();
+    CHECK(what.find("the simulation blew up: state '") == 0);
+    CHECK(what.find(" at t = ") != std::string::npos);
+    CHECK(what.find(" in run 1 with c=0.5, k=4, eps=-1") != std::string::npos);
+  }
+
+  TEST_CASE("estimates are read from identify's JSON, and bad files are located") {
+    const Model model = model_file("duffing.mom");
+    const auto write = [](const std::string& text) {
+      const std::string path = "validate_estimates.json";
+      std::ofstream(path) << text;
+      return path;
+    };
+    const std::string good = write(
+        "{\"model\": \"duffing\", \"parameters\": {\"c\": {\"estimate\": 0.25}, \"k\": "
+        "{\"estimate\": 3}, \"eps\": {\"estimate\": -1e-3}}}");
+    const std::vector<GiNaC::numeric> values = read_estimates(model, good);
+    REQUIRE(values.size() == 3);
+    CHECK(values[0].to_double() == 0.25);
+    CHECK(values[2].to_double() == -1e-3);
+    const DataError bad =
+        error_from<DataError>([&] { read_estimates(model, write("{\n  \"model\": duffing\n}")); });
+    CHECK(bad.location().line == 2);
+    CHECK(bad.message().find("not JSON") == 0);
+    const DataError missing = error_from<DataError>([&] {
+      read_estimates(model, write("{\"parameters\": {\"c\": {\"estimate\": 1}, \"k\": "
+                                  "{\"estimate\": 1}}}"));
+    });
+    CHECK(missing.message().find("no estimate of parameter 'eps'") == 0);
+  }
+}
+
+}  // namespace
+}  // namespace momentid
