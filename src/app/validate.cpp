@@ -242,8 +242,10 @@ std::vector<GiNaC::numeric> read_estimates(const Model& model, const std::string
   try {
     document = nlohmann::json::parse(text);
   } catch (const nlohmann::json::parse_error& e) {
+    // The library's message after its own "... line L, column C: " prefix.
     std::string reason = e.what();
-    const std::size_t colon = reason.rfind(": ");
+    const std::size_t column = reason.find("column ");
+    const std::size_t colon = reason.find(": ", column == std::string::npos ? 0 : column);
     if (colon != std::string::npos) reason = reason.substr(colon + 2);
     throw DataError(at(e.byte == 0 ? 0 : e.byte - 1), "not JSON: " + reason);
   }
