@@ -60,14 +60,22 @@ ValidateOptions with_parameters(const Model& model, const std::vector<std::strin
 }
 
 TEST_SUITE("validate") {
+  // The signal at the middle of each interval between samples.
+  std::vector<double> midpoints(const std::vector<double>& u, Interpolation method) {
+    const Interpolator half(method, {0.5});
+    std::vector<double> out;
+    for (std::size_t n = 0; n + 1 < u.size(); ++n) out.push_back(half(u, n, 0));
+    return out;
+  }
+
   TEST_CASE("each interpolation gives a sampled sinusoid the documented midpoint gain") {
     for (const double w : {0.2 * M_PI, 0.5 * M_PI, 0.8 * M_PI}) {
       std::vector<double> u;
       for (int n = 0; n < 200; ++n) u.push_back(std::cos(w * n + 0.3));
-      const auto hold = interval_midpoints(u, Interpolation::kHold);
-      const auto line = interval_midpoints(u, Interpolation::kLinear);
-      const auto cubic = interval_midpoints(u, Interpolation::kCubic);
-      const auto sinc = interval_midpoints(u, Interpolation::kSinc);
+      const auto hold = midpoints(u, Interpolation::kHold);
+      const auto line = midpoints(u, Interpolation::kLinear);
+      const auto cubic = midpoints(u, Interpolation::kCubic);
+      const auto sinc = midpoints(u, Interpolation::kSinc);
       REQUIRE(cubic.size() == 199);
       const double cubic_gain = (9 * std::cos(w / 2) - std::cos(3 * w / 2)) / 8;
       for (std::size_t n = 24; n + 25 < u.size(); ++n) {
@@ -80,19 +88,31 @@ TEST_SUITE("validate") {
     }
   }
 
+  TEST_CASE("the band-limited interpolation is exact to 1e-6 at any fraction of the interval") {
+    const double w = 0.6 * M_PI;
+    std::vector<double> u;
+    for (int n = 0; n < 100; ++n) u.push_back(std::sin(w * n));
+    const Interpolator at(Interpolation::kSinc, {0.125, 0.25, 0.75, 0.875});
+    for (std::size_t k = 0; k < 4; ++k) {
+      const double f = 0.125 * (k < 2 ? k + 1 : k + 4);
+      CHECK(std::abs(at(u, 50, k) - std::sin(w * (50 + f))) < 1e-6);
+    }
+  }
+
   TEST_CASE("intervals near the ends take the widest stencil that fits") {
-    // A quadratic: the cubic and the three-point stencils are exact for it.
+    // A quadratic: the cubic and the three-point stencils are exact for it, at any fraction.
     std::vector<double> u;
     for (int n = 0; n < 40; ++n) u.push_back(1 + 2.0 * n - 0.25 * n * n);
     for (const Interpolation method : {Interpolation::kCubic, Interpolation::kSinc}) {
-      const auto mid = interval_midpoints(u, method);
+      const Interpolator at(method, {0.3, 0.5});
       for (std::size_t n : {0UL, 1UL, 2UL, 36UL, 37UL, 38UL}) {
-        const double x = n + 0.5;
-        CHECK(mid[n] == doctest::Approx(1 + 2 * x - 0.25 * x * x).epsilon(1e-12));
+        for (std::size_t k = 0; k < 2; ++k) {
+          const double x = n + (k == 0 ? 0.3 : 0.5);
+          CHECK(at(u, n, k) == doctest::Approx(1 + 2 * x - 0.25 * x * x).epsilon(1e-12));
+        }
       }
     }
-    CHECK(interval_midpoints({1.0, 3.0}, Interpolation::kSinc) == std::vector<double>{2.0});
-    CHECK(interval_midpoints({1.0}, Interpolation::kCubic).empty());
+    CHECK(midpoints({1.0, 3.0}, Interpolation::kSinc) == std::vector<double>{2.0});
   }
 
   TEST_CASE("a record of held inputs is reproduced bit for bit with its own parameters") {
@@ -122,6 +142,7 @@ TEST_SUITE("validate") {
     const MemoryRecord record(model, recorder, {"y", "v", "x"}, "sample");
     ReplayOptions replay_options;
     replay_options.parameters = parameter_values(model, {});
+    replay_options.substeps = 1;  // as the simulator integrated: only the inputs differ
     const std::vector<double> y = recorder.column(1);
     double spread = 0, worst_sinc = 0, worst_cubic = 0;
     for (double v : y) spread = std::max(spread, std::abs(v));

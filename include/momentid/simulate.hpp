@@ -235,8 +235,8 @@ DataMetadata simulation_metadata(const Model& model, const SimulationOptions& op
 void simulate_to_file(const Model& model, const SimulationOptions& options, const std::string& path,
                       DataWriter::Format format);
 
-// How a recorded input is taken between its samples, where the integrator needs it (at the
-// middle of each step; README, "momentid validate"):
+// How a recorded input is taken between its samples, where the integrator needs it (README,
+// "momentid validate"):
 //   kHold    the sample held over the interval that follows it (zero-order hold), which is how
 //            `simulate` applies its random processes;
 //   kLinear  a straight line between neighbouring samples (first-order hold);
@@ -252,20 +252,37 @@ enum class Interpolation { kHold, kLinear, kCubic, kSinc };
 std::string interpolation_name(Interpolation method);
 // Parses those names; throws UsageError naming `option` otherwise.
 Interpolation parse_interpolation(const std::string& text, const std::string& option);
-// The input at the middle of each interval between consecutive samples (rows - 1 values).
-std::vector<double> interval_midpoints(const std::vector<double>& samples, Interpolation method);
 
-// The response of a model to recorded inputs, integrated with the classical Runge-Kutta method
-// at the record's sample interval, one run at a time from a given initial state.
+// Evaluates a sampled signal between its samples at fixed fractions of the sample interval.
 //
 // Example:
-//   RecordSimulator sim(model, parameter_values(model, {}), {Interpolation::kSinc}, 0.01);
+//   Interpolator half(Interpolation::kSinc, {0.5});
+//   double x = half(u, n, 0);  // u at t_n + dt/2
+class Interpolator {
+ public:
+  // Fractions in (0, 1).
+  Interpolator(Interpolation method, std::vector<double> fractions);
+  // The signal `u` (all its samples) at t_n + fractions[k] dt, for n < u.size() - 1.
+  double operator()(const std::vector<double>& u, std::size_t n, std::size_t k) const;
+
+ private:
+  Interpolation method_;
+  std::vector<double> fractions_;
+  std::vector<std::vector<double>> sinc_;  // per fraction, the weights of u[n-23] .. u[n+24]
+};
+
+// The response of a model to recorded inputs, integrated with the classical Runge-Kutta method
+// in `substeps` equal steps per sample interval, one run at a time from a given initial state.
+//
+// Example:
+//   RecordSimulator sim(model, parameter_values(model, {}), {Interpolation::kSinc}, 0.01, 2);
 //   auto states = sim.run({x}, {y0, v0}, 0.0, 1);  // states[j][n]: state j at row n
 class RecordSimulator {
  public:
-  // One interpolation method per model input. Throws ModelError as CompiledModel does.
+  // One interpolation method per model input; `substeps` from 1 to kMaxSubsteps. Throws
+  // ModelError as CompiledModel does.
   RecordSimulator(const Model& model, std::vector<GiNaC::numeric> parameters,
-                  std::vector<Interpolation> methods, double dt);
+                  std::vector<Interpolation> methods, double dt, int substeps = 1);
   // `inputs[i][n]`: input i at row n, all of the same length; `initial`: one value per state.
   // Returns states[j][n], the state j at row n, for the first `rows` rows (all when 0). Throws
   // Error naming the time (`start` + n dt), the run and the state when the simulation blows up
@@ -275,12 +292,16 @@ class RecordSimulator {
                                        const std::vector<double>& initial, double start,
                                        std::size_t run_number, std::size_t rows = 0) const;
 
+  static constexpr int kMaxSubsteps = 64;
+
  private:
   const Model& model_;
   std::vector<GiNaC::numeric> parameters_;
   CompiledModel f_;
   std::vector<Interpolation> methods_;
   double dt_;
+  int substeps_;
+  std::vector<Interpolator> within_;  // per input, at the substeps' starts, middles and ends
 };
 
 // The values of the model's parameters: nominal values, overridden by `assignments` (`k=4`,

@@ -47,6 +47,14 @@ struct ReplayOptions {
   std::optional<Interpolation> interpolation;
   // The sample interval; nullopt: the record's (`t` column or `dt` metadata).
   std::optional<double> dt;
+  // Runge-Kutta steps per sample interval, 1..RecordSimulator::kMaxSubsteps; nullopt: the fewest
+  // (1, 2, 4, ...) for which halving the step changes the simulation of the first
+  // kSubstepTrialRows rows of the first run by less than kSubstepTolerance of each state's
+  // spread.
+  std::optional<int> substeps;
+
+  static constexpr std::size_t kSubstepTrialRows = 4000;
+  static constexpr double kSubstepTolerance = 1e-6;
 };
 
 // A record and the model's response to its inputs, run by run. Each run starts from its own
@@ -56,6 +64,8 @@ struct ReplayOptions {
 struct Replay {
   Record record;
   std::vector<Interpolation> interpolation;  // per model input
+  int substeps = 1;
+  bool substeps_chosen = false;
   std::vector<std::string> initial_how;      // per state, how its initial value was found
   std::vector<std::vector<double>> initial;  // per run, per state
   // simulated[r][j][n]: state j at row n of run r.

@@ -157,6 +157,41 @@ std::size_t run_label(const Record& record, std::size_t r) {
   return record.has_run ? static_cast<std::size_t>(record.runs[r].number) : r + 1;
 }
 
+// The fewest substeps (1, 2, 4, ...) for which halving the step changes the simulation of the
+// first rows of the first run by less than ReplayOptions::kSubstepTolerance of each state's
+// spread.
+int chosen_substeps(const Model& model, const std::vector<GiNaC::numeric>& parameters,
+                    const Replay& replay) {
+  const Record& record = replay.record;
+  const RecordRun& run = record.runs.front();
+  const std::size_t rows = std::min(run.rows(), ReplayOptions::kSubstepTrialRows);
+  const std::vector<std::vector<double>> inputs = run_inputs(model, record, run);
+  const auto simulate = [&](int substeps) {
+    return RecordSimulator(model, parameters, replay.interpolation, record.dt, substeps)
+        .run(inputs, replay.initial.front(), run_start(run), run_label(record, 0), rows);
+  };
+  std::vector<std::vector<double>> coarse = simulate(1);
+  int substeps = 1;
+  for (; substeps < RecordSimulator::kMaxSubsteps; substeps *= 2) {
+    std::vector<std::vector<double>> fine = simulate(2 * substeps);
+    double worst = 0;
+    for (std::size_t j = 0; j < fine.size(); ++j) {
+      double mean = 0, squares = 0, change = 0;
+      for (double x : fine[j]) mean += x;
+      mean /= static_cast<double>(rows);
+      for (std::size_t n = 0; n < rows; ++n) {
+        squares += (fine[j][n] - mean) * (fine[j][n] - mean);
+        change = std::max(change, std::abs(fine[j][n] - coarse[j][n]));
+      }
+      const double spread = std::sqrt(squares / static_cast<double>(rows));
+      if (spread > 0) worst = std::max(worst, change / spread);
+    }
+    if (worst < ReplayOptions::kSubstepTolerance) break;
+    coarse = std::move(fine);
+  }
+  return substeps;
+}
+
 }  // namespace
 
 Replay replay(const Model& model, const DataSource& source, const ReplayOptions& options) {
@@ -170,11 +205,25 @@ Replay replay(const Model& model, const DataSource& source, const ReplayOptions&
   std::vector<bool> measured(model.variables().size(), false);
   for (std::size_t v : record.variables) measured[v] = true;
   const std::vector<VariableReading> readings = variable_readings(model, measured);
-  const RecordSimulator simulator(model, options.parameters, out.interpolation, record.dt);
+  for (std::size_t r = 0; r < record.runs.size(); ++r) {
+    out.initial.push_back(initial_state(model, record, record.runs[r], readings,
+                                        r == 0 ? &out.initial_how : nullptr));
+  }
+  if (options.substeps) {
+    if (*options.substeps < 1 || *options.substeps > RecordSimulator::kMaxSubsteps) {
+      throw UsageError("--substeps: expected a number from 1 to " +
+                       std::to_string(RecordSimulator::kMaxSubsteps) + ", found " +
+                       std::to_string(*options.substeps));
+    }
+    out.substeps = *options.substeps;
+  } else {
+    out.substeps = chosen_substeps(model, options.parameters, out);
+    out.substeps_chosen = true;
+  }
+  const RecordSimulator simulator(model, options.parameters, out.interpolation, record.dt,
+                                  out.substeps);
   for (std::size_t r = 0; r < record.runs.size(); ++r) {
     const RecordRun& run = record.runs[r];
-    out.initial.push_back(
-        initial_state(model, record, run, readings, r == 0 ? &out.initial_how : nullptr));
     out.simulated.push_back(simulator.run(run_inputs(model, record, run), out.initial.back(),
                                           run_start(run), run_label(record, r)));
   }
@@ -197,6 +246,7 @@ void write_replay(const Model& model, const Replay& replay, const std::string& p
     line.emplace_back("interpolation." + model.inputs()[i].name,
                       interpolation_name(replay.interpolation[i]));
   }
+  line.emplace_back("substeps", std::to_string(replay.substeps));
   metadata.add_line(std::move(line));
   DataWriter out(path, format, metadata, columns);
   const std::size_t states = model.states().size();
@@ -404,7 +454,8 @@ ValidateResult validate(const Model& model, const DataSource& source,
   }
 
   result.skip_chosen = !options.skip;
-  const RecordSimulator simulator(model, result.parameters, replay.interpolation, record.dt);
+  const RecordSimulator simulator(model, result.parameters, replay.interpolation, record.dt,
+                                  replay.substeps);
   for (std::size_t r = 0; r < record.runs.size(); ++r) {
     const std::size_t rows = record.runs[r].rows();
     std::size_t skip = 0;
@@ -605,6 +656,12 @@ std::string format_text(const ValidateResult& r) {
     out += "input " + model.inputs()[i].name + ": " +
            interpolation_name(replay.interpolation[i]) + " between samples\n";
   }
+  out += "integration: " + std::to_string(replay.substeps) + " Runge-Kutta step" +
+         (replay.substeps == 1 ? "" : "s") + " per sample" +
+         (replay.substeps_chosen ? " (halving the step changes the simulation by less than 1e-6 "
+                                   "of each state's spread)"
+                                 : "") +
+         "\n";
   out += "initial state (run " + std::to_string(run_label(record, 0)) + "): ";
   for (std::size_t j = 0; j < model.states().size(); ++j) {
     out += (j ? ", " : "") + model.states()[j].name + " = " +
@@ -677,7 +734,7 @@ std::string format_json(const ValidateResult& r) {
     out << (i ? ", " : "") << json_string(model.inputs()[i].name) << ": "
         << json_string(interpolation_name(replay.interpolation[i]));
   }
-  out << "},\n  \"initial_state\": [";
+  out << "},\n  \"substeps\": " << replay.substeps << ",\n  \"initial_state\": [";
   for (std::size_t r0 = 0; r0 < record.runs.size(); ++r0) {
     out << (r0 ? ", " : "") << "{";
     for (std::size_t j = 0; j < model.states().size(); ++j) {

@@ -24,7 +24,8 @@ struct SimulateCommand {
   std::string input_file;
   std::string interpolation;
   std::vector<std::string> columns;
-  std::optional<double> record_dt;  // --dt with --input-file: overrides the record's interval
+  std::optional<double> record_dt;
+  std::optional<int> substeps;  // --dt with --input-file: overrides the record's interval
 };
 
 // One spec per model input: `name=SPEC` entries, or a single SPEC when the model has one input.
@@ -66,6 +67,7 @@ int run_simulate(SimulateCommand& command) {
     options.parameters = parameter_values(model, command.set);
     options.columns = column_map(command.columns);
     options.dt = command.record_dt;
+    options.substeps = command.substeps;
     if (!command.interpolation.empty()) {
       options.interpolation = parse_interpolation(command.interpolation, "--interpolation");
     }
@@ -98,6 +100,11 @@ Command add_simulate(CLI::App& app) {
   sub->add_option("--interpolation", command->interpolation,
                   "with --input-file: the inputs between samples, zoh, foh, cubic or sinc "
                   "(default: zoh for held inputs, sinc otherwise)")
+      ->needs(input_file);
+  sub->add_option("--substeps", command->substeps,
+                  "with --input-file: Runge-Kutta steps per sample interval (default: the fewest "
+                  "that change the result by less than 1e-6)")
+      ->check(CLI::Range(1, RecordSimulator::kMaxSubsteps))
       ->needs(input_file);
   sub->add_option("--columns", command->columns,
                   "with --input-file: NAME=COLUMN, where a model variable is")

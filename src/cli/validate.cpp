@@ -90,6 +90,10 @@ Command add_validate(CLI::App& app) {
                   "the inputs between samples: zoh, foh, cubic or sinc (default: zoh for "
                   "held inputs, sinc otherwise)");
   sub->add_option("--dt", command->dt, "sample interval, overriding the data's");
+  sub->add_option("--substeps", command->options.replay.substeps,
+                  "Runge-Kutta steps per sample interval (default: the fewest that change the "
+                  "result by less than 1e-6)")
+      ->check(CLI::Range(1, RecordSimulator::kMaxSubsteps));
   sub->add_option("--skip", command->skip,
                   "rows left out at the start of each run (default: until the model has "
                   "forgotten its initial state)");

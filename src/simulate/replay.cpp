@@ -15,18 +15,18 @@ namespace {
 constexpr int kSincHalfWidth = 24;
 constexpr double kSincBeta = 14;
 
-// The weights of samples n - 23 .. n + 24 for the value at the middle of interval n: a sinc
-// through the half-sample offsets under a Kaiser window, scaled to sum to 1.
-std::vector<double> sinc_weights() {
+// The weights of samples n - 23 .. n + 24 for the value at t_n + fraction dt: a sinc through
+// the offsets under a Kaiser window, scaled to sum to 1.
+std::vector<double> sinc_weights(double fraction) {
   std::vector<double> w;
   double sum = 0;
   const double pi = 3.14159265358979323846;
   const double window_scale = boost::math::cyl_bessel_i(0, kSincBeta);
   for (int k = -kSincHalfWidth + 1; k <= kSincHalfWidth; ++k) {
-    const double x = k - 0.5;
+    const double x = k - fraction;
     const double r = x / kSincHalfWidth;
-    const double window = boost::math::cyl_bessel_i(0, kSincBeta * std::sqrt(1 - r * r)) /
-                          window_scale;
+    const double window =
+        boost::math::cyl_bessel_i(0, kSincBeta * std::sqrt(1 - r * r)) / window_scale;
     w.push_back(std::sin(pi * x) / (pi * x) * window);
     sum += w.back();
   }
@@ -58,48 +58,60 @@ Interpolation parse_interpolation(const std::string& text, const std::string& op
   throw UsageError(option + ": expected zoh, foh, cubic or sinc, found '" + text + "'");
 }
 
-std::vector<double> interval_midpoints(const std::vector<double>& u, Interpolation method) {
-  const std::size_t rows = u.size();
-  if (rows < 2) return {};
-  std::vector<double> mid(rows - 1);
-  static const std::vector<double> sinc = sinc_weights();
-  const auto reach = [&](std::size_t n) { return std::min(n + 1, rows - 1 - n); };
-  for (std::size_t n = 0; n + 1 < rows; ++n) {
-    if (method == Interpolation::kHold) {
-      mid[n] = u[n];
-      continue;
-    }
-    // Samples available on each side of the interval: n + 1 before its end, rows - 1 - n after
-    // its start.
-    const std::size_t side = method == Interpolation::kLinear ? 1 : reach(n);
-    if (method == Interpolation::kSinc && side >= kSincHalfWidth) {
-      double sum = 0;
-      const double* first = u.data() + n + 1 - kSincHalfWidth;
-      for (std::size_t k = 0; k < sinc.size(); ++k) sum += sinc[k] * first[k];
-      mid[n] = sum;
-    } else if (side >= 2) {
-      mid[n] = (9 * (u[n] + u[n + 1]) - (u[n - 1] + u[n + 2])) / 16;
-    } else if (rows >= 3 && method != Interpolation::kLinear) {
-      // The quadratic through three samples, the third on the side that has one.
-      mid[n] = n == 0 ? (3 * u[0] + 6 * u[1] - u[2]) / 8
-                      : (-u[n - 1] + 6 * u[n] + 3 * u[n + 1]) / 8;
-    } else {
-      mid[n] = (u[n] + u[n + 1]) / 2;
-    }
+Interpolator::Interpolator(Interpolation method, std::vector<double> fractions)
+    : method_(method), fractions_(std::move(fractions)) {
+  if (method_ == Interpolation::kSinc) {
+    for (double f : fractions_) sinc_.push_back(sinc_weights(f));
   }
-  return mid;
+}
+
+double Interpolator::operator()(const std::vector<double>& u, std::size_t n, std::size_t k) const {
+  const double f = fractions_[k];
+  if (method_ == Interpolation::kHold) return u[n];
+  const std::size_t rows = u.size();
+  // Samples on each side of the interval: n + 1 up to its start, rows - 1 - n from its end.
+  const std::size_t side =
+      method_ == Interpolation::kLinear ? 1 : std::min(n + 1, rows - 1 - n);
+  if (method_ == Interpolation::kSinc && side >= kSincHalfWidth) {
+    const std::vector<double>& w = sinc_[k];
+    const double* first = u.data() + n + 1 - kSincHalfWidth;
+    double sum = 0;
+    for (std::size_t j = 0; j < w.size(); ++j) sum += w[j] * first[j];
+    return sum;
+  }
+  if (side >= 2) {
+    // The cubic through samples n - 1 .. n + 2 (Lagrange).
+    return -f * (f - 1) * (f - 2) / 6 * u[n - 1] + (f + 1) * (f - 1) * (f - 2) / 2 * u[n] -
+           (f + 1) * f * (f - 2) / 2 * u[n + 1] + (f + 1) * f * (f - 1) / 6 * u[n + 2];
+  }
+  if (rows >= 3 && method_ != Interpolation::kLinear) {
+    // The quadratic through three samples, the third on the side that has one.
+    if (n == 0) {
+      return (f - 1) * (f - 2) / 2 * u[0] - f * (f - 2) * u[1] + f * (f - 1) / 2 * u[2];
+    }
+    return f * (f - 1) / 2 * u[n - 1] + (1 - f * f) * u[n] + (f + 1) * f / 2 * u[n + 1];
+  }
+  return (1 - f) * u[n] + f * u[n + 1];
 }
 
 RecordSimulator::RecordSimulator(const Model& model, std::vector<GiNaC::numeric> parameters,
-                                 std::vector<Interpolation> methods, double dt)
+                                 std::vector<Interpolation> methods, double dt, int substeps)
     : model_(model),
       parameters_(std::move(parameters)),
       f_(model, parameters_),
       methods_(std::move(methods)),
-      dt_(dt) {
+      dt_(dt),
+      substeps_(substeps) {
   if (methods_.size() != model.inputs().size()) {
     throw std::invalid_argument("RecordSimulator: one interpolation method per input needed");
   }
+  if (substeps < 1 || substeps > kMaxSubsteps) {
+    throw std::invalid_argument("RecordSimulator: substeps out of range");
+  }
+  // Fractions k / (2 substeps), k = 1 .. 2 substeps - 1: the substeps' middles and inner ends.
+  std::vector<double> fractions;
+  for (int k = 1; k < 2 * substeps; ++k) fractions.push_back(k / (2.0 * substeps));
+  for (Interpolation method : methods_) within_.emplace_back(method, fractions);
 }
 
 std::vector<std::vector<double>> RecordSimulator::run(const std::vector<std::vector<double>>& inputs,
@@ -118,35 +130,35 @@ std::vector<std::vector<double>> RecordSimulator::run(const std::vector<std::vec
     }
   }
   if (rows == 0 || rows > length) rows = length;
-  std::vector<std::vector<double>> middles(m);
-  for (std::size_t i = 0; i < m; ++i) {
-    if (methods_[i] != Interpolation::kHold) {
-      middles[i] = interval_midpoints(
-          std::vector<double>(inputs[i].begin(), inputs[i].begin() + static_cast<long>(rows)),
-          methods_[i]);
-    }
-  }
   RungeKuttaStep step(f_);
   std::vector<std::vector<double>> states(n, std::vector<double>(rows));
   std::vector<double> y = initial, u0(m), um(m), u1(m);
+  const double h = dt_ / substeps_;
+  const auto fail = [&](const std::string& what, std::size_t row) {
+    throw Error("the simulation " + what + " at t = " +
+                shortest_decimal(start + static_cast<double>(row) * dt_) + " in run " +
+                std::to_string(run_number) + " with " + parameter_list(model_, parameters_) +
+                ": the model is unstable for these values, or the sample interval is too "
+                "large for it");
+  };
+  // Input i at fraction k / (2 substeps) of interval s.
+  const auto input = [&](std::size_t i, std::size_t s, int k) {
+    if (k == 0 || methods_[i] == Interpolation::kHold) return inputs[i][s];
+    if (k == 2 * substeps_) return inputs[i][s + 1];
+    return within_[i](inputs[i], s, static_cast<std::size_t>(k - 1));
+  };
   for (std::size_t s = 0; s < rows; ++s) {
     for (std::size_t j = 0; j < n; ++j) states[j][s] = y[j];
     if (s + 1 == rows) break;
-    for (std::size_t i = 0; i < m; ++i) {
-      const bool held = methods_[i] == Interpolation::kHold;
-      u0[i] = inputs[i][s];
-      um[i] = held ? u0[i] : middles[i][s];
-      u1[i] = held ? u0[i] : inputs[i][s + 1];
-    }
-    const auto fail = [&](const std::string& what, std::size_t row) {
-      throw Error("the simulation " + what + " at t = " +
-                  shortest_decimal(start + static_cast<double>(row) * dt_) + " in run " +
-                  std::to_string(run_number) + " with " + parameter_list(model_, parameters_) +
-                  ": the model is unstable for these values, or the sample interval is too "
-                  "large for it");
-    };
-    if (!step(y.data(), u0.data(), um.data(), u1.data(), dt_)) {
-      fail("met a point where the derivatives cannot be solved for", s);
+    for (int sub = 0; sub < substeps_; ++sub) {
+      for (std::size_t i = 0; i < m; ++i) {
+        u0[i] = input(i, s, 2 * sub);
+        um[i] = input(i, s, 2 * sub + 1);
+        u1[i] = input(i, s, 2 * sub + 2);
+      }
+      if (!step(y.data(), u0.data(), um.data(), u1.data(), h)) {
+        fail("met a point where the derivatives cannot be solved for", s);
+      }
     }
     const int blown = step.blown_up(y.data());
     if (blown >= 0) {
