@@ -364,7 +364,9 @@ double lagged_sum(const Segments& s, int lag) {
     const auto n = static_cast<long>(s.length[k]);
     const long from = std::max(0L, static_cast<long>(lag));
     const long to = std::min(n, n + lag);
-    for (long t = from; t < to; ++t) sum += s.a[k][t] * s.b[k][t - lag];
+    if (to <= from) continue;
+    sum += Eigen::Map<const Eigen::VectorXd>(s.a[k] + from, to - from)
+               .dot(Eigen::Map<const Eigen::VectorXd>(s.b[k] + from - lag, to - from));
   }
   return sum;
 }

@@ -1,0 +1,67 @@
+// `validate` on a Duffing record against `simulate` of the same length, in the same run: the
+// time to write the record with simulate_to_file, and to validate the model on it (read, replay,
+// choose the skip, compare, correlate), for CSV and binary files.
+//
+// Usage: bench_validate [rows=1000000] [directory=/tmp] [repetitions=3]
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+#include <vector>
+
+#include "momentid/model.hpp"
+#include "momentid/simulate.hpp"
+#include "momentid/validate.hpp"
+
+namespace {
+
+template <typename F>
+double median_seconds(int repetitions, F&& f) {
+  std::vector<double> times;
+  for (int r = 0; r < repetitions; ++r) {
+    const auto start = std::chrono::steady_clock::now();
+    f();
+    times.push_back(
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+  }
+  std::sort(times.begin(), times.end());
+  return times[times.size() / 2];
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const std::size_t rows = argc > 1 ? std::strtoull(argv[1], nullptr, 10) : 1000000;
+  const std::string directory = argc > 2 ? argv[2] : "/tmp";
+  const int repetitions = argc > 3 ? std::atoi(argv[3]) : 3;
+  const momentid::Model model =
+      momentid::parse_model_file(MOMENTID_SOURCE_DIR "/models/duffing.mom");
+  momentid::SimulationOptions simulation;
+  simulation.parameters = momentid::parameter_values(model, {});
+  simulation.inputs = {momentid::InputSpec::parse("ma:K=10,w=0.1,sigma=20", "input")};
+  simulation.samples = rows;
+  simulation.burn_in = 2000;
+  momentid::ValidateOptions validation;
+  validation.replay.parameters = momentid::parameter_values(model, {"c=0.55"});
+  std::printf("%zu rows of the Duffing model, median of %d\n", rows, repetitions);
+  std::printf("%-8s %12s %12s %8s %10s\n", "format", "simulate s", "validate s", "ratio",
+              "fit %");
+  for (const auto& [name, format] :
+       {std::pair{"csv", momentid::DataWriter::Format::kCsv},
+        std::pair{"bin", momentid::DataWriter::Format::kBinary}}) {
+    const std::string path = directory + "/bench_validate." + name;
+    const double simulate = median_seconds(
+        repetitions, [&] { momentid::simulate_to_file(model, simulation, path, format); });
+    double fit = 0;
+    const double validate = median_seconds(repetitions, [&] {
+      const momentid::ValidateResult result =
+          momentid::validate(model, momentid::DataSource::file(path), validation);
+      fit = result.outputs.front().fit;
+    });
+    std::printf("%-8s %12.3f %12.3f %8.2f %10.3f\n", name, simulate, validate,
+                validate / simulate, fit);
+    std::remove(path.c_str());
+  }
+}
