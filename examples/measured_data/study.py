@@ -13,10 +13,19 @@ times per period of the resonance (a multisine force evaluated exactly, no hold;
   coarse      the same three methods on that record (momentid chooses its 13-point stencils
               for sampled inputs; `coarse, held` forces the 5-point ones of held inputs)
 
-  study.py [--samples N,N,...] [--noise F,F,...] [--seed S] [--coarse-samples N] [--plot OUT.png]
+and finally validates the coarse estimates (`momentid validate`) on a separate record whose
+force grows steadily to three times the rms of the estimation record, past the amplitudes the
+estimates were fitted to:
 
-Prints the relative error of every estimate; with --plot draws them against the noise level
-(matplotlib). Uses build/momentid, or the MOMENTID environment variable.
+  validation  the fit of the lagged and of the baseline estimates, over the record's first 10%
+              and the rest
+
+  study.py [--samples N,N,...] [--noise F,F,...] [--seed S] [--coarse-samples N]
+           [--validation-samples N] [--plot OUT.png] [--validation-plot OUT.png]
+
+Prints the relative error of every estimate and the validation fits; with --plot draws the
+errors against the noise level, with --validation-plot the validation record against the two
+models' simulations (matplotlib). Uses build/momentid, or the MOMENTID environment variable.
 """
 import argparse
 import json
@@ -113,13 +122,110 @@ def coarse(samples, seed):
                 "coarse, eq. error": dict(zip(TRUTH, theta))}
 
 
+# The validation record: a force with the coarse record's band, whose rms grows linearly from 2.5
+# to 15 (the estimation record has 5), made at a tenth of the coarse interval by numpy and run
+# through the model with `simulate --input-file` (the force is smooth: band-limited interpolation
+# between its fine samples); every tenth sample is kept and 1% noise added to y, as before.
+def validation_record(samples, seed, path):
+    rng = np.random.default_rng(seed + 1000)
+    fine_dt = COARSE_DT / 10
+    t = fine_dt * np.arange(10 * samples)
+    frequencies = rng.uniform(0.05, 0.6, 40)
+    phases = rng.uniform(0, 2 * np.pi, 40)
+    unit = np.sqrt(2 / 40) * np.cos(np.multiply.outer(t, 2 * np.pi * frequencies) + phases).sum(1)
+    x = (2.5 + 12.5 * t / t[-1]) * unit
+    with tempfile.TemporaryDirectory() as tmp:
+        force = os.path.join(tmp, "force.csv")
+        with open(force, "w") as out:
+            # A y column of zeros: the response starts at rest and is written in its place.
+            out.write("# momentid: input-hold=sample\nt,y,x\n")
+            np.savetxt(out, np.column_stack([t, np.zeros_like(t), x]), delimiter=",",
+                       fmt="%.17g")
+        response = os.path.join(tmp, "response.csv")
+        subprocess.run([MOMENTID, "simulate", MODEL, "--input-file", force, "-o", response],
+                       check=True)
+        y = read(response)["y"]
+    y, x, t = y[::10], x[::10], t[::10]
+    y = y + 0.01 * np.std(y) * rng.standard_normal(len(y))
+    with open(path, "w") as out:
+        out.write(f"# momentid: dt={COARSE_DT} input-hold=sample\nt,y,x\n")
+        np.savetxt(out, np.column_stack([t, y, x]), delimiter=",", fmt="%.17g")
+    return t, y, x
+
+
+def validate(record, estimates, tmp, name):
+    """The validate JSON and the simulated y for one set of estimates."""
+    path = os.path.join(tmp, f"{name}.json")
+    with open(path, "w") as out:
+        json.dump({"model": "duffing",
+                   "parameters": {p: {"estimate": v} for p, v in estimates.items()}}, out)
+    result = json.loads(subprocess.run(
+        [MOMENTID, "validate", MODEL, record, "--estimates", path, "--format", "json"],
+        check=True, capture_output=True, text=True).stdout)
+    simulated = os.path.join(tmp, f"{name}.csv")
+    subprocess.run([MOMENTID, "simulate", MODEL, "--input-file", record, "--set",
+                    ",".join(f"{p}={v!r}" for p, v in estimates.items()), "-o", simulated],
+                   check=True)
+    return result, read(simulated)["y"]
+
+
+def validation(samples, seed, estimates, plot):
+    with tempfile.TemporaryDirectory() as tmp:
+        record = os.path.join(tmp, "validation.csv")
+        t, y, x = validation_record(samples, seed, record)
+        runs = {name: validate(record, estimates[name], tmp, name.replace(", ", "_").replace(
+            ". ", "_")) for name in ("coarse", "coarse, eq. error")}
+    print(f"\nvalidation on {samples} rows, force rms 2.5 -> 15 (estimated at 5), 1% noise:")
+    print(f"{'estimates':<18} {'fit %':>8} {'rms first 10%':>14} {'rms rest':>10}  skip  "
+          "substeps")
+    for name, (result, _) in runs.items():
+        out = result["outputs"]["y"]
+        print(f"{name:<18} {out['fit_percent']:>8.2f} {out['rms_first_10pct']:>14.4g} "
+              f"{out['rms_rest']:>10.4g}  {result['skip'][0]:>4}  {result['substeps']:>8}")
+    if not plot:
+        return
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    figure = plt.figure(figsize=(12, 9))
+    grid = figure.add_gridspec(3, 2)
+    span = int(60 / COARSE_DT)  # a minute of the record
+    windows = (("start (force rms about 3)", runs["coarse"][0]["skip"][0]),
+               ("end (force rms about 15)", len(t) - span))
+    for row, (title, start) in enumerate(windows):
+        ax = figure.add_subplot(grid[row, :])
+        window = slice(start, start + span)
+        ax.plot(t[window], y[window], "k.", markersize=4, label="measured y (every sample)")
+        for (name, (result, simulated)), colour in zip(runs.items(), ("tab:red", "tab:blue")):
+            ax.plot(t[window], simulated[window], color=colour,
+                    label=f"{name} model (fit {result['outputs']['y']['fit_percent']:.1f}%)")
+        ax.set_title(f"validation record, {title}")
+        ax.set_xlabel("t (s)")
+        ax.legend(loc="upper right", fontsize=8)
+    outputs = runs["coarse"][0]["outputs"]["y"]
+    for col, (check, title) in enumerate(
+            ((outputs["autocorrelation"], "autocorrelation of the error"),
+             (outputs["cross_correlation"]["x"], "cross-correlation of the error with x"))):
+        ax = figure.add_subplot(grid[2, col])
+        ax.stem(check["lags"], check["values"], basefmt="k-")
+        ax.axhline(check["band99"], color="tab:blue", linestyle="--", label="99% band")
+        ax.axhline(-check["band99"], color="tab:blue", linestyle="--")
+        ax.set_title(f"coarse model: {title}", fontsize=10)
+        ax.set_xlabel("lag (samples)")
+        ax.legend(fontsize=8)
+    figure.tight_layout()
+    figure.savefig(plot, dpi=90)
+
+
 def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--samples", default="100000,1000000")
     parser.add_argument("--noise", default="0,0.02,0.05,0.1,0.2")
     parser.add_argument("--seed", type=int, default=3)
     parser.add_argument("--coarse-samples", type=int, default=300000)
+    parser.add_argument("--validation-samples", type=int, default=20000)
     parser.add_argument("--plot")
+    parser.add_argument("--validation-plot")
     args = parser.parse_args()
     sizes = [int(n) for n in args.samples.split(",")]
     levels = [float(f) for f in args.noise.split(",")]
@@ -133,9 +239,11 @@ def main():
                 errors = [(results[n, f][method][p] - t) / t for p, t in TRUTH.items()]
                 print(f"{n:>8} {f:>6.0%}  {method:<18}" + "".join(f"{e:>+12.3%}" for e in errors))
     n = args.coarse_samples
-    for method, estimates in coarse(n, args.seed).items():
+    coarse_estimates = coarse(n, args.seed)
+    for method, estimates in coarse_estimates.items():
         errors = [(estimates[p] - t) / t for p, t in TRUTH.items()]
         print(f"{n:>8} {0.01:>6.0%}  {method:<18}" + "".join(f"{e:>+12.3%}" for e in errors))
+    validation(args.validation_samples, args.seed, coarse_estimates, args.validation_plot)
     if args.plot:
         import matplotlib
         matplotlib.use("Agg")
