@@ -237,6 +237,27 @@ TEST_SUITE("validate") {
     CHECK(result.skip[0] == 1000);
   }
 
+  TEST_CASE("a model without inputs is compared over its whole free response") {
+    const Model model = parse_model(
+        "model decay\nstate y, v\nparam c = 0.4, k = 4\ny' = v\nv' = -c*v - k*y\n", "decay.mom");
+    // y = exp(-a t) cos(w t), a = c/2, w = sqrt(k - a^2): the exact free decay from y = 1.
+    const double a = 0.2, w = std::sqrt(4 - a * a), dt = 0.01;
+    std::vector<double> t, y;
+    for (int n = 0; n < 3000; ++n) {
+      t.push_back(n * dt);
+      y.push_back(std::exp(-a * t.back()) * std::cos(w * t.back()));
+    }
+    MemoryData data;
+    data.columns = {{"t", t.data(), 1}, {"y", y.data(), 1}};
+    data.rows = t.size();
+    const ValidateResult result =
+        validate(model, DataSource::memory(data), with_parameters(model, {}));
+    CHECK(result.skip == std::vector<std::size_t>{0});
+    CHECK(result.outputs[0].fit > 99.9);
+    CHECK(result.outputs[0].cross.empty());
+    CHECK(format_text(result).find("the model has no input") != std::string::npos);
+  }
+
   TEST_CASE("an unstable model ends with the time, the run and the state") {
     const Model model = model_file("duffing.mom");
     const Recorder recorder = simulated(model, duffing_options(model, 5000));

@@ -276,21 +276,21 @@ class Interpolator {
 //
 // Example:
 //   RecordSimulator sim(model, parameter_values(model, {}), {Interpolation::kSinc}, 0.01, 2);
-//   auto states = sim.run({x}, {y0, v0}, 0.0, 1);  // states[j][n]: state j at row n
+//   auto states = sim.run({x}, {y0, v0}, 0.0, 1, x.size());  // states[j][n]: state j at row n
 class RecordSimulator {
  public:
   // One interpolation method per model input; `substeps` from 1 to kMaxSubsteps. Throws
   // ModelError as CompiledModel does.
   RecordSimulator(const Model& model, std::vector<GiNaC::numeric> parameters,
                   std::vector<Interpolation> methods, double dt, int substeps = 1);
-  // `inputs[i][n]`: input i at row n, all of the same length; `initial`: one value per state.
-  // Returns states[j][n], the state j at row n, for the first `rows` rows (all when 0). Throws
-  // Error naming the time (`start` + n dt), the run and the state when the simulation blows up
-  // or meets a point where the derivatives cannot be solved for, and std::invalid_argument for
-  // arrays of the wrong sizes.
+  // `inputs[i][n]`: input i at row n, at least `rows` of them; `initial`: one value per state.
+  // Returns states[j][n], the state j at row n, for `rows` rows. Throws Error naming the time
+  // (`start` + n dt), the run and the state when the simulation blows up or meets a point where
+  // the derivatives cannot be solved for, and std::invalid_argument for arrays of the wrong
+  // sizes.
   std::vector<std::vector<double>> run(const std::vector<std::vector<double>>& inputs,
                                        const std::vector<double>& initial, double start,
-                                       std::size_t run_number, std::size_t rows = 0) const;
+                                       std::size_t run_number, std::size_t rows) const;
 
   static constexpr int kMaxSubsteps = 64;
 

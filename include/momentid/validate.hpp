@@ -138,7 +138,8 @@ struct ValidateResult {
   Replay replay;
   // Rows left out at the start of each run. Chosen (skip_chosen): the first row after which a
   // perturbation of the initial state by 10% of each state's spread stays below 1% of its size
-  // in the simulation, searched over the first half of the run.
+  // in the simulation, searched over the first half of the run; none for a model without
+  // inputs, whose response is that to its initial state.
   std::vector<std::size_t> skip;
   bool skip_chosen = false;
   std::vector<OutputFit> outputs;  // the measured states, in model order

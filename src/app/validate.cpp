@@ -224,8 +224,8 @@ Replay replay(const Model& model, const DataSource& source, const ReplayOptions&
                                   out.substeps);
   for (std::size_t r = 0; r < record.runs.size(); ++r) {
     const RecordRun& run = record.runs[r];
-    out.simulated.push_back(simulator.run(run_inputs(model, record, run), out.initial.back(),
-                                          run_start(run), run_label(record, r)));
+    out.simulated.push_back(simulator.run(run_inputs(model, record, run), out.initial[r],
+                                          run_start(run), run_label(record, r), run.rows()));
   }
   return out;
 }
@@ -463,7 +463,7 @@ ValidateResult validate(const Model& model, const DataSource& source,
     std::size_t skip = 0;
     if (options.skip) {
       skip = *options.skip;
-    } else {
+    } else if (!model.inputs().empty()) {
       const auto [row, distance] =
           forgetting_row(simulator, inputs_of(r), replay.initial[r], replay.simulated[r],
                          run_start(record.runs[r]), run_label(record, r));
@@ -610,12 +610,15 @@ std::string parameters_text(const ValidateResult& r) {
   return out;
 }
 
-std::string skip_text(const ValidateResult& r) {
+std::string skip_text(const ValidateResult& r, bool autonomous) {
   const auto [low, high] = std::minmax_element(r.skip.begin(), r.skip.end());
   std::string rows = *low == *high ? std::to_string(*low)
                                    : std::to_string(*low) + " to " + std::to_string(*high);
   std::string out = "the first " + rows + " rows of each run";
-  if (r.skip_chosen) {
+  if (r.skip_chosen && autonomous) {
+    out += " (the model has no input: its response is that to the initial state, which is "
+           "compared whole)";
+  } else if (r.skip_chosen) {
     out += " (until a perturbation of the initial state by 10% of each state's spread fell "
            "below 1% of its size)";
   }
@@ -669,7 +672,7 @@ std::string format_text(const ValidateResult& r) {
     out += (j ? ", " : "") + model.states()[j].name + " = " +
            number(replay.initial[0][j], "%.6g") + " from " + replay.initial_how[j];
   }
-  out += "\nskipped: " + skip_text(r) + "\n\n";
+  out += "\nskipped: " + skip_text(r, model.inputs().empty()) + "\n\n";
   char line[256];
   std::snprintf(line, sizeof line, "%-10s %10s %12s %9s %14s %12s\n", "output", "samples",
                 "rms error", "fit %", "rms first 10%", "rms rest");

@@ -104,9 +104,10 @@ Command add_validate(CLI::App& app) {
       ->delimiter(',');
   sub->add_option("--format", command->format, "output format")
       ->check(CLI::IsMember({"text", "json"}));
-  sub->add_option("--plot", command->plot, "draw the comparison into this SVG file");
+  auto* plot = sub->add_option("--plot", command->plot, "draw the comparison into this SVG file");
   sub->add_option("--window", command->window,
-                  "FROM:TO, the times the plot shows (default: the first 2000 compared rows)");
+                  "FROM:TO, the times the plot shows (default: the first 2000 compared rows)")
+      ->needs(plot);
   return {sub, [command] { return run_validate(*command); }};
 }
 
