@@ -66,6 +66,9 @@ struct Replay {
   std::vector<Interpolation> interpolation;  // per model input
   int substeps = 1;
   bool substeps_chosen = false;
+  // Chosen: how much halving the step changed the trial simulation (relative to each state's
+  // spread); at least ReplayOptions::kSubstepTolerance when even the most substeps fell short.
+  double substep_change = 0;
   std::vector<std::string> initial_how;      // per state, how its initial value was found
   std::vector<std::vector<double>> initial;  // per run, per state
   // simulated[r][j][n]: state j at row n of run r.

@@ -7,6 +7,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
+#include <tuple>
 
 #include "app/variables.hpp"
 #include "common/decimal.hpp"
@@ -160,8 +161,10 @@ std::size_t run_label(const Record& record, std::size_t r) {
 // The fewest substeps (1, 2, 4, ...) for which halving the step changes the simulation of the
 // first rows of the first run by less than ReplayOptions::kSubstepTolerance of each state's
 // spread.
-int chosen_substeps(const Model& model, const std::vector<GiNaC::numeric>& parameters,
-                    const Replay& replay) {
+// Also returns that change, which is above the tolerance when even kMaxSubsteps do not reach it.
+std::pair<int, double> chosen_substeps(const Model& model,
+                                       const std::vector<GiNaC::numeric>& parameters,
+                                       const Replay& replay) {
   const Record& record = replay.record;
   const RecordRun& run = record.runs.front();
   const std::size_t rows = std::min(run.rows(), ReplayOptions::kSubstepTrialRows);
@@ -170,26 +173,41 @@ int chosen_substeps(const Model& model, const std::vector<GiNaC::numeric>& param
     return RecordSimulator(model, parameters, replay.interpolation, record.dt, substeps)
         .run(inputs, replay.initial.front(), run_start(run), run_label(record, 0), rows);
   };
-  std::vector<std::vector<double>> coarse = simulate(1);
-  int substeps = 1;
-  for (; substeps < RecordSimulator::kMaxSubsteps; substeps *= 2) {
-    std::vector<std::vector<double>> fine = simulate(2 * substeps);
-    double worst = 0;
-    for (std::size_t j = 0; j < fine.size(); ++j) {
-      double mean = 0, squares = 0, change = 0;
-      for (double x : fine[j]) mean += x;
-      mean /= static_cast<double>(rows);
-      for (std::size_t n = 0; n < rows; ++n) {
-        squares += (fine[j][n] - mean) * (fine[j][n] - mean);
-        change = std::max(change, std::abs(fine[j][n] - coarse[j][n]));
-      }
-      const double spread = std::sqrt(squares / static_cast<double>(rows));
-      if (spread > 0) worst = std::max(worst, change / spread);
+  // A step too long for the model can blow the simulation up: that is a reason to halve it.
+  const auto attempt = [&](int substeps) -> std::optional<std::vector<std::vector<double>>> {
+    try {
+      return simulate(substeps);
+    } catch (const Error&) {
+      return std::nullopt;
     }
-    if (worst < ReplayOptions::kSubstepTolerance) break;
+  };
+  std::optional<std::vector<std::vector<double>>> coarse = attempt(1);
+  int substeps = 1;
+  double worst = INFINITY;
+  for (; substeps < RecordSimulator::kMaxSubsteps; substeps *= 2) {
+    std::optional<std::vector<std::vector<double>>> fine = attempt(2 * substeps);
+    if (coarse && fine) {
+      worst = 0;
+      for (std::size_t j = 0; j < fine->size(); ++j) {
+        const std::vector<double>& a = (*fine)[j];
+        const std::vector<double>& b = (*coarse)[j];
+        double mean = 0, squares = 0, change = 0;
+        for (double x : a) mean += x;
+        mean /= static_cast<double>(rows);
+        for (std::size_t n = 0; n < rows; ++n) {
+          squares += (a[n] - mean) * (a[n] - mean);
+          change = std::max(change, std::abs(a[n] - b[n]));
+        }
+        const double spread = std::sqrt(squares / static_cast<double>(rows));
+        if (spread > 0) worst = std::max(worst, change / spread);
+      }
+      if (worst < ReplayOptions::kSubstepTolerance) break;
+    }
     coarse = std::move(fine);
   }
-  return substeps;
+  // Even the shortest step blows up: the error of that simulation is the answer.
+  if (!coarse) simulate(substeps);
+  return {substeps, worst};
 }
 
 }  // namespace
@@ -217,7 +235,7 @@ Replay replay(const Model& model, const DataSource& source, const ReplayOptions&
     }
     out.substeps = *options.substeps;
   } else {
-    out.substeps = chosen_substeps(model, options.parameters, out);
+    std::tie(out.substeps, out.substep_change) = chosen_substeps(model, options.parameters, out);
     out.substeps_chosen = true;
   }
   const RecordSimulator simulator(model, options.parameters, out.interpolation, record.dt,
@@ -455,6 +473,15 @@ ValidateResult validate(const Model& model, const DataSource& source,
                         " is a column of the data: there is nothing to compare");
   }
 
+  if (replay.substep_change >= ReplayOptions::kSubstepTolerance) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%.2g", replay.substep_change);
+    result.warnings.push_back(
+        "even " + std::to_string(replay.substeps) +
+        " Runge-Kutta steps per sample change the simulation by " + text +
+        " of its spread when halved: the sample interval is too coarse for the model's fastest "
+        "dynamics with these values, and the simulation error is part of the fit");
+  }
   result.skip_chosen = !options.skip;
   const RecordSimulator simulator(model, result.parameters, replay.interpolation, record.dt,
                                   replay.substeps);
@@ -661,11 +688,13 @@ std::string format_text(const ValidateResult& r) {
     out += "input " + model.inputs()[i].name + ": " +
            interpolation_name(replay.interpolation[i]) + " between samples\n";
   }
+  const bool converged =
+      replay.substeps_chosen && replay.substep_change < ReplayOptions::kSubstepTolerance;
   out += "integration: " + std::to_string(replay.substeps) + " Runge-Kutta step" +
          (replay.substeps == 1 ? "" : "s") + " per sample" +
-         (replay.substeps_chosen ? " (halving the step changes the simulation by less than 1e-6 "
-                                   "of each state's spread)"
-                                 : "") +
+         (converged ? " (halving the step changes the simulation by less than 1e-6 of each "
+                      "state's spread)"
+                    : "") +
          "\n";
   out += "initial state (run " + std::to_string(run_label(record, 0)) + "): ";
   for (std::size_t j = 0; j < model.states().size(); ++j) {
