@@ -157,12 +157,12 @@ std::vector<std::vector<double>> RecordSimulator::run(const std::vector<std::vec
       if (!step(y.data(), u0.data(), um.data(), u1.data(), h)) {
         fail("met a point where the derivatives cannot be solved for", s);
       }
-    }
-    const int blown = step.blown_up(y.data());
-    if (blown >= 0) {
-      fail("blew up: state '" + model_.states()[static_cast<std::size_t>(blown)].name +
-               "' reached " + shortest_decimal(y[static_cast<std::size_t>(blown)]),
-           s + 1);
+      const int blown = step.blown_up(y.data());
+      if (blown >= 0) {
+        fail("blew up: state '" + model_.states()[static_cast<std::size_t>(blown)].name +
+                 "' reached " + shortest_decimal(y[static_cast<std::size_t>(blown)]),
+             s + 1);
+      }
     }
   }
   return states;
