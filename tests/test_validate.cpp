@@ -4,6 +4,7 @@
 #include <doctest/doctest.h>
 
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <numeric>
 
@@ -273,7 +274,8 @@ TEST_SUITE("validate") {
   TEST_CASE("estimates are read from identify's JSON, and bad files are located") {
     const Model model = model_file("duffing.mom");
     const auto write = [](const std::string& text) {
-      const std::string path = "validate_estimates.json";
+      const std::string path =
+          (std::filesystem::temp_directory_path() / "momentid_validate_estimates.json").string();
       std::ofstream(path) << text;
       return path;
     };
