@@ -37,6 +37,9 @@ struct DataOptions {
   std::size_t min_rows = 2;
   // Pair input row n with state row n + input_shift (0: the same row).
   long input_shift = 0;
+  // Per channel (states, then inputs): a value subtracted from every sample as it is read, such
+  // as the channel's mean; empty: none.
+  std::vector<double> offsets;
 };
 
 // What one pass over a data file yields.

@@ -45,6 +45,9 @@ struct IdentifyOptions {
   // channels by their Hermite polynomials: nullopt estimates each measured state's noise
   // variance from its autocorrelation; a map gives the variances by name (absent: none).
   std::optional<std::map<std::string, double>> noise;
+  // Model variables whose mean is removed before the moments are formed (a sensor offset on a
+  // symmetric system): the means come from a first pass over the data.
+  std::vector<std::string> center;
 
   static constexpr std::size_t kMinBatches = 2, kMaxBatches = 10000, kDefaultBatches = 50;
   static constexpr int kMaxDegree = 12;
@@ -79,6 +82,7 @@ struct IdentifyResult {
   DataMoments data;
   Estimate estimate;
   bool gmm = false;  // the optimally weighted estimate is the main result
+  std::map<std::string, double> centered;  // the means removed, by variable (IdentifyOptions::center)
 
   // The main result: the optimally weighted estimate when it was asked for and could be
   // computed, otherwise least squares.
@@ -101,7 +105,16 @@ IdentifyResult identify(const Model& model, const DataSource& source,
 std::string format_text(const IdentifyResult& result);
 // The JSON layout documented in the README ("momentid identify").
 std::string format_json(const IdentifyResult& result);
-// Every warning about the result: its status, the solver's, and the data's smoothness.
+// The warnings that make a result doubtful (README, "Warnings"): a J test that rejects the model
+// (p < 0.01), a stationarity identity violated (|z| > 4), a state with a mean of more than 0.2
+// of its standard deviation when the model is symmetric and its inputs have none.
+std::vector<std::string> doubts(const IdentifyResult& result);
+// "ok", "doubtful" (there are doubts), "rank-deficient" or "nothing-identifiable".
+std::string status_name(const IdentifyResult& result);
+// Every warning about the result, the most serious first: the solver's status, the doubts, an
+// optimal weighting that could not be made, weakly determined parameters (standard error above
+// 10% of the value) and strongly correlated pairs (|rho| > 0.95), then the data's smoothness and
+// noise and the solver's other remarks.
 std::vector<std::string> warnings(const IdentifyResult& result);
 
 }  // namespace momentid

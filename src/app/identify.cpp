@@ -17,7 +17,16 @@ namespace {
 // estimate cannot tell noise from the roughness of a state whose derivative holds a held input.
 constexpr double kNoiseWarning = 0.02;
 
-constexpr std::size_t kBatchesPerLaggedEquation = 4;
+// Four batches per equation keep the optimal weighting's finite-sample correction (see
+// solve_rows) below 1.5.
+constexpr std::size_t kBatchesPerEquation = 4;
+
+// What makes a result doubtful, and what draws a warning (README, "Warnings").
+constexpr double kIdentityZ = 4;        // |z| of a stationarity identity's violation
+constexpr double kJRejection = 0.01;    // p-value of the J test
+constexpr double kOffset = 0.2;         // |mean| / standard deviation of a channel
+constexpr double kWeakRelativeError = 0.1;
+constexpr double kStrongCorrelation = 0.95;
 
 }  // namespace
 
@@ -36,6 +45,12 @@ void IdentifyOptions::validate(const Model& model) const {
                      std::to_string(input_shift));
   }
   const auto& variables = model.variables();
+  for (const std::string& name : center) {
+    if (std::find(variables.begin(), variables.end(), name) == variables.end()) {
+      throw UsageError("--center: '" + name + "' is not a state or input of model " +
+                       model.name());
+    }
+  }
   for (const auto& column : columns) {
     if (std::find(variables.begin(), variables.end(), column.first) == variables.end()) {
       throw UsageError("--columns: '" + column.first + "' is not a state or input of model " +
@@ -96,6 +111,35 @@ int lag_window(const IdentifyResult& r) {
                     LagOptions::kMaxLag);
 }
 
+// The offsets of DataOptions for the channels `states` then `inputs`: the mean of each channel
+// that `center` names, from a pass of its own, and 0 for the others; none when `center` names
+// none of them. Records the means removed in `centered`.
+std::vector<double> channel_offsets(const DataSource& source, const std::vector<std::string>& states,
+                                    const std::vector<std::string>& inputs,
+                                    const DataOptions& options,
+                                    const std::vector<std::string>& center,
+                                    std::map<std::string, double>& centered) {
+  std::vector<std::string> channels = states;
+  channels.insert(channels.end(), inputs.begin(), inputs.end());
+  centered.clear();
+  if (std::none_of(channels.begin(), channels.end(), [&](const std::string& c) {
+        return std::find(center.begin(), center.end(), c) != center.end();
+      })) {
+    return {};
+  }
+  DataOptions first = options;
+  first.offsets.clear();
+  const DataMoments means = moments_from_data(source, states, inputs, std::vector<Monomial>{},
+                                              first);
+  std::vector<double> out(channels.size(), 0.0);
+  for (std::size_t c = 0; c < channels.size(); ++c) {
+    if (std::find(center.begin(), center.end(), channels[c]) == center.end()) continue;
+    out[c] = means.channels[c].mean;
+    centered[channels[c]] = out[c];
+  }
+  return out;
+}
+
 }  // namespace
 
 IdentifyResult identify(const Model& model, const DataSource& source,
@@ -126,8 +170,16 @@ IdentifyResult identify(const Model& model, const DataSource& source,
     std::vector<std::string> states, inputs;
     for (const auto& d : model.states()) states.push_back(d.name);
     for (const auto& d : model.inputs()) inputs.push_back(d.name);
-    result.data = moments_from_data(source, states, inputs, result.moments, data_options);
     result.gmm = options.gmm.value_or(false);
+    // The optimal weighting estimates the equations' covariance from the batches.
+    if (result.gmm && !options.batches) {
+      data_options.batches =
+          std::clamp(kBatchesPerEquation * result.system.equations.size(),
+                     IdentifyOptions::kDefaultBatches, IdentifyOptions::kMaxBatches);
+    }
+    data_options.offsets =
+        channel_offsets(source, states, inputs, data_options, options.center, result.centered);
+    result.data = moments_from_data(source, states, inputs, result.moments, data_options);
     result.estimate = solve(result.system, result.data.estimates, {.gmm = result.gmm});
     return result;
   }
@@ -176,13 +228,14 @@ IdentifyResult identify(const Model& model, const DataSource& source,
                        ": use fewer lags or instruments");
     }
     result.lagged_moments = probe.moments;
-    // The optimal weighting estimates the equations' covariance from the batches: with four
-    // batches per equation its finite-sample correction (see solve_rows) stays below 1.5.
+    // The optimal weighting estimates the equations' covariance from the batches.
     if (!options.batches) {
       data_options.batches =
-          std::clamp(kBatchesPerLaggedEquation * probe.rows.a.size(),
+          std::clamp(kBatchesPerEquation * probe.rows.a.size(),
                      IdentifyOptions::kDefaultBatches, IdentifyOptions::kMaxBatches);
     }
+    data_options.offsets =
+        channel_offsets(source, states, inputs, data_options, options.center, result.centered);
     result.data = moments_from_data(source, states, inputs, probe.moments, data_options);
     if (!result.data.time_step) {
       throw DataError({source.name(), 1, 1, ""},
@@ -228,30 +281,136 @@ IdentifyResult identify(const Model& model, const DataSource& source,
   return result;
 }
 
+namespace {
+
+// Whether every term of every equation has an odd degree, counting a derivative as a factor:
+// then the model is unchanged when every state and input changes sign, and zero-mean inputs
+// give zero-mean states.
+bool symmetric(const Model& model) {
+  for (const Equation& eq : model.equations()) {
+    for (const Term& t : eq.terms) {
+      int degree = t.derivative >= 0 ? 1 : 0;
+      for (int e : t.monomial) degree += e;
+      if (degree % 2 == 0) return false;
+    }
+  }
+  return true;
+}
+
+std::string figure(double x, const char* format = "%.2g") {
+  char text[32];
+  std::snprintf(text, sizeof text, format, x);
+  return text;
+}
+
+}  // namespace
+
+std::vector<std::string> doubts(const IdentifyResult& r) {
+  std::vector<std::string> out;
+  const Estimate& e = r.estimate;
+  if (e.j_pvalue && *e.j_pvalue < kJRejection && r.gmm) {
+    out.push_back("the J test rejects the model (p = " + figure(*e.j_pvalue) +
+                  "): its moment equations disagree with each other more than their errors "
+                  "allow. A term may be missing, a noise or an offset not modelled, or the "
+                  "record too coarsely sampled: check the estimates with 'momentid validate' "
+                  "before using them");
+  }
+  for (const IdentityCheck& c : e.identities) {
+    if (!(std::abs(c.z) > kIdentityZ)) continue;
+    out.push_back("the stationarity identity " + c.identity + " is violated (z = " +
+                  figure(c.z, "%.3g") +
+                  "): the record is not stationary (a drift, a start-up transient, runs joined "
+                  "end to end), or its columns are not what the model's kinematic equations say "
+                  "(v is not y', or the channels are shifted in time)");
+  }
+  if (symmetric(*r.model)) {
+    const auto offset = [](const ChannelStatistics& c) {
+      return c.variance > 0 && std::abs(c.mean) > kOffset * std::sqrt(c.variance);
+    };
+    const auto& channels = r.data.channels;
+    const bool inputs_centred = std::none_of(channels.begin(), channels.end(), [&](const auto& c) {
+      return c.is_input && offset(c);
+    });
+    for (const ChannelStatistics& c : channels) {
+      if (c.is_input || !inputs_centred || !offset(c)) continue;
+      out.push_back("'" + c.name + "' has the mean " + figure(c.mean, "%.3g") + ", " +
+                    figure(std::abs(c.mean) / std::sqrt(c.variance)) +
+                    " of its standard deviation, but model " + r.model->name() +
+                    " is symmetric (every term odd) and its inputs have no mean, so its states "
+                    "have none: a sensor offset? It biases the estimates; if it is one, remove "
+                    "it with --center " + c.name);
+    }
+  }
+  return out;
+}
+
+std::string status_name(const IdentifyResult& r) {
+  switch (r.estimate.status) {
+    case Estimate::Status::kRankDeficient:
+      return "rank-deficient";
+    case Estimate::Status::kNothingIdentifiable:
+      return "nothing-identifiable";
+    case Estimate::Status::kOk:
+      break;
+  }
+  return doubts(r).empty() ? "ok" : "doubtful";
+}
+
 std::vector<std::string> warnings(const IdentifyResult& r) {
-  std::vector<std::string> w = smoothness_warnings(r.data);
+  std::vector<std::string> w;
+  if (r.estimate.status != Estimate::Status::kOk) w.push_back(r.estimate.message);
+  const std::vector<std::string> doubt = doubts(r);
+  w.insert(w.end(), doubt.begin(), doubt.end());
+  // The optimal weighting that was asked for and could not be made: before the rest.
+  for (const std::string& s : r.estimate.warnings) {
+    if (s.rfind("no optimally weighted estimate", 0) == 0) w.push_back(s);
+  }
+  const std::vector<ParameterEstimate>& parameters = r.parameters();
+  for (const ParameterEstimate& p : parameters) {
+    if (!p.identifiable || !(std::abs(p.std_error) > kWeakRelativeError * std::abs(p.estimate))) {
+      continue;
+    }
+    w.push_back("'" + p.name + "' is weakly determined: its standard error is " +
+                figure(100 * p.std_error / std::abs(p.estimate), "%.3g") +
+                "% of its value. Excite the system more, add multipliers (--degree) or fix "
+                "parameters you know");
+  }
+  const auto& correlation =
+      r.gmm && !r.estimate.gmm_parameters.empty() ? r.estimate.gmm_correlation
+                                                  : r.estimate.correlation;
+  for (std::size_t i = 0; i < correlation.size(); ++i) {
+    for (std::size_t j = i + 1; j < correlation.size(); ++j) {
+      if (!(std::abs(correlation[i][j]) > kStrongCorrelation)) continue;
+      w.push_back("the estimates of '" + parameters[i].name + "' and '" + parameters[j].name +
+                  "' are strongly correlated (" + figure(correlation[i][j], "%.3f") +
+                  "): the data determine a combination of them better than each");
+    }
+  }
+  std::vector<std::string> rest = smoothness_warnings(r.data);
   for (const ChannelStatistics& c : r.data.channels) {
     const std::optional<double> fraction = c.noise_fraction();
     if (c.is_input || !fraction || *fraction < kNoiseWarning) continue;
-    char text[32];
-    std::snprintf(text, sizeof text, "%.2g%%", 100 * *fraction);
-    w.push_back("'" + c.name + "' carries white noise of about " + text +
-                " of its standard deviation (the excess of its autocorrelation at lag 0): " +
-                (r.lagged ? "the lagged equations correct its powers, but the estimates are "
-                            "less certain and may still be biased"
-                          : "it biases the zero-lag estimates (the lagged equations, --lags, "
-                            "correct for it in part)"));
+    rest.push_back("'" + c.name + "' carries white noise of about " +
+                   figure(100 * *fraction) +
+                   "% of its standard deviation (the excess of its autocorrelation at lag 0): " +
+                   (r.lagged ? "the lagged equations correct its powers, but the estimates are "
+                               "less certain and may still be biased"
+                             : "it biases the zero-lag estimates (the lagged equations, --lags, "
+                               "correct for it in part)"));
   }
   for (const auto& [name, tau] : r.correlation_lags) {
     if (tau > 0) continue;
-    w.push_back("'" + name + "' stays correlated across lags " +
-                std::to_string(r.lagged->first_lag) + ".." + std::to_string(r.lagged->last_lag) +
-                " (its autocorrelation stays above 1/e): the lagged equations see less than a "
-                "correlation time of it; give --lags a longer window (with fewer instruments if "
-                "the moments run out) or keep every n-th sample of the record");
+    rest.push_back("'" + name + "' stays correlated across lags " +
+                   std::to_string(r.lagged->first_lag) + ".." +
+                   std::to_string(r.lagged->last_lag) +
+                   " (its autocorrelation stays above 1/e): the lagged equations see less than a "
+                   "correlation time of it; give --lags a longer window (with fewer instruments "
+                   "if the moments run out) or keep every n-th sample of the record");
   }
-  if (r.estimate.status != Estimate::Status::kOk) w.insert(w.begin(), r.estimate.message);
-  w.insert(w.end(), r.estimate.warnings.begin(), r.estimate.warnings.end());
+  for (const std::string& s : r.estimate.warnings) {
+    if (s.rfind("no optimally weighted estimate", 0) != 0) rest.push_back(s);
+  }
+  w.insert(w.end(), rest.begin(), rest.end());
   return w;
 }
 
@@ -331,6 +490,11 @@ std::string format_text(const IdentifyResult& r) {
   if (d.time_step) out << ", dt = " << number(*d.time_step);
   out << ", input hold " << hold_name(d.hold) << "\n";
   if (r.lagged) out << method_text(r) << "\n";
+  if (!r.centered.empty()) {
+    out << "means removed (--center):";
+    for (const auto& [name, mean] : r.centered) out << " " << name << " " << number(mean, "%.4g");
+    out << "\n";
+  }
   out << "\n";
   if (r.gmm && !e.gmm_parameters.empty()) {
     out << "optimally weighted estimate (two-step GMM)\n";
@@ -341,6 +505,10 @@ std::string format_text(const IdentifyResult& r) {
   }
   table(out, e.parameters);
   out << "\ndiagnostics\n";
+  out << "  status: " << status_name(r) << "\n";
+  const std::vector<std::string> all = warnings(r);
+  if (all.empty()) out << "  warnings: none\n";
+  for (const std::string& w : all) out << "  warning: " << w << "\n";
   out << "  equations: " << e.rows << ", rank " << e.rank << " of " << e.parameters.size()
       << ", condition number " << number(e.condition, "%.3g") << "\n";
   out << "  batches: " << e.batches << " (standard errors from the spread of batch means)\n";
@@ -356,9 +524,6 @@ std::string format_text(const IdentifyResult& r) {
           << " (z = " << number(c.z, "%.2f") << ")\n";
     }
   }
-  const std::vector<std::string> all = warnings(r);
-  if (all.empty()) out << "  warnings: none\n";
-  for (const std::string& w : all) out << "  warning: " << w << "\n";
   return out.str();
 }
 
@@ -400,6 +565,14 @@ std::string format_json(const IdentifyResult& r) {
     }
     out << "}}";
   }
+  if (!r.centered.empty()) {
+    out << ",\n  \"centered\": {";
+    std::size_t k = 0;
+    for (const auto& [name, mean] : r.centered) {
+      out << (k++ ? ", " : "") << json_string(name) << ": " << json_number(mean);
+    }
+    out << "}";
+  }
   out << ",\n  \"moments\": {";
   for (std::size_t k = 0; k < d.estimates.mean.size(); ++k) {
     const std::string name = r.lagged ? lagged_moment_text(r.channels, r.lagged_moments[k])
@@ -408,9 +581,7 @@ std::string format_json(const IdentifyResult& r) {
   }
   out << "}";
   out << ",\n  \"diagnostics\": {\n    \"status\": "
-      << json_string(e.status == Estimate::Status::kOk              ? "ok"
-                     : e.status == Estimate::Status::kRankDeficient ? "rank-deficient"
-                                                                    : "nothing-identifiable")
+      << json_string(status_name(r))
       << ",\n    \"rows\": " << e.rows << ",\n    \"rank\": " << e.rank
       << ",\n    \"condition\": " << json_number(e.condition) << ",\n    \"batches\": " << e.batches
       << ",\n    \"samples\": " << d.rows << ",\n    \"runs\": " << d.runs
@@ -424,6 +595,15 @@ std::string format_json(const IdentifyResult& r) {
     out << (i ? ", " : "") << "{\"identity\": " << json_string(c.identity)
         << ", \"violation\": " << json_number(c.violation) << ", \"z\": " << json_number(c.z)
         << "}";
+  }
+  out << "],\n    \"correlation\": [";
+  const auto& correlation = gmm ? e.gmm_correlation : e.correlation;
+  for (std::size_t i = 0; i < correlation.size(); ++i) {
+    out << (i ? ", " : "") << "[";
+    for (std::size_t j = 0; j < correlation[i].size(); ++j) {
+      out << (j ? ", " : "") << json_number(correlation[i][j]);
+    }
+    out << "]";
   }
   out << "],\n    \"warnings\": [";
   const std::vector<std::string> all = warnings(r);

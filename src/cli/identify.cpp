@@ -26,6 +26,7 @@ struct IdentifyCommand {
   std::optional<std::string> lags;
   std::optional<std::string> instruments;
   std::string noise = "auto";
+  std::vector<std::string> center;
 };
 
 // `--noise auto|none|NAME=VARIANCE,...`.
@@ -64,6 +65,11 @@ int run_identify(IdentifyCommand& command) {
   options.noise = noise_option(model, command.noise);
   if (command.instruments) {
     options.instruments = parse_instrument_list(model, *command.instruments, "--instruments");
+  }
+  if (command.center.size() == 1 && command.center[0] == "all") {
+    options.center = model.variables();
+  } else {
+    options.center = command.center;
   }
   const IdentifyResult result = identify(model, DataSource::file(command.data), options);
   std::cout << (command.format == "json" ? format_json(result) : format_text(result));
@@ -115,6 +121,10 @@ Command add_identify(CLI::App& app) {
   sub->add_option("--noise", command->noise,
                   "white sensor noise on the states for the lagged equations: auto (estimated), "
                   "none, or NAME=VARIANCE,...");
+  sub->add_option("--center", command->center,
+                  "remove the means of these channels (NAME,... or all) before forming the "
+                  "moments: a sensor offset on a symmetric system")
+      ->delimiter(',');
   return {sub, [command] { return run_identify(*command); }};
 }
 

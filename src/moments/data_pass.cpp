@@ -7,6 +7,7 @@
 #include <deque>
 #include <exception>
 #include <mutex>
+#include <stdexcept>
 #include <thread>
 
 namespace momentid {
@@ -216,6 +217,9 @@ DataMoments moments_from_data(const DataSource& source, const std::vector<std::s
     out.hold = hold && *hold == "zoh" ? InputHold::kZeroOrderHold : InputHold::kSample;
   }
   const std::size_t channels = request.names.size();
+  if (!options.offsets.empty() && options.offsets.size() != channels) {
+    throw std::invalid_argument("moments_from_data: one offset per channel needed");
+  }
   const bool any_moments = !keys.empty();
   MomentAccumulator accumulator(std::move(keys), states.size(), inputs.size(), out.hold,
                                 options.batches);
@@ -244,6 +248,12 @@ DataMoments moments_from_data(const DataSource& source, const std::vector<std::s
         accumulator.start_run();
         lags.start_run();
         ++out.runs;
+      }
+      if (!options.offsets.empty()) {
+        double* values = block->values.data();
+        for (std::size_t r = 0; r < block->rows; ++r) {
+          for (std::size_t c = 0; c < channels; ++c) values[r * channels + c] -= options.offsets[c];
+        }
       }
       if (options.input_shift == 0) {
         accumulator.add(block->values.data(), block->rows);

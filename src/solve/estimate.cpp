@@ -129,6 +129,29 @@ Estimate solve(const MomentSystem& system, const MomentEstimates& estimates,
   return out;
 }
 
+namespace {
+
+// cov(i, j) / sqrt(cov(i, i) cov(j, j)), NaN where a variance is not positive or a parameter
+// is not identifiable.
+std::vector<std::vector<double>> correlation_of(const MatrixXd& cov,
+                                                const std::vector<bool>& identifiable) {
+  const auto n = static_cast<std::size_t>(cov.rows());
+  std::vector<std::vector<double>> out(n, std::vector<double>(n, kNaN));
+  for (std::size_t i = 0; i < n; ++i) {
+    for (std::size_t j = 0; j < n; ++j) {
+      const auto a = static_cast<Eigen::Index>(i), b = static_cast<Eigen::Index>(j);
+      const double scale = std::sqrt(cov(a, a) * cov(b, b));
+      // Symmetric to the last bit, whatever the rounding of the products that made cov.
+      if (identifiable[i] && identifiable[j] && scale > 0) {
+        out[i][j] = (cov(a, b) + cov(b, a)) / 2 / scale;
+      }
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
 Estimate solve_rows(const MomentRows& system, const std::vector<std::string>& names,
                     const MomentEstimates& estimates, const std::vector<std::vector<double>>& c,
                     const SolveOptions& options) {
@@ -273,6 +296,8 @@ Estimate solve_rows(const MomentRows& system, const std::vector<std::string>& na
     e.ci_high = e.estimate + t975 * e.std_error;
   }
 
+  if (out.batches >= 2) out.correlation = correlation_of(cov_theta, identifiable);
+
   if (out.batches < 10) {
     out.warnings.push_back("only " + std::to_string(out.batches) +
                            " batches: the standard errors are rough (use a longer record or "
@@ -348,6 +373,7 @@ Estimate solve_rows(const MomentRows& system, const std::vector<std::string>& na
     e.ci_high = e.estimate + t975 * e.std_error;
     out.gmm_parameters.push_back(e);
   }
+  out.gmm_correlation = correlation_of(cov_gmm_scaled, identifiable);
   out.j_dof = static_cast<int>(s_rank - params);
   if (out.j_dof > 0) {
     // With S from the batches, J is Hotelling's T^2 of the d = m - q combinations of the
