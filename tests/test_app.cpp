@@ -7,6 +7,7 @@
 #include <cmath>
 #include <filesystem>
 #include <limits>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -70,7 +71,37 @@ struct SineArrays {
 
 }  // namespace
 
+// A result holding only a model and the estimates of its parameters, in declaration order.
+momentid::IdentifyResult result_with(const momentid::Model& model,
+                                     const std::vector<double>& estimates) {
+  momentid::IdentifyResult r;
+  r.model = std::make_shared<const momentid::Model>(model);
+  for (std::size_t p = 0; p < estimates.size(); ++p) {
+    r.estimate.parameters.push_back({model.parameters()[p].name, estimates[p]});
+  }
+  return r;
+}
+
 TEST_SUITE("app") {
+  TEST_CASE("the identified model is printed with the estimates substituted") {
+    const momentid::Model duffing = model_file("duffing.mom");
+    CHECK(momentid::identified_equations(result_with(duffing, {0.5, 4, 1.25})) ==
+          std::vector<std::string>{"y' = v", "v' = -4*y - 0.5*v - 1.25*y^3 + x"});
+    // A parameter before the derivative divides the rest; a constant comes last; two
+    // derivatives in one equation stay on the left.
+    const momentid::Model model = momentid::parse_model(
+        "model m\nstate y, v, w\ninput x\nparam m, c, b\ny' = v\n"
+        "m*v' = -c*v - y + 2*x*y + b\nv' + 2*w' = -w + x\n",
+        "m.mom");
+    CHECK(momentid::identified_equations(result_with(model, {2, 0.5, 0.1})) ==
+          std::vector<std::string>{"y' = v", "v' = -0.5*y - 0.25*v + y*x + 0.05",
+                                   "v' + 2*w' = -w + x"});
+    momentid::IdentifyResult deficient = result_with(duffing, {0.5, 4, 1});
+    deficient.estimate.status = momentid::Estimate::Status::kRankDeficient;
+    CHECK(momentid::identified_equations(deficient).empty());
+  }
+
+
   TEST_CASE("identify gives the same numbers from columns in memory as from the file") {
     const DuffingFile file(20000, 2);
     const std::vector<std::string> names{"t", "y", "v", "x", "run"};

@@ -101,7 +101,13 @@ struct IdentifyResult {
 IdentifyResult identify(const Model& model, const DataSource& source,
                         const IdentifyOptions& options = {});
 
-// A table (parameter, estimate, standard error, 95% interval), then the diagnostics.
+// The model's equations with the estimates (of parameters()) substituted, each solved for its
+// derivative when it has one with a number in front (`v' = -0.500938*v - 4.00069*y + x`),
+// otherwise with the derivative terms on the left; empty unless the status is ok or doubtful.
+std::vector<std::string> identified_equations(const IdentifyResult& result);
+
+// A table (parameter, estimate, standard error, 95% interval), the identified model, then the
+// diagnostics.
 std::string format_text(const IdentifyResult& result);
 // The JSON layout documented in the README ("momentid identify").
 std::string format_json(const IdentifyResult& result);

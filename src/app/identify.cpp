@@ -344,6 +344,99 @@ std::vector<std::string> doubts(const IdentifyResult& r) {
   return out;
 }
 
+std::vector<std::string> identified_equations(const IdentifyResult& r) {
+  const Model& model = *r.model;
+  const std::vector<ParameterEstimate>& parameters = r.parameters();
+  if (r.estimate.status != Estimate::Status::kOk) return {};
+  // Sums of coefficient * monomial, in the order the terms first appear.
+  using Sum = std::vector<std::pair<Monomial, double>>;
+  const auto add = [](Sum& into, const Monomial& m, double c) {
+    const auto it = std::find_if(into.begin(), into.end(), [&](const auto& t) { return t.first == m; });
+    if (it == into.end()) {
+      into.emplace_back(m, c);
+    } else {
+      it->second += c;
+    }
+  };
+  // Terms in the states first (by degree, then in the order of the states), then those with an
+  // input, then the constant.
+  const std::size_t state_count = model.states().size();
+  const auto order = [&](const Monomial& m) {
+    int degree = 0, input_degree = 0;
+    for (std::size_t v = 0; v < m.size(); ++v) {
+      degree += m[v];
+      if (v >= state_count) input_degree += m[v];
+    }
+    const int group = degree == 0 ? 2 : input_degree > 0 ? 1 : 0;
+    std::vector<int> key{group, degree};
+    for (int e : m) key.push_back(-e);
+    return key;
+  };
+  // "-4*y - 0.5*v + x", terms of zero coefficient left out, "0" for none.
+  const auto text = [&](Sum sum) {
+    std::stable_sort(sum.begin(), sum.end(),
+                     [&](const auto& a, const auto& b) { return order(a.first) < order(b.first); });
+    std::string out;
+    for (const auto& [m, c] : sum) {
+      if (c == 0) continue;
+      const bool constant = std::all_of(m.begin(), m.end(), [](int e) { return e == 0; });
+      const std::string magnitude = figure(std::abs(c), "%.6g");
+      std::string term = constant       ? magnitude
+                         : magnitude == "1" ? format_monomial(model, m)
+                                            : magnitude + "*" + format_monomial(model, m);
+      out += (out.empty() ? (c < 0 ? "-" : "") : (c < 0 ? " - " : " + ")) + term;
+    }
+    return out.empty() ? std::string("0") : out;
+  };
+  std::vector<std::string> out;
+  for (const Equation& eq : model.equations()) {
+    // lhs - rhs = sum of derivative terms + sum of the others = 0.
+    std::vector<std::pair<std::pair<int, Monomial>, double>> derivatives;
+    Sum rest;
+    for (const Term& t : eq.terms) {
+      double c = t.coefficient.to_double();
+      if (t.parameter >= 0) c *= parameters[static_cast<std::size_t>(t.parameter)].estimate;
+      if (t.derivative < 0) {
+        add(rest, t.monomial, -c);
+        continue;
+      }
+      const auto key = std::make_pair(t.derivative, t.monomial);
+      const auto it = std::find_if(derivatives.begin(), derivatives.end(),
+                                   [&](const auto& d) { return d.first == key; });
+      if (it == derivatives.end()) {
+        derivatives.emplace_back(key, c);
+      } else {
+        it->second += c;
+      }
+    }
+    const bool constant_factor = derivatives.size() == 1 &&
+                                 std::all_of(derivatives[0].first.second.begin(),
+                                             derivatives[0].first.second.end(),
+                                             [](int e) { return e == 0; });
+    if (constant_factor && derivatives[0].second != 0) {
+      // One derivative with a number in front: solved for it.
+      for (auto& [m, c] : rest) c /= derivatives[0].second;
+      out.push_back(model.states()[static_cast<std::size_t>(derivatives[0].first.first)].name +
+                    "' = " + text(rest));
+      continue;
+    }
+    std::stable_sort(derivatives.begin(), derivatives.end(),
+                     [](const auto& a, const auto& b) { return a.first < b.first; });
+    std::string left;
+    for (const auto& [key, c] : derivatives) {
+      if (c == 0) continue;
+      const std::string name = model.states()[static_cast<std::size_t>(key.first)].name + "'";
+      const bool plain = std::all_of(key.second.begin(), key.second.end(), [](int e) { return e == 0; });
+      const std::string factor = plain ? name : format_monomial(model, key.second) + "*" + name;
+      const std::string magnitude = figure(std::abs(c), "%.6g");
+      left += (left.empty() ? (c < 0 ? "-" : "") : (c < 0 ? " - " : " + ")) +
+              (magnitude == "1" ? factor : magnitude + "*" + factor);
+    }
+    out.push_back((left.empty() ? std::string("0") : left) + " = " + text(rest));
+  }
+  return out;
+}
+
 std::string status_name(const IdentifyResult& r) {
   switch (r.estimate.status) {
     case Estimate::Status::kRankDeficient:
@@ -504,6 +597,11 @@ std::string format_text(const IdentifyResult& r) {
     out << "least-squares estimate\n";
   }
   table(out, e.parameters);
+  const std::vector<std::string> equations = identified_equations(r);
+  if (!equations.empty()) {
+    out << "\nidentified model\n";
+    for (const std::string& line : equations) out << "  " << line << "\n";
+  }
   out << "\ndiagnostics\n";
   out << "  status: " << status_name(r) << "\n";
   const std::vector<std::string> all = warnings(r);
@@ -573,6 +671,12 @@ std::string format_json(const IdentifyResult& r) {
     }
     out << "}";
   }
+  out << ",\n  \"equations\": [";
+  const std::vector<std::string> equations = identified_equations(r);
+  for (std::size_t i = 0; i < equations.size(); ++i) {
+    out << (i ? ", " : "") << json_string(equations[i]);
+  }
+  out << "]";
   out << ",\n  \"moments\": {";
   for (std::size_t k = 0; k < d.estimates.mean.size(); ++k) {
     const std::string name = r.lagged ? lagged_moment_text(r.channels, r.lagged_moments[k])
