@@ -83,6 +83,36 @@ momentid::IdentifyResult result_with(const momentid::Model& model,
 }
 
 TEST_SUITE("app") {
+  TEST_CASE("a fixed parameter is known: the others are estimated with it, in both methods") {
+    const DuffingFile file(50000);
+    const auto source = momentid::DataSource::file(file.path.string());
+    for (const bool lagged : {false, true}) {
+      momentid::IdentifyOptions options;
+      if (lagged) options.lags = std::pair{3, 150};
+      const momentid::IdentifyResult free = momentid::identify(file.model, source, options);
+      options.fixed = {{"k", 4.0}};
+      const momentid::IdentifyResult fixed = momentid::identify(file.model, source, options);
+      const auto& p = fixed.parameters();
+      REQUIRE(p.size() == 3);
+      CHECK(p[1].fixed);
+      CHECK(p[1].estimate == 4.0);
+      CHECK(p[1].std_error == 0);
+      CHECK(!p[0].fixed);
+      // Knowing k, the others agree with the free fit.
+      for (std::size_t i : {0UL, 2UL}) {
+        const auto& f = free.parameters()[i];
+        const std::string method = lagged ? "lagged " : "zero-lag ";
+        MESSAGE(method << p[i].name << ": free " << f.estimate << " +- " << f.std_error
+                       << ", k fixed " << p[i].estimate << " +- " << p[i].std_error);
+        CHECK(p[i].std_error > 0);
+        CHECK(std::abs(p[i].estimate - f.estimate) < 3 * f.std_error);
+      }
+      CHECK(std::isnan(fixed.estimate.correlation[1][0]));
+      CHECK(momentid::format_json(fixed).find("\"fixed\": true") != std::string::npos);
+      CHECK(momentid::format_text(fixed).find("fixed\n") != std::string::npos);
+    }
+  }
+
   TEST_CASE("the identified model is printed with the estimates substituted") {
     const momentid::Model duffing = model_file("duffing.mom");
     CHECK(momentid::identified_equations(result_with(duffing, {0.5, 4, 1.25})) ==

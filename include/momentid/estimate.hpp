@@ -18,6 +18,7 @@ struct ParameterEstimate {
   double std_error = 0;
   double ci_low = 0, ci_high = 0;  // 95% interval
   bool identifiable = true;
+  bool fixed = false;  // given, not estimated (SolveOptions::fixed): error 0
 };
 
 // The sample violation of a pure-data identity E[m] = value, in standard errors.
@@ -53,6 +54,9 @@ struct Estimate {
 
 struct SolveOptions {
   bool gmm = false;
+  // Per parameter: a value that makes it known, its terms moved to the right-hand side; empty,
+  // or nullopt for a parameter: estimated.
+  std::vector<std::optional<double>> fixed;
   // Each row divided by the length of its coefficients (at the estimated moments), so that
   // equations of different sizes count alike; the delta method takes these weights as fixed.
   bool normalise_rows = false;

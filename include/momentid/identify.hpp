@@ -45,6 +45,8 @@ struct IdentifyOptions {
   // channels by their Hermite polynomials: nullopt estimates each measured state's noise
   // variance from its autocorrelation; a map gives the variances by name (absent: none).
   std::optional<std::map<std::string, double>> noise;
+  // Parameters taken as known, by name: their terms move to the right-hand side.
+  std::map<std::string, double> fixed;
   // Model variables whose mean is removed before the moments are formed (a sensor offset on a
   // symmetric system): the means come from a first pass over the data.
   std::vector<std::string> center;

@@ -309,9 +309,11 @@ class RecordSimulator {
 // ModelError naming a parameter that has no value.
 std::vector<GiNaC::numeric> parameter_values(const Model& model,
                                              const std::vector<std::string>& assignments);
-// The same starting from `base` (one value per parameter) instead of the nominal values.
+// The same starting from `base` (one value per parameter) instead of the nominal values, with
+// messages naming `option`.
 std::vector<GiNaC::numeric> parameter_values(const Model& model,
                                              const std::vector<std::string>& assignments,
-                                             const std::vector<GiNaC::numeric>& base);
+                                             const std::vector<GiNaC::numeric>& base,
+                                             const std::string& option = "--set");
 
 }  // namespace momentid

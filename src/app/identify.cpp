@@ -45,6 +45,18 @@ void IdentifyOptions::validate(const Model& model) const {
                      std::to_string(input_shift));
   }
   const auto& variables = model.variables();
+  for (const auto& [name, value] : fixed) {
+    if (model.parameter_index(name) < 0) {
+      throw UsageError("--fix: '" + name + "' is not a parameter of model " + model.name());
+    }
+    if (!std::isfinite(value)) {
+      throw UsageError("--fix: the value of '" + name + "' must be a finite number");
+    }
+  }
+  if (!model.parameters().empty() && fixed.size() == model.parameters().size()) {
+    throw UsageError("--fix: every parameter of model " + model.name() +
+                     " is fixed: there is nothing to estimate");
+  }
   for (const std::string& name : center) {
     if (std::find(variables.begin(), variables.end(), name) == variables.end()) {
       throw UsageError("--center: '" + name + "' is not a state or input of model " +
@@ -140,6 +152,17 @@ std::vector<double> channel_offsets(const DataSource& source, const std::vector<
   return out;
 }
 
+// IdentifyOptions::fixed as SolveOptions::fixed wants it: per parameter, in declaration order.
+std::vector<std::optional<double>> fixed_values(const Model& model,
+                                                const std::map<std::string, double>& fixed) {
+  std::vector<std::optional<double>> out;
+  for (const Declaration& p : model.parameters()) {
+    const auto it = fixed.find(p.name);
+    out.push_back(it == fixed.end() ? std::nullopt : std::optional<double>(it->second));
+  }
+  return out;
+}
+
 }  // namespace
 
 IdentifyResult identify(const Model& model, const DataSource& source,
@@ -180,7 +203,8 @@ IdentifyResult identify(const Model& model, const DataSource& source,
     data_options.offsets =
         channel_offsets(source, states, inputs, data_options, options.center, result.centered);
     result.data = moments_from_data(source, states, inputs, result.moments, data_options);
-    result.estimate = solve(result.system, result.data.estimates, {.gmm = result.gmm});
+    result.estimate = solve(result.system, result.data.estimates,
+                            {.gmm = result.gmm, .fixed = fixed_values(model, options.fixed)});
     return result;
   }
 
@@ -277,7 +301,9 @@ IdentifyResult identify(const Model& model, const DataSource& source,
   result.gmm = options.gmm.value_or(true);
   result.estimate =
       solve_rows(rows.rows, names, result.data.estimates, result.data.estimates.covariance(),
-                 {.gmm = result.gmm, .normalise_rows = true});
+                 {.gmm = result.gmm,
+                  .fixed = fixed_values(model, options.fixed),
+                  .normalise_rows = true});
   return result;
 }
 
@@ -528,9 +554,10 @@ void table(std::ostringstream& out, const std::vector<ParameterEstimate>& parame
                 "estimate", "std error", "95% interval");
   out << line;
   for (const auto& p : parameters) {
-    const std::string interval = p.identifiable
-                                     ? "[" + number(p.ci_low) + ", " + number(p.ci_high) + "]"
-                                     : "not identifiable";
+    const std::string interval = p.fixed          ? "fixed"
+                                 : p.identifiable ? "[" + number(p.ci_low) + ", " +
+                                                        number(p.ci_high) + "]"
+                                                  : "not identifiable";
     std::snprintf(line, sizeof line, "  %-*s  %14s  %12s  %s\n", static_cast<int>(width),
                   p.name.c_str(), number(p.estimate).c_str(), number(p.std_error, "%.3g").c_str(),
                   interval.c_str());
@@ -636,7 +663,8 @@ std::string format_json(const IdentifyResult& r) {
              ": {\"estimate\": " + json_number(p.estimate) +
              ", \"std_error\": " + json_number(p.std_error) + ", \"ci95\": [" +
              json_number(p.ci_low) + ", " + json_number(p.ci_high) +
-             "], \"identifiable\": " + (p.identifiable ? "true" : "false") + "}";
+             "], \"identifiable\": " + (p.identifiable ? "true" : "false") +
+             ", \"fixed\": " + (p.fixed ? "true" : "false") + "}";
     }
     return out + "\n  }";
   };

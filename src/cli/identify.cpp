@@ -10,6 +10,7 @@
 
 #include "cli/commands.hpp"
 #include "momentid/model.hpp"
+#include "momentid/simulate.hpp"
 
 namespace momentid::cli {
 namespace {
@@ -27,6 +28,7 @@ struct IdentifyCommand {
   std::optional<std::string> instruments;
   std::string noise = "auto";
   std::vector<std::string> center;
+  std::vector<std::string> fix;
 };
 
 // `--noise auto|none|NAME=VARIANCE,...`.
@@ -65,6 +67,13 @@ int run_identify(IdentifyCommand& command) {
   options.noise = noise_option(model, command.noise);
   if (command.instruments) {
     options.instruments = parse_instrument_list(model, *command.instruments, "--instruments");
+  }
+  // --fix k=9,...: the values read as --set reads them.
+  const std::vector<GiNaC::numeric> values = parameter_values(
+      model, command.fix, std::vector<GiNaC::numeric>(model.parameters().size(), 0), "--fix");
+  for (const std::string& item : command.fix) {
+    const std::string name = item.substr(0, item.find('='));
+    options.fixed[name] = values[static_cast<std::size_t>(model.parameter_index(name))].to_double();
   }
   if (command.center.size() == 1 && command.center[0] == "all") {
     options.center = model.variables();
@@ -121,6 +130,10 @@ Command add_identify(CLI::App& app) {
   sub->add_option("--noise", command->noise,
                   "white sensor noise on the states for the lagged equations: auto (estimated), "
                   "none, or NAME=VARIANCE,...");
+  sub->add_option("--fix", command->fix,
+                  "parameters taken as known, NAME=VALUE,...: their terms move to the right-hand "
+                  "side")
+      ->delimiter(',');
   sub->add_option("--center", command->center,
                   "remove the means of these channels (NAME,... or all) before forming the "
                   "moments: a sensor offset on a symmetric system")

@@ -438,22 +438,22 @@ bool is_decimal(std::string_view text) {
 namespace {
 
 std::vector<numeric> assign(const Model& model, const std::vector<std::string>& assignments,
-                            std::vector<std::optional<numeric>> values) {
+                            std::vector<std::optional<numeric>> values, const std::string& option) {
   for (const std::string& a : assignments) {
     const std::size_t eq = a.find('=');
     if (eq == std::string::npos) {
-      throw UsageError("--set: expected NAME=VALUE, found '" + a + "'");
+      throw UsageError(option + ": expected NAME=VALUE, found '" + a + "'");
     }
     const std::string name = a.substr(0, eq), text = a.substr(eq + 1);
     const int p = model.parameter_index(name);
     if (p < 0) {
       std::string known;
       for (const Declaration& d : model.parameters()) known += (known.empty() ? "" : ", ") + d.name;
-      throw UsageError("--set: '" + name + "' is not a parameter of model " + model.name() +
+      throw UsageError(option + ": '" + name + "' is not a parameter of model " + model.name() +
                        " (parameters: " + known + ")");
     }
     if (!is_decimal(text)) {
-      throw UsageError("--set: the value of '" + name + "' must be a number, found '" + text + "'");
+      throw UsageError(option + ": the value of '" + name + "' must be a number, found '" + text + "'");
     }
     const bool negative = text[0] == '-';
     const std::string digits = (text[0] == '-' || text[0] == '+') ? text.substr(1) : text;
@@ -461,7 +461,7 @@ std::vector<numeric> assign(const Model& model, const std::vector<std::string>& 
     try {
       v = parse_exact_number(digits);
     } catch (const std::out_of_range& e) {
-      throw UsageError(std::string("--set: ") + e.what());
+      throw UsageError(option + ": " + e.what());
     }
     values[static_cast<std::size_t>(p)] = negative ? -v : v;
   }
@@ -484,16 +484,18 @@ std::vector<numeric> parameter_values(const Model& model,
                                       const std::vector<std::string>& assignments) {
   std::vector<std::optional<numeric>> values;
   for (const Declaration& p : model.parameters()) values.push_back(p.value);
-  return assign(model, assignments, std::move(values));
+  return assign(model, assignments, std::move(values), "--set");
 }
 
 std::vector<numeric> parameter_values(const Model& model,
                                       const std::vector<std::string>& assignments,
-                                      const std::vector<numeric>& base) {
+                                      const std::vector<numeric>& base,
+                                      const std::string& option) {
   if (base.size() != model.parameters().size()) {
     throw std::invalid_argument("parameter_values: one base value per parameter needed");
   }
-  return assign(model, assignments, std::vector<std::optional<numeric>>(base.begin(), base.end()));
+  return assign(model, assignments, std::vector<std::optional<numeric>>(base.begin(), base.end()),
+                option);
 }
 
 DataMetadata simulation_metadata(const Model& model, const SimulationOptions& options,

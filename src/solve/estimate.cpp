@@ -1,11 +1,13 @@
 #include "momentid/estimate.hpp"
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <map>
 #include <set>
 #include <sstream>
+#include <stdexcept>
 
 #include "solve/distributions.hpp"
 
@@ -152,9 +154,81 @@ std::vector<std::vector<double>> correlation_of(const MatrixXd& cov,
 
 }  // namespace
 
+namespace {
+
+// The system with the fixed parameters' columns moved to the right-hand side: b - a_p v_p.
+MomentRows without_fixed(const MomentRows& system, const std::vector<std::optional<double>>& fixed) {
+  MomentRows out;
+  for (std::size_t r = 0; r < system.a.size(); ++r) {
+    std::vector<MomentRows::Entry> row;
+    MomentRows::Entry b = system.b[r];
+    for (std::size_t p = 0; p < system.a[r].size(); ++p) {
+      const MomentRows::Entry& e = system.a[r][p];
+      if (!fixed[p]) {
+        row.push_back(e);
+        continue;
+      }
+      b.constant -= *fixed[p] * e.constant;
+      for (const auto& [k, w] : e.moments) b.moments.emplace_back(k, -*fixed[p] * w);
+    }
+    out.a.push_back(std::move(row));
+    out.b.push_back(std::move(b));
+  }
+  return out;
+}
+
+// The estimate of the free parameters spread back over all of them: the fixed ones with their
+// values, no error and no correlation.
+Estimate with_fixed(Estimate free, const std::vector<std::string>& names,
+                    const std::vector<std::optional<double>>& fixed) {
+  const auto spread = [&](const std::vector<ParameterEstimate>& list) {
+    std::vector<ParameterEstimate> out;
+    for (std::size_t p = 0, k = 0; p < names.size(); ++p) {
+      if (fixed[p]) {
+        out.push_back({names[p], *fixed[p], 0, *fixed[p], *fixed[p], true, true});
+      } else {
+        out.push_back(list[k++]);
+      }
+    }
+    return out;
+  };
+  const auto spread_matrix = [&](const std::vector<std::vector<double>>& m) {
+    std::vector<std::vector<double>> out(names.size(), std::vector<double>(names.size(), kNaN));
+    std::vector<std::size_t> index;
+    for (std::size_t p = 0; p < names.size(); ++p) {
+      if (!fixed[p]) index.push_back(p);
+    }
+    for (std::size_t i = 0; i < index.size(); ++i) {
+      for (std::size_t j = 0; j < index.size(); ++j) out[index[i]][index[j]] = m[i][j];
+    }
+    return out;
+  };
+  free.parameters = spread(free.parameters);
+  if (!free.gmm_parameters.empty()) free.gmm_parameters = spread(free.gmm_parameters);
+  if (!free.correlation.empty()) free.correlation = spread_matrix(free.correlation);
+  if (!free.gmm_correlation.empty()) free.gmm_correlation = spread_matrix(free.gmm_correlation);
+  return free;
+}
+
+}  // namespace
+
 Estimate solve_rows(const MomentRows& system, const std::vector<std::string>& names,
                     const MomentEstimates& estimates, const std::vector<std::vector<double>>& c,
                     const SolveOptions& options) {
+  if (std::any_of(options.fixed.begin(), options.fixed.end(), [](const auto& v) { return v; })) {
+    if (options.fixed.size() != names.size()) {
+      throw std::invalid_argument("solve_rows: one fixed value or nullopt per parameter needed");
+    }
+    std::vector<std::string> free_names;
+    for (std::size_t p = 0; p < names.size(); ++p) {
+      if (!options.fixed[p]) free_names.push_back(names[p]);
+    }
+    SolveOptions free_options = options;
+    free_options.fixed.clear();
+    return with_fixed(solve_rows(without_fixed(system, options.fixed), free_names, estimates, c,
+                                 free_options),
+                      names, options.fixed);
+  }
   const auto rows = static_cast<Eigen::Index>(system.a.size());
   const auto params = static_cast<Eigen::Index>(names.size());
   const auto k_count = static_cast<Eigen::Index>(estimates.mean.size());
