@@ -141,7 +141,7 @@ TEST_SUITE("app") {
     for (std::size_t c = 0; c < names.size(); ++c) {
       data.columns.push_back({names[c], columns[c].data()});
     }
-    data.metadata.add_line({{"input-hold", "zoh"}});
+    data.metadata.add_line({{"input-hold", "zoh"}, {"dt", "0.01"}});
     const momentid::IdentifyOptions options{.degree = 3, .batches = 20, .gmm = true};
     const auto from_file =
         momentid::identify(file.model, momentid::DataSource::file(file.path.string()), options);

@@ -20,6 +20,9 @@ struct ColumnRequest {
   std::map<std::string, std::string> rename;
   // Fewer data rows than this is an error naming the file (the estimation needs them).
   std::size_t min_rows = 2;
+  // The sample interval, overriding the data's: the time column is then neither read nor
+  // checked, and time_step() returns it.
+  std::optional<double> dt;
 };
 
 // Consecutive rows of one run (one continuous record). A block never spans two runs.
@@ -34,9 +37,13 @@ struct DataBlock {
 //
 // CSV: optional `# momentid: ...` metadata lines (and other `#` comment lines) before a header
 // row of column names; then one row per sample. The separator is taken from the header: comma,
-// else semicolon, else blanks. An optional `t` column holds the sample times (uniform steps
-// within a run), an optional `run` column (integers) separates records; other columns not
-// requested are ignored. A UTF-8 byte order mark and CR LF line ends are accepted.
+// else semicolon, else blanks. An optional time column holds the sample times (uniform steps
+// within a run): `t`, or else the first named `time` in any case, either optionally followed by
+// a unit in brackets or parentheses (`t [s]`, `Time (s)`), or the one ColumnRequest::rename maps
+// `t` to. Steps may differ from the first by 1e-6 of it plus 2.4e-7 of |t|, the rounding of
+// float32 time stamps; time_step() is the mean step. An optional `run` column (integers)
+// separates records; other columns not requested are ignored. A UTF-8 byte order mark and CR LF
+// line ends are accepted.
 //
 // Binary (see README, "Data files"): the 8 bytes `MOMNTID1`, a little-endian uint32 H, H bytes
 // of text holding the metadata lines and the header row exactly as in CSV, then the rows as
@@ -58,9 +65,9 @@ class DataReader {
   virtual const DataMetadata& metadata() const = 0;
   // The column names of the file's header, in file order.
   virtual const std::vector<std::string>& columns() const = 0;
-  // The sample interval: from the `t` column when there is one (checked against the metadata's
-  // `dt` when both are present), otherwise from the metadata, otherwise none. Known after the
-  // first two rows of the first run have been read.
+  // The sample interval: ColumnRequest::dt when given; else the metadata's `dt` (the time
+  // column's first step is checked against it); else the mean step of the time column over the
+  // rows read so far, final once every row has been read; else none.
   virtual std::optional<double> time_step() const = 0;
   // Reads up to `max_rows` rows into `block`; false (and block.rows == 0) at the end.
   virtual bool next(DataBlock& block, std::size_t max_rows) = 0;

@@ -56,6 +56,24 @@ void read_names(const std::string& path, std::string_view line, Header& header) 
 
 }  // namespace
 
+bool is_time_name(std::string_view name) {
+  std::string lower;
+  for (char c : name) lower += static_cast<char>(c >= 'A' && c <= 'Z' ? c - 'A' + 'a' : c);
+  std::string_view rest = lower;
+  if (rest.starts_with("time")) {
+    rest.remove_prefix(4);
+  } else if (rest.starts_with("t")) {
+    rest.remove_prefix(1);
+  } else {
+    return false;
+  }
+  rest = trim(rest);
+  if (rest.empty()) return true;
+  // A unit: "[s]", "(ms)", ...
+  return rest.size() >= 2 && ((rest.front() == '[' && rest.back() == ']') ||
+                              (rest.front() == '(' && rest.back() == ')'));
+}
+
 Header read_header(const std::string& path, LineReader& lines, bool binary) {
   Header header;
   std::string_view line;
@@ -109,13 +127,29 @@ ColumnMap map_columns(const std::string& path, const Header& header, const Colum
     listed += " and " + std::to_string(header.names.size() - 12) + " more";
   }
 
+  // The time column: the one `t` is renamed to, else `t`, else the first time-like name.
+  std::string time_name;
+  if (const auto renamed = request.rename.find("t"); renamed != request.rename.end()) {
+    time_name = renamed->second;
+    if (std::find(header.names.begin(), header.names.end(), time_name) == header.names.end()) {
+      fail(location(1), "missing column '" + time_name + "' for 't' (the header has: " + listed +
+                            ")");
+    }
+  } else if (std::find(header.names.begin(), header.names.end(), "t") != header.names.end()) {
+    time_name = "t";
+  } else {
+    const auto found = std::find_if(header.names.begin(), header.names.end(), is_time_name);
+    if (found != header.names.end()) time_name = *found;
+  }
+  if (request.dt) time_name.clear();
+
   std::vector<std::string> file_names;
   for (const std::string& name : request.names) {
     const auto renamed = request.rename.find(name);
     file_names.push_back(renamed == request.rename.end() ? name : renamed->second);
   }
   const auto matters = [&](const std::string& name) {
-    return name == "t" || name == "run" ||
+    return (!time_name.empty() && name == time_name) || name == "run" ||
            std::find(file_names.begin(), file_names.end(), name) != file_names.end();
   };
 
@@ -132,7 +166,9 @@ ColumnMap map_columns(const std::string& path, const Header& header, const Colum
                std::to_string(header.name_columns[seen->second]) + ")");
     }
   }
-  if (const auto t = first.find("t"); t != first.end()) map.time = static_cast<int>(t->second);
+  if (const auto t = first.find(time_name); !time_name.empty() && t != first.end()) {
+    map.time = static_cast<int>(t->second);
+  }
   if (const auto r = first.find("run"); r != first.end()) map.run = static_cast<int>(r->second);
   if (map.time >= 0) map.needed[map.time] = 1;
   if (map.run >= 0) map.needed[map.run] = 1;

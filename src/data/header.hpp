@@ -5,6 +5,7 @@
 #include <cstddef>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -37,6 +38,10 @@ struct ColumnMap {
   int time = -1;
   int run = -1;
 };
+
+// Whether a column name reads as a time: `t` or `time` in any case, optionally followed by a
+// unit in brackets or parentheses (`t [s]`, `Time (s)`).
+bool is_time_name(std::string_view name);
 
 // The fields that fill `request`. Throws DataError, located in the header row, for a missing
 // column or a needed one that appears twice.

@@ -9,11 +9,12 @@
 namespace momentid::data {
 namespace {
 
-// Relative tolerance of a time step: far above the rounding of times written with ten or more
-// significant digits, far below a missing sample or a changed step.
+// Relative tolerance of a time step: far below a missing sample or a changed step.
 constexpr double kStepTolerance = 1e-6;
-// Steps are differences of times: rounding of t itself adds an error proportional to |t|.
-constexpr double kTimeRounding = 1e-9;
+// Steps are differences of times, compared with the first step: rounding of the times adds an
+// error proportional to |t|. Four roundings of float32 time stamps (2^-24 of |t| each), which
+// also covers times printed with seven or more significant digits.
+constexpr double kTimeRounding = 4 * 5.9604644775390625e-8;
 
 }  // namespace
 
@@ -50,7 +51,7 @@ bool StreamReader::next(DataBlock& block, std::size_t max_rows) {
       current_run_ = keys.run;
       has_previous_time_ = false;
     }
-    if (map_.time >= 0) check_time(keys.t);
+    if (map_.time >= 0 && !request_.dt) check_time(keys.t);
     if (run_starts && block.rows > 0) {
       // The row begins the next block: a block never spans two runs.
       pending_.assign(row, row + width);
@@ -66,6 +67,13 @@ bool StreamReader::next(DataBlock& block, std::size_t max_rows) {
   block.values.resize(block.rows * width);
   rows_read_ += block.rows;
   return block.rows > 0;
+}
+
+std::optional<double> StreamReader::time_step() const {
+  if (request_.dt) return request_.dt;
+  // The metadata's interval is exact where the time column, checked against it, is rounded.
+  if (header_.metadata_dt || steps_ == 0) return header_.metadata_dt;
+  return span_ / static_cast<double>(steps_);
 }
 
 void StreamReader::check_time(double t) {
@@ -91,6 +99,10 @@ void StreamReader::check_time(double t) {
                                           " (t = " + shortest_decimal(t) +
                                           "; samples must be equally spaced)");
     }
+  }
+  if (has_previous_time_) {
+    span_ += t - previous_time_;
+    ++steps_;
   }
   previous_time_ = t;
   has_previous_time_ = true;

@@ -27,7 +27,7 @@ class StreamReader : public DataReader {
 
   const std::vector<std::string>& columns() const override { return header_.names; }
 
-  std::optional<double> time_step() const override { return step_ ? step_ : header_.metadata_dt; }
+  std::optional<double> time_step() const override;
 
   std::size_t rows_read() const override { return rows_read_; }
 
@@ -56,7 +56,9 @@ class StreamReader : public DataReader {
   // Fails when the data have fewer than the requested minimum of rows.
   void finish(std::size_t rows);
 
-  std::optional<double> step_;
+  std::optional<double> step_;  // the first step, the reference of the others
+  double span_ = 0;             // the steps' sum, over all runs
+  std::size_t steps_ = 0;
   double previous_time_ = 0;
   bool has_previous_time_ = false;
   bool started_ = false;
