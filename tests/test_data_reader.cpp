@@ -275,6 +275,55 @@ TEST_SUITE("data reader") {
     CHECK(read_text(text, columns({"y"})).rows == 100);
   }
 
+  TEST_CASE("accepts float32 time stamps and takes their mean step as the interval") {
+    // t = 1000 + n * 0.01 stored as float32: each stamp off by up to 3e-5, a step by up to 0.6%.
+    std::string text = "t,y\n";
+    const int rows = 2000;
+    for (int n = 0; n < rows; ++n) {
+      text += decimal(static_cast<double>(static_cast<float>(1000.0 + n * 0.01))) + ",1\n";
+    }
+    const Contents contents = read_text(text, columns({"y"}));
+    CHECK(contents.rows == rows);
+    const double span = static_cast<double>(static_cast<float>(1000.0 + (rows - 1) * 0.01)) -
+                        static_cast<double>(static_cast<float>(1000.0));
+    CHECK(*contents.time_step == doctest::Approx(span / (rows - 1)).epsilon(1e-12));
+    CHECK(std::abs(*contents.time_step / 0.01 - 1) < 1e-5);
+    // A missing sample is still a gap.
+    std::string gap = "t,y\n";
+    for (int n = 0; n < 20; ++n) {
+      if (n != 12) gap += decimal(static_cast<double>(static_cast<float>(1000.0 + n * 0.01))) + ",1\n";
+    }
+    const TempFile file(gap);
+    const DataError e = error_from<DataError>([&] { read_file(file.path(), columns({"y"})); });
+    CHECK(e.message().find("non-uniform time step") == 0);
+    CHECK(e.location().line == 14);
+  }
+
+  TEST_CASE("recognises a time column named time or t with a unit, or mapped to t") {
+    for (const char* header : {"time", "Time", "TIME", "t [s]", "Time (s)", "time[ms]"}) {
+      const Contents contents =
+          read_text(std::string(header) + ",y\n0,1\n0.5,2\n1,3\n", columns({"y"}));
+      CHECK(contents.time_step == 0.5);
+    }
+    // Not times: the column is not read, and its steps are not checked.
+    for (const char* header : {"timestamp", "temperature", "t_end"}) {
+      CHECK(read_text(std::string(header) + ",y\n0,1\n7,2\n8,3\n", columns({"y"})).time_step ==
+            std::nullopt);
+    }
+    CHECK(read_text("clock,y\n0,1\n0.25,2\n0.5,3\n", columns({"y"}, {{"t", "clock"}}))
+              .time_step == 0.25);
+    check_read_error("clock,y\n0,1\n0.25,2\n", columns({"y"}, {{"t", "tick"}}),
+                     "missing column 'tick' for 't' (the header has: clock, y)", 1, 1, "clock,y");
+  }
+
+  TEST_CASE("a given sample interval overrides the time column, which is then not checked") {
+    ColumnRequest request = columns({"y"});
+    request.dt = 0.125;
+    const Contents contents = read_text("t,y\n0,1\n0.1,2\n0.7,3\n", request);
+    CHECK(contents.rows == 3);
+    CHECK(contents.time_step == 0.125);
+  }
+
   // --- Blocks and runs ------------------------------------------------------------------------
 
   TEST_CASE("splits blocks at max_rows and where the run changes") {

@@ -18,7 +18,8 @@ namespace momentid {
 struct CheckOptions {
   std::size_t lags = 9;                        // autocorrelations per channel, 1..kMaxLags
   std::optional<InputHold> hold;               // as IdentifyOptions::hold
-  std::map<std::string, std::string> columns;  // model variable -> data column
+  std::map<std::string, std::string> columns;  // model variable (or `t`) -> data column
+  std::optional<double> dt;                    // as IdentifyOptions::dt
   static constexpr std::size_t kMaxLags = 1000;
 
   // Throws UsageError for a number of lags out of range.

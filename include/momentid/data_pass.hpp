@@ -40,6 +40,8 @@ struct DataOptions {
   // Per channel (states, then inputs): a value subtracted from every sample as it is read, such
   // as the channel's mean; empty: none.
   std::vector<double> offsets;
+  // The sample interval, overriding the data's (ColumnRequest::dt).
+  std::optional<double> dt;
 };
 
 // What one pass over a data file yields.

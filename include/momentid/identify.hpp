@@ -32,8 +32,10 @@ struct IdentifyOptions {
   // Two-step optimally weighted estimate (GMM) with the J test, besides least squares; nullopt:
   // for the lagged equations only, whose many strongly correlated rows it weights.
   std::optional<bool> gmm;
-  // Model variable -> data column, for data whose columns have other names.
+  // Model variable (or `t`, the time) -> data column, for data whose columns have other names.
   std::map<std::string, std::string> columns;
+  // The sample interval, overriding the data's: the time column is then not read.
+  std::optional<double> dt;
   // Pair input row n with state row n + input_shift, within kMaxInputShift either way.
   long input_shift = 0;
   // Lagged moment equations (README, "Measured data") at lags first..last samples, with these

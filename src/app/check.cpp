@@ -6,6 +6,7 @@
 #include <optional>
 
 #include "app/variables.hpp"
+#include "data/header.hpp"
 #include "momentid/derive.hpp"
 #include "momentid/lagged.hpp"
 
@@ -56,8 +57,11 @@ CheckResult check(const DataSource& source, const Model* model, const CheckOptio
   } else {
     const std::vector<std::string> columns =
         source.open({.names = {}, .rename = {}, .min_rows = 0})->columns();
+    const auto time = options.columns.find("t");
     for (const std::string& c : columns) {
-      if (!c.empty() && c != "t" && c != "run") states.push_back(c);
+      const bool is_time = time != options.columns.end() ? c == time->second
+                                                         : c == "t" || data::is_time_name(c);
+      if (!c.empty() && !is_time && c != "run") states.push_back(c);
     }
   }
   std::optional<MomentSystem> system;
@@ -84,6 +88,7 @@ CheckResult check(const DataSource& source, const Model* model, const CheckOptio
   data_options.lags = options.lags;
   data_options.hold = options.hold;
   data_options.rename = options.columns;
+  data_options.dt = options.dt;
   result.data = moments_from_data(source, states, inputs, moments, data_options);
   if (system) result.identities = check_identities(*system, full_moments, result.data.estimates);
   result.warnings = smoothness_warnings(result.data);

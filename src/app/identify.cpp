@@ -63,7 +63,11 @@ void IdentifyOptions::validate(const Model& model) const {
                        model.name());
     }
   }
+  if (dt && !(std::isfinite(*dt) && *dt > 0)) {
+    throw UsageError("--dt: expected a positive number");
+  }
   for (const auto& column : columns) {
+    if (column.first == "t") continue;
     if (std::find(variables.begin(), variables.end(), column.first) == variables.end()) {
       throw UsageError("--columns: '" + column.first + "' is not a state or input of model " +
                        model.name());
@@ -177,6 +181,7 @@ IdentifyResult identify(const Model& model, const DataSource& source,
   data_options.rename = options.columns;
   data_options.min_rows = 2 * data_options.batches;
   data_options.input_shift = options.input_shift;
+  data_options.dt = options.dt;
   data_options.lags = 4;  // for the noise estimates
 
   // Which variables the data have: the lagged equations serve data without some state.

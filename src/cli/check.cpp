@@ -42,6 +42,9 @@ Command add_check(CLI::App& app) {
       ->check(CLI::Range(std::size_t{1}, CheckOptions::kMaxLags));
   sub->add_option("--input-hold", command->hold, "how the inputs were sampled")
       ->check(CLI::IsMember({"sample", "zoh"}));
+  sub->add_option("--dt", command->options.dt,
+                  "sample interval, overriding the data's: the time column is then not read")
+      ->check(CLI::PositiveNumber);
   sub->add_option("--columns", command->columns, "NAME=COLUMN: where a model variable is")
       ->delimiter(',');
   return {sub, [command] { return run_check(*command); }};

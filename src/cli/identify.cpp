@@ -130,6 +130,9 @@ Command add_identify(CLI::App& app) {
   sub->add_option("--noise", command->noise,
                   "white sensor noise on the states for the lagged equations: auto (estimated), "
                   "none, or NAME=VARIANCE,...");
+  sub->add_option("--dt", options.dt,
+                  "sample interval, overriding the data's: the time column is then not read")
+      ->check(CLI::PositiveNumber);
   sub->add_option("--fix", command->fix,
                   "parameters taken as known, NAME=VALUE,...: their terms move to the right-hand "
                   "side")

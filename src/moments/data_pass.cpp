@@ -206,6 +206,7 @@ DataMoments moments_from_data(const DataSource& source, const std::vector<std::s
   request.names.insert(request.names.end(), inputs.begin(), inputs.end());
   request.rename = options.rename;
   request.min_rows = options.min_rows;
+  request.dt = options.dt;
   std::unique_ptr<DataReader> reader = source.open(request);
 
   DataMoments out;
