@@ -281,12 +281,23 @@ multipliers 1, y2
           "multipliers skipped: 0\n");
   }
 
+  TEST_CASE("the automatic multipliers reach the model's own degree") {
+    // Van der Pol (mu*(1 - y^2)*v) is determined at degree 1 but estimated ten times better at
+    // degree 3; a linear model stays at degree 1.
+    const MomentSystem vdp = derive(momentid::testing::model_file("van_der_pol.mom"));
+    CHECK(vdp.equations.size() == derive(momentid::testing::model_file("van_der_pol.mom"),
+                                         {.degree = 3})
+                                      .equations.size());
+    const MomentSystem linear = derive(momentid::testing::model_file("kozin_4_1a.mom"));
+    CHECK(linear.equations.size() == 1);
+  }
+
   TEST_CASE("a kinematic equation of mixed degree does not start an endless identity search") {
     // y' = -y - y^3 + x relates moments of degree k to degree k + 2 without end; identities are
     // looked for only up to the equations' own degree.
     const Model model = momentid::parse_model(
         "state y, v\ninput x\nparam c\ny' = -y - y^3 + x\nv' = -c*v + y\n", "loop.mom");
-    const MomentSystem system = derive(model);
+    const MomentSystem system = derive(model, {.degree = 1});
     CHECK(system.generic_rank == 1);
     REQUIRE(system.identities.size() == 1);
     CHECK(momentid::format_moment(model, system.identities[0].moment) + " = " +

@@ -622,20 +622,29 @@ MomentSystem derive(const Model& model, const DeriveOptions& options) {
     }
     return system;
   } else {
-    // The lowest degree that determines every parameter even when odd moments vanish (as they
-    // do for symmetric systems under symmetric input); failing that, the lowest that does for
-    // generic moments.
+    // The lowest degree, at least the model's own (its highest power of the states and inputs,
+    // up to kMaxAutomaticDegree), that determines every parameter even when odd moments vanish
+    // (as they do for symmetric systems under symmetric input); failing that, the lowest that
+    // does for generic moments. Below the model's degree the system is square or nearly so,
+    // and its estimates are far poorer (README, "momentid derive").
+    int model_degree = 1;
+    for (const Equation& eq : equations) {
+      for (const Term& t : eq.terms) model_degree = std::max(model_degree, degree(t.monomial));
+    }
     const int parameters = static_cast<int>(model.parameters().size());
-    std::optional<MomentSystem> generic;
+    std::optional<MomentSystem> full, generic;
     MomentSystem last;
     for (int d = 1; d <= kMaxAutomaticDegree; ++d) {
       if (d > 1 && dynamic * count_monomials(states, d) > kMaxProducts) break;
       all(monomials_up_to(states, d));
       last = deriver.run(multipliers);
-      if (last.symmetric_rank == parameters) return last;
+      if (last.symmetric_rank == parameters) {
+        if (d >= model_degree) return last;
+        if (!full) full = last;
+      }
       if (!generic && last.generic_rank == parameters) generic = last;
     }
-    return generic ? *generic : last;
+    return full ? *full : generic ? *generic : last;
   }
   return deriver.run(multipliers);
 }
