@@ -3,6 +3,7 @@
 #include <pthread.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <bit>
 #include <cerrno>
 #include <charconv>
@@ -116,15 +117,18 @@ void write_whole_file(const std::string& path, const std::string& contents) {
 DataWriter::DataWriter(const std::string& path, Format format, const DataMetadata& metadata,
                        const std::vector<std::string>& columns)
     : file_(path), format_(format), columns_(columns.size()), buffer_(kBufferSize) {
-  const std::string header = data::header_text(metadata, columns);
+  // The header goes through the buffer like the rows: on standard output nothing appears before
+  // the first megabyte or commit(), so a run that fails early leaves no header-only output.
+  std::string header = data::header_text(metadata, columns);
   if (format_ == Format::kBinary) {
-    file_.write(data::kMagic.data(), data::kMagic.size());
     const auto length = static_cast<std::uint32_t>(header.size());
     const char bytes[4] = {static_cast<char>(length), static_cast<char>(length >> 8),
                            static_cast<char>(length >> 16), static_cast<char>(length >> 24)};
-    file_.write(bytes, 4);
+    header = std::string(data::kMagic) + std::string(bytes, 4) + header;
   }
-  file_.write(header.data(), header.size());
+  if (header.size() > buffer_.size()) buffer_.resize(header.size() + kBufferSize);
+  std::copy(header.begin(), header.end(), buffer_.begin());
+  used_ = header.size();
 }
 
 DataWriter::~DataWriter() = default;
