@@ -13,6 +13,8 @@
 #include "momentid/derive.hpp"
 #include "momentid/model.hpp"
 
+#include "usage.hpp"
+
 namespace {
 
 // Mass i has damping c_i, stiffness k_i, cubic stiffness eps_i, and a coupling spring kc_i to
@@ -68,6 +70,7 @@ Timing time_derive(const std::string& text, int repetitions) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (asked_for_help(argc, argv, "usage: bench_derive [N=10] [repetitions=5]")) return 0;
   const int n = argc > 1 ? std::atoi(argv[1]) : 10;
   const int repetitions = argc > 2 ? std::atoi(argv[2]) : 5;
   const Timing single = time_derive(chain_model(1), repetitions);

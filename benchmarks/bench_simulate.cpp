@@ -14,6 +14,8 @@
 #include "momentid/model.hpp"
 #include "momentid/simulate.hpp"
 
+#include "usage.hpp"
+
 namespace {
 
 // Keeps the last sample so that the work cannot be optimised away.
@@ -62,6 +64,7 @@ double median_seconds(int repetitions, F&& f) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (asked_for_help(argc, argv, "usage: bench_simulate [steps=2000000] [repetitions=5]")) return 0;
   const std::size_t steps = argc > 1 ? std::strtoull(argv[1], nullptr, 10) : 2000000;
   const int repetitions = argc > 2 ? std::atoi(argv[2]) : 5;
   const momentid::Model model = momentid::parse_model(R"(

@@ -15,6 +15,8 @@
 #include "momentid/simulate.hpp"
 #include "momentid/validate.hpp"
 
+#include "usage.hpp"
+
 namespace {
 
 template <typename F>
@@ -33,6 +35,7 @@ double median_seconds(int repetitions, F&& f) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (asked_for_help(argc, argv, "usage: bench_validate [rows=1000000] [directory=/tmp] [repetitions=3]")) return 0;
   const std::size_t rows = argc > 1 ? std::strtoull(argv[1], nullptr, 10) : 1000000;
   const std::string directory = argc > 2 ? argv[2] : "/tmp";
   const int repetitions = argc > 3 ? std::atoi(argv[3]) : 3;

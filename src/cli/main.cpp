@@ -20,7 +20,13 @@ int main(int argc, char** argv) {
   momentid::remove_partial_output_on_interrupt();
   CLI::App app{"momentid: identify the parameters of polynomial ODE models from random data"};
   app.require_subcommand(1);
-  app.set_version_flag("--version", "momentid " MOMENTID_VERSION);
+  // --help shows each option's default (subcommands inherit this).
+  app.option_defaults()->always_capture_default();
+  app.set_version_flag("-V,--version",
+                       "momentid " MOMENTID_VERSION
+                       "\ndata formats: CSV, momentid binary (read and written)"
+                       "\nvalidate plots: SVG (written by momentid)"
+                       "\ndistributions: Boost.Math; linear algebra: Eigen; algebra: GiNaC");
 
   const std::vector<momentid::cli::Command> commands{
       momentid::cli::add_derive(app), momentid::cli::add_simulate(app),

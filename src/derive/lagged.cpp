@@ -409,8 +409,12 @@ Moment lagged_moment(const Monomial& instrument, const Monomial& function, int l
 }
 
 std::string format_lag_function(const Model& model, const LagFunction& f) {
-  return "C" + primes(f.order) + "[" + format_monomial(model, f.instrument) + ";" +
-         format_monomial(model, f.function) + "](s)";
+  // Appended piece by piece: GCC 12 warns (-Wrestrict, wrongly) about "C" + a temporary.
+  std::string out = "C";
+  out += primes(f.order);
+  out += "[" + format_monomial(model, f.instrument) + ";" + format_monomial(model, f.function);
+  out += "](s)";
+  return out;
 }
 
 namespace {
@@ -470,8 +474,10 @@ std::string format_text(const LaggedSystem& system) {
   std::vector<std::string> sources;
   std::size_t width = 0;
   for (const LaggedEquation& eq : system.equations) {
-    sources.push_back("[" + model.equations()[eq.equation].name() + "] with " +
-                      format_monomial(model, eq.instrument) + "(t-s)");
+    std::string source = "[";
+    source += model.equations()[eq.equation].name();
+    source += "] with " + format_monomial(model, eq.instrument) + "(t-s)";
+    sources.push_back(std::move(source));
     width = std::max(width, sources.back().size());
   }
   const std::size_t number_width = std::to_string(system.equations.size()).size();
