@@ -12,7 +12,6 @@
 
 #include "momentid/derive.hpp"
 #include "momentid/model.hpp"
-
 #include "usage.hpp"
 
 namespace {

@@ -19,7 +19,6 @@
 #include "momentid/model.hpp"
 #include "momentid/simulate.hpp"
 #include "momentid/writer.hpp"
-
 #include "usage.hpp"
 
 namespace {
@@ -95,7 +94,9 @@ Pass run_pass(const std::string& self, const std::string& path, bool lagged = fa
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (asked_for_help(argc, argv, "usage: bench_identify [rows=10000000] [directory=/tmp] [--no-baseline]")) return 0;
+  if (asked_for_help(argc, argv,
+                     "usage: bench_identify [rows=10000000] [directory=/tmp] [--no-baseline]"))
+    return 0;
   if (argc == 3 && std::string(argv[1]) == "--pass") return one_pass(argv[2], false);
   if (argc == 3 && std::string(argv[1]) == "--lagged-pass") return one_pass(argv[2], true);
   const std::size_t rows = argc > 1 ? std::strtoull(argv[1], nullptr, 10) : 10000000;

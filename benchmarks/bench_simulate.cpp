@@ -13,7 +13,6 @@
 
 #include "momentid/model.hpp"
 #include "momentid/simulate.hpp"
-
 #include "usage.hpp"
 
 namespace {

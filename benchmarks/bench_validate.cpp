@@ -14,7 +14,6 @@
 #include "momentid/model.hpp"
 #include "momentid/simulate.hpp"
 #include "momentid/validate.hpp"
-
 #include "usage.hpp"
 
 namespace {
@@ -35,7 +34,9 @@ double median_seconds(int repetitions, F&& f) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (asked_for_help(argc, argv, "usage: bench_validate [rows=1000000] [directory=/tmp] [repetitions=3]")) return 0;
+  if (asked_for_help(argc, argv,
+                     "usage: bench_validate [rows=1000000] [directory=/tmp] [repetitions=3]"))
+    return 0;
   const std::size_t rows = argc > 1 ? std::strtoull(argv[1], nullptr, 10) : 1000000;
   const std::string directory = argc > 2 ? argv[2] : "/tmp";
   const int repetitions = argc > 3 ? std::atoi(argv[3]) : 3;
@@ -49,11 +50,9 @@ int main(int argc, char** argv) {
   momentid::ValidateOptions validation;
   validation.replay.parameters = momentid::parameter_values(model, {"c=0.55"});
   std::printf("%zu rows of the Duffing model, median of %d\n", rows, repetitions);
-  std::printf("%-8s %12s %12s %8s %10s\n", "format", "simulate s", "validate s", "ratio",
-              "fit %");
-  for (const auto& [name, format] :
-       {std::pair{"csv", momentid::DataWriter::Format::kCsv},
-        std::pair{"bin", momentid::DataWriter::Format::kBinary}}) {
+  std::printf("%-8s %12s %12s %8s %10s\n", "format", "simulate s", "validate s", "ratio", "fit %");
+  for (const auto& [name, format] : {std::pair{"csv", momentid::DataWriter::Format::kCsv},
+                                     std::pair{"bin", momentid::DataWriter::Format::kBinary}}) {
     const std::string path = directory + "/bench_validate." + name;
     const double simulate = median_seconds(
         repetitions, [&] { momentid::simulate_to_file(model, simulation, path, format); });
@@ -63,8 +62,8 @@ int main(int argc, char** argv) {
           momentid::validate(model, momentid::DataSource::file(path), validation);
       fit = result.outputs.front().fit;
     });
-    std::printf("%-8s %12.3f %12.3f %8.2f %10.3f\n", name, simulate, validate,
-                validate / simulate, fit);
+    std::printf("%-8s %12.3f %12.3f %8.2f %10.3f\n", name, simulate, validate, validate / simulate,
+                fit);
     std::remove(path.c_str());
   }
 }

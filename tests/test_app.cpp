@@ -131,7 +131,6 @@ TEST_SUITE("app") {
     CHECK(momentid::identified_equations(deficient).empty());
   }
 
-
   TEST_CASE("identify gives the same numbers from columns in memory as from the file") {
     const DuffingFile file(20000, 2);
     const std::vector<std::string> names{"t", "y", "v", "x", "run"};

@@ -291,7 +291,8 @@ TEST_SUITE("data reader") {
     // A missing sample is still a gap.
     std::string gap = "t,y\n";
     for (int n = 0; n < 20; ++n) {
-      if (n != 12) gap += decimal(static_cast<double>(static_cast<float>(1000.0 + n * 0.01))) + ",1\n";
+      if (n != 12)
+        gap += decimal(static_cast<double>(static_cast<float>(1000.0 + n * 0.01))) + ",1\n";
     }
     const TempFile file(gap);
     const DataError e = error_from<DataError>([&] { read_file(file.path(), columns({"y"})); });
@@ -310,8 +311,8 @@ TEST_SUITE("data reader") {
       CHECK(read_text(std::string(header) + ",y\n0,1\n7,2\n8,3\n", columns({"y"})).time_step ==
             std::nullopt);
     }
-    CHECK(read_text("clock,y\n0,1\n0.25,2\n0.5,3\n", columns({"y"}, {{"t", "clock"}}))
-              .time_step == 0.25);
+    CHECK(read_text("clock,y\n0,1\n0.25,2\n0.5,3\n", columns({"y"}, {{"t", "clock"}})).time_step ==
+          0.25);
     check_read_error("clock,y\n0,1\n0.25,2\n", columns({"y"}, {{"t", "tick"}}),
                      "missing column 'tick' for 't' (the header has: clock, y)", 1, 1, "clock,y");
   }

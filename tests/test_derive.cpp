@@ -285,9 +285,8 @@ multipliers 1, y2
     // Van der Pol (mu*(1 - y^2)*v) is determined at degree 1 but estimated ten times better at
     // degree 3; a linear model stays at degree 1.
     const MomentSystem vdp = derive(momentid::testing::model_file("van_der_pol.mom"));
-    CHECK(vdp.equations.size() == derive(momentid::testing::model_file("van_der_pol.mom"),
-                                         {.degree = 3})
-                                      .equations.size());
+    CHECK(vdp.equations.size() ==
+          derive(momentid::testing::model_file("van_der_pol.mom"), {.degree = 3}).equations.size());
     const MomentSystem linear = derive(momentid::testing::model_file("kozin_4_1a.mom"));
     CHECK(linear.equations.size() == 1);
   }

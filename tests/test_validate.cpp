@@ -29,8 +29,8 @@ struct MemoryRecord {
     data.columns.push_back({"t", nullptr, 1});
     const auto& variables = model.variables();
     for (const std::string& name : names) {
-      const auto v = static_cast<std::size_t>(
-          std::find(variables.begin(), variables.end(), name) - variables.begin());
+      const auto v = static_cast<std::size_t>(std::find(variables.begin(), variables.end(), name) -
+                                              variables.begin());
       columns.push_back(recorder.column(v + 1));
       data.columns.push_back({name, nullptr, 1});
     }
@@ -157,7 +157,7 @@ TEST_SUITE("validate") {
       (method == Interpolation::kSinc ? worst_sinc : worst_cubic) = worst / spread;
     }
     MESSAGE("largest error relative to the largest |y|: sinc " << worst_sinc << ", cubic "
-                                                              << worst_cubic);
+                                                               << worst_cubic);
     CHECK(worst_sinc < 1e-6);
     CHECK(worst_sinc < worst_cubic);
   }
@@ -173,8 +173,8 @@ TEST_SUITE("validate") {
     CHECK(truth.warnings.empty());
     const ValidateResult off =
         validate(model, record.source(), with_parameters(model, {"c=0.6", "k=4.8", "eps=1.2"}));
-    MESSAGE("fit with the truth " << truth.outputs[0].fit << "%, 20% off "
-                                  << off.outputs[0].fit << "%");
+    MESSAGE("fit with the truth " << truth.outputs[0].fit << "%, 20% off " << off.outputs[0].fit
+                                  << "%");
     CHECK(off.outputs[0].fit < 80);
     REQUIRE(off.outputs[0].autocorrelation);
     CHECK(off.outputs[0].autocorrelation->outside() > 20);

@@ -65,9 +65,9 @@ TEST_SUITE("warnings") {
 
   TEST_CASE("a model without the cubic spring is rejected by the J test: doubtful") {
     const Record record(50000);
-    const Model linear = parse_model(
-        "model linear\nstate y, v\ninput x\nparam c, k\ny' = v\nv' = -c*v - k*y + x\n",
-        "linear.mom");
+    const Model linear =
+        parse_model("model linear\nstate y, v\ninput x\nparam c, k\ny' = v\nv' = -c*v - k*y + x\n",
+                    "linear.mom");
     const IdentifyResult r = identify(linear, record.source(), {.degree = 3, .gmm = true});
     REQUIRE(r.estimate.j_pvalue);
     MESSAGE("J p-value " << *r.estimate.j_pvalue);

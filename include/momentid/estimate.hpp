@@ -41,7 +41,7 @@ struct Estimate {
   // The estimates' correlation matrices, parameter by parameter (NaN where a parameter is not
   // identifiable or has no standard error), for each of the two.
   std::vector<std::vector<double>> correlation, gmm_correlation;
-  std::size_t rows = 0;                           // equations in the system
+  std::size_t rows = 0;  // equations in the system
   std::size_t rank = 0;
   double condition = 0;  // of the column-scaled coefficient matrix
   std::size_t batches = 0;

@@ -86,7 +86,8 @@ struct IdentifyResult {
   DataMoments data;
   Estimate estimate;
   bool gmm = false;  // the optimally weighted estimate is the main result
-  std::map<std::string, double> centered;  // the means removed, by variable (IdentifyOptions::center)
+  std::map<std::string, double>
+      centered;  // the means removed, by variable (IdentifyOptions::center)
 
   // The main result: the optimally weighted estimate when it was asked for and could be
   // computed, otherwise least squares.

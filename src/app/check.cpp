@@ -59,8 +59,8 @@ CheckResult check(const DataSource& source, const Model* model, const CheckOptio
         source.open({.names = {}, .rename = {}, .min_rows = 0})->columns();
     const auto time = options.columns.find("t");
     for (const std::string& c : columns) {
-      const bool is_time = time != options.columns.end() ? c == time->second
-                                                         : c == "t" || data::is_time_name(c);
+      const bool is_time =
+          time != options.columns.end() ? c == time->second : c == "t" || data::is_time_name(c);
       if (!c.empty() && !is_time && c != "run") states.push_back(c);
     }
   }

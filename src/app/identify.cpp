@@ -22,9 +22,9 @@ constexpr double kNoiseWarning = 0.02;
 constexpr std::size_t kBatchesPerEquation = 4;
 
 // What makes a result doubtful, and what draws a warning (README, "Warnings").
-constexpr double kIdentityZ = 4;        // |z| of a stationarity identity's violation
-constexpr double kJRejection = 0.01;    // p-value of the J test
-constexpr double kOffset = 0.2;         // |mean| / standard deviation of a channel
+constexpr double kIdentityZ = 4;      // |z| of a stationarity identity's violation
+constexpr double kJRejection = 0.01;  // p-value of the J test
+constexpr double kOffset = 0.2;       // |mean| / standard deviation of a channel
 constexpr double kWeakRelativeError = 0.1;
 constexpr double kStrongCorrelation = 0.95;
 
@@ -59,8 +59,7 @@ void IdentifyOptions::validate(const Model& model) const {
   }
   for (const std::string& name : center) {
     if (std::find(variables.begin(), variables.end(), name) == variables.end()) {
-      throw UsageError("--center: '" + name + "' is not a state or input of model " +
-                       model.name());
+      throw UsageError("--center: '" + name + "' is not a state or input of model " + model.name());
     }
   }
   if (dt && !(std::isfinite(*dt) && *dt > 0)) {
@@ -130,7 +129,8 @@ int lag_window(const IdentifyResult& r) {
 // The offsets of DataOptions for the channels `states` then `inputs`: the mean of each channel
 // that `center` names, from a pass of its own, and 0 for the others; none when `center` names
 // none of them. Records the means removed in `centered`.
-std::vector<double> channel_offsets(const DataSource& source, const std::vector<std::string>& states,
+std::vector<double> channel_offsets(const DataSource& source,
+                                    const std::vector<std::string>& states,
                                     const std::vector<std::string>& inputs,
                                     const DataOptions& options,
                                     const std::vector<std::string>& center,
@@ -145,8 +145,8 @@ std::vector<double> channel_offsets(const DataSource& source, const std::vector<
   }
   DataOptions first = options;
   first.offsets.clear();
-  const DataMoments means = moments_from_data(source, states, inputs, std::vector<Monomial>{},
-                                              first);
+  const DataMoments means =
+      moments_from_data(source, states, inputs, std::vector<Monomial>{}, first);
   std::vector<double> out(channels.size(), 0.0);
   for (std::size_t c = 0; c < channels.size(); ++c) {
     if (std::find(center.begin(), center.end(), channels[c]) == center.end()) continue;
@@ -260,8 +260,8 @@ IdentifyResult identify(const Model& model, const DataSource& source,
     // The optimal weighting estimates the equations' covariance from the batches.
     if (!options.batches) {
       data_options.batches =
-          std::clamp(kBatchesPerEquation * probe.rows.a.size(),
-                     IdentifyOptions::kDefaultBatches, IdentifyOptions::kMaxBatches);
+          std::clamp(kBatchesPerEquation * probe.rows.a.size(), IdentifyOptions::kDefaultBatches,
+                     IdentifyOptions::kMaxBatches);
     }
     data_options.offsets =
         channel_offsets(source, states, inputs, data_options, options.center, result.centered);
@@ -304,11 +304,9 @@ IdentifyResult identify(const Model& model, const DataSource& source,
   std::vector<std::string> names;
   for (const Declaration& p : model.parameters()) names.push_back(p.name);
   result.gmm = options.gmm.value_or(true);
-  result.estimate =
-      solve_rows(rows.rows, names, result.data.estimates, result.data.estimates.covariance(),
-                 {.gmm = result.gmm,
-                  .fixed = fixed_values(model, options.fixed),
-                  .normalise_rows = true});
+  result.estimate = solve_rows(
+      rows.rows, names, result.data.estimates, result.data.estimates.covariance(),
+      {.gmm = result.gmm, .fixed = fixed_values(model, options.fixed), .normalise_rows = true});
   return result;
 }
 
@@ -348,8 +346,8 @@ std::vector<std::string> doubts(const IdentifyResult& r) {
   }
   for (const IdentityCheck& c : e.identities) {
     if (!(std::abs(c.z) > kIdentityZ)) continue;
-    out.push_back("the stationarity identity " + c.identity + " is violated (z = " +
-                  figure(c.z, "%.3g") +
+    out.push_back("the stationarity identity " + c.identity +
+                  " is violated (z = " + figure(c.z, "%.3g") +
                   "): the record is not stationary (a drift, a start-up transient, runs joined "
                   "end to end), or its columns are not what the model's kinematic equations say "
                   "(v is not y', or the channels are shifted in time)");
@@ -359,9 +357,8 @@ std::vector<std::string> doubts(const IdentifyResult& r) {
       return c.variance > 0 && std::abs(c.mean) > kOffset * std::sqrt(c.variance);
     };
     const auto& channels = r.data.channels;
-    const bool inputs_centred = std::none_of(channels.begin(), channels.end(), [&](const auto& c) {
-      return c.is_input && offset(c);
-    });
+    const bool inputs_centred = std::none_of(
+        channels.begin(), channels.end(), [&](const auto& c) { return c.is_input && offset(c); });
     for (const ChannelStatistics& c : channels) {
       if (c.is_input || !inputs_centred || !offset(c)) continue;
       out.push_back("'" + c.name + "' has the mean " + figure(c.mean, "%.3g") + ", " +
@@ -369,7 +366,8 @@ std::vector<std::string> doubts(const IdentifyResult& r) {
                     " of its standard deviation, but model " + r.model->name() +
                     " is symmetric (every term odd) and its inputs have no mean, so its states "
                     "have none: a sensor offset? It biases the estimates; if it is one, remove "
-                    "it with --center " + c.name);
+                    "it with --center " +
+                    c.name);
     }
   }
   return out;
@@ -382,7 +380,8 @@ std::vector<std::string> identified_equations(const IdentifyResult& r) {
   // Sums of coefficient * monomial, in the order the terms first appear.
   using Sum = std::vector<std::pair<Monomial, double>>;
   const auto add = [](Sum& into, const Monomial& m, double c) {
-    const auto it = std::find_if(into.begin(), into.end(), [&](const auto& t) { return t.first == m; });
+    const auto it =
+        std::find_if(into.begin(), into.end(), [&](const auto& t) { return t.first == m; });
     if (it == into.end()) {
       into.emplace_back(m, c);
     } else {
@@ -412,7 +411,7 @@ std::vector<std::string> identified_equations(const IdentifyResult& r) {
       if (c == 0) continue;
       const bool constant = std::all_of(m.begin(), m.end(), [](int e) { return e == 0; });
       const std::string magnitude = figure(std::abs(c), "%.6g");
-      std::string term = constant       ? magnitude
+      std::string term = constant           ? magnitude
                          : magnitude == "1" ? format_monomial(model, m)
                                             : magnitude + "*" + format_monomial(model, m);
       out += (out.empty() ? (c < 0 ? "-" : "") : (c < 0 ? " - " : " + ")) + term;
@@ -440,10 +439,10 @@ std::vector<std::string> identified_equations(const IdentifyResult& r) {
         it->second += c;
       }
     }
-    const bool constant_factor = derivatives.size() == 1 &&
-                                 std::all_of(derivatives[0].first.second.begin(),
-                                             derivatives[0].first.second.end(),
-                                             [](int e) { return e == 0; });
+    const bool constant_factor =
+        derivatives.size() == 1 &&
+        std::all_of(derivatives[0].first.second.begin(), derivatives[0].first.second.end(),
+                    [](int e) { return e == 0; });
     if (constant_factor && derivatives[0].second != 0) {
       // One derivative with a number in front: solved for it.
       for (auto& [m, c] : rest) c /= derivatives[0].second;
@@ -457,7 +456,8 @@ std::vector<std::string> identified_equations(const IdentifyResult& r) {
     for (const auto& [key, c] : derivatives) {
       if (c == 0) continue;
       const std::string name = model.states()[static_cast<std::size_t>(key.first)].name + "'";
-      const bool plain = std::all_of(key.second.begin(), key.second.end(), [](int e) { return e == 0; });
+      const bool plain =
+          std::all_of(key.second.begin(), key.second.end(), [](int e) { return e == 0; });
       const std::string factor = plain ? name : format_monomial(model, key.second) + "*" + name;
       const std::string magnitude = figure(std::abs(c), "%.6g");
       left += (left.empty() ? (c < 0 ? "-" : "") : (c < 0 ? " - " : " + ")) +
@@ -499,9 +499,8 @@ std::vector<std::string> warnings(const IdentifyResult& r) {
                 "% of its value. Excite the system more, add multipliers (--degree) or fix "
                 "parameters you know");
   }
-  const auto& correlation =
-      r.gmm && !r.estimate.gmm_parameters.empty() ? r.estimate.gmm_correlation
-                                                  : r.estimate.correlation;
+  const auto& correlation = r.gmm && !r.estimate.gmm_parameters.empty() ? r.estimate.gmm_correlation
+                                                                        : r.estimate.correlation;
   for (std::size_t i = 0; i < correlation.size(); ++i) {
     for (std::size_t j = i + 1; j < correlation.size(); ++j) {
       if (!(std::abs(correlation[i][j]) > kStrongCorrelation)) continue;
@@ -514,8 +513,7 @@ std::vector<std::string> warnings(const IdentifyResult& r) {
   for (const ChannelStatistics& c : r.data.channels) {
     const std::optional<double> fraction = c.noise_fraction();
     if (c.is_input || !fraction || *fraction < kNoiseWarning) continue;
-    rest.push_back("'" + c.name + "' carries white noise of about " +
-                   figure(100 * *fraction) +
+    rest.push_back("'" + c.name + "' carries white noise of about " + figure(100 * *fraction) +
                    "% of its standard deviation (the excess of its autocorrelation at lag 0): " +
                    (r.lagged ? "the lagged equations correct its powers, but the estimates are "
                                "less certain and may still be biased"
@@ -525,8 +523,7 @@ std::vector<std::string> warnings(const IdentifyResult& r) {
   for (const auto& [name, tau] : r.correlation_lags) {
     if (tau > 0) continue;
     rest.push_back("'" + name + "' stays correlated across lags " +
-                   std::to_string(r.lagged->first_lag) + ".." +
-                   std::to_string(r.lagged->last_lag) +
+                   std::to_string(r.lagged->first_lag) + ".." + std::to_string(r.lagged->last_lag) +
                    " (its autocorrelation stays above 1/e): the lagged equations see less than a "
                    "correlation time of it; give --lags a longer window (with fewer instruments "
                    "if the moments run out) or keep every n-th sample of the record");
@@ -559,10 +556,10 @@ void table(std::ostringstream& out, const std::vector<ParameterEstimate>& parame
                 "estimate", "std error", "95% interval");
   out << line;
   for (const auto& p : parameters) {
-    const std::string interval = p.fixed          ? "fixed"
-                                 : p.identifiable ? "[" + number(p.ci_low) + ", " +
-                                                        number(p.ci_high) + "]"
-                                                  : "not identifiable";
+    const std::string interval = p.fixed ? "fixed"
+                                 : p.identifiable
+                                     ? "[" + number(p.ci_low) + ", " + number(p.ci_high) + "]"
+                                     : "not identifiable";
     std::snprintf(line, sizeof line, "  %-*s  %14s  %12s  %s\n", static_cast<int>(width),
                   p.name.c_str(), number(p.estimate).c_str(), number(p.std_error, "%.3g").c_str(),
                   interval.c_str());
@@ -717,8 +714,7 @@ std::string format_json(const IdentifyResult& r) {
     out << (k ? ", " : "") << json_string(name) << ": " << json_number(d.estimates.mean[k]);
   }
   out << "}";
-  out << ",\n  \"diagnostics\": {\n    \"status\": "
-      << json_string(status_name(r))
+  out << ",\n  \"diagnostics\": {\n    \"status\": " << json_string(status_name(r))
       << ",\n    \"rows\": " << e.rows << ",\n    \"rank\": " << e.rank
       << ",\n    \"condition\": " << json_number(e.condition) << ",\n    \"batches\": " << e.batches
       << ",\n    \"samples\": " << d.rows << ",\n    \"runs\": " << d.runs

@@ -193,8 +193,8 @@ void thin(std::vector<double>& xs, std::vector<std::vector<double>*> series) {
     if (from >= to) continue;
     // The rows of the first series' extremes; the other series follow the same rows.
     const std::vector<double>& s = *series.front();
-    const auto [low, high] = std::minmax_element(s.begin() + static_cast<long>(from),
-                                                 s.begin() + static_cast<long>(to));
+    const auto [low, high] =
+        std::minmax_element(s.begin() + static_cast<long>(from), s.begin() + static_cast<long>(to));
     const auto a = static_cast<std::size_t>(low - s.begin());
     const auto c = static_cast<std::size_t>(high - s.begin());
     keep.push_back(std::min(a, c));
@@ -227,8 +227,8 @@ void draw_correlation(Page& page, const CorrelationCheck& c, const std::string& 
                      : output + ": cross-correlation of the error with " + c.with + ", 99% band";
   const Page::Panel p =
       page.panel(c.with.empty() ? "autocorrelation" : "cross-correlation", title,
-                 c.with.empty() ? "lag (samples)" : "lag (samples; positive: the input leads)",
-                 150, first - 1, last + 1, std::min(low, 0.0), std::max(high, 0.0));
+                 c.with.empty() ? "lag (samples)" : "lag (samples; positive: the input leads)", 150,
+                 first - 1, last + 1, std::min(low, 0.0), std::max(high, 0.0));
   page.line(p.x(first - 1), p.y(0), p.x(last + 1), p.y(0), "#444", 1);
   page.dashed(p.x(first - 1), p.y(c.band), p.x(last + 1), p.y(c.band), "#1f77b4", "band");
   page.dashed(p.x(first - 1), p.y(-c.band), p.x(last + 1), p.y(-c.band), "#1f77b4", "band");
@@ -273,8 +273,7 @@ void write_plot(const ValidateResult& result, const std::string& path,
   page.heading(title);
   for (const OutputFit& fit : result.outputs) {
     const std::size_t j = fit.state;
-    const std::vector<double>& y =
-        run.columns[static_cast<std::size_t>(record.column_of(j))];
+    const std::vector<double>& y = run.columns[static_cast<std::size_t>(record.column_of(j))];
     const std::vector<double>& sim = result.replay.simulated.front()[j];
     std::vector<double> xs, measured, simulated, error;
     for (std::size_t n = from; n < to; ++n) {
@@ -291,9 +290,9 @@ void write_plot(const ValidateResult& result, const std::string& path,
     range_of(simulated, low, high);
     char fit_text[64];
     std::snprintf(fit_text, sizeof fit_text, " (fit %.2f%%)", fit.fit);
-    const Page::Panel signals = page.panel("signals", fit.name + ": measured and simulated" +
-                                                          std::string(fit_text),
-                                           "t", 220, time(from), time(to - 1), low, high);
+    const Page::Panel signals =
+        page.panel("signals", fit.name + ": measured and simulated" + std::string(fit_text), "t",
+                   220, time(from), time(to - 1), low, high);
     page.shade(signals, time(0), time(skip), "skipped");
     page.polyline(signals, xs, measured, "measured", "#333333");
     page.polyline(signals, xs, simulated, "simulated", "#d62728");
@@ -301,8 +300,8 @@ void write_plot(const ValidateResult& result, const std::string& path,
     double e_low = INFINITY, e_high = -INFINITY;
     range_of(error, e_low, e_high);
     const Page::Panel errors =
-        page.panel("error", fit.name + ": measured - simulated", "t", 120, time(from),
-                   time(to - 1), std::min(e_low, 0.0), std::max(e_high, 0.0));
+        page.panel("error", fit.name + ": measured - simulated", "t", 120, time(from), time(to - 1),
+                   std::min(e_low, 0.0), std::max(e_high, 0.0));
     page.shade(errors, time(0), time(skip), "skipped");
     page.polyline(errors, error_xs, error, "error", "#1f77b4");
   }

@@ -114,9 +114,8 @@ std::vector<double> initial_state(const Model& model, const Record& record, cons
       std::string derivative = model.variables()[static_cast<std::size_t>(r.base)] +
                                std::string(static_cast<std::size_t>(r.order), '\'');
       if (r.scale != 1) derivative = shortest_decimal(r.scale) + "*" + derivative;
-      text = derivative + " at the start (a cubic fitted to the first " +
-             std::to_string(count) + " samples of " +
-             model.variables()[static_cast<std::size_t>(r.base)] + ")";
+      text = derivative + " at the start (a cubic fitted to the first " + std::to_string(count) +
+             " samples of " + model.variables()[static_cast<std::size_t>(r.base)] + ")";
     } else {
       text = "0 (no column, and no kinematic equation defines it from one)";
     }
@@ -317,8 +316,7 @@ std::vector<GiNaC::numeric> read_estimates(const Model& model, const std::string
     if (colon != std::string::npos) reason = reason.substr(colon + 2);
     throw DataError(at(e.byte == 0 ? 0 : e.byte - 1), "not JSON: " + reason);
   }
-  const std::string expected =
-      " (expected the output of 'momentid identify --format json')";
+  const std::string expected = " (expected the output of 'momentid identify --format json')";
   if (!document.is_object() || !document.contains("parameters") ||
       !document["parameters"].is_object()) {
     throw DataError(at(0), "no \"parameters\" object" + expected);
@@ -363,8 +361,8 @@ void ValidateOptions::validate() const {
 }
 
 std::size_t CorrelationCheck::outside() const {
-  return static_cast<std::size_t>(std::count_if(
-      values.begin(), values.end(), [&](double v) { return std::abs(v) > band; }));
+  return static_cast<std::size_t>(
+      std::count_if(values.begin(), values.end(), [&](double v) { return std::abs(v) > band; }));
 }
 
 namespace {
@@ -639,15 +637,17 @@ std::string parameters_text(const ValidateResult& r) {
 
 std::string skip_text(const ValidateResult& r, bool autonomous) {
   const auto [low, high] = std::minmax_element(r.skip.begin(), r.skip.end());
-  std::string rows = *low == *high ? std::to_string(*low)
-                                   : std::to_string(*low) + " to " + std::to_string(*high);
+  std::string rows =
+      *low == *high ? std::to_string(*low) : std::to_string(*low) + " to " + std::to_string(*high);
   std::string out = "the first " + rows + " rows of each run";
   if (r.skip_chosen && autonomous) {
-    out += " (the model has no input: its response is that to the initial state, which is "
-           "compared whole)";
+    out +=
+        " (the model has no input: its response is that to the initial state, which is "
+        "compared whole)";
   } else if (r.skip_chosen) {
-    out += " (until a perturbation of the initial state by 10% of each state's spread fell "
-           "below 1% of its size)";
+    out +=
+        " (until a perturbation of the initial state by 10% of each state's spread fell "
+        "below 1% of its size)";
   }
   return out;
 }
@@ -657,8 +657,8 @@ std::string check_text(const CorrelationCheck& c) {
   std::string out = c.with.empty() ? "autocorrelation of the error"
                                    : "cross-correlation of the error with " + c.with;
   out += ", lags " + std::to_string(c.first_lag) + ".." + std::to_string(last) + ": " +
-         std::to_string(c.outside()) + " of " + std::to_string(c.values.size()) +
-         " outside +-" + number(c.band, "%.3g");
+         std::to_string(c.outside()) + " of " + std::to_string(c.values.size()) + " outside +-" +
+         number(c.band, "%.3g");
   if (c.outside() == 0) return out;
   std::size_t worst = 0;
   for (std::size_t k = 0; k < c.values.size(); ++k) {
@@ -681,12 +681,12 @@ std::string format_text(const ValidateResult& r) {
   for (const RecordRun& run : record.runs) rows += run.rows();
   std::string out = "validate " + model.name() + " on " + record.name + ": " +
                     std::to_string(rows) + " rows in " + std::to_string(record.runs.size()) +
-                    (record.runs.size() == 1 ? " run" : " runs") + ", dt = " +
-                    number(record.dt, "%g") + "\n";
+                    (record.runs.size() == 1 ? " run" : " runs") +
+                    ", dt = " + number(record.dt, "%g") + "\n";
   out += "parameters (" + r.parameters_from + "): " + parameters_text(r) + "\n";
   for (std::size_t i = 0; i < model.inputs().size(); ++i) {
-    out += "input " + model.inputs()[i].name + ": " +
-           interpolation_name(replay.interpolation[i]) + " between samples\n";
+    out += "input " + model.inputs()[i].name + ": " + interpolation_name(replay.interpolation[i]) +
+           " between samples\n";
   }
   const bool converged =
       replay.substeps_chosen && replay.substep_change < ReplayOptions::kSubstepTolerance;
@@ -698,8 +698,8 @@ std::string format_text(const ValidateResult& r) {
          "\n";
   out += "initial state (run " + std::to_string(run_label(record, 0)) + "): ";
   for (std::size_t j = 0; j < model.states().size(); ++j) {
-    out += (j ? ", " : "") + model.states()[j].name + " = " +
-           number(replay.initial[0][j], "%.6g") + " from " + replay.initial_how[j];
+    out += (j ? ", " : "") + model.states()[j].name + " = " + number(replay.initial[0][j], "%.6g") +
+           " from " + replay.initial_how[j];
   }
   out += "\nskipped: " + skip_text(r, model.inputs().empty()) + "\n\n";
   char line[256];

@@ -148,9 +148,8 @@ Command add_simulate(CLI::App& app) {
   sub->add_option("--format", command->format, "output format")
       ->check(CLI::IsMember({"csv", "bin"}));
   sub->add_option("-o,--output", command->output, "output file, - for standard output");
-  for (const char* name :
-       {"--input", "--noise", "--observe", "--samples", "--burn-in", "--runs", "--continue",
-        "--seed"}) {
+  for (const char* name : {"--input", "--noise", "--observe", "--samples", "--burn-in", "--runs",
+                           "--continue", "--seed"}) {
     sub->get_option(name)->excludes(input_file);
   }
   return {sub, [command, sub] {

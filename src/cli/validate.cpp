@@ -36,8 +36,7 @@ std::pair<double, double> window_option(const std::string& text) {
     const auto [end, error] = std::from_chars(part.data(), part.data() + part.size(), into);
     return error == std::errc() && end == part.data() + part.size() && std::isfinite(into);
   };
-  if (colon == std::string::npos ||
-      !parse(std::string_view(text).substr(0, colon), out.first) ||
+  if (colon == std::string::npos || !parse(std::string_view(text).substr(0, colon), out.first) ||
       !parse(std::string_view(text).substr(colon + 1), out.second) || !(out.second > out.first)) {
     throw UsageError("--window: expected FROM:TO, two times with FROM < TO, found '" + text + "'");
   }
@@ -97,8 +96,7 @@ Command add_validate(CLI::App& app) {
   sub->add_option("--skip", command->skip,
                   "rows left out at the start of each run (default: until the model has "
                   "forgotten its initial state)");
-  sub->add_option("--lags", command->options.lags,
-                  "lags of the correlation checks (default 25)")
+  sub->add_option("--lags", command->options.lags, "lags of the correlation checks (default 25)")
       ->check(CLI::Range(1, ValidateOptions::kMaxLags));
   sub->add_option("--columns", command->columns, "NAME=COLUMN: where a model variable is")
       ->delimiter(',');

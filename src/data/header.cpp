@@ -132,8 +132,8 @@ ColumnMap map_columns(const std::string& path, const Header& header, const Colum
   if (const auto renamed = request.rename.find("t"); renamed != request.rename.end()) {
     time_name = renamed->second;
     if (std::find(header.names.begin(), header.names.end(), time_name) == header.names.end()) {
-      fail(location(1), "missing column '" + time_name + "' for 't' (the header has: " + listed +
-                            ")");
+      fail(location(1),
+           "missing column '" + time_name + "' for 't' (the header has: " + listed + ")");
     }
   } else if (std::find(header.names.begin(), header.names.end(), "t") != header.names.end()) {
     time_name = "t";

@@ -162,8 +162,8 @@ void DataWriter::commit() {
   file_.commit();
 }
 
-// The temporary file being written, for remove_partial_output_on_interrupt() to delete from a signal
-// handler: a fixed buffer, since a handler may not allocate.
+// The temporary file being written, for remove_partial_output_on_interrupt() to delete from a
+// signal handler: a fixed buffer, since a handler may not allocate.
 namespace {
 char g_temporary[4096];
 volatile std::sig_atomic_t g_has_temporary = 0;

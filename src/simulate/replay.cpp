@@ -70,8 +70,7 @@ double Interpolator::operator()(const std::vector<double>& u, std::size_t n, std
   if (method_ == Interpolation::kHold) return u[n];
   const std::size_t rows = u.size();
   // Samples on each side of the interval: n + 1 up to its start, rows - 1 - n from its end.
-  const std::size_t side =
-      method_ == Interpolation::kLinear ? 1 : std::min(n + 1, rows - 1 - n);
+  const std::size_t side = method_ == Interpolation::kLinear ? 1 : std::min(n + 1, rows - 1 - n);
   if (method_ == Interpolation::kSinc && side >= kSincHalfWidth) {
     const std::vector<double>& w = sinc_[k];
     const double* first = u.data() + n + 1 - kSincHalfWidth;
@@ -114,10 +113,9 @@ RecordSimulator::RecordSimulator(const Model& model, std::vector<GiNaC::numeric>
   for (Interpolation method : methods_) within_.emplace_back(method, fractions);
 }
 
-std::vector<std::vector<double>> RecordSimulator::run(const std::vector<std::vector<double>>& inputs,
-                                                      const std::vector<double>& initial,
-                                                      double start, std::size_t run_number,
-                                                      std::size_t rows) const {
+std::vector<std::vector<double>> RecordSimulator::run(
+    const std::vector<std::vector<double>>& inputs, const std::vector<double>& initial,
+    double start, std::size_t run_number, std::size_t rows) const {
   const std::size_t n = static_cast<std::size_t>(f_.states());
   const std::size_t m = static_cast<std::size_t>(f_.inputs());
   if (inputs.size() != m || initial.size() != n) {
@@ -133,8 +131,8 @@ std::vector<std::vector<double>> RecordSimulator::run(const std::vector<std::vec
   std::vector<double> y = initial, u0(m), um(m), u1(m);
   const double h = dt_ / substeps_;
   const auto fail = [&](const std::string& what, std::size_t row) {
-    throw Error("the simulation " + what + " at t = " +
-                shortest_decimal(start + static_cast<double>(row) * dt_) + " in run " +
+    throw Error("the simulation " + what +
+                " at t = " + shortest_decimal(start + static_cast<double>(row) * dt_) + " in run " +
                 std::to_string(run_number) + " with " + parameter_list(model_, parameters_) +
                 ": the model is unstable for these values, or the sample interval is too "
                 "large for it");

@@ -453,7 +453,8 @@ std::vector<numeric> assign(const Model& model, const std::vector<std::string>& 
                        " (parameters: " + known + ")");
     }
     if (!is_decimal(text)) {
-      throw UsageError(option + ": the value of '" + name + "' must be a number, found '" + text + "'");
+      throw UsageError(option + ": the value of '" + name + "' must be a number, found '" + text +
+                       "'");
     }
     const bool negative = text[0] == '-';
     const std::string digits = (text[0] == '-' || text[0] == '+') ? text.substr(1) : text;
@@ -489,8 +490,7 @@ std::vector<numeric> parameter_values(const Model& model,
 
 std::vector<numeric> parameter_values(const Model& model,
                                       const std::vector<std::string>& assignments,
-                                      const std::vector<numeric>& base,
-                                      const std::string& option) {
+                                      const std::vector<numeric>& base, const std::string& option) {
   if (base.size() != model.parameters().size()) {
     throw std::invalid_argument("parameter_values: one base value per parameter needed");
   }

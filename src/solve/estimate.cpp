@@ -157,7 +157,8 @@ std::vector<std::vector<double>> correlation_of(const MatrixXd& cov,
 namespace {
 
 // The system with the fixed parameters' columns moved to the right-hand side: b - a_p v_p.
-MomentRows without_fixed(const MomentRows& system, const std::vector<std::optional<double>>& fixed) {
+MomentRows without_fixed(const MomentRows& system,
+                         const std::vector<std::optional<double>>& fixed) {
   MomentRows out;
   for (std::size_t r = 0; r < system.a.size(); ++r) {
     std::vector<MomentRows::Entry> row;
@@ -225,9 +226,9 @@ Estimate solve_rows(const MomentRows& system, const std::vector<std::string>& na
     }
     SolveOptions free_options = options;
     free_options.fixed.clear();
-    return with_fixed(solve_rows(without_fixed(system, options.fixed), free_names, estimates, c,
-                                 free_options),
-                      names, options.fixed);
+    return with_fixed(
+        solve_rows(without_fixed(system, options.fixed), free_names, estimates, c, free_options),
+        names, options.fixed);
   }
   const auto rows = static_cast<Eigen::Index>(system.a.size());
   const auto params = static_cast<Eigen::Index>(names.size());
