@@ -58,8 +58,10 @@ struct DataBlock {
 //   while (reader->next(block, 65536)) accumulate(block);
 class DataReader {
  public:
-  // Opens a file, choosing the format by its first bytes (not by its name).
-  static std::unique_ptr<DataReader> open(const std::string& path, const ColumnRequest& request);
+  // Opens a file, choosing the format by its first bytes (not by its name); messages name it
+  // `name` when given.
+  static std::unique_ptr<DataReader> open(const std::string& path, const ColumnRequest& request,
+                                          const std::string& name = "");
   virtual ~DataReader() = default;
 
   virtual const DataMetadata& metadata() const = 0;
@@ -102,6 +104,9 @@ class DataSource {
  public:
   static DataSource file(std::string path);
   static DataSource memory(MemoryData data);
+  // Standard input, read to its end now into a temporary file that the source (and its copies)
+  // owns and removes; named `<stdin>` in messages. Throws Error when it cannot be stored.
+  static DataSource standard_input();
 
   // The path, or MemoryData::name.
   const std::string& name() const { return name_; }
@@ -110,6 +115,7 @@ class DataSource {
  private:
   std::string name_;
   std::optional<MemoryData> memory_;
+  std::shared_ptr<const std::string> stored_;  // the file standard input was stored in
 };
 
 }  // namespace momentid

@@ -3,6 +3,7 @@
 #include "momentid/check.hpp"
 
 #include <iostream>
+#include <utility>
 #include <memory>
 
 #include "cli/commands.hpp"
@@ -21,11 +22,15 @@ struct CheckCommand {
 
 int run_check(CheckCommand& command) {
   std::optional<Model> model;
+  // Either order: `check MODEL DATA` is read as `check DATA MODEL`.
+  if (!command.model.empty() && !is_model_file(command.model) && is_model_file(command.data)) {
+    std::swap(command.model, command.data);
+  }
   if (!command.model.empty()) model = parse_model_file(command.model);
   command.options.hold = hold_option(command.hold);
   command.options.columns = column_map(command.columns);
   const CheckResult result =
-      check(DataSource::file(command.data), model ? &*model : nullptr, command.options);
+      check(data_source(command.data), model ? &*model : nullptr, command.options);
   std::cout << format_text(result);
   return 0;
 }
@@ -36,7 +41,7 @@ Command add_check(CLI::App& app) {
   auto command = std::make_shared<CheckCommand>();
   CLI::App* sub = app.add_subcommand(
       "check", "statistics of a data file: autocorrelations, smoothness, stationarity");
-  sub->add_option("DATA", command->data, "data file (CSV or binary)")->required();
+  sub->add_option("DATA", command->data, "data file (CSV or binary), - for standard input")->required();
   sub->add_option("MODEL", command->model, "model file: check its stationarity identities");
   sub->add_option("--lags", command->options.lags, "autocorrelation lags")
       ->check(CLI::Range(std::size_t{1}, CheckOptions::kMaxLags));

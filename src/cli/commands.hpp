@@ -11,7 +11,9 @@
 #include <vector>
 
 #include "momentid/accumulator.hpp"
+#include "momentid/model.hpp"
 #include "momentid/moment.hpp"
+#include "momentid/reader.hpp"
 
 namespace momentid::cli {
 
@@ -28,6 +30,14 @@ Command add_identify(CLI::App& app);
 Command add_check(CLI::App& app);
 Command add_validate(CLI::App& app);
 
+// Whether `path` is a readable model file (small enough to be one: at most 1 MB).
+bool is_model_file(const std::string& path);
+// The model at `model`; when that is not a model but `data` is, a UsageError saying that the
+// files of `usage` (e.g. "identify MODEL DATA") were given in the wrong order.
+Model model_argument(const std::string& model, const std::string& data, const std::string& usage);
+
+// The data argument: a file, or standard input for `-`.
+DataSource data_source(const std::string& path);
 // `--columns v=velocity,x=force`: the model's names mapped to the data's columns.
 std::map<std::string, std::string> column_map(const std::vector<std::string>& entries);
 // `NAME=VALUE,NAME=VALUE` for `option`, whose entries are described as `expected`.

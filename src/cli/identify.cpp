@@ -55,7 +55,7 @@ std::optional<std::map<std::string, double>> noise_option(const Model& model,
 }
 
 int run_identify(IdentifyCommand& command) {
-  const Model model = parse_model_file(command.model);
+  const Model model = model_argument(command.model, command.data, "identify MODEL DATA");
   IdentifyOptions& options = command.options;
   if (command.multipliers) {
     options.multipliers = parse_multiplier_list(model, *command.multipliers, "--multipliers");
@@ -80,7 +80,7 @@ int run_identify(IdentifyCommand& command) {
   } else {
     options.center = command.center;
   }
-  const IdentifyResult result = identify(model, DataSource::file(command.data), options);
+  const IdentifyResult result = identify(model, data_source(command.data), options);
   std::cout << (command.format == "json" ? format_json(result) : format_text(result));
   if (result.estimate.status == Estimate::Status::kNothingIdentifiable) {
     std::cerr << "momentid: nothing identifiable: " << result.estimate.message << "\n";
@@ -97,7 +97,7 @@ Command add_identify(CLI::App& app) {
   CLI::App* sub = app.add_subcommand(
       "identify", "estimate the parameters of a model from data, with standard errors");
   sub->add_option("MODEL", command->model, "model file")->required();
-  sub->add_option("DATA", command->data, "data file (CSV or binary)")->required();
+  sub->add_option("DATA", command->data, "data file (CSV or binary), - for standard input")->required();
   auto* multipliers =
       sub->add_option("--multipliers", command->multipliers, "multipliers, as for derive");
   sub->add_option("--degree", options.degree, "multipliers up to this degree")

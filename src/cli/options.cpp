@@ -1,11 +1,42 @@
 #include <algorithm>
 #include <charconv>
+#include <filesystem>
 #include <string_view>
 
 #include "cli/commands.hpp"
 #include "momentid/error.hpp"
 
 namespace momentid::cli {
+
+bool is_model_file(const std::string& path) {
+  std::error_code error;
+  if (path == "-" || !std::filesystem::is_regular_file(path, error) ||
+      std::filesystem::file_size(path, error) > (1u << 20)) {
+    return false;
+  }
+  try {
+    parse_model_file(path);
+    return true;
+  } catch (const Error&) {
+    return false;
+  }
+}
+
+Model model_argument(const std::string& model, const std::string& data, const std::string& usage) {
+  try {
+    return parse_model_file(model);
+  } catch (const LocatedError&) {
+    if (is_model_file(data)) {
+      throw UsageError("'" + model + "' is not a model file but '" + data +
+                       "' is: did you swap the files? The order is " + usage);
+    }
+    throw;
+  }
+}
+
+DataSource data_source(const std::string& path) {
+  return path == "-" ? DataSource::standard_input() : DataSource::file(path);
+}
 
 std::map<std::string, std::string> column_map(const std::vector<std::string>& entries) {
   std::map<std::string, std::string> out;

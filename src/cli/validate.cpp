@@ -44,7 +44,7 @@ std::pair<double, double> window_option(const std::string& text) {
 }
 
 int run_validate(ValidateCommand& command) {
-  const Model model = parse_model_file(command.model);
+  const Model model = model_argument(command.model, command.data, "validate MODEL DATA");
   ReplayOptions& replay = command.options.replay;
   std::string from = "the model's nominal values";
   if (!command.estimates.empty()) {
@@ -63,7 +63,7 @@ int run_validate(ValidateCommand& command) {
   command.options.skip = command.skip;
   std::optional<std::pair<double, double>> window;
   if (!command.window.empty()) window = window_option(command.window);
-  ValidateResult result = validate(model, DataSource::file(command.data), command.options);
+  ValidateResult result = validate(model, data_source(command.data), command.options);
   result.parameters_from = from;
   if (!command.plot.empty()) write_plot(result, command.plot, window);
   std::cout << (command.format == "json" ? format_json(result) : format_text(result));
@@ -78,7 +78,7 @@ Command add_validate(CLI::App& app) {
       "validate",
       "simulate a model through a record's inputs and compare it with the record's states");
   sub->add_option("MODEL", command->model, "model file")->required();
-  sub->add_option("DATA", command->data, "data file (CSV or binary)")->required();
+  sub->add_option("DATA", command->data, "data file (CSV or binary), - for standard input")->required();
   sub->add_option("--set", command->set,
                   "parameter values NAME=VALUE, overriding the model's nominal values and "
                   "--estimates")

@@ -2,9 +2,15 @@
 
 #include "momentid/reader.hpp"
 
+#include <unistd.h>
+
 #include <array>
 #include <cerrno>
+#include <cstdio>
+#include <cstdlib>
 #include <cstring>
+#include <filesystem>
+#include <vector>
 
 #include "data/formats.hpp"
 
@@ -20,16 +26,20 @@ constexpr std::array kFormats{
 }  // namespace
 
 std::unique_ptr<DataReader> DataReader::open(const std::string& path,
-                                             const ColumnRequest& request) {
+                                             const ColumnRequest& request,
+                                             const std::string& name) {
+  const std::string& shown = name.empty() ? path : name;
   data::File file(std::fopen(path.c_str(), "rb"));
-  if (!file) throw Error(path + ": cannot open the data file: " + std::strerror(errno));
+  if (!file) throw Error(shown + ": cannot open the data file: " + std::strerror(errno));
   // Reads are already large: stdio's buffer would only add a copy.
   std::setvbuf(file.get(), nullptr, _IONBF, 0);
   std::array<char, data::kDetectBytes> start;
-  const std::size_t got = data::read_fully(file.get(), path, start.data(), start.size());
+  const std::size_t got = data::read_fully(file.get(), shown, start.data(), start.size());
   const std::string_view first_bytes(start.data(), got);
   for (const data::DataFormat& format : kFormats) {
-    if (format.detect(first_bytes)) return format.open(std::move(file), path, request, first_bytes);
+    if (format.detect(first_bytes)) {
+      return format.open(std::move(file), shown, request, first_bytes);
+    }
   }
   return nullptr;  // not reached: CSV takes every file
 }
@@ -47,8 +57,42 @@ DataSource DataSource::memory(MemoryData data) {
   return source;
 }
 
+DataSource DataSource::standard_input() {
+  std::string path =
+      (std::filesystem::temp_directory_path() / "momentid_stdin_XXXXXX").string();
+  const int fd = mkstemp(path.data());
+  if (fd < 0) {
+    throw Error("<stdin>: cannot store standard input: " + std::string(std::strerror(errno)));
+  }
+  // Removed when the last copy of the source is gone.
+  auto stored = std::shared_ptr<const std::string>(new std::string(path), [](const std::string* p) {
+    std::remove(p->c_str());
+    delete p;
+  });
+  data::File out(fdopen(fd, "wb"));
+  if (!out) {
+    ::close(fd);
+    throw Error("<stdin>: cannot store standard input: " + std::string(std::strerror(errno)));
+  }
+  std::vector<char> buffer(1 << 20);
+  for (;;) {
+    const std::size_t got = std::fread(buffer.data(), 1, buffer.size(), stdin);
+    if (got > 0 && std::fwrite(buffer.data(), 1, got, out.get()) != got) {
+      throw Error("<stdin>: cannot store standard input: " + std::string(std::strerror(errno)));
+    }
+    if (got < buffer.size()) break;
+  }
+  if (std::ferror(stdin)) throw Error("<stdin>: cannot read standard input");
+  if (std::fclose(out.release()) != 0) throw Error("<stdin>: cannot store standard input");
+  DataSource source;
+  source.name_ = "<stdin>";
+  source.stored_ = std::move(stored);
+  return source;
+}
+
 std::unique_ptr<DataReader> DataSource::open(const ColumnRequest& request) const {
   if (memory_) return data::open_memory(*memory_, request);
+  if (stored_) return DataReader::open(*stored_, request, name_);
   return DataReader::open(name_, request);
 }
 
