@@ -317,6 +317,26 @@ TEST_SUITE("data reader") {
                      "missing column 'tick' for 't' (the header has: clock, y)", 1, 1, "clock,y");
   }
 
+  TEST_CASE("reads a units row and decimal commas when told to, and suggests both") {
+    ColumnRequest request = columns({"y", "x"});
+    check_read_error("t;y;x\ns;m;N\n0;1,5;2\n0,5;1,25;1\n", request,
+                     "column 't': expected a number (a units row? give --skip-rows 1), found 's'",
+                     2, 1, "s;m;N");
+    request.csv.skip_rows = 1;
+    check_read_error("t;y;x\ns;m;N\n0;1,5;2\n0,5;1,25;1\n", request,
+                     "column 'y': expected a number (with a decimal comma? give --decimal ,), "
+                     "found '1,5'",
+                     3, 3, "0;1,5;2");
+    request.csv.decimal = ',';
+    const Contents contents = read_text("t;y;x\ns;m;N\n0;1,5;2\n0,5;1,25;-1e-1\n", request);
+    CHECK(contents.values == std::vector<double>{1.5, 2, 1.25, -0.1});
+    CHECK(contents.time_step == 0.5);
+    check_read_error("t,y,x\n0,1,2\n", request,
+                     "a decimal comma needs fields separated by ';' or blanks, but the header "
+                     "separates them by ','",
+                     1, 1, "t,y,x");
+  }
+
   TEST_CASE("a given sample interval overrides the time column, which is then not checked") {
     ColumnRequest request = columns({"y"});
     request.dt = 0.125;

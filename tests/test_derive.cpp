@@ -308,8 +308,8 @@ multipliers 1, y2
     std::string text = "state y1, y2, y3, y4, y5, y6, y7, y8\ninput x\nparam a\n";
     text += "y1' = -a*y1 + x\n";
     for (int i = 2; i <= 8; ++i) {
-      text += "y" + std::to_string(i) + "' = -a*y" + std::to_string(i) + " + y" +
-              std::to_string(i - 1) + "\n";
+      const std::string n = std::to_string(i), previous = std::to_string(i - 1);
+      text += "y" + n + "' = -a*y" + n + " + y" + previous + "\n";
     }
     const Model model = momentid::parse_model(text, "chain.mom");
     CHECK_THROWS_WITH_AS(derive(model, {.multipliers = {}, .degree = 8}),

@@ -42,6 +42,7 @@ struct DataOptions {
   std::vector<double> offsets;
   // The sample interval, overriding the data's (ColumnRequest::dt).
   std::optional<double> dt;
+  CsvLayout csv;
 };
 
 // What one pass over a data file yields.

@@ -12,6 +12,14 @@
 
 namespace momentid {
 
+// How a CSV file departs from the usual layout (README, "Data from the lab").
+struct CsvLayout {
+  // Lines after the header row that are not data (units, descriptions), skipped.
+  std::size_t skip_rows = 0;
+  // The decimal separator, '.' or ','; ',' needs a field separator other than the comma.
+  char decimal = '.';
+};
+
 // What to read from a data file: the columns to deliver, in this order (normally the model's
 // states, then its inputs), and where a column has another name in the file (`--columns
 // v=velocity` maps the model's `v` to the file's `velocity`).
@@ -23,6 +31,7 @@ struct ColumnRequest {
   // The sample interval, overriding the data's: the time column is then neither read nor
   // checked, and time_step() returns it.
   std::optional<double> dt;
+  CsvLayout csv;
 };
 
 // Consecutive rows of one run (one continuous record). A block never spans two runs.

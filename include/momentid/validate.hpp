@@ -47,6 +47,7 @@ struct ReplayOptions {
   std::optional<Interpolation> interpolation;
   // The sample interval; nullopt: the record's (`t` column or `dt` metadata).
   std::optional<double> dt;
+  CsvLayout csv;  // as IdentifyOptions::csv
   // Runge-Kutta steps per sample interval, 1..RecordSimulator::kMaxSubsteps; nullopt: the fewest
   // (1, 2, 4, ...) for which halving the step changes the simulation of the first
   // kSubstepTrialRows rows of the first run by less than kSubstepTolerance of each state's

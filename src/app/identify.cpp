@@ -182,6 +182,7 @@ IdentifyResult identify(const Model& model, const DataSource& source,
   data_options.min_rows = 2 * data_options.batches;
   data_options.input_shift = options.input_shift;
   data_options.dt = options.dt;
+  data_options.csv = options.csv;
   data_options.lags = 4;  // for the noise estimates
 
   // Which variables the data have: the lagged equations serve data without some state.

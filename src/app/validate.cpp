@@ -50,7 +50,8 @@ Record read_record(const Model& model, const DataSource& source, const ReplayOpt
       record.columns.push_back(renamed == options.columns.end() ? name : renamed->second);
     }
   }
-  const auto reader = source.open({.names = names, .rename = options.columns, .min_rows = 2});
+  const auto reader = source.open(
+      {.names = names, .rename = options.columns, .min_rows = 2, .csv = options.csv});
   const std::size_t first = record.has_time ? 1 : 0;
   const std::size_t width = names.size();
   DataBlock block;

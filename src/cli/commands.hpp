@@ -36,6 +36,9 @@ bool is_model_file(const std::string& path);
 // files of `usage` (e.g. "identify MODEL DATA") were given in the wrong order.
 Model model_argument(const std::string& model, const std::string& data, const std::string& usage);
 
+// --skip-rows and --decimal, into `layout`.
+void add_csv_options(CLI::App* command, CsvLayout& layout);
+
 // The data argument: a file, or standard input for `-`.
 DataSource data_source(const std::string& path);
 // `--columns v=velocity,x=force`: the model's names mapped to the data's columns.

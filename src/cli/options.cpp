@@ -34,6 +34,16 @@ Model model_argument(const std::string& model, const std::string& data, const st
   }
 }
 
+void add_csv_options(CLI::App* command, CsvLayout& layout) {
+  command->add_option("--skip-rows", layout.skip_rows,
+                      "lines after the header that are not data (units), skipped");
+  command
+      ->add_option_function<std::string>(
+          "--decimal", [&layout](const std::string& text) { layout.decimal = text[0]; },
+          "the decimal separator, . or , (with ; or blank separated fields)")
+      ->check(CLI::IsMember({".", ","}));
+}
+
 DataSource data_source(const std::string& path) {
   return path == "-" ? DataSource::standard_input() : DataSource::file(path);
 }

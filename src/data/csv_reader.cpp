@@ -33,6 +33,14 @@ class CsvReader final : public StreamReader {
     separator_ = header_.separator;
     fields_ = header_.names.size();
     field_starts_.assign(fields_, nullptr);
+    if (request_.csv.decimal == ',' && separator_ == ',') {
+      fail(text_location(path_, header_.line, 1, header_.text),
+           "a decimal comma needs fields separated by ';' or blanks, but the header separates "
+           "them by ','");
+    }
+    for (std::size_t k = 0; k < request_.csv.skip_rows; ++k) {
+      if (!lines_.next(line_)) break;
+    }
   }
 
  protected:
@@ -101,10 +109,21 @@ class CsvReader final : public StreamReader {
     const char* const end = line_.data() + line_.size();
     const char* const start = skip_blanks(p, end);
     double value = 0;
-    const char* after = parse_number(start, end, value);
+    const char* after = parse_number(start, end, value, request_.csv.decimal);
     if (after != nullptr && separator_ != ' ') after = skip_blanks(after, end);
     if (after == nullptr || (after != end && *after != separator_ && !is_blank(*after))) {
-      bad_field(field, p, "expected a number");
+      // "1,5" in a ';'-separated file: a decimal comma.
+      const bool comma = request_.csv.decimal == '.' && separator_ != ',' &&
+                         std::memchr(start, ',', static_cast<std::size_t>(field_end(start, end) -
+                                                                          start)) != nullptr;
+      // A first row without a digit: units or descriptions.
+      const bool units = rows_parsed_ == 1 && std::none_of(line_.begin(), line_.end(), [](char c) {
+                           return c >= '0' && c <= '9';
+                         });
+      bad_field(field, p,
+                comma   ? "expected a number (with a decimal comma? give --decimal ,)"
+                : units ? "expected a number (a units row? give --skip-rows 1)"
+                        : "expected a number");
     }
     if (!std::isfinite(value)) bad_field(field, p, "expected a finite number");
     if (map_.output[field] >= 0) row[map_.output[field]] = value;

@@ -42,12 +42,14 @@ std::string_view trim(std::string_view s);
 
 // Parses a number at the start of [p, end) (fast_float, plus an optional leading '+'). Returns
 // the end of the number, or nullptr when there is none. Non-finite values are returned as such.
-inline const char* parse_number(const char* p, const char* end, double& value) {
+inline const char* parse_number(const char* p, const char* end, double& value,
+                                char decimal = '.') {
   if (p != end && *p == '+') {
     ++p;
     if (p == end || *p == '+' || *p == '-') return nullptr;
   }
-  const fast_float::from_chars_result result = fast_float::from_chars(p, end, value);
+  const fast_float::from_chars_result result = fast_float::from_chars_advanced(
+      p, end, value, fast_float::parse_options{fast_float::chars_format::general, decimal});
   if (result.ec == std::errc::result_out_of_range) {
     value = std::numeric_limits<double>::infinity();
   } else if (result.ec != std::errc()) {

@@ -207,6 +207,7 @@ DataMoments moments_from_data(const DataSource& source, const std::vector<std::s
   request.rename = options.rename;
   request.min_rows = options.min_rows;
   request.dt = options.dt;
+  request.csv = options.csv;
   std::unique_ptr<DataReader> reader = source.open(request);
 
   DataMoments out;

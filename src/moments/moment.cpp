@@ -69,8 +69,13 @@ Monomial Moment::at_lag(int lag, std::size_t variables) const {
 }
 
 std::string to_string(const MomentFactor& factor) {
-  std::string out = "c" + std::to_string(factor.channel);
-  if (factor.power != 1) out += "^" + std::to_string(factor.power);
+  // Appended piece by piece: GCC 12 warns (-Wrestrict, wrongly) about "c" + a temporary.
+  std::string out = "c";
+  out += std::to_string(factor.channel);
+  if (factor.power != 1) {
+    out += "^";
+    out += std::to_string(factor.power);
+  }
   if (factor.lag > 0) out += "(t-" + std::to_string(factor.lag) + ")";
   if (factor.lag < 0) out += "(t+" + std::to_string(-static_cast<long long>(factor.lag)) + ")";
   return out;
