@@ -188,7 +188,9 @@ TEST_SUITE("app") {
     const momentid::Model model = model_file("kozin_4_1a.mom");
     const auto e = error_from<momentid::DataError>(
         [&] { momentid::identify(model, momentid::DataSource::memory(data), {.batches = 2}); });
-    CHECK(std::string(e.what()) == "arrays:3:2: column 'y': expected a finite number, found 'nan'");
+    CHECK(std::string(e.what()) ==
+          "arrays:3:2: column 'y': expected a number (a missing value? --missing drop-row or "
+          "split-run passes over it), found 'nan'");
   }
 
   TEST_CASE("a metadata dt in memory that is not a positive number is refused") {

@@ -62,6 +62,7 @@ struct Contents {
   std::size_t rows = 0;
   momentid::DataMetadata metadata;
   std::optional<double> time_step;
+  momentid::MissingSummary missing;
 };
 
 Contents read_file(const std::string& path, const ColumnRequest& request,
@@ -80,6 +81,7 @@ Contents read_file(const std::string& path, const ColumnRequest& request,
   contents.rows = reader->rows_read();
   contents.metadata = reader->metadata();
   contents.time_step = reader->time_step();
+  contents.missing = reader->missing();
   return contents;
 }
 
@@ -322,12 +324,12 @@ TEST_SUITE("data reader") {
     check_read_error("t;y;x\ns;m;N\n0;1,5;2\n0,5;1,25;1\n", request,
                      "column 't': expected a number (a units row? give --skip-rows 1), found 's'",
                      2, 1, "s;m;N");
-    request.csv.skip_rows = 1;
+    request.layout.skip_rows = 1;
     check_read_error("t;y;x\ns;m;N\n0;1,5;2\n0,5;1,25;1\n", request,
                      "column 'y': expected a number (with a decimal comma? give --decimal ,), "
                      "found '1,5'",
                      3, 3, "0;1,5;2");
-    request.csv.decimal = ',';
+    request.layout.decimal = ',';
     const Contents contents = read_text("t;y;x\ns;m;N\n0;1,5;2\n0,5;1,25;-1e-1\n", request);
     CHECK(contents.values == std::vector<double>{1.5, 2, 1.25, -0.1});
     CHECK(contents.time_step == 0.5);
@@ -567,9 +569,7 @@ TEST_SUITE("data reader") {
                      2, 1, field);
   }
 
-  TEST_CASE("nan, inf and numbers too large for a double are reported as not finite") {
-    check_read_error("t,y,v\n0,1,2\n0.1,nan,3\n", columns({"y", "v"}),
-                     "column 'y': expected a finite number, found 'nan'", 3, 5, "0.1,nan,3");
+  TEST_CASE("inf and numbers too large for a double are reported as not finite") {
     check_read_error("t,y,v\n0,1,-inf\n", columns({"y", "v"}),
                      "column 'v': expected a finite number, found '-inf'", 2, 5, "0,1,-inf");
     check_read_error("y\n1e999\n", columns({"y"}),
@@ -578,11 +578,66 @@ TEST_SUITE("data reader") {
                      "column 't': expected a finite number, found 'Infinity'", 2, 1, "Infinity,1");
   }
 
-  TEST_CASE("an empty field is reported as such") {
+  TEST_CASE("a missing value (empty, nan, NA, N/A) is an error that names the --missing rules") {
+    const std::string hint =
+        "expected a number (a missing value? --missing drop-row or split-run passes over it)";
     check_read_error("t,y,v\n0.1,,3\n", columns({"y", "v"}),
-                     "column 'y': expected a number, found an empty field", 2, 5, "0.1,,3");
+                     "column 'y': " + hint + ", found an empty field", 2, 5, "0.1,,3");
     check_read_error("t,y,v\n0.1,2, \t\n", columns({"y", "v"}),
-                     "column 'v': expected a number, found an empty field", 2, 7, "0.1,2, \t");
+                     "column 'v': " + hint + ", found an empty field", 2, 7, "0.1,2, \t");
+    check_read_error("t,y,v\n0,1,2\n0.1,nan,3\n", columns({"y", "v"}),
+                     "column 'y': " + hint + ", found 'nan'", 3, 5, "0.1,nan,3");
+    check_read_error("t y v\n0 1 2\n0.1 3 N/A\n", columns({"y", "v"}),
+                     "column 'v': " + hint + ", found 'N/A'", 3, 7, "0.1 3 N/A");
+    check_read_error("t;y\n0;1\nNA;3\n", columns({"y"}), "column 't': " + hint + ", found 'NA'", 3,
+                     1, "NA;3");
+  }
+
+  TEST_CASE("drop-row drops rows with a missing value and joins their neighbours") {
+    ColumnRequest request = columns({"y", "v"});
+    request.layout.missing = momentid::MissingValues::kDropRow;
+    // The time column's step across a dropped row is not checked and not in the mean step.
+    const std::string text = "t,y,v\n0,1,2\n0.5,,3\n1,4,nan\n1.5,5,6\n2,7,8\n2.5,NA,1\n";
+    const Contents c = read_text(text, request);
+    REQUIRE(c.blocks.size() == 1);
+    CHECK(c.values == std::vector<double>{1, 2, 5, 6, 7, 8});
+    CHECK(c.time_step == 0.5);
+    const momentid::MissingSummary& missing = c.missing;
+    CHECK(missing.rows == 3);
+    CHECK(missing.joins == 1);
+    CHECK(missing.splits == 0);
+    REQUIRE(missing.first);
+    CHECK(missing.first->line == 3);
+    CHECK(missing.first->column == 5);
+    // Times must still increase across a dropped row.
+    check_read_error(
+        "t,y\n1,1\n1.5,\n0.25,2\n",
+        [] {
+          ColumnRequest r = columns({"y"});
+          r.layout.missing = momentid::MissingValues::kDropRow;
+          return r;
+        }(),
+        "non-increasing time: t = 0.25 after t = 1 (samples must be in increasing time order)", 4,
+        1, "0.25,2");
+  }
+
+  TEST_CASE("split-run drops rows with a missing value and starts a new run after them") {
+    ColumnRequest request = columns({"y"});
+    request.layout.missing = momentid::MissingValues::kSplitRun;
+    // A gap in time after the dropped rows is then no error.
+    const std::string text =
+        "y,t,run\n,0,1\n1,1,1\n2,2,1\n,3,1\nnan,4,1\n5,5,1\n6,6,1\n,7,1\n7,0,2\n";
+    const Contents c = read_text(text, request);
+    REQUIRE(c.blocks.size() == 3);
+    CHECK(c.blocks[0].values == std::vector<double>{1, 2});
+    CHECK(c.blocks[1].values == std::vector<double>{5, 6});
+    CHECK(c.blocks[1].run == 1);
+    CHECK(c.blocks[1].run_starts);
+    CHECK(c.blocks[2].values == std::vector<double>{7});
+    CHECK(c.blocks[2].run == 2);
+    CHECK(c.time_step == 1);
+    CHECK(c.missing.rows == 4);
+    CHECK(c.missing.splits == 1);  // the first row and the last of run 1 split nothing
   }
 
   TEST_CASE("a row with too few fields is reported at column 1") {
@@ -662,8 +717,9 @@ TEST_SUITE("data reader") {
     // Early in the line: the first 200 bytes.
     const std::string early = "nan" + row.substr(1);
     check_read_error(header + "\n" + early + "\n", columns({"y"}),
-                     "column 'y': expected a finite number, found 'nan'", 2, 1,
-                     early.substr(0, 200) + "...");
+                     "column 'y': expected a number (a missing value? --missing drop-row or "
+                     "split-run passes over it), found 'nan'",
+                     2, 1, early.substr(0, 200) + "...");
     // Far into the line: up to 40 bytes after the field, so that a caret can point at it.
     const std::string late = row + ",oops," + row;
     const int column = static_cast<int>(row.size()) + 2;
@@ -715,7 +771,9 @@ TEST_SUITE("data reader") {
 
   TEST_CASE("a non-finite value of a binary file is reported by row and column number") {
     check_read_error(binary_file("t,y,v\n", {0, 1, 2, 0.1, kNaN, 2}), columns({"y"}),
-                     "column 'y': expected a finite number, found 'nan'", 2, 2, "");
+                     "column 'y': expected a number (a missing value? --missing drop-row or "
+                     "split-run passes over it), found 'nan'",
+                     2, 2, "");
     check_read_error(binary_file("t,y,v\n", {0, 1, -kInf}), columns({"y", "v"}),
                      "column 'v': expected a finite number, found '-inf'", 1, 3, "");
   }

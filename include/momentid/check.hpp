@@ -20,7 +20,7 @@ struct CheckOptions {
   std::optional<InputHold> hold;               // as IdentifyOptions::hold
   std::map<std::string, std::string> columns;  // model variable (or `t`) -> data column
   std::optional<double> dt;                    // as IdentifyOptions::dt
-  CsvLayout csv;                               // as IdentifyOptions::csv
+  FileLayout layout;                           // as IdentifyOptions::layout
   static constexpr std::size_t kMaxLags = 1000;
 
   // Throws UsageError for a number of lags out of range.

@@ -42,7 +42,7 @@ struct DataOptions {
   std::vector<double> offsets;
   // The sample interval, overriding the data's (ColumnRequest::dt).
   std::optional<double> dt;
-  CsvLayout csv;
+  FileLayout layout;
 };
 
 // What one pass over a data file yields.
@@ -54,6 +54,7 @@ struct DataMoments {
   std::optional<double> time_step;
   std::size_t rows = 0;
   std::size_t runs = 0;
+  MissingSummary missing;  // rows dropped for missing values
 };
 
 // Reads `source` once, streaming (memory does not grow with a file), and estimates `moments`
@@ -72,10 +73,13 @@ DataMoments moments_from_data(const DataSource& source, const std::vector<std::s
 
 namespace momentid {
 
-// Warnings about the data for the moment method: an input that is nearly white (lag-1
+// Warnings about the data for the moment method: rows dropped for missing values (and, with
+// MissingValues::kDropRow, neighbours joined across them), an input that is nearly white (lag-1
 // autocorrelation below 0.5; the method needs a smooth input) and sampling too coarse for the
 // dynamics (a state's lag-1 autocorrelation below 0.9: the trapezoidal averages of products
 // with derivatives are then biased).
-std::vector<std::string> smoothness_warnings(const DataMoments& data);
+std::vector<std::string> data_warnings(const DataMoments& data);
+// The warning for rows dropped for missing values (MissingSummary::rows > 0).
+std::string missing_warning(const MissingSummary& missing);
 
 }  // namespace momentid

@@ -36,7 +36,7 @@ struct IdentifyOptions {
   std::map<std::string, std::string> columns;
   // The sample interval, overriding the data's: the time column is then not read.
   std::optional<double> dt;
-  CsvLayout csv;  // units rows, decimal comma
+  FileLayout layout;  // units rows, decimal comma
   // Pair input row n with state row n + input_shift, within kMaxInputShift either way.
   long input_shift = 0;
   // Lagged moment equations (README, "Measured data") at lags first..last samples, with these

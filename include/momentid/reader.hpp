@@ -12,12 +12,31 @@
 
 namespace momentid {
 
-// How a CSV file departs from the usual layout (README, "Data from the lab").
-struct CsvLayout {
+// What a missing value (an empty CSV field, `nan`, `NA`, `N/A`; NaN in a binary file) in a
+// requested column does.
+enum class MissingValues {
+  kError,     // stops the reading with the value's location (the default)
+  kDropRow,   // drops the row; its neighbours are joined as if consecutive
+  kSplitRun,  // drops the row and ends the run: the next complete row starts a new one
+};
+
+// How a file departs from the usual layout (README, "Data from the lab").
+struct FileLayout {
   // Lines after the header row that are not data (units, descriptions), skipped.
   std::size_t skip_rows = 0;
   // The decimal separator, '.' or ','; ',' needs a field separator other than the comma.
   char decimal = '.';
+  MissingValues missing = MissingValues::kError;
+};
+
+// The rows a reader dropped for missing values: how many, the first one's place, and at how
+// many places within a run a new run began after them (MissingValues::kSplitRun) or their
+// neighbours were joined (MissingValues::kDropRow).
+struct MissingSummary {
+  std::size_t rows = 0;
+  std::optional<SourceLocation> first;
+  std::size_t splits = 0;
+  std::size_t joins = 0;
 };
 
 // What to read from a data file: the columns to deliver, in this order (normally the model's
@@ -31,7 +50,7 @@ struct ColumnRequest {
   // The sample interval, overriding the data's: the time column is then neither read nor
   // checked, and time_step() returns it.
   std::optional<double> dt;
-  CsvLayout csv;
+  FileLayout layout;
 };
 
 // Consecutive rows of one run (one continuous record). A block never spans two runs.
@@ -84,6 +103,8 @@ class DataReader {
   virtual bool next(DataBlock& block, std::size_t max_rows) = 0;
   // Data rows delivered so far.
   virtual std::size_t rows_read() const = 0;
+  // Rows dropped so far for missing values (FileLayout::missing).
+  virtual const MissingSummary& missing() const = 0;
 };
 
 // Columns held in memory by the caller, e.g. numpy arrays: no copy is made, so the values must

@@ -34,6 +34,7 @@ struct Record {
   double dt = 0;
   DataMetadata metadata;
   std::vector<RecordRun> runs;
+  MissingSummary missing;  // rows dropped for missing values
   // The index in `variables` of model variable v, or -1.
   int column_of(std::size_t v) const;
 };
@@ -47,7 +48,7 @@ struct ReplayOptions {
   std::optional<Interpolation> interpolation;
   // The sample interval; nullopt: the record's (`t` column or `dt` metadata).
   std::optional<double> dt;
-  CsvLayout csv;  // as IdentifyOptions::csv
+  FileLayout layout;  // as IdentifyOptions::layout
   // Runge-Kutta steps per sample interval, 1..RecordSimulator::kMaxSubsteps; nullopt: the fewest
   // (1, 2, 4, ...) for which halving the step changes the simulation of the first
   // kSubstepTrialRows rows of the first run by less than kSubstepTolerance of each state's

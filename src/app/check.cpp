@@ -89,10 +89,10 @@ CheckResult check(const DataSource& source, const Model* model, const CheckOptio
   data_options.hold = options.hold;
   data_options.rename = options.columns;
   data_options.dt = options.dt;
-  data_options.csv = options.csv;
+  data_options.layout = options.layout;
   result.data = moments_from_data(source, states, inputs, moments, data_options);
   if (system) result.identities = check_identities(*system, full_moments, result.data.estimates);
-  result.warnings = smoothness_warnings(result.data);
+  result.warnings = data_warnings(result.data);
   return result;
 }
 

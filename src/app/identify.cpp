@@ -182,7 +182,7 @@ IdentifyResult identify(const Model& model, const DataSource& source,
   data_options.min_rows = 2 * data_options.batches;
   data_options.input_shift = options.input_shift;
   data_options.dt = options.dt;
-  data_options.csv = options.csv;
+  data_options.layout = options.layout;
   data_options.lags = 4;  // for the noise estimates
 
   // Which variables the data have: the lagged equations serve data without some state.
@@ -510,7 +510,7 @@ std::vector<std::string> warnings(const IdentifyResult& r) {
                   "): the data determine a combination of them better than each");
     }
   }
-  std::vector<std::string> rest = smoothness_warnings(r.data);
+  std::vector<std::string> rest = data_warnings(r.data);
   for (const ChannelStatistics& c : r.data.channels) {
     const std::optional<double> fraction = c.noise_fraction();
     if (c.is_input || !fraction || *fraction < kNoiseWarning) continue;

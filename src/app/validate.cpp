@@ -12,6 +12,7 @@
 #include "app/variables.hpp"
 #include "common/decimal.hpp"
 #include "common/json.hpp"
+#include "momentid/data_pass.hpp"
 #include "momentid/error.hpp"
 #include "momentid/lagged.hpp"
 
@@ -51,7 +52,7 @@ Record read_record(const Model& model, const DataSource& source, const ReplayOpt
     }
   }
   const auto reader = source.open(
-      {.names = names, .rename = options.columns, .min_rows = 2, .csv = options.csv});
+      {.names = names, .rename = options.columns, .min_rows = 2, .layout = options.layout});
   const std::size_t first = record.has_time ? 1 : 0;
   const std::size_t width = names.size();
   DataBlock block;
@@ -71,6 +72,7 @@ Record read_record(const Model& model, const DataSource& source, const ReplayOpt
     }
   }
   record.metadata = reader->metadata();
+  record.missing = reader->missing();
   const std::optional<double> dt = options.dt ? options.dt : reader->time_step();
   if (!dt) {
     throw DataError(file_start(record.name),
@@ -472,6 +474,7 @@ ValidateResult validate(const Model& model, const DataSource& source,
                         " is a column of the data: there is nothing to compare");
   }
 
+  if (record.missing.rows > 0) result.warnings.push_back(missing_warning(record.missing));
   if (replay.substep_change >= ReplayOptions::kSubstepTolerance) {
     char text[32];
     std::snprintf(text, sizeof text, "%.2g", replay.substep_change);

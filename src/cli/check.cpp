@@ -52,7 +52,7 @@ Command add_check(CLI::App& app) {
       ->check(CLI::PositiveNumber);
   sub->add_option("--columns", command->columns, "NAME=COLUMN: where a model variable is")
       ->delimiter(',');
-  add_csv_options(sub, command->options.csv);
+  add_layout_options(sub, command->options.layout);
   return {sub, [command] { return run_check(*command); }};
 }
 

@@ -37,7 +37,7 @@ bool is_model_file(const std::string& path);
 Model model_argument(const std::string& model, const std::string& data, const std::string& usage);
 
 // --skip-rows and --decimal, into `layout`.
-void add_csv_options(CLI::App* command, CsvLayout& layout);
+void add_layout_options(CLI::App* command, FileLayout& layout);
 
 // The data argument: a file, or standard input for `-`.
 DataSource data_source(const std::string& path);

@@ -141,7 +141,7 @@ Command add_identify(CLI::App& app) {
                   "remove the means of these channels (NAME,... or all) before forming the "
                   "moments: a sensor offset on a symmetric system")
       ->delimiter(',');
-  add_csv_options(sub, options.csv);
+  add_layout_options(sub, options.layout);
   return {sub, [command] { return run_identify(*command); }};
 }
 

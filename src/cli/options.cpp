@@ -34,7 +34,7 @@ Model model_argument(const std::string& model, const std::string& data, const st
   }
 }
 
-void add_csv_options(CLI::App* command, CsvLayout& layout) {
+void add_layout_options(CLI::App* command, FileLayout& layout) {
   command->add_option("--skip-rows", layout.skip_rows,
                       "lines after the header that are not data (units), skipped");
   command
@@ -42,6 +42,15 @@ void add_csv_options(CLI::App* command, CsvLayout& layout) {
           "--decimal", [&layout](const std::string& text) { layout.decimal = text[0]; },
           "the decimal separator, . or , (with ; or blank separated fields)")
       ->check(CLI::IsMember({".", ","}));
+  const std::map<std::string, MissingValues> rules = {{"error", MissingValues::kError},
+                                                      {"drop-row", MissingValues::kDropRow},
+                                                      {"split-run", MissingValues::kSplitRun}};
+  command
+      ->add_option("--missing", layout.missing,
+                   "a missing value (empty, nan, NA): error, drop-row (joins its neighbours) or "
+                   "split-run (starts a new run)")
+      ->transform(CLI::CheckedTransformer(rules))
+      ->default_str("error");
 }
 
 DataSource data_source(const std::string& path) {

@@ -106,7 +106,7 @@ Command add_validate(CLI::App& app) {
   sub->add_option("--window", command->window,
                   "FROM:TO, the times the plot shows (default: the first 2000 compared rows)")
       ->needs(plot);
-  add_csv_options(sub, command->options.replay.csv);
+  add_layout_options(sub, command->options.replay.layout);
   return {sub, [command] { return run_validate(*command); }};
 }
 

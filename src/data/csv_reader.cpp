@@ -33,12 +33,12 @@ class CsvReader final : public StreamReader {
     separator_ = header_.separator;
     fields_ = header_.names.size();
     field_starts_.assign(fields_, nullptr);
-    if (request_.csv.decimal == ',' && separator_ == ',') {
+    if (request_.layout.decimal == ',' && separator_ == ',') {
       fail(text_location(path_, header_.line, 1, header_.text),
            "a decimal comma needs fields separated by ';' or blanks, but the header separates "
            "them by ','");
     }
-    for (std::size_t k = 0; k < request_.csv.skip_rows; ++k) {
+    for (std::size_t k = 0; k < request_.layout.skip_rows; ++k) {
       if (!lines_.next(line_)) break;
     }
   }
@@ -104,18 +104,33 @@ class CsvReader final : public StreamReader {
     return found == nullptr ? end : static_cast<const char*>(found);
   }
 
+  // An empty field, or a missing-value marker as spreadsheets and pandas write them.
+  static bool is_missing_value(std::string_view text) {
+    const auto is = [&](std::string_view marker) {
+      return std::equal(text.begin(), text.end(), marker.begin(), marker.end(),
+                        [](char a, char b) { return (a | 0x20) == (b | 0x20); });
+    };
+    return text.empty() || is("nan") || is("na") || is("n/a");
+  }
+
   // Reads the number in the field starting at `p` and returns the end of the field.
   const char* read_field(std::size_t field, const char* p, double* row, RowKeys& keys) {
     const char* const end = line_.data() + line_.size();
     const char* const start = skip_blanks(p, end);
+    const char* const stop = field_end(start, end);
+    if (is_missing_value(trim(std::string_view(start, static_cast<std::size_t>(stop - start))))) {
+      if (!pass_over_missing(keys, field))
+        bad_field(field, p, std::string("expected a number (") + kMissingHint + ")");
+      field_starts_[field] = start;
+      return stop;
+    }
     double value = 0;
-    const char* after = parse_number(start, end, value, request_.csv.decimal);
+    const char* after = parse_number(start, end, value, request_.layout.decimal);
     if (after != nullptr && separator_ != ' ') after = skip_blanks(after, end);
     if (after == nullptr || (after != end && *after != separator_ && !is_blank(*after))) {
       // "1,5" in a ';'-separated file: a decimal comma.
-      const bool comma = request_.csv.decimal == '.' && separator_ != ',' &&
-                         std::memchr(start, ',', static_cast<std::size_t>(field_end(start, end) -
-                                                                          start)) != nullptr;
+      const bool comma = request_.layout.decimal == '.' && separator_ != ',' &&
+                         std::memchr(start, ',', static_cast<std::size_t>(stop - start)) != nullptr;
       // A first row without a digit: units or descriptions.
       const bool units = rows_parsed_ == 1 && std::none_of(line_.begin(), line_.end(), [](char c) {
                            return c >= '0' && c <= '9';
@@ -166,7 +181,8 @@ class CsvReader final : public StreamReader {
   char separator_ = ',';
   std::size_t fields_ = 0;
   std::string_view line_;
-  std::vector<const char*> field_starts_;  // of the `t` and `run` fields of the current row
+  // Of the `t` and `run` fields of the current row, and of a missing value.
+  std::vector<const char*> field_starts_;
   std::size_t rows_parsed_ = 0;
   std::string last_short_row_;  // the last row while there are fewer than min_rows
   long long last_short_row_line_ = 0;

@@ -25,8 +25,7 @@ constexpr std::array kFormats{
 
 }  // namespace
 
-std::unique_ptr<DataReader> DataReader::open(const std::string& path,
-                                             const ColumnRequest& request,
+std::unique_ptr<DataReader> DataReader::open(const std::string& path, const ColumnRequest& request,
                                              const std::string& name) {
   const std::string& shown = name.empty() ? path : name;
   data::File file(std::fopen(path.c_str(), "rb"));
@@ -58,8 +57,7 @@ DataSource DataSource::memory(MemoryData data) {
 }
 
 DataSource DataSource::standard_input() {
-  std::string path =
-      (std::filesystem::temp_directory_path() / "momentid_stdin_XXXXXX").string();
+  std::string path = (std::filesystem::temp_directory_path() / "momentid_stdin_XXXXXX").string();
   const int fd = mkstemp(path.data());
   if (fd < 0) {
     throw Error("<stdin>: cannot store standard input: " + std::string(std::strerror(errno)));

@@ -40,12 +40,23 @@ bool StreamReader::next(DataBlock& block, std::size_t max_rows) {
   RowKeys keys;
   while (block.rows < max_rows) {
     double* const row = block.values.data() + block.rows * width;
+    keys.missing_field = -1;
     if (!read_row(row, keys)) {
       finish(rows_read_ + block.rows);
       break;
     }
+    if (keys.missing_field >= 0) {
+      if (!missing_.first) missing_.first = field_location(keys.missing_field);
+      ++missing_.rows;
+      dropped_ = started_;
+      continue;
+    }
     for (const auto& [to, from] : map_.copies) row[to] = row[from];
-    const bool run_starts = !started_ || keys.run != current_run_;
+    const bool split = dropped_ && request_.layout.missing == MissingValues::kSplitRun;
+    const bool run_starts = !started_ || keys.run != current_run_ || split;
+    if (dropped_ && keys.run == current_run_) ++(split ? missing_.splits : missing_.joins);
+    joined_ = dropped_;
+    dropped_ = false;
     if (run_starts) {
       started_ = true;
       current_run_ = keys.run;
@@ -85,7 +96,9 @@ void StreamReader::check_time(double t) {
                                           " (samples must be in increasing time order)");
     }
     const double allowance = kTimeRounding * std::max(std::abs(t), std::abs(previous_time_));
-    if (!step_) {
+    if (joined_) {
+      // Rows dropped for missing values lie between: the step is not a sample interval.
+    } else if (!step_) {
       const std::optional<double> dt = header_.metadata_dt;
       if (dt && std::abs(step - *dt) > kStepTolerance * *dt + allowance) {
         fail(field_location(map_.time), "time step " + distinguished(step, *dt).first +
@@ -100,10 +113,11 @@ void StreamReader::check_time(double t) {
                                           "; samples must be equally spaced)");
     }
   }
-  if (has_previous_time_) {
+  if (has_previous_time_ && !joined_) {
     span_ += t - previous_time_;
     ++steps_;
   }
+  joined_ = false;
   previous_time_ = t;
   has_previous_time_ = true;
 }

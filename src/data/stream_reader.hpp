@@ -17,7 +17,13 @@ bool to_run(double value, long& run);
 struct RowKeys {
   double t = 0;
   long run = 0;
+  // The first requested field of the row that holds a missing value, or -1.
+  int missing_field = -1;
 };
+
+// The hint of an error at a missing value.
+inline constexpr const char* kMissingHint =
+    "a missing value? --missing drop-row or split-run passes over it";
 
 // The reading both layouts share: blocks, runs and the time-step checks. A layout delivers rows
 // through read_row() and says where a field is for errors.
@@ -31,6 +37,8 @@ class StreamReader : public DataReader {
 
   std::size_t rows_read() const override { return rows_read_; }
 
+  const MissingSummary& missing() const override { return missing_; }
+
   bool next(DataBlock& block, std::size_t max_rows) override;
 
  protected:
@@ -38,12 +46,21 @@ class StreamReader : public DataReader {
       : path_(std::move(path)), request_(request) {}
 
   // Reads the next data row: the requested values into `row` (in request order), its time and
-  // run into `keys`. False at the end of the data.
+  // run into `keys`. False at the end of the data. A missing value in a requested field fails
+  // when the rule is MissingValues::kError, else marks the row in `keys` (pass_over_missing).
   virtual bool read_row(double* row, RowKeys& keys) = 0;
   // Where field `field` (from 0) of the row read last is.
   virtual SourceLocation field_location(int field) const = 0;
   // Where the last data row is, or the header when there is none.
   virtual SourceLocation last_row_location() const = 0;
+
+  // Marks field `field` of the row as missing when the rule passes over missing values; false
+  // when it is an error, which the layout reports with kMissingHint.
+  bool pass_over_missing(RowKeys& keys, std::size_t field) const {
+    if (request_.layout.missing == MissingValues::kError) return false;
+    if (keys.missing_field < 0) keys.missing_field = static_cast<int>(field);
+    return true;
+  }
 
   std::string path_;
   ColumnRequest request_;
@@ -61,6 +78,9 @@ class StreamReader : public DataReader {
   std::size_t steps_ = 0;
   double previous_time_ = 0;
   bool has_previous_time_ = false;
+  bool dropped_ = false;  // a row was dropped since the last one delivered
+  bool joined_ = false;   // a dropped row lies between the previous time and the next
+  MissingSummary missing_;
   bool started_ = false;
   long current_run_ = 0;
   std::vector<double> pending_;

@@ -42,8 +42,7 @@ std::string_view trim(std::string_view s);
 
 // Parses a number at the start of [p, end) (fast_float, plus an optional leading '+'). Returns
 // the end of the number, or nullptr when there is none. Non-finite values are returned as such.
-inline const char* parse_number(const char* p, const char* end, double& value,
-                                char decimal = '.') {
+inline const char* parse_number(const char* p, const char* end, double& value, char decimal = '.') {
   if (p != end && *p == '+') {
     ++p;
     if (p == end || *p == '+' || *p == '-') return nullptr;

@@ -207,7 +207,7 @@ DataMoments moments_from_data(const DataSource& source, const std::vector<std::s
   request.rename = options.rename;
   request.min_rows = options.min_rows;
   request.dt = options.dt;
-  request.csv = options.csv;
+  request.layout = options.layout;
   std::unique_ptr<DataReader> reader = source.open(request);
 
   DataMoments out;
@@ -289,6 +289,7 @@ DataMoments moments_from_data(const DataSource& source, const std::vector<std::s
                 ": the time averages need at least one interval");
   }
   out.time_step = reader->time_step();
+  out.missing = reader->missing();
   out.estimates = estimates(accumulator, options.batches);
   for (std::size_t c = 0; c < channels; ++c) {
     ChannelStatistics s = lags.statistics(c);
@@ -308,8 +309,28 @@ std::optional<double> ChannelStatistics::noise_fraction() const {
   return std::sqrt(std::max(0.0, *noise_variance) / variance);
 }
 
-std::vector<std::string> smoothness_warnings(const DataMoments& data) {
+std::string missing_warning(const MissingSummary& missing) {
+  const SourceLocation& at = *missing.first;
+  std::string text = "dropped " + std::to_string(missing.rows) +
+                     (missing.rows == 1 ? " row" : " rows") +
+                     " with missing values (the first at " + at.file + ":" +
+                     std::to_string(at.line) + ":" + std::to_string(at.column) + ")";
+  if (missing.splits > 0) {
+    text += " and began a new run at " + std::to_string(missing.splits) +
+            (missing.splits == 1 ? " place" : " places");
+  }
+  if (missing.joins > 0) {
+    text += " and joined their neighbours at " + std::to_string(missing.joins) +
+            (missing.joins == 1 ? " place" : " places") +
+            " as consecutive samples, which is right only for gaps short against the dynamics "
+            "(--missing split-run starts a new run instead)";
+  }
+  return text;
+}
+
+std::vector<std::string> data_warnings(const DataMoments& data) {
   std::vector<std::string> out;
+  if (data.missing.rows > 0) out.push_back(missing_warning(data.missing));
   for (const ChannelStatistics& c : data.channels) {
     if (c.autocorrelation.empty() || std::isnan(c.autocorrelation[0])) continue;
     const double rho = c.autocorrelation[0];
