@@ -57,6 +57,8 @@ struct kw_const : sor<TAO_PEGTL_KEYWORD("constants"), TAO_PEGTL_KEYWORD("constan
 // `multipliers` or `multiplier`
 struct kw_multipliers : sor<TAO_PEGTL_KEYWORD("multipliers"), TAO_PEGTL_KEYWORD("multiplier")> {};
 struct kw_dot : TAO_PEGTL_KEYWORD("dot") {};
+// `fixed`, after a parameter's value; not reserved, as no name can stand there
+struct kw_fixed : TAO_PEGTL_KEYWORD("fixed") {};
 
 // --- Numbers and strings --------------------------------------------------------------------
 
@@ -156,8 +158,10 @@ template <typename Item>
 struct comma_list : seq<Item, star<sp, comma, must<item_after_comma<Item>>>> {};
 // `state y, v` and `input x`: names only
 struct name_list : comma_list<declared_name> {};
-// `param c = 0.5, k` : names with optional nominal values
-struct param_item : seq<declared_name, sp, opt<declared_value>> {};
+// `fixed` after a parameter: its value is known, not estimated
+struct fixed_mark : kw_fixed {};
+// `param c = 0.5, k, m = 2 fixed` : names with optional nominal values, and known ones
+struct param_item : seq<declared_name, sp, opt<declared_value>, sp, opt<fixed_mark>> {};
 struct param_list : comma_list<param_item> {};
 // `const m = 1`: names with values
 struct const_item : seq<declared_name, sp, must<required_value>> {};

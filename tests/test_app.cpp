@@ -113,6 +113,35 @@ TEST_SUITE("app") {
     }
   }
 
+  TEST_CASE("a parameter fixed in the model file is fixed as by the option, whose value wins") {
+    const DuffingFile file(20000);
+    const auto source = momentid::DataSource::file(file.path.string());
+    const momentid::Model declared = momentid::parse_model(
+        "model duffing\nstate y, v\ninput x\nparam c, k = 4 fixed, eps\ny' = v\n"
+        "v' = -c*v - k*y - eps*y^3 + x\n",
+        "fixed.mom");
+    const auto estimates = [](const momentid::IdentifyResult& r) {
+      std::vector<double> out;
+      for (const auto& p : r.parameters()) out.push_back(p.estimate);
+      return out;
+    };
+    const momentid::IdentifyResult by_file = momentid::identify(declared, source, {});
+    CHECK(by_file.parameters()[1].fixed);
+    CHECK(estimates(by_file) ==
+          estimates(momentid::identify(file.model, source, {.fixed = {{"k", 4.0}}})));
+    const momentid::IdentifyResult overridden =
+        momentid::identify(declared, source, {.fixed = {{"k", 3.5}}});
+    CHECK(overridden.parameters()[1].estimate == 3.5);
+    CHECK(estimates(overridden) ==
+          estimates(momentid::identify(file.model, source, {.fixed = {{"k", 3.5}}})));
+    const auto e = error_from<momentid::UsageError>([&] {
+      momentid::identify(declared, source, {.fixed = {{"c", 1.0}, {"eps", 1.0}}});
+    });
+    CHECK(std::string(e.what()) ==
+          "--fix: every parameter of model duffing is fixed (by --fix or in the model file): "
+          "there is nothing to estimate");
+  }
+
   TEST_CASE("the identified model is printed with the estimates substituted") {
     const momentid::Model duffing = model_file("duffing.mom");
     CHECK(momentid::identified_equations(result_with(duffing, {0.5, 4, 1.25})) ==

@@ -76,6 +76,12 @@ m*v' = -c*v - q*y + x
                 6, 15, "m*v' = -c*v - q*y + x");
   }
 
+  TEST_CASE("a fixed parameter without a value is reported at 'fixed'") {
+    const auto e = error_of<ModelError>("state y\nparam c, k fixed\ny' = -c*y - k*y^3\n");
+    check_error(e, "a fixed parameter needs its value: write 'k = VALUE fixed'", 2, 12,
+                "param c, k fixed");
+  }
+
   TEST_CASE("a name declared twice as the same kind is reported with the first declaration") {
     const auto e = error_of<ModelError>(R"(state y, v
 param k

@@ -35,6 +35,23 @@ TEST_SUITE("parser") {
     CHECK(*model.constants()[0].value == 2);
   }
 
+  TEST_CASE("a parameter declared fixed keeps its value and says so") {
+    const momentid::Model model = momentid::parse_model(
+        "state y\ninput x\nparam a = 2 fixed, b, c = -0.5 fixed\ny' = -a*y - b*y^3 + c*x\n",
+        "f.mom");
+    const auto& p = model.parameters();
+    REQUIRE(p.size() == 3);
+    CHECK(p[0].fixed);
+    CHECK(*p[0].value == 2);
+    CHECK_FALSE(p[1].fixed);
+    CHECK(p[2].fixed);
+    CHECK(*p[2].value == GiNaC::numeric(-1, 2));
+    // `fixed` is a word only after a value: it may still name a parameter.
+    CHECK(momentid::parse_model("state y\nparam fixed = 1 fixed\ny' = -fixed*y\n", "g.mom")
+              .parameters()[0]
+              .fixed);
+  }
+
   TEST_CASE("an equation becomes terms of lhs - rhs with constants substituted") {
     const momentid::Equation& eq = duffing().equations()[1];
     CHECK(eq.label == "motion");

@@ -48,7 +48,8 @@ struct IdentifyOptions {
   // channels by their Hermite polynomials: nullopt estimates each measured state's noise
   // variance from its autocorrelation; a map gives the variances by name (absent: none).
   std::optional<std::map<std::string, double>> noise;
-  // Parameters taken as known, by name: their terms move to the right-hand side.
+  // Parameters taken as known, by name, besides those declared `fixed` in the model file (a
+  // value here wins): their terms move to the right-hand side.
   std::map<std::string, double> fixed;
   // Model variables whose mean is removed before the moments are formed (a sensor offset on a
   // symmetric system): the means come from a first pass over the data.

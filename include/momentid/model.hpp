@@ -18,12 +18,15 @@ enum class SymbolKind { kState, kInput, kParameter, kConstant };
 const char* kind_name(SymbolKind kind);
 
 // One declared name. `value` is the nominal value of a parameter (optional; the simulator uses
-// it) or the value of a constant (always present). Numbers are kept exact: `0.1` is 1/10.
+// it) or the value of a constant (always present). Numbers are kept exact: `0.1` is 1/10. A
+// parameter declared `fixed` (`param m = 2 fixed`) is known: identify uses its value instead of
+// estimating it.
 struct Declaration {
   std::string name;
   SymbolKind kind = SymbolKind::kState;
   std::optional<GiNaC::numeric> value;
   SourceLocation where;
+  bool fixed = false;
 };
 
 // One term of an equation moved to the form `lhs - rhs = 0` and expanded:

@@ -53,9 +53,11 @@ void IdentifyOptions::validate(const Model& model) const {
       throw UsageError("--fix: the value of '" + name + "' must be a finite number");
     }
   }
-  if (!model.parameters().empty() && fixed.size() == model.parameters().size()) {
+  const auto declared_fixed = [&](const Declaration& p) { return p.fixed || fixed.count(p.name); };
+  if (!model.parameters().empty() &&
+      std::all_of(model.parameters().begin(), model.parameters().end(), declared_fixed)) {
     throw UsageError("--fix: every parameter of model " + model.name() +
-                     " is fixed: there is nothing to estimate");
+                     " is fixed (by --fix or in the model file): there is nothing to estimate");
   }
   for (const std::string& name : center) {
     if (std::find(variables.begin(), variables.end(), name) == variables.end()) {
@@ -156,13 +158,20 @@ std::vector<double> channel_offsets(const DataSource& source,
   return out;
 }
 
-// IdentifyOptions::fixed as SolveOptions::fixed wants it: per parameter, in declaration order.
+// The parameters fixed by IdentifyOptions::fixed or in the model file (the option's value wins),
+// as SolveOptions::fixed wants them: per parameter, in declaration order.
 std::vector<std::optional<double>> fixed_values(const Model& model,
                                                 const std::map<std::string, double>& fixed) {
   std::vector<std::optional<double>> out;
   for (const Declaration& p : model.parameters()) {
     const auto it = fixed.find(p.name);
-    out.push_back(it == fixed.end() ? std::nullopt : std::optional<double>(it->second));
+    if (it != fixed.end()) {
+      out.emplace_back(it->second);
+    } else if (p.fixed) {
+      out.emplace_back(p.value->to_double());
+    } else {
+      out.emplace_back();
+    }
   }
   return out;
 }

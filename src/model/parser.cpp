@@ -66,6 +66,7 @@ using ParseTreeRules = KeptRules<
     KeptRule<g::const_declaration, SyntaxKind::kConstDeclaration>,
     KeptRule<g::declared_name, SyntaxKind::kDeclaredName>,
     KeptRule<g::param_item, SyntaxKind::kParamItem>,
+    KeptRule<g::fixed_mark, SyntaxKind::kFixedMark>,
     KeptRule<g::const_item, SyntaxKind::kConstItem>,
     KeptRule<g::signed_number, SyntaxKind::kSignedNumber>,
     KeptRule<g::number, SyntaxKind::kNumber>,

@@ -32,17 +32,25 @@ void SymbolTable::declare_all(const SyntaxNode& statement, SymbolKind kind) {
   for (const SyntaxNode& child : statement.children) {
     const SyntaxNode* name = &child;
     const SyntaxNode* value = nullptr;
+    const SyntaxNode* fixed = nullptr;
     if (child.kind == SyntaxKind::kParamItem || child.kind == SyntaxKind::kConstItem) {
       name = &child.children.at(0);
-      if (child.children.size() > 1) value = &child.children[1];
+      for (const SyntaxNode& part : child.children) {
+        if (part.kind == SyntaxKind::kSignedNumber) value = &part;
+        if (part.kind == SyntaxKind::kFixedMark) fixed = &part;
+      }
     }
     if (name->kind != SyntaxKind::kDeclaredName) continue;
-    declare(*name, value, kind);
+    if (fixed != nullptr && value == nullptr) {
+      source_.fail(*fixed, "a fixed parameter needs its value: write '" + std::string(name->text) +
+                               " = VALUE fixed'");
+    }
+    declare(*name, value, kind, fixed != nullptr);
   }
 }
 
 void SymbolTable::declare(const SyntaxNode& name_node, const SyntaxNode* value_node,
-                          SymbolKind kind) {
+                          SymbolKind kind, bool fixed) {
   const std::string name(name_node.text);
   static const std::set<std::string> reserved{
       "model",     "state",      "states",      "input", "inputs", "param",
@@ -51,7 +59,7 @@ void SymbolTable::declare(const SyntaxNode& name_node, const SyntaxNode* value_n
   if (reserved.count(name) != 0) {
     source_.fail(name_node, "'" + name + "' is a reserved word and cannot be declared");
   }
-  Declaration d{name, kind, std::nullopt, source_.where(name_node)};
+  Declaration d{name, kind, std::nullopt, source_.where(name_node), fixed};
   if (auto [it, fresh] = first_declaration_.emplace(name, d); !fresh) {
     const Declaration& first = it->second;
     source_.fail(name_node,

@@ -61,7 +61,8 @@ class SymbolTable {
 
  private:
   // `value_node` is the `= value` part, or nullptr.
-  void declare(const SyntaxNode& name_node, const SyntaxNode* value_node, SymbolKind kind);
+  void declare(const SyntaxNode& name_node, const SyntaxNode* value_node, SymbolKind kind,
+               bool fixed = false);
   // Fills the lookup maps from the lists.
   void index_symbols();
   // Everything declared, by kind: what an error about an undeclared name offers instead.

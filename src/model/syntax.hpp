@@ -27,6 +27,7 @@ enum class SyntaxKind {
   kConstDeclaration,
   kDeclaredName,
   kParamItem,
+  kFixedMark,
   kConstItem,
   kSignedNumber,
   kNumber,
