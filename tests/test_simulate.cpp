@@ -277,6 +277,36 @@ TEST_SUITE("simulate") {
                          momentid::UsageError);
   }
 
+  TEST_CASE("a moving average over T seconds has T/dt rounded equal weights, 1/K by default") {
+    const InputSpec window = InputSpec::parse("ma:T=0.1,sigma=2", "--input");
+    CHECK(window.text() == "ma:T=0.1,sigma=2,mean=0");
+    CHECK(InputSpec::parse(window.text(), "--input").text() == window.text());
+    CHECK(window.weights_at(0.01) == std::vector<double>(10, 0.1));
+    CHECK(window.weights_at(0.03) == std::vector<double>(3, 1.0 / 3));  // 3.33 steps
+    CHECK(window.weights_at(0.15) == std::vector<double>(1, 1.0));
+    const InputSpec weighted = InputSpec::parse("ma:T=0.05,w=0.5", "--input");
+    CHECK(weighted.text() == "ma:T=0.05,w=0.5,sigma=1,mean=0");
+    CHECK(weighted.weights_at(0.01) == std::vector<double>(5, 0.5));
+    // The same process as its count in samples: the same values.
+    momentid::InputProcess by_time(window, 0.01, 4, 0);
+    momentid::InputProcess by_count(InputSpec::parse("ma:K=10,w=0.1,sigma=2", "--input"), 0.01, 4,
+                                    0);
+    for (int n = 0; n < 100; ++n) REQUIRE(by_time.next() == by_count.next());
+    CHECK_THROWS_WITH_AS(InputSpec::parse("ma:T=0.1,K=10", "--input"),
+                         "--input: give the window either in seconds (T) or in samples (K or "
+                         "weights), not both",
+                         momentid::UsageError);
+    CHECK_THROWS_WITH_AS(InputSpec::parse("ma:T=0", "--input"),
+                         "--input: T must be a positive number of seconds, found '0'",
+                         momentid::UsageError);
+    CHECK_THROWS_WITH_AS(window.validate("--input x", 0.5),
+                         "--input x: T=0.1 is shorter than half a step (dt = 0.5)",
+                         momentid::UsageError);
+    CHECK_THROWS_WITH_AS(window.validate("--input x", 1e-8),
+                         "--input x: T=0.1 is longer than 1000000 steps (dt = 1e-08)",
+                         momentid::UsageError);
+  }
+
   TEST_CASE("the Ornstein-Uhlenbeck input has variance sigma^2 and correlation exp(-dt/tau)") {
     const std::size_t n = 400000;
     momentid::InputProcess input(InputSpec::parse("ou:tau=0.05,sigma=2", "--input"), 0.01, 9, 0);

@@ -13,6 +13,9 @@ namespace momentid {
 //
 //   ma:K=10,w=0.1          moving average x_n = sum_{i<K} w_i v_{n-i} of white noise v, the
 //                          report's input; K equal weights w, or `weights=[0.3,0.4,0.3]`
+//   ma:T=0.1               the same over a window of T seconds: K = T/dt rounded (at least
+//                          1), equal weights w (default 1/K, a gain of 1 at 0 Hz); the gain
+//                          falls by 3 dB near 0.443/T Hz and to 0 at 1/T Hz
 //   ou:tau=0.5             first-order filtered noise with correlation time tau (seconds):
 //                          x_{n+1} = a x_n + sqrt(1 - a^2) e_n, a = exp(-dt/tau)
 //   white                  a new independent value every step
@@ -43,6 +46,9 @@ struct InputSpec {
   enum class Kind { kMovingAverage, kOrnsteinUhlenbeck, kWhite, kMultisine };
   Kind kind = Kind::kMovingAverage;
   std::vector<double> weights = std::vector<double>(10, 0.1);
+  // ma:T=: the averaging window in seconds, 0 when `weights` are given; `weights` then holds the
+  // one weight w when given, else nothing (1/K).
+  double window = 0;
   double tau = 1;
   double sigma = 1;
   double mean = 0;
@@ -52,6 +58,7 @@ struct InputSpec {
   double rms = 1;
 
   static constexpr std::uint32_t kMaxLines = 10000;
+  static constexpr long kMaxWeights = 1000000;
 
   // Parses the text form above; throws UsageError naming `option` and what is wrong.
   static InputSpec parse(const std::string& text, const std::string& option);
@@ -59,8 +66,11 @@ struct InputSpec {
   // `multisine:f1=0.5,f2=5,lines=10,rms=1,mean=0`.
   std::string text() const;
   // Throws UsageError naming `option` when the spec cannot be simulated at step `dt`: a value
-  // parse() would refuse, or a multisine whose f2 is not below the Nyquist frequency 1/(2 dt).
+  // parse() would refuse, a multisine whose f2 is not below the Nyquist frequency 1/(2 dt), or
+  // a window shorter than half a step or longer than kMaxWeights steps.
   void validate(const std::string& option, double dt) const;
+  // The moving average's weights at step `dt` (those of the window, or `weights`).
+  std::vector<double> weights_at(double dt) const;
   // Whether the process is held over each step (ma, ou, white) rather than evaluated at every
   // time the integrator asks for (multisine).
   bool held() const { return kind != Kind::kMultisine; }

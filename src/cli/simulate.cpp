@@ -112,7 +112,8 @@ Command add_simulate(CLI::App& app) {
       ->needs(input_file);
   sub->add_option(
       "--input", command->inputs,
-      "input process [NAME=]SPEC: ma:K=10,w=0.1 | ma:weights=[..] | ou:tau=T | white, with "
+      "input process [NAME=]SPEC: ma:K=10,w=0.1 | ma:T=SECONDS | ma:weights=[..] | ou:tau=T | "
+      "white, with "
       "sigma= and mean= (default ma:K=10,w=0.1); multisine:f1=F1,f2=F2,lines=L with rms= and "
       "mean=");
   sub->add_option("--noise", command->noise,

@@ -68,7 +68,12 @@ void check_values(const InputSpec& spec, const std::string& option) {
       if (!(spec.sigma >= 0 && std::isfinite(spec.sigma))) {
         throw UsageError(option + ": sigma must not be negative");
       }
-      if (spec.kind == InputSpec::Kind::kMovingAverage && spec.weights.empty()) {
+      if (spec.kind == InputSpec::Kind::kMovingAverage && spec.window > 0 &&
+          !std::isfinite(spec.window)) {
+        throw UsageError(option + ": T must be a positive number of seconds");
+      }
+      if (spec.kind == InputSpec::Kind::kMovingAverage && spec.weights.empty() &&
+          spec.window == 0) {
         throw UsageError(option + ": a moving average needs at least one weight");
       }
       if (spec.kind == InputSpec::Kind::kOrnsteinUhlenbeck &&
@@ -132,6 +137,7 @@ InputSpec InputSpec::parse(const std::string& text, const std::string& option) {
   double equal_weight = 0.1;
   long count = 10;
   bool explicit_weights = false, has_count = false, has_w = false, has_tau = false;
+  bool has_window = false;
   bool has_f1 = false, has_f2 = false, has_lines = false;
   if (!rest.empty()) {
     for (const std::string& item : split_items(rest)) {
@@ -155,6 +161,13 @@ InputSpec InputSpec::parse(const std::string& text, const std::string& option) {
         }
         count = static_cast<long>(k);
         has_count = true;
+      } else if (ma && key == "T") {
+        spec.window = parse_number(value, "T", option);
+        if (!(spec.window > 0)) {
+          throw UsageError(option + ": T must be a positive number of seconds, found '" + value +
+                           "'");
+        }
+        has_window = true;
       } else if (ma && key == "w") {
         equal_weight = parse_number(value, "w", option);
         has_w = true;
@@ -200,7 +213,16 @@ InputSpec InputSpec::parse(const std::string& text, const std::string& option) {
     if (explicit_weights && (has_count || has_w)) {
       throw UsageError(option + ": give either K and w, or weights, not both");
     }
-    if (!explicit_weights) spec.weights.assign(static_cast<std::size_t>(count), equal_weight);
+    if (has_window && (has_count || explicit_weights)) {
+      throw UsageError(option + ": give the window either in seconds (T) or in samples (K or " +
+                       "weights), not both");
+    }
+    if (has_window) {
+      spec.weights.clear();
+      if (has_w) spec.weights.push_back(equal_weight);
+    } else if (!explicit_weights) {
+      spec.weights.assign(static_cast<std::size_t>(count), equal_weight);
+    }
   }
   if (spec.kind == Kind::kOrnsteinUhlenbeck && !has_tau) {
     throw UsageError(option + ": an ou input needs its correlation time, e.g. ou:tau=0.5");
@@ -220,6 +242,11 @@ std::string InputSpec::text() const {
   std::string out;
   switch (kind) {
     case Kind::kMovingAverage: {
+      if (window > 0) {
+        out = "ma:T=" + shortest_decimal(window);
+        if (!weights.empty()) out += ",w=" + shortest_decimal(weights.front());
+        break;
+      }
       bool equal = true;
       for (double w : weights) equal = equal && w == weights.front();
       if (equal) {
@@ -249,8 +276,21 @@ std::string InputSpec::text() const {
   return out + "sigma=" + shortest_decimal(sigma) + ",mean=" + shortest_decimal(mean);
 }
 
+std::vector<double> InputSpec::weights_at(double dt) const {
+  if (window == 0) return weights;
+  const auto k = static_cast<std::size_t>(std::max(1.0, std::round(window / dt)));
+  return std::vector<double>(k, weights.empty() ? 1.0 / static_cast<double>(k) : weights.front());
+}
+
 void InputSpec::validate(const std::string& option, double dt) const {
   check_values(*this, option);
+  if (kind == Kind::kMovingAverage && window > 0 &&
+      !(window >= 0.5 * dt && window / dt <= static_cast<double>(kMaxWeights))) {
+    throw UsageError(option + ": T=" + shortest_decimal(window) + " is " +
+                     (window < 0.5 * dt ? "shorter than half a step"
+                                        : "longer than " + std::to_string(kMaxWeights) + " steps") +
+                     " (dt = " + shortest_decimal(dt) + ")");
+  }
   if (kind == Kind::kMultisine && !(f2 < 0.5 / dt)) {
     throw UsageError(
         option + ": f2=" + shortest_decimal(f2) +
@@ -277,6 +317,8 @@ InputProcess::InputProcess(const InputSpec& spec, double dt, std::uint64_t seed,
     : spec_(spec), random_(seed, stream) {
   switch (spec_.kind) {
     case InputSpec::Kind::kMovingAverage:
+      spec_.weights = spec.weights_at(dt);
+      spec_.window = 0;
       // The filter starts full, so the first output is already stationary.
       history_.resize(spec_.weights.size());
       for (double& v : history_) v = spec_.mean + spec_.sigma * random_.normal();
