@@ -277,6 +277,36 @@ TEST_SUITE("simulate") {
                          momentid::UsageError);
   }
 
+  TEST_CASE("the step check finds the linear oscillator's eigenvalues and a hardening spring's") {
+    // y'' + c y' + k y = x: eigenvalues -c/2 +- i sqrt(k - c^2/4), of modulus sqrt(k) = 2.
+    const Model duffing = model_file("duffing.mom");
+    for (const double dt : {0.2, 0.3}) {
+      SimulationOptions options = options_for(duffing, 2000, 3);
+      options.parameters = momentid::parameter_values(duffing, {"eps=0"});
+      options.dt = dt;
+      Recorder rows(3);
+      momentid::StepCheck check(duffing, options, rows);
+      momentid::simulate(duffing, options, check);
+      CHECK(rows.rows.size() == 2000);  // every sample passed on
+      // The central difference of a linear model is exact up to rounding.
+      CHECK(check.largest() == doctest::Approx(2 * dt).epsilon(1e-8));
+      CHECK(check.warning().has_value() == (2 * dt > momentid::StepCheck::kLimit));
+    }
+    SimulationOptions options = options_for(duffing, 2000, 3);
+    options.dt = 0.3;
+    Recorder rows(3);
+    momentid::StepCheck check(duffing, options, rows);
+    momentid::simulate(duffing, options, check);
+    REQUIRE(check.warning());
+    const std::string warning = *check.warning();
+    CHECK(warning.starts_with("the step is coarse for the model's dynamics: linearised at t = "));
+    CHECK(warning.ends_with(
+        "; fourth-order Runge-Kutta is accurate for |lambda| dt well below 1 and unstable beyond "
+        "2.8: use --dt 0.1 or smaller"));
+    // eps y^3 stiffens the spring to k + 3 eps y^2 where |y| is large.
+    CHECK(check.largest() > 2 * 0.3);
+  }
+
   TEST_CASE("a moving average over T seconds has T/dt rounded equal weights, 1/K by default") {
     const InputSpec window = InputSpec::parse("ma:T=0.1,sigma=2", "--input");
     CHECK(window.text() == "ma:T=0.1,sigma=2,mean=0");

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -210,6 +211,39 @@ void simulate(const Model& model, const SimulationOptions& options, SampleSink& 
               const std::vector<double>& noise_sd);
 inline constexpr double kBlowUpBound = 1e100;
 
+// Watches a simulation for a step too coarse for its dynamics, passing every sample on to `next`.
+// At up to kPoints samples spread over the record it linearises the model there (a Jacobian by
+// central differences) and keeps the largest modulus of its eigenvalues, |lambda|; the
+// fourth-order Runge-Kutta step is accurate for |lambda| dt well below 1 and unstable beyond
+// about 2.8. A nonlinear model is linearised where its states are, so a hardening spring
+// counts at the amplitudes reached.
+//
+// Example:
+//   StepCheck check(model, options, rows);
+//   simulate(model, options, check);
+//   if (auto w = check.warning()) std::cerr << "warning: " << *w << "\n";
+class StepCheck : public SampleSink {
+ public:
+  StepCheck(const Model& model, const SimulationOptions& options, SampleSink& next);
+  void sample(double t, const double* values, std::size_t run) override;
+  // The largest |lambda| dt seen, and where.
+  double largest() const { return largest_; }
+  // A warning naming the eigenvalue, the time and run, and a step that would do, when the
+  // largest |lambda| dt exceeds kLimit.
+  std::optional<std::string> warning() const;
+  static constexpr double kLimit = 0.5;
+  static constexpr std::size_t kPoints = 256;
+
+ private:
+  const Model& model_;
+  CompiledModel f_;
+  SampleSink& next_;
+  double dt_;
+  std::size_t stride_, seen_ = 0;
+  double largest_ = 0, largest_t_ = 0;
+  std::size_t largest_run_ = 0;
+};
+
 // The absolute standard deviation of each `options.noise` entry: its relative level times the
 // standard deviation of the clean channel over all written samples. Runs the simulation once,
 // without writing, when a level is not 0. The options are validated first.
@@ -231,9 +265,10 @@ DataMetadata simulation_metadata(const Model& model, const SimulationOptions& op
 // channels (by default the states, then the inputs) and, for several runs, `run` (from 1), after
 // simulation_metadata(); written whole or not at all (see DataWriter). `path` "-" is standard
 // output. With noise, the simulation runs twice: once to measure the channels' standard
-// deviations, which the metadata records, and once to write.
-void simulate_to_file(const Model& model, const SimulationOptions& options, const std::string& path,
-                      DataWriter::Format format);
+// deviations, which the metadata records, and once to write. Returns the warnings of a
+// StepCheck.
+std::vector<std::string> simulate_to_file(const Model& model, const SimulationOptions& options,
+                                          const std::string& path, DataWriter::Format format);
 
 // How a recorded input is taken between its samples, where the integrator needs it (README,
 // "momentid validate"):

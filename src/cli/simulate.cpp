@@ -3,6 +3,7 @@
 #include "momentid/simulate.hpp"
 
 #include <cmath>
+#include <iostream>
 #include <memory>
 
 #include "cli/commands.hpp"
@@ -78,7 +79,10 @@ int run_simulate(SimulateCommand& command) {
   command.options.parameters = parameter_values(model, command.set);
   command.options.inputs = input_specs(model, command.inputs);
   command.options.noise = parse_noise(command.noise);
-  simulate_to_file(model, command.options, command.output, format);
+  for (const std::string& warning :
+       simulate_to_file(model, command.options, command.output, format)) {
+    std::cerr << "momentid: warning: " << warning << "\n";
+  }
   return 0;
 }
 

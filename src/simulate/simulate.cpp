@@ -1,5 +1,6 @@
 #include "momentid/simulate.hpp"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <charconv>
 #include <cmath>
@@ -543,8 +544,8 @@ DataMetadata simulation_metadata(const Model& model, const SimulationOptions& op
   return metadata;
 }
 
-void simulate_to_file(const Model& model, const SimulationOptions& options, const std::string& path,
-                      DataWriter::Format format) {
+std::vector<std::string> simulate_to_file(const Model& model, const SimulationOptions& options,
+                                          const std::string& path, DataWriter::Format format) {
   options.validate(model);
   const std::vector<double> noise_sd = noise_standard_deviations(model, options);
   const std::vector<std::string>& variables = model.variables();
@@ -563,8 +564,67 @@ void simulate_to_file(const Model& model, const SimulationOptions& options, cons
   if (with_run) columns.push_back("run");
   DataWriter out(path, format, simulation_metadata(model, options, noise_sd), columns);
   SampleRows rows(out, std::move(channels), with_run);
-  simulate(model, options, rows, noise_sd);
+  StepCheck check(model, options, rows);
+  simulate(model, options, check, noise_sd);
   out.commit();
+  std::vector<std::string> warnings;
+  if (auto w = check.warning()) warnings.push_back(std::move(*w));
+  return warnings;
+}
+
+StepCheck::StepCheck(const Model& model, const SimulationOptions& options, SampleSink& next)
+    : model_(model),
+      f_(model, options.parameters),
+      next_(next),
+      dt_(options.dt),
+      stride_(std::max<std::size_t>(1, options.samples * options.runs / kPoints)) {}
+
+void StepCheck::sample(double t, const double* values, std::size_t run) {
+  next_.sample(t, values, run);
+  if (seen_++ % stride_ != 0) return;
+  const int n = f_.states();
+  std::vector<double> y(values, values + n), plus(static_cast<std::size_t>(n)),
+      minus(static_cast<std::size_t>(n));
+  const double* u = values + n;
+  Eigen::MatrixXd jacobian(n, n);
+  for (int j = 0; j < n; ++j) {
+    // The central difference's error (h^2) and rounding (eps/h) balance near eps^(1/3).
+    const double h = 6e-6 * std::max(1.0, std::abs(values[j]));
+    y[static_cast<std::size_t>(j)] = values[j] + h;
+    const bool up = f_.derivative(y.data(), u, plus.data());
+    y[static_cast<std::size_t>(j)] = values[j] - h;
+    const bool down = f_.derivative(y.data(), u, minus.data());
+    y[static_cast<std::size_t>(j)] = values[j];
+    if (!up || !down) return;
+    for (int i = 0; i < n; ++i) {
+      jacobian(i, j) =
+          (plus[static_cast<std::size_t>(i)] - minus[static_cast<std::size_t>(i)]) / (2 * h);
+    }
+  }
+  if (!jacobian.allFinite()) return;
+  const double modulus =
+      Eigen::EigenSolver<Eigen::MatrixXd>(jacobian, false).eigenvalues().cwiseAbs().maxCoeff();
+  if (modulus * dt_ > largest_) {
+    largest_ = modulus * dt_;
+    largest_t_ = t;
+    largest_run_ = run;
+  }
+}
+
+std::optional<std::string> StepCheck::warning() const {
+  if (!(largest_ > kLimit)) return std::nullopt;
+  char when[32], text[64];
+  // A step that puts |lambda| dt at 0.25, rounded down to one significant digit.
+  const double wanted = 0.25 * dt_ / largest_;
+  const double unit = std::pow(10.0, std::floor(std::log10(wanted)));
+  std::snprintf(when, sizeof when, "%.6g", largest_t_);
+  std::snprintf(text, sizeof text, "%.3g (|lambda| dt = %.2f)", largest_ / dt_, largest_);
+  return std::string("the step is coarse for the model's dynamics: linearised at t = ") + when +
+         " in run " + std::to_string(largest_run_ + 1) +
+         ", the model has an eigenvalue of modulus " + text +
+         "; fourth-order Runge-Kutta is accurate for |lambda| dt well below 1 and unstable "
+         "beyond 2.8: use --dt " +
+         shortest_decimal(std::floor(wanted / unit) * unit) + " or smaller";
 }
 
 }  // namespace momentid
