@@ -1,0 +1,427 @@
+"""Identify the parameters of ODE models from random vibration data, in Python.
+
+momentid derives the moment equations of a polynomial ODE model (a linear system in its
+unknown parameters whose entries are moments of the data), estimates the moments from a record
+in one pass, and solves for the parameters with standard errors and diagnostics. This module
+runs the C++ library on the arrays you already hold: no files, no parsing.
+
+Example::
+
+    import momentid
+    model = momentid.Model.from_file("models/duffing.mom")
+    record = momentid.simulate(model, {"c": 0.5, "k": 4, "eps": 1}, samples=200_000,
+                               inputs={"x": "ma:K=10,w=0.1,sigma=20"})
+    result = momentid.identify(model, record)
+    print(result)                      # the table, the identified model, the diagnostics
+    result.estimates["k"], result.std_errors["k"], result.ci95["k"]
+
+The functions mirror the commands of the `momentid` program (see its README): the same
+options, spelled as keyword arguments, give the same numbers.
+"""
+
+from __future__ import annotations
+
+import json as _json
+import os as _os
+import warnings as _warnings
+from typing import Any, Mapping, Optional, Sequence, Union
+
+import numpy as _np
+
+__all__ = [
+    "Model", "Equations", "Record", "IdentifyResult", "CheckResult", "ValidateResult",
+    "identify", "check", "simulate", "validate",
+    "Error", "ModelError", "DataError", "UsageError", "MomentidWarning", "__version__",
+]
+
+
+class Error(Exception):
+    """Every error momentid reports. Located errors carry `file`, `line`, `column` and
+    `source_line` (the text of that line); the message is `file:line:col: what was found and
+    what was expected`, as the command line prints it."""
+
+    file: Optional[str] = None
+    line: Optional[int] = None
+    column: Optional[int] = None
+    source_line: Optional[str] = None
+
+
+class ModelError(Error, ValueError):
+    """A model that does not parse, or that parses but means nothing momentid can use."""
+
+
+class DataError(Error, ValueError):
+    """Data that cannot be used: a missing column, a value that is not a finite number, too few
+    rows, non-uniform time steps; located at the row (line) and column."""
+
+
+class UsageError(Error, ValueError):
+    """An option out of range, or naming something the model or data do not have."""
+
+
+class MomentidWarning(UserWarning):
+    """A warning of the library's, such as a simulation step too coarse for the dynamics."""
+
+
+from . import _momentid  # noqa: E402  (the exceptions above must exist before it is used)
+
+__version__: str = _momentid.__version__
+
+PathLike = Union[str, "_os.PathLike[str]"]
+
+
+class Model:
+    """A model in the momentid language: states, inputs, parameters and polynomial equations.
+
+    `Model(text)` parses a model given as text; `Model.from_file(path)` reads a file. Errors
+    raise ModelError with the place (`file`, `line`, `column`).
+
+    Example::
+
+        model = momentid.Model('''
+            state y, v
+            input x
+            param c, k, eps
+            y' = v
+            v' = -c*v - k*y - eps*y^3 + x
+        ''', name="duffing")
+    """
+
+    def __init__(self, text: str, name: str = "<string>") -> None:
+        self._model = _momentid.Model(text, name)
+
+    @classmethod
+    def from_file(cls, path: PathLike) -> "Model":
+        """Reads a model file (`models/duffing.mom`)."""
+        model = cls.__new__(cls)
+        model._model = _momentid.Model._from_file(_os.fspath(path))
+        return model
+
+    name = property(lambda self: self._model.name, doc="The model's name.")
+    title = property(lambda self: self._model.title, doc="The model's title, or ''.")
+    states = property(lambda self: list(self._model.states), doc="State names, in order.")
+    inputs = property(lambda self: list(self._model.inputs), doc="Input names, in order.")
+    parameters = property(lambda self: list(self._model.parameters),
+                          doc="Parameter names, in declaration order.")
+    nominal = property(lambda self: dict(self._model.nominal),
+                       doc="Each parameter's nominal value (None when the file gives none).")
+    fixed = property(lambda self: list(self._model.fixed),
+                     doc="Parameters declared `fixed` in the model (known, not estimated).")
+
+    def derive(self, multipliers: Optional[str] = None, degree: Optional[int] = None,
+               lags: Optional[tuple[int, int]] = None, instruments: Optional[str] = None,
+               measured: Optional[Sequence[str]] = None) -> "Equations":
+        """The moment equations, as `momentid derive` prints them.
+
+        multipliers: monomials in the states to multiply every equation by ("y, v, y^3");
+        degree: every monomial in the states of degree 1..degree; neither: the model's own or
+        the automatic choice. lags=(first, last): the lagged equations for records that lack
+        some states, with `instruments` and the `measured` channels.
+        """
+        text, latex, json_text, count = _momentid._derive(
+            self._model, _options(multipliers=multipliers, degree=degree, lags=lags,
+                                  instruments=instruments, measured=measured))
+        return Equations(text, latex, json_text, count)
+
+    def __repr__(self) -> str:
+        parts = [f"states {', '.join(self.states)}"]
+        if self.inputs:
+            parts.append(f"inputs {', '.join(self.inputs)}")
+        parts.append(f"parameters {', '.join(self.parameters) or '(none)'}")
+        return f"<momentid.Model {self.name}: {'; '.join(parts)}>"
+
+
+class Equations:
+    """Moment equations: `.text` (as the command prints them), `.latex`, `.json` (a string;
+    `.to_dict()` parses it) and `len()` the number of equations. Shown as LaTeX in a notebook."""
+
+    def __init__(self, text: str, latex: str, json_text: str, count: int) -> None:
+        self.text, self.latex, self.json = text, latex, json_text
+        self._count = count
+
+    def to_dict(self) -> dict:
+        return _json.loads(self.json)
+
+    def __len__(self) -> int:
+        return self._count
+
+    def __str__(self) -> str:
+        return self.text
+
+    __repr__ = __str__
+
+    def _repr_latex_(self) -> str:
+        return self.latex
+
+
+class Record(dict):
+    """The columns simulate() returns ({name: array}), with the `metadata` of the file the
+    program would write ({"dt": "0.01", "input-hold": "zoh", ...}), which identify(), check()
+    and validate() read as they read a file's: a held input is known to be held."""
+
+    metadata: dict
+
+    def __init__(self, columns: dict, metadata: dict) -> None:
+        super().__init__(columns)
+        self.metadata = metadata
+
+
+class IdentifyResult:
+    """What identify() found.
+
+    estimates, std_errors: {parameter: float}; ci95: {parameter: (low, high)}; fixed: the
+    parameters taken as known; status: "ok", "doubtful", "rank-deficient" or
+    "nothing-identifiable"; warnings: what to distrust, the most serious first; equations: the
+    identified model; diagnostics: the whole diagnostics section of the JSON; to_dict(): the
+    JSON of `momentid identify --format json`; str(): its text report.
+    """
+
+    def __init__(self, text: str, json_text: str) -> None:
+        self.text = text
+        self.json = json_text
+        self._dict = _json.loads(json_text)
+        parameters = self._dict["parameters"]
+        self.estimates = {name: p["estimate"] for name, p in parameters.items()}
+        self.std_errors = {name: p["std_error"] for name, p in parameters.items()}
+        self.ci95 = {name: tuple(p["ci95"]) if p["ci95"] is not None else None
+                     for name, p in parameters.items()}
+        self.fixed = [name for name, p in parameters.items() if p["fixed"]]
+        self.diagnostics = self._dict["diagnostics"]
+        self.status = self.diagnostics["status"]
+        self.warnings = list(self.diagnostics["warnings"])
+        self.equations = list(self._dict.get("equations", []))
+
+    def to_dict(self) -> dict:
+        return _json.loads(self.json)
+
+    def __str__(self) -> str:
+        return self.text
+
+    def __repr__(self) -> str:
+        values = ", ".join(f"{name}={value:.6g}±{self.std_errors[name]:.2g}"
+                           for name, value in self.estimates.items())
+        return f"<momentid.IdentifyResult {self.status}: {values}>"
+
+
+class CheckResult:
+    """What check() found: `channels` {name: statistics}, `identities` (with a model),
+    `warnings`, `to_dict()`, and str() the report of `momentid check`."""
+
+    def __init__(self, text: str, values: dict) -> None:
+        self.text = text
+        self._dict = values
+        self.channels = values["channels"]
+        self.identities = values["identities"]
+        self.warnings = values["warnings"]
+
+    def to_dict(self) -> dict:
+        return dict(self._dict)
+
+    def __str__(self) -> str:
+        return self.text
+
+    def __repr__(self) -> str:
+        return (f"<momentid.CheckResult {self._dict['rows']} rows, "
+                f"{len(self.warnings)} warnings>")
+
+
+class ValidateResult:
+    """What validate() found: `fit` {output: percent}, `rms` {output: error}, `warnings`,
+    `to_dict()` (the JSON of `momentid validate --format json`) and str() its report."""
+
+    def __init__(self, text: str, json_text: str) -> None:
+        self.text = text
+        self.json = json_text
+        self._dict = _json.loads(json_text)
+        outputs = self._dict["outputs"]
+        self.fit = {name: o["fit_percent"] for name, o in outputs.items()}
+        self.rms = {name: o["rms"] for name, o in outputs.items()}
+        self.warnings = list(self._dict["warnings"])
+
+    def to_dict(self) -> dict:
+        return _json.loads(self.json)
+
+    def __str__(self) -> str:
+        return self.text
+
+    def __repr__(self) -> str:
+        fits = ", ".join(f"{name} {value:.2f}%" for name, value in self.fit.items())
+        return f"<momentid.ValidateResult fit {fits}>"
+
+
+def identify(model: Union[Model, PathLike], data: Any, *, columns: Optional[Sequence[str]] = None,
+             dt: Optional[float] = None, multipliers: Optional[str] = None,
+             degree: Optional[int] = None, batches: Optional[int] = None,
+             weighting: Optional[str] = None, lags: Optional[tuple[int, int]] = None,
+             instruments: Optional[str] = None, noise: Optional[Mapping[str, float]] = None,
+             fix: Optional[Mapping[str, float]] = None,
+             center: Union[None, str, Sequence[str]] = None, input_hold: Optional[str] = None,
+             input_shift: Optional[int] = None, rename: Optional[Mapping[str, str]] = None,
+             missing: Optional[str] = None, skip_rows: Optional[int] = None,
+             decimal: Optional[str] = None) -> IdentifyResult:
+    """Estimates the model's parameters from a record, as `momentid identify MODEL DATA`.
+
+    model: a Model or a model file's path.
+    data: a mapping of column name to 1-D array (a dict of numpy arrays, a pandas DataFrame),
+      a 2-D array with `columns` naming its columns, or a data file's path (CSV or binary).
+      Columns are named as in a file: the model's variables, `t` for the sample times and `run`
+      to separate records. float64 arrays are read in place, strided ones too; other real
+      dtypes are converted. Without a `t` column give `dt`.
+    dt: the sample interval (overrides the `t` column).
+    multipliers, degree: the zero-lag equations (as `derive`); lags=(first, last),
+      instruments, noise ({state: variance}; None estimates it): the lagged equations, used
+      by default when the data lack a state.
+    batches, weighting ("auto", "ls", "gmm"): the standard errors and the optimal weighting.
+    fix: {parameter: value} taken as known. center: variables (or "all") whose mean is removed.
+    input_hold ("zoh" or "sample"), input_shift, rename ({model name: column}), and for files
+      missing ("error", "drop-row", "split-run"), skip_rows, decimal: as on the command line.
+
+    Returns an IdentifyResult. Raises ModelError, DataError or UsageError with the command
+    line's messages. The GIL is released during the pass over the data.
+    """
+    model = _model_of(model)
+    source, name, metadata, keep = _data_of(data, columns, dt)
+    if isinstance(center, str):
+        center = model.states + model.inputs if center == "all" else [center]
+    options = _options(multipliers=multipliers, degree=degree, batches=batches,
+                       weighting=weighting, lags=lags, instruments=instruments, noise=noise,
+                       fix=fix, center=center, input_hold=input_hold, input_shift=input_shift,
+                       rename=rename, dt=dt if isinstance(source, str) else None,
+                       missing=missing, skip_rows=skip_rows, decimal=decimal)
+    text, json_text = _momentid._identify(model._model, source, name, metadata, options)
+    del keep
+    return IdentifyResult(text, json_text)
+
+
+def check(data: Any, model: Union[None, Model, PathLike] = None, *,
+          columns: Optional[Sequence[str]] = None, dt: Optional[float] = None,
+          lags: Optional[int] = None, input_hold: Optional[str] = None,
+          rename: Optional[Mapping[str, str]] = None, missing: Optional[str] = None,
+          skip_rows: Optional[int] = None, decimal: Optional[str] = None) -> CheckResult:
+    """Whether a record suits the method, as `momentid check DATA [MODEL]`: each channel's
+    mean, variance and autocorrelations (`lags` of them), warnings, and with a model the sample
+    violations of its stationarity identities. `data` and the options as for identify()."""
+    model = None if model is None else _model_of(model)
+    source, name, metadata, keep = _data_of(data, columns, dt)
+    options = _options(lags=lags, input_hold=input_hold, rename=rename,
+                       dt=dt if isinstance(source, str) else None, missing=missing,
+                       skip_rows=skip_rows, decimal=decimal)
+    text, values = _momentid._check(None if model is None else model._model, source, name,
+                                    metadata, options)
+    del keep
+    return CheckResult(text, values)
+
+
+def simulate(model: Union[Model, PathLike], params: Optional[Mapping[str, float]] = None, *,
+             samples: int = 10000, dt: float = 0.01,
+             inputs: Optional[Mapping[str, str]] = None, seed: int = 1, runs: int = 1,
+             burn_in: int = 10000, noise: Optional[Mapping[str, float]] = None,
+             observe: Optional[Sequence[str]] = None, path: Optional[PathLike] = None,
+             format: str = "csv") -> Optional[dict]:
+    """Simulates the model with known parameters, as `momentid simulate`.
+
+    params: {parameter: value}, the rest at the model's nominal values. inputs: {input: process}
+    such as "ma:K=10,w=0.1,sigma=20", "ma:T=0.1", "ou:tau=0.5" or
+    "multisine:f1=0.5,f2=5,lines=10" (default "ma:K=10,w=0.1"). noise: {channel: relative level}
+    of white measurement noise. observe: the channels to return (default: states, then inputs).
+
+    Returns a Record, {"t": array, channel: array, ..., "run": array (with runs > 1)} of
+    `samples * runs` values each, the same numbers the program writes, with the file's
+    metadata; or, with `path`, writes that file ("csv" or "bin") and returns None. A step too coarse for the dynamics gives a MomentidWarning.
+    """
+    model = _model_of(model)
+    options = _options(params=_numbers(params), samples=samples, dt=dt,
+                       inputs=dict(inputs) if inputs else None, seed=seed, runs=runs,
+                       burn_in=burn_in, noise=noise, observe=observe,
+                       path=None if path is None else _os.fspath(path), format=format)
+    columns, metadata, warnings = _momentid._simulate(model._model, options)
+    for warning in warnings:
+        _warnings.warn(warning, MomentidWarning, stacklevel=2)
+    return None if columns is None else Record(columns, metadata)
+
+
+def validate(model: Union[Model, PathLike], data: Any,
+             params: Union[None, Mapping[str, float], IdentifyResult] = None, *,
+             columns: Optional[Sequence[str]] = None, dt: Optional[float] = None,
+             skip: Optional[int] = None, lags: Optional[int] = None,
+             interpolation: Optional[str] = None, substeps: Optional[int] = None,
+             rename: Optional[Mapping[str, str]] = None, plot: Optional[PathLike] = None,
+             missing: Optional[str] = None, skip_rows: Optional[int] = None,
+             decimal: Optional[str] = None) -> ValidateResult:
+    """Simulates the model through the record's inputs and compares its outputs, as
+    `momentid validate`: per measured state the RMS error, the fit (100 (1 - |y - ŷ| / |y - ȳ|)
+    %), the drift and the residual correlation checks.
+
+    params: {parameter: value} or an IdentifyResult (its estimates); the rest at the nominal
+    values. skip: rows left out at the start of each run (default: until the initial state is
+    forgotten). interpolation: "zoh", "foh", "cubic" or "sinc". plot: an SVG file to draw.
+    `data` and the other options as for identify().
+    """
+    model = _model_of(model)
+    if isinstance(params, IdentifyResult):
+        params = params.estimates
+    source, name, metadata, keep = _data_of(data, columns, dt)
+    options = _options(params=_numbers(params), skip=skip, lags=lags,
+                       interpolation=interpolation, substeps=substeps, rename=rename,
+                       dt=dt if isinstance(source, str) else None,
+                       plot=None if plot is None else _os.fspath(plot), missing=missing,
+                       skip_rows=skip_rows, decimal=decimal)
+    text, json_text = _momentid._validate(model._model, source, name, metadata, options)
+    del keep
+    return ValidateResult(text, json_text)
+
+
+# --- helpers ----------------------------------------------------------------------------------
+
+def _options(**options: Any) -> dict:
+    return {key: value for key, value in options.items() if value is not None}
+
+
+def _numbers(values: Optional[Mapping[str, float]]) -> Optional[dict]:
+    # repr() of a float reads back exactly, which is how the library reads the value.
+    return None if values is None else {name: repr(float(v)) for name, v in values.items()}
+
+
+def _model_of(model: Union[Model, PathLike]) -> Model:
+    if isinstance(model, Model):
+        return model
+    if isinstance(model, (str, _os.PathLike)):
+        return Model.from_file(model)
+    raise TypeError(f"model: expected a momentid.Model or a path, found {type(model).__name__}")
+
+
+def _column(name: str, values: Any) -> _np.ndarray:
+    array = _np.asarray(values)
+    if array.dtype.kind not in "fiub":
+        raise UsageError(f"column '{name}': expected real numbers, found dtype {array.dtype}")
+    if array.ndim != 1:
+        raise UsageError(f"column '{name}': expected a one-dimensional array, found shape "
+                         f"{array.shape}")
+    if array.dtype != _np.float64 or array.strides[0] % 8 != 0:
+        array = _np.ascontiguousarray(array, dtype=_np.float64)
+    return array
+
+
+def _data_of(data: Any, columns: Optional[Sequence[str]], dt: Optional[float]):
+    """The record as the compiled part takes it: a path, or [(name, float64 array)] with a name
+    for messages and metadata; the last item keeps converted arrays alive."""
+    if isinstance(data, (str, _os.PathLike)):
+        if columns is not None:
+            raise UsageError("columns: only for a 2-D array; a file names its own columns")
+        return _os.fspath(data), "", {}, None
+    metadata = dict(getattr(data, "metadata", None) or {})
+    if dt is not None:
+        metadata["dt"] = repr(float(dt))
+    if isinstance(data, _np.ndarray) and data.ndim == 2:
+        if columns is None or len(columns) != data.shape[1]:
+            raise UsageError(f"columns: a 2-D array of {data.shape[1]} columns needs as many "
+                             f"names, found {0 if columns is None else len(columns)}")
+        pairs = [(str(n), _column(str(n), data[:, k])) for k, n in enumerate(columns)]
+        return pairs, "<array>", metadata, pairs
+    if columns is not None:
+        raise UsageError("columns: only for a 2-D array; a mapping names its own columns")
+    if not hasattr(data, "keys") or not hasattr(data, "__getitem__"):
+        raise TypeError("data: expected a mapping of column names to arrays, a 2-D array with "
+                        f"columns=, or a path, found {type(data).__name__}")
+    pairs = [(str(n), _column(str(n), data[n])) for n in data.keys()]
+    return pairs, "<arrays>", metadata, pairs

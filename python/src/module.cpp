@@ -1,0 +1,506 @@
+// The compiled part of the Python module `momentid` (python/momentid/__init__.py is the rest):
+// thin functions over the library that take and return Python objects. The arrays of a record
+// are read in place (DataSource::memory), and the GIL is released while the library works.
+
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "momentid/momentid.hpp"
+
+namespace py = pybind11;
+
+namespace momentid::python {
+namespace {
+
+// Raises the module's exception for `kind` (a class of momentid/__init__.py) with the message
+// and, for a located error, its place.
+[[noreturn]] void raise(const char* kind, const std::string& message,
+                        const SourceLocation* where = nullptr) {
+  py::object type = py::module_::import("momentid").attr(kind);
+  py::object error = type(message);
+  if (where != nullptr) {
+    error.attr("file") = where->file;
+    error.attr("line") = where->line;
+    error.attr("column") = where->column;
+    error.attr("source_line") = where->text;
+  }
+  PyErr_SetObject(type.ptr(), error.ptr());
+  throw py::error_already_set();
+}
+
+void translate(std::exception_ptr thrown) {
+  try {
+    if (thrown) std::rethrow_exception(thrown);
+  } catch (const DataError& e) {
+    raise("DataError", e.what(), &e.location());
+  } catch (const LocatedError& e) {  // ParseError, ModelError
+    raise("ModelError", e.what(), &e.location());
+  } catch (const UsageError& e) {
+    raise("UsageError", e.what());
+  } catch (const Error& e) {
+    raise("Error", e.what());
+  }
+}
+
+// A record handed over from Python: a file path, or columns of numbers that are read in place.
+// The arrays (float64, one dimension, any stride that is a whole number of values) are kept
+// alive by the caller for as long as the source is used.
+DataSource data_source(const py::object& data, const std::string& name,
+                       const std::map<std::string, std::string>& metadata) {
+  if (py::isinstance<py::str>(data)) return DataSource::file(data.cast<std::string>());
+  MemoryData memory;
+  memory.name = name;
+  DataMetadata::Line line(metadata.begin(), metadata.end());
+  if (!line.empty()) memory.metadata.add_line(std::move(line));
+  bool first = true;
+  for (const py::handle item : data.cast<py::list>()) {
+    const auto pair = item.cast<py::tuple>();
+    const std::string column = pair[0].cast<std::string>();
+    const auto array = pair[1].cast<py::array>();
+    if (array.ndim() != 1 || !array.dtype().is(py::dtype::of<double>()) ||
+        array.strides(0) % static_cast<py::ssize_t>(sizeof(double)) != 0) {
+      throw UsageError("column '" + column + "': expected a one-dimensional float64 array");
+    }
+    const auto rows = static_cast<std::size_t>(array.shape(0));
+    if (first) {
+      memory.rows = rows;
+      first = false;
+    } else if (rows != memory.rows) {
+      throw UsageError("column '" + column + "' has " + std::to_string(rows) + " values, but '" +
+                       memory.columns.front().name + "' has " + std::to_string(memory.rows) +
+                       ": every column needs one value per sample");
+    }
+    // A negative stride (a reversed view) reads backwards from the first element.
+    memory.columns.push_back({column, static_cast<const double*>(array.data()),
+                              static_cast<std::size_t>(array.strides(0) /
+                                                       static_cast<py::ssize_t>(sizeof(double)))});
+  }
+  if (first) throw UsageError("the data have no columns");
+  return DataSource::memory(std::move(memory));
+}
+
+template <class T>
+std::optional<T> get(const py::dict& options, const char* key) {
+  if (!options.contains(key) || options[key].is_none()) return std::nullopt;
+  return options[key].cast<T>();
+}
+
+FileLayout layout_of(const py::dict& options) {
+  FileLayout layout;
+  if (auto rows = get<std::size_t>(options, "skip_rows")) layout.skip_rows = *rows;
+  if (auto decimal = get<std::string>(options, "decimal")) {
+    if (*decimal != "." && *decimal != ",") {
+      throw UsageError("decimal: expected '.' or ',', found '" + *decimal + "'");
+    }
+    layout.decimal = (*decimal)[0];
+  }
+  if (auto missing = get<std::string>(options, "missing")) {
+    if (*missing == "error") {
+      layout.missing = MissingValues::kError;
+    } else if (*missing == "drop-row") {
+      layout.missing = MissingValues::kDropRow;
+    } else if (*missing == "split-run") {
+      layout.missing = MissingValues::kSplitRun;
+    } else {
+      throw UsageError("missing: expected 'error', 'drop-row' or 'split-run', found '" +
+                       *missing + "'");
+    }
+  }
+  return layout;
+}
+
+std::optional<InputHold> hold_of(const py::dict& options) {
+  const auto hold = get<std::string>(options, "input_hold");
+  if (!hold) return std::nullopt;
+  if (*hold == "zoh") return InputHold::kZeroOrderHold;
+  if (*hold == "sample") return InputHold::kSample;
+  throw UsageError("input_hold: expected 'zoh' or 'sample', found '" + *hold + "'");
+}
+
+// `NAME=VALUE` items, as --set and --fix take them, from a mapping of names to numbers.
+std::vector<std::string> assignments(const std::map<std::string, py::object>& values) {
+  std::vector<std::string> out;
+  for (const auto& [name, value] : values) {
+    out.push_back(name + "=" + py::str(value).cast<std::string>());
+  }
+  return out;
+}
+
+std::vector<GiNaC::numeric> parameters_of(const Model& model, const py::dict& options,
+                                          const char* key) {
+  const auto values = get<std::map<std::string, py::object>>(options, key);
+  return parameter_values(model, values ? assignments(*values) : std::vector<std::string>{});
+}
+
+// --- derive ---------------------------------------------------------------------------------
+
+struct Derivation {
+  std::string text, latex, json;
+  std::size_t equations = 0;
+};
+
+Derivation derive_equations(const Model& model, const py::dict& options) {
+  Derivation out;
+  if (auto lags = get<std::pair<int, int>>(options, "lags")) {
+    LagOptions lag_options;
+    std::tie(lag_options.first_lag, lag_options.last_lag) = *lags;
+    if (auto text = get<std::string>(options, "instruments")) {
+      lag_options.instruments = parse_instrument_list(model, *text, "instruments");
+    }
+    if (auto measured = get<std::vector<std::string>>(options, "measured")) {
+      std::vector<bool> flags(model.variables().size(), false);
+      for (const std::string& name : *measured) {
+        const auto& v = model.variables();
+        const auto found = std::find(v.begin(), v.end(), name);
+        if (found == v.end()) {
+          throw UsageError("measured: '" + name + "' is not a state or input of the model");
+        }
+        flags[static_cast<std::size_t>(found - v.begin())] = true;
+      }
+      lag_options.measured = flags;
+    }
+    const LaggedSystem system = derive_lagged(model, lag_options);
+    return {format_text(system), format_latex(system), format_json(system),
+            system.equations.size()};
+  }
+  DeriveOptions derive_options;
+  if (auto text = get<std::string>(options, "multipliers")) {
+    derive_options.multipliers = parse_multiplier_list(model, *text, "multipliers");
+  }
+  if (auto degree = get<int>(options, "degree")) derive_options.degree = *degree;
+  const MomentSystem system = derive(model, derive_options);
+  return {format_text(system), format_latex(system), format_json(system), system.equations.size()};
+}
+
+// --- identify -------------------------------------------------------------------------------
+
+IdentifyOptions identify_options(const Model& model, const py::dict& options) {
+  IdentifyOptions out;
+  if (auto text = get<std::string>(options, "multipliers")) {
+    out.multipliers = parse_multiplier_list(model, *text, "multipliers");
+  }
+  if (auto degree = get<int>(options, "degree")) out.degree = *degree;
+  out.hold = hold_of(options);
+  out.batches = get<std::size_t>(options, "batches");
+  if (auto weighting = get<std::string>(options, "weighting")) {
+    if (*weighting == "gmm" || *weighting == "ls") {
+      out.gmm = *weighting == "gmm";
+    } else if (*weighting != "auto") {
+      throw UsageError("weighting: expected 'auto', 'ls' or 'gmm', found '" + *weighting + "'");
+    }
+  }
+  if (auto rename = get<std::map<std::string, std::string>>(options, "rename")) {
+    out.columns = *rename;
+  }
+  out.dt = get<double>(options, "dt");
+  out.layout = layout_of(options);
+  if (auto shift = get<long>(options, "input_shift")) out.input_shift = *shift;
+  out.lags = get<std::pair<int, int>>(options, "lags");
+  if (auto text = get<std::string>(options, "instruments")) {
+    out.instruments = parse_instrument_list(model, *text, "instruments");
+  }
+  out.noise = get<std::map<std::string, double>>(options, "noise");
+  if (auto fixed = get<std::map<std::string, double>>(options, "fix")) out.fixed = *fixed;
+  if (auto center = get<std::vector<std::string>>(options, "center")) out.center = *center;
+  return out;
+}
+
+// --- check ----------------------------------------------------------------------------------
+
+py::dict check_dict(const CheckResult& r) {
+  py::dict out;
+  out["data"] = r.data_name;
+  out["rows"] = r.data.rows;
+  out["runs"] = r.data.runs;
+  out["dt"] = r.data.time_step ? py::cast(*r.data.time_step) : py::none();
+  py::dict channels;
+  for (const ChannelStatistics& c : r.data.channels) {
+    py::dict channel;
+    channel["input"] = c.is_input;
+    channel["mean"] = c.mean;
+    channel["variance"] = c.variance;
+    channel["autocorrelation"] = c.autocorrelation;
+    channel["correlation_time"] = c.correlation_time;
+    channel["noise_fraction"] = c.noise_fraction() ? py::cast(*c.noise_fraction()) : py::none();
+    channels[py::str(c.name)] = channel;
+  }
+  out["channels"] = channels;
+  py::list identities;
+  for (const IdentityCheck& i : r.identities) {
+    py::dict identity;
+    identity["identity"] = i.identity;
+    identity["violation"] = i.violation;
+    identity["z"] = i.z;
+    identities.append(identity);
+  }
+  out["identities"] = identities;
+  out["missing_inputs"] = r.missing_inputs;
+  out["missing_states"] = r.missing_states;
+  out["warnings"] = r.warnings;
+  return out;
+}
+
+// --- simulate -------------------------------------------------------------------------------
+
+// Writes the samples into arrays, one per channel, run after run.
+class ArraySink : public SampleSink {
+ public:
+  ArraySink(std::vector<double*> columns, std::vector<std::size_t> channels, double* time,
+            double* run, std::size_t samples)
+      : columns_(std::move(columns)),
+        channels_(std::move(channels)),
+        time_(time),
+        run_(run),
+        samples_(samples) {}
+  void sample(double t, const double* values, std::size_t run) override {
+    if (run != run_index_) {
+      run_index_ = run;
+      row_in_run_ = 0;
+    }
+    const std::size_t row = run * samples_ + row_in_run_++;
+    time_[row] = t;
+    if (run_ != nullptr) run_[row] = static_cast<double>(run + 1);
+    for (std::size_t c = 0; c < channels_.size(); ++c) columns_[c][row] = values[channels_[c]];
+  }
+
+ private:
+  std::vector<double*> columns_;
+  std::vector<std::size_t> channels_;
+  double *time_, *run_;
+  std::size_t samples_, run_index_ = 0, row_in_run_ = 0;
+};
+
+SimulationOptions simulation_options(const Model& model, const py::dict& options) {
+  SimulationOptions out;
+  out.parameters = parameters_of(model, options, "params");
+  std::vector<std::string> inputs;
+  if (auto given = get<std::map<std::string, std::string>>(options, "inputs")) {
+    for (const auto& [name, spec] : *given) inputs.push_back(name + "=" + spec);
+  }
+  // As `--input`: every input named, the rest at the default process.
+  for (std::size_t i = 0; i < model.inputs().size(); ++i) {
+    const std::string& name = model.inputs()[i].name;
+    std::string spec = "ma:K=10,w=0.1";
+    for (const std::string& item : inputs) {
+      if (item.starts_with(name + "=")) spec = item.substr(name.size() + 1);
+    }
+    out.inputs.push_back(InputSpec::parse(spec, "inputs['" + name + "']"));
+  }
+  for (const std::string& item : inputs) {
+    const std::string name = item.substr(0, item.find('='));
+    const auto& declared = model.inputs();
+    if (std::none_of(declared.begin(), declared.end(),
+                     [&](const Declaration& d) { return d.name == name; })) {
+      throw UsageError("inputs: '" + name + "' is not an input of model " + model.name());
+    }
+  }
+  if (auto dt = get<double>(options, "dt")) out.dt = *dt;
+  if (auto samples = get<std::size_t>(options, "samples")) out.samples = *samples;
+  if (auto burn_in = get<std::size_t>(options, "burn_in")) out.burn_in = *burn_in;
+  if (auto runs = get<std::size_t>(options, "runs")) out.runs = *runs;
+  if (auto seed = get<std::uint64_t>(options, "seed")) out.seed = *seed;
+  if (auto noise = get<std::map<std::string, double>>(options, "noise")) {
+    for (const auto& [channel, level] : *noise) out.noise.push_back({channel, level});
+  }
+  if (auto observe = get<std::vector<std::string>>(options, "observe")) out.observe = *observe;
+  return out;
+}
+
+// The simulated record as {name: array} (t, the observed channels, run when there are several),
+// its metadata as a file would carry it, and the warnings; or, with `path`, the file written and
+// the warnings.
+py::tuple simulate_record(const Model& model, const py::dict& options) {
+  const SimulationOptions simulation = simulation_options(model, options);
+  if (auto path = get<std::string>(options, "path")) {
+    const std::string format = get<std::string>(options, "format").value_or("csv");
+    if (format != "csv" && format != "bin") {
+      throw UsageError("format: expected 'csv' or 'bin', found '" + format + "'");
+    }
+    std::vector<std::string> warnings;
+    {
+      py::gil_scoped_release release;
+      warnings = simulate_to_file(
+          model, simulation, *path,
+          format == "bin" ? DataWriter::Format::kBinary : DataWriter::Format::kCsv);
+    }
+    return py::make_tuple(py::none(), py::none(), warnings);
+  }
+  simulation.validate(model);
+  const std::vector<std::string>& variables = model.variables();
+  std::vector<std::size_t> channels;
+  if (simulation.observe.empty()) {
+    for (std::size_t c = 0; c < variables.size(); ++c) channels.push_back(c);
+  } else {
+    for (const std::string& name : simulation.observe) {
+      channels.push_back(static_cast<std::size_t>(
+          std::find(variables.begin(), variables.end(), name) - variables.begin()));
+    }
+  }
+  const auto rows = static_cast<py::ssize_t>(simulation.samples * simulation.runs);
+  py::dict out;
+  py::array_t<double> time(rows);
+  out["t"] = time;
+  std::vector<double*> columns;
+  for (std::size_t c : channels) {
+    py::array_t<double> column(rows);
+    columns.push_back(column.mutable_data());
+    out[py::str(variables[c])] = column;
+  }
+  double* run = nullptr;
+  if (simulation.runs > 1) {
+    py::array_t<double> runs(rows);
+    run = runs.mutable_data();
+    out["run"] = runs;
+  }
+  ArraySink sink(columns, channels, time.mutable_data(), run, simulation.samples);
+  std::optional<std::string> warning;
+  {
+    py::gil_scoped_release release;
+    StepCheck check(model, simulation, sink);
+    simulate(model, simulation, check);
+    warning = check.warning();
+  }
+  std::vector<std::string> warnings;
+  if (warning) warnings.push_back(*warning);
+  py::dict metadata;
+  const DataMetadata written = simulation_metadata(model, simulation);
+  for (const DataMetadata::Line& line : written.lines()) {
+    for (const auto& [key, value] : line) metadata[py::str(key)] = value;
+  }
+  return py::make_tuple(out, metadata, warnings);
+}
+
+// --- validate -------------------------------------------------------------------------------
+
+ValidateOptions validate_options(const Model& model, const py::dict& options) {
+  ValidateOptions out;
+  out.replay.parameters = parameters_of(model, options, "params");
+  if (auto rename = get<std::map<std::string, std::string>>(options, "rename")) {
+    out.replay.columns = *rename;
+  }
+  out.replay.dt = get<double>(options, "dt");
+  out.replay.layout = layout_of(options);
+  if (auto substeps = get<int>(options, "substeps")) out.replay.substeps = *substeps;
+  if (auto method = get<std::string>(options, "interpolation")) {
+    out.replay.interpolation = parse_interpolation(*method, "interpolation");
+  }
+  out.skip = get<std::size_t>(options, "skip");
+  if (auto lags = get<int>(options, "lags")) out.lags = *lags;
+  return out;
+}
+
+}  // namespace
+}  // namespace momentid::python
+
+PYBIND11_MODULE(_momentid, m) {
+  using namespace momentid;
+  using namespace momentid::python;
+  m.doc() = "The compiled part of momentid; use the package `momentid`.";
+  m.attr("__version__") = MOMENTID_VERSION;
+  py::register_exception_translator(translate);
+
+  py::class_<Model>(m, "Model")
+      .def(py::init([](const std::string& text, const std::string& name) {
+             return parse_model(text, name);
+           }),
+           py::arg("text"), py::arg("name") = "<string>")
+      .def_static("_from_file", &parse_model_file, py::arg("path"))
+      .def_property_readonly("name", &Model::name)
+      .def_property_readonly("title", &Model::title)
+      .def_property_readonly("states",
+                             [](const Model& model) {
+                               std::vector<std::string> out;
+                               for (const auto& d : model.states()) out.push_back(d.name);
+                               return out;
+                             })
+      .def_property_readonly("inputs",
+                             [](const Model& model) {
+                               std::vector<std::string> out;
+                               for (const auto& d : model.inputs()) out.push_back(d.name);
+                               return out;
+                             })
+      .def_property_readonly("parameters",
+                             [](const Model& model) {
+                               std::vector<std::string> out;
+                               for (const auto& d : model.parameters()) out.push_back(d.name);
+                               return out;
+                             })
+      .def_property_readonly("nominal",
+                             [](const Model& model) {
+                               py::dict out;
+                               for (const auto& d : model.parameters()) {
+                                 out[py::str(d.name)] =
+                                     d.value ? py::cast(d.value->to_double()) : py::none();
+                               }
+                               return out;
+                             })
+      .def_property_readonly("fixed", [](const Model& model) {
+        std::vector<std::string> out;
+        for (const auto& d : model.parameters()) {
+          if (d.fixed) out.push_back(d.name);
+        }
+        return out;
+      });
+
+  m.def("_derive", [](const Model& model, const py::dict& options) {
+    const Derivation d = derive_equations(model, options);
+    return py::make_tuple(d.text, d.latex, d.json, d.equations);
+  });
+
+  m.def("_identify", [](const Model& model, const py::object& data, const std::string& name,
+                        const std::map<std::string, std::string>& metadata,
+                        const py::dict& options) {
+    const IdentifyOptions identify_with = identify_options(model, options);
+    const DataSource source = data_source(data, name, metadata);
+    std::optional<IdentifyResult> result;
+    {
+      py::gil_scoped_release release;
+      result = identify(model, source, identify_with);
+    }
+    return py::make_tuple(format_text(*result), format_json(*result));
+  });
+
+  m.def("_check", [](const py::object& model, const py::object& data, const std::string& name,
+                     const std::map<std::string, std::string>& metadata, const py::dict& options) {
+    CheckOptions check_with;
+    if (auto lags = get<std::size_t>(options, "lags")) check_with.lags = *lags;
+    check_with.hold = hold_of(options);
+    if (auto rename = get<std::map<std::string, std::string>>(options, "rename")) {
+      check_with.columns = *rename;
+    }
+    check_with.dt = get<double>(options, "dt");
+    check_with.layout = layout_of(options);
+    const Model* with = model.is_none() ? nullptr : &model.cast<const Model&>();
+    const DataSource source = data_source(data, name, metadata);
+    std::optional<CheckResult> result;
+    {
+      py::gil_scoped_release release;
+      result = check(source, with, check_with);
+    }
+    return py::make_tuple(format_text(*result), check_dict(*result));
+  });
+
+  m.def("_simulate", &simulate_record);
+
+  m.def("_validate", [](const Model& model, const py::object& data, const std::string& name,
+                        const std::map<std::string, std::string>& metadata,
+                        const py::dict& options) {
+    const ValidateOptions validate_with = validate_options(model, options);
+    const DataSource source = data_source(data, name, metadata);
+    std::optional<ValidateResult> result;
+    {
+      py::gil_scoped_release release;
+      result = validate(model, source, validate_with);
+    }
+    if (auto plot = get<std::string>(options, "plot")) write_plot(*result, *plot);
+    return py::make_tuple(format_text(*result), format_json(*result));
+  });
+}
