@@ -313,28 +313,44 @@ def check(data: Any, model: Union[None, Model, PathLike] = None, *,
 
 
 def simulate(model: Union[Model, PathLike], params: Optional[Mapping[str, float]] = None, *,
-             samples: int = 10000, dt: float = 0.01,
-             inputs: Optional[Mapping[str, str]] = None, seed: int = 1, runs: int = 1,
-             burn_in: int = 10000, noise: Optional[Mapping[str, float]] = None,
+             samples: int = 10000, dt: Optional[float] = None, inputs: Any = None,
+             seed: int = 1, runs: int = 1, burn_in: int = 10000,
+             noise: Optional[Mapping[str, float]] = None,
              observe: Optional[Sequence[str]] = None, path: Optional[PathLike] = None,
-             format: str = "csv") -> Optional[dict]:
+             format: str = "csv", interpolation: Optional[str] = None,
+             substeps: Optional[int] = None) -> Optional[Record]:
     """Simulates the model with known parameters, as `momentid simulate`.
 
-    params: {parameter: value}, the rest at the model's nominal values. inputs: {input: process}
-    such as "ma:K=10,w=0.1,sigma=20", "ma:T=0.1", "ou:tau=0.5" or
-    "multisine:f1=0.5,f2=5,lines=10" (default "ma:K=10,w=0.1"). noise: {channel: relative level}
-    of white measurement noise. observe: the channels to return (default: states, then inputs).
+    params: {parameter: value}, the rest at the model's nominal values.
+    inputs: {input: process} such as "ma:K=10,w=0.1,sigma=20", "ma:T=0.1", "ou:tau=0.5" or
+      "multisine:f1=0.5,f2=5,lines=10" (default "ma:K=10,w=0.1"); or a record (a mapping of
+      arrays with the model's inputs and `t`, or a data file's path) whose inputs drive the
+      model, as `simulate --input-file` does: each run starts from the record's initial state,
+      `interpolation` ("zoh", "foh", "cubic", "sinc") and `substeps` as for validate().
+    dt: the step (default 0.01; for a record, its own sample interval).
+    noise: {channel: relative level} of white measurement noise. observe: the channels to
+      return (default: states, then inputs).
 
-    Returns a Record, {"t": array, channel: array, ..., "run": array (with runs > 1)} of
-    `samples * runs` values each, the same numbers the program writes, with the file's
-    metadata; or, with `path`, writes that file ("csv" or "bin") and returns None. A step too coarse for the dynamics gives a MomentidWarning.
+    Returns a Record, {"t": array, channel: array, ..., "run": array (with several runs)},
+    the same numbers the program writes, with the file's metadata; or, with `path`, writes that
+    file ("csv" or "bin") and returns None. A step too coarse for the dynamics gives a
+    MomentidWarning.
     """
     model = _model_of(model)
-    options = _options(params=_numbers(params), samples=samples, dt=dt,
-                       inputs=dict(inputs) if inputs else None, seed=seed, runs=runs,
-                       burn_in=burn_in, noise=noise, observe=observe,
-                       path=None if path is None else _os.fspath(path), format=format)
-    columns, metadata, warnings = _momentid._simulate(model._model, options)
+    if inputs is not None and (isinstance(inputs, (str, _os.PathLike)) or
+                               any(not isinstance(v, str) for v in inputs.values())):
+        source, name, metadata, keep = _data_of(inputs, None, dt)
+        options = _options(params=_numbers(params), interpolation=interpolation,
+                           substeps=substeps, dt=dt if isinstance(source, str) else None)
+        columns, metadata, warnings = _momentid._replay(model._model, source, name, metadata,
+                                                        options)
+        del keep
+    else:
+        options = _options(params=_numbers(params), samples=samples, dt=dt,
+                           inputs=dict(inputs) if inputs else None, seed=seed, runs=runs,
+                           burn_in=burn_in, noise=noise, observe=observe,
+                           path=None if path is None else _os.fspath(path), format=format)
+        columns, metadata, warnings = _momentid._simulate(model._model, options)
     for warning in warnings:
         _warnings.warn(warning, MomentidWarning, stacklevel=2)
     return None if columns is None else Record(columns, metadata)

@@ -362,16 +362,18 @@ py::tuple simulate_record(const Model& model, const py::dict& options) {
   }
   ArraySink sink(columns, channels, time.mutable_data(), run, simulation.samples);
   std::optional<std::string> warning;
+  std::vector<double> noise_sd;
   {
     py::gil_scoped_release release;
+    noise_sd = noise_standard_deviations(model, simulation);
     StepCheck check(model, simulation, sink);
-    simulate(model, simulation, check);
+    simulate(model, simulation, check, noise_sd);
     warning = check.warning();
   }
   std::vector<std::string> warnings;
   if (warning) warnings.push_back(*warning);
   py::dict metadata;
-  const DataMetadata written = simulation_metadata(model, simulation);
+  const DataMetadata written = simulation_metadata(model, simulation, noise_sd);
   for (const DataMetadata::Line& line : written.lines()) {
     for (const auto& [key, value] : line) metadata[py::str(key)] = value;
   }
@@ -395,6 +397,53 @@ ValidateOptions validate_options(const Model& model, const py::dict& options) {
   out.skip = get<std::size_t>(options, "skip");
   if (auto lags = get<int>(options, "lags")) out.lags = *lags;
   return out;
+}
+
+// The model's response to a record's inputs, as `simulate --input-file` writes it: t, every
+// state (simulated) and the inputs (recorded), run when there are several; and the metadata.
+py::tuple replay_record(const Model& model, const DataSource& source, const py::dict& options) {
+  const ValidateOptions with = validate_options(model, options);
+  std::optional<Replay> done;
+  {
+    py::gil_scoped_release release;
+    done = replay(model, source, with.replay);
+  }
+  const Record& record = done->record;
+  std::size_t rows = 0;
+  for (const RecordRun& run : record.runs) rows += run.rows();
+  const auto column = [&](auto value_at) {
+    py::array_t<double> out(static_cast<py::ssize_t>(rows));
+    double* into = out.mutable_data();
+    for (std::size_t r = 0; r < record.runs.size(); ++r) {
+      for (std::size_t n = 0; n < record.runs[r].rows(); ++n) *into++ = value_at(r, n);
+    }
+    return out;
+  };
+  py::dict out;
+  out["t"] = column([&](std::size_t r, std::size_t n) {
+    const RecordRun& run = record.runs[r];
+    return run.time.empty() ? static_cast<double>(n) * record.dt : run.time[n];
+  });
+  const std::size_t states = model.states().size();
+  for (std::size_t j = 0; j < states; ++j) {
+    out[py::str(model.states()[j].name)] =
+        column([&](std::size_t r, std::size_t n) { return done->simulated[r][j][n]; });
+  }
+  for (std::size_t v = states; v < model.variables().size(); ++v) {
+    const auto c = static_cast<std::size_t>(record.column_of(v));
+    out[py::str(model.variables()[v])] =
+        column([&](std::size_t r, std::size_t n) { return record.runs[r].columns[c][n]; });
+  }
+  if (record.runs.size() > 1) {
+    out["run"] = column([&](std::size_t r, std::size_t) {
+      return static_cast<double>(record.has_run ? record.runs[r].number : static_cast<long>(r) + 1);
+    });
+  }
+  // What the record says of its sampling holds for the response too; its parameters do not.
+  py::dict metadata;
+  metadata["dt"] = py::str(py::repr(py::float_(record.dt)));
+  if (auto hold = record.metadata.get("input-hold")) metadata["input-hold"] = *hold;
+  return py::make_tuple(out, metadata, std::vector<std::string>{});
 }
 
 }  // namespace
@@ -489,6 +538,12 @@ PYBIND11_MODULE(_momentid, m) {
   });
 
   m.def("_simulate", &simulate_record);
+
+  m.def("_replay", [](const Model& model, const py::object& data, const std::string& name,
+                      const std::map<std::string, std::string>& metadata,
+                      const py::dict& options) {
+    return replay_record(model, data_source(data, name, metadata), options);
+  });
 
   m.def("_validate", [](const Model& model, const py::object& data, const std::string& name,
                         const std::map<std::string, std::string>& metadata,
