@@ -413,7 +413,8 @@ def _column(name: str, values: Any) -> _np.ndarray:
     if array.ndim != 1:
         raise UsageError(f"column '{name}': expected a one-dimensional array, found shape "
                          f"{array.shape}")
-    if array.dtype != _np.float64 or array.strides[0] % 8 != 0:
+    # Read in place: float64 with a stride of whole values, forwards (or 0, a broadcast).
+    if array.dtype != _np.float64 or array.strides[0] % 8 != 0 or array.strides[0] < 0:
         array = _np.ascontiguousarray(array, dtype=_np.float64)
     return array
 

@@ -65,9 +65,10 @@ DataSource data_source(const py::object& data, const std::string& name,
     const auto pair = item.cast<py::tuple>();
     const std::string column = pair[0].cast<std::string>();
     const auto array = pair[1].cast<py::array>();
-    if (array.ndim() != 1 || !array.dtype().is(py::dtype::of<double>()) ||
+    if (array.ndim() != 1 || !array.dtype().is(py::dtype::of<double>()) || array.strides(0) < 0 ||
         array.strides(0) % static_cast<py::ssize_t>(sizeof(double)) != 0) {
-      throw UsageError("column '" + column + "': expected a one-dimensional float64 array");
+      throw UsageError("column '" + column +
+                       "': expected a one-dimensional float64 array with a forward stride");
     }
     const auto rows = static_cast<std::size_t>(array.shape(0));
     if (first) {
@@ -78,7 +79,6 @@ DataSource data_source(const py::object& data, const std::string& name,
                        memory.columns.front().name + "' has " + std::to_string(memory.rows) +
                        ": every column needs one value per sample");
     }
-    // A negative stride (a reversed view) reads backwards from the first element.
     memory.columns.push_back({column, static_cast<const double*>(array.data()),
                               static_cast<std::size_t>(array.strides(0) /
                                                        static_cast<py::ssize_t>(sizeof(double)))});
