@@ -27,6 +27,11 @@ struct FileLayout {
   // The decimal separator, '.' or ','; ',' needs a field separator other than the comma.
   char decimal = '.';
   MissingValues missing = MissingValues::kError;
+  // The sample interval from a scalar stored in the file (.mat, HDF5): `Ts`, or `1/fs` for a
+  // rate; checked against the time column when there is one.
+  std::optional<std::string> dt_from;
+  // Names for the columns of a file that has none (a 2-D .npy array), in order.
+  std::vector<std::string> column_names;
 };
 
 // The rows a reader dropped for missing values: how many, the first one's place, and at how
@@ -50,6 +55,7 @@ struct ColumnRequest {
   // The sample interval, overriding the data's: the time column is then neither read nor
   // checked, and time_step() returns it.
   std::optional<double> dt;
+
   FileLayout layout;
 };
 

@@ -280,13 +280,13 @@ def identify(model: Union[Model, PathLike], data: Any, *, columns: Optional[Sequ
     line's messages. The GIL is released during the pass over the data.
     """
     model = _model_of(model)
-    source, name, metadata, keep = _data_of(data, columns, dt)
+    source, name, metadata, keep = _data_of(data, columns)
     if isinstance(center, str):
         center = model.states + model.inputs if center == "all" else [center]
     options = _options(multipliers=multipliers, degree=degree, batches=batches,
                        weighting=weighting, lags=lags, instruments=instruments, noise=noise,
                        fix=fix, center=center, input_hold=input_hold, input_shift=input_shift,
-                       rename=rename, dt=dt if isinstance(source, str) else None,
+                       rename=rename, dt=dt,
                        missing=missing, skip_rows=skip_rows, decimal=decimal)
     text, json_text = _momentid._identify(model._model, source, name, metadata, options)
     del keep
@@ -302,9 +302,9 @@ def check(data: Any, model: Union[None, Model, PathLike] = None, *,
     mean, variance and autocorrelations (`lags` of them), warnings, and with a model the sample
     violations of its stationarity identities. `data` and the options as for identify()."""
     model = None if model is None else _model_of(model)
-    source, name, metadata, keep = _data_of(data, columns, dt)
+    source, name, metadata, keep = _data_of(data, columns)
     options = _options(lags=lags, input_hold=input_hold, rename=rename,
-                       dt=dt if isinstance(source, str) else None, missing=missing,
+                       dt=dt, missing=missing,
                        skip_rows=skip_rows, decimal=decimal)
     text, values = _momentid._check(None if model is None else model._model, source, name,
                                     metadata, options)
@@ -339,9 +339,9 @@ def simulate(model: Union[Model, PathLike], params: Optional[Mapping[str, float]
     model = _model_of(model)
     if inputs is not None and (isinstance(inputs, (str, _os.PathLike)) or
                                any(not isinstance(v, str) for v in inputs.values())):
-        source, name, metadata, keep = _data_of(inputs, None, dt)
+        source, name, metadata, keep = _data_of(inputs, None)
         options = _options(params=_numbers(params), interpolation=interpolation,
-                           substeps=substeps, dt=dt if isinstance(source, str) else None)
+                           substeps=substeps, dt=dt)
         columns, metadata, warnings = _momentid._replay(model._model, source, name, metadata,
                                                         options)
         del keep
@@ -374,12 +374,15 @@ def validate(model: Union[Model, PathLike], data: Any,
     `data` and the other options as for identify().
     """
     model = _model_of(model)
+    origin = "the model's nominal values"
     if isinstance(params, IdentifyResult):
-        params = params.estimates
-    source, name, metadata, keep = _data_of(data, columns, dt)
-    options = _options(params=_numbers(params), skip=skip, lags=lags,
+        params, origin = params.estimates, "the estimates of identify()"
+    elif params:
+        origin += " and params"
+    source, name, metadata, keep = _data_of(data, columns)
+    options = _options(params=_numbers(params), parameters_from=origin, skip=skip, lags=lags,
                        interpolation=interpolation, substeps=substeps, rename=rename,
-                       dt=dt if isinstance(source, str) else None,
+                       dt=dt,
                        plot=None if plot is None else _os.fspath(plot), missing=missing,
                        skip_rows=skip_rows, decimal=decimal)
     text, json_text = _momentid._validate(model._model, source, name, metadata, options)
@@ -419,7 +422,7 @@ def _column(name: str, values: Any) -> _np.ndarray:
     return array
 
 
-def _data_of(data: Any, columns: Optional[Sequence[str]], dt: Optional[float]):
+def _data_of(data: Any, columns: Optional[Sequence[str]]):
     """The record as the compiled part takes it: a path, or [(name, float64 array)] with a name
     for messages and metadata; the last item keeps converted arrays alive."""
     if isinstance(data, (str, _os.PathLike)):
@@ -427,8 +430,6 @@ def _data_of(data: Any, columns: Optional[Sequence[str]], dt: Optional[float]):
             raise UsageError("columns: only for a 2-D array; a file names its own columns")
         return _os.fspath(data), "", {}, None
     metadata = dict(getattr(data, "metadata", None) or {})
-    if dt is not None:
-        metadata["dt"] = repr(float(dt))
     if isinstance(data, _np.ndarray) and data.ndim == 2:
         if columns is None or len(columns) != data.shape[1]:
             raise UsageError(f"columns: a 2-D array of {data.shape[1]} columns needs as many "

@@ -11,6 +11,7 @@
 #include <map>
 #include <optional>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "momentid/momentid.hpp"
@@ -87,10 +88,34 @@ DataSource data_source(const py::object& data, const std::string& name,
   return DataSource::memory(std::move(memory));
 }
 
+// What a value of type T is, for messages.
+template <class T>
+const char* describe() {
+  if constexpr (std::is_same_v<T, bool>) {
+    return "True or False";
+  } else if constexpr (std::is_integral_v<T> && std::is_unsigned_v<T>) {
+    return "a whole number, 0 or more";
+  } else if constexpr (std::is_integral_v<T>) {
+    return "a whole number";
+  } else if constexpr (std::is_floating_point_v<T>) {
+    return "a number";
+  } else if constexpr (std::is_same_v<T, std::string>) {
+    return "a string";
+  } else {
+    return "of the documented type";
+  }
+}
+
+// Option `key` as T, nullopt when absent or None; UsageError when it is not a T.
 template <class T>
 std::optional<T> get(const py::dict& options, const char* key) {
   if (!options.contains(key) || options[key].is_none()) return std::nullopt;
-  return options[key].cast<T>();
+  try {
+    return options[key].cast<T>();
+  } catch (const py::cast_error&) {
+    throw UsageError(std::string(key) + ": expected " + describe<T>() + ", found " +
+                     py::repr(options[key]).cast<std::string>());
+  }
 }
 
 FileLayout layout_of(const py::dict& options) {
@@ -555,6 +580,8 @@ PYBIND11_MODULE(_momentid, m) {
       py::gil_scoped_release release;
       result = validate(model, source, validate_with);
     }
+    result->parameters_from =
+        get<std::string>(options, "parameters_from").value_or("the model's nominal values");
     if (auto plot = get<std::string>(options, "plot")) write_plot(*result, *plot);
     return py::make_tuple(format_text(*result), format_json(*result));
   });

@@ -29,7 +29,8 @@ CheckResult check(const DataSource& source, const Model* model, const CheckOptio
   // Per model variable: whether the check reads it.
   std::vector<bool> kept;
   if (model != nullptr) {
-    const std::vector<bool> present = variables_present(*model, source, options.columns);
+    const std::vector<bool> present =
+        variables_present(*model, source, options.columns, options.layout);
     // The statistics of the states and most identities need no input: inputs missing from the
     // data are left out rather than refused (all of them, so that the channels are the states).
     // So are states the data show only as derivatives (v when y' = v and y is measured); any
@@ -55,8 +56,7 @@ CheckResult check(const DataSource& source, const Model* model, const CheckOptio
       if (kept[v]) (v < state_count ? states : inputs).push_back(model->variables()[v]);
     }
   } else {
-    const std::vector<std::string> columns =
-        source.open({.names = {}, .rename = {}, .min_rows = 0})->columns();
+    const std::vector<std::string> columns = data_columns(source, options.columns, options.layout);
     const auto time = options.columns.find("t");
     for (const std::string& c : columns) {
       const bool is_time =

@@ -195,7 +195,8 @@ IdentifyResult identify(const Model& model, const DataSource& source,
   data_options.lags = 4;  // for the noise estimates
 
   // Which variables the data have: the lagged equations serve data without some state.
-  const std::vector<bool> measured = variables_present(model, source, options.columns);
+  const std::vector<bool> measured =
+      variables_present(model, source, options.columns, options.layout);
   const bool all_measured = std::all_of(measured.begin(), measured.end(), [](bool m) { return m; });
   // Without lags asked for, data that cannot show a state (not even as a derivative) get the
   // zero-lag pass and its message naming the missing column.

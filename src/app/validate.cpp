@@ -31,12 +31,12 @@ constexpr double kBand99 = 2.5758293035489004;
 SourceLocation file_start(const std::string& name) { return {name, 1, 1, ""}; }
 
 Record read_record(const Model& model, const DataSource& source, const ReplayOptions& options) {
-  const std::vector<bool> present = variables_present(model, source, options.columns);
+  const std::vector<bool> present =
+      variables_present(model, source, options.columns, options.layout);
   const std::size_t states = model.states().size();
   Record record;
   record.name = source.name();
-  const std::vector<std::string> header =
-      source.open({.names = {}, .rename = {}, .min_rows = 0})->columns();
+  const std::vector<std::string> header = data_columns(source, options.columns, options.layout);
   record.has_time = std::find(header.begin(), header.end(), "t") != header.end();
   record.has_run = std::find(header.begin(), header.end(), "run") != header.end();
   // Every input is requested, so that one the data lack is reported as a missing column.

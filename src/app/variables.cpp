@@ -4,10 +4,16 @@
 
 namespace momentid {
 
+std::vector<std::string> data_columns(const DataSource& source,
+                                      const std::map<std::string, std::string>& columns,
+                                      const FileLayout& layout) {
+  return source.open({.names = {}, .rename = columns, .min_rows = 0, .layout = layout})->columns();
+}
+
 std::vector<bool> variables_present(const Model& model, const DataSource& source,
-                                    const std::map<std::string, std::string>& columns) {
-  const std::vector<std::string> header =
-      source.open({.names = {}, .rename = {}, .min_rows = 0})->columns();
+                                    const std::map<std::string, std::string>& columns,
+                                    const FileLayout& layout) {
+  const std::vector<std::string> header = data_columns(source, columns, layout);
   std::vector<bool> present;
   for (const std::string& v : model.variables()) {
     const auto renamed = columns.find(v);

@@ -9,9 +9,17 @@
 
 namespace momentid {
 
+// The column names of `source`, as a reader with these renames and this layout sees them (a
+// 2-D .npy array is named by FileLayout::column_names, a .npy file named in `columns` is a
+// column). Reads the header only.
+std::vector<std::string> data_columns(const DataSource& source,
+                                      const std::map<std::string, std::string>& columns,
+                                      const FileLayout& layout);
+
 // Per model variable (states, then inputs): whether `source` has its column, under the name
 // `columns` maps it to (model name -> data column) or its own. Reads the header only.
 std::vector<bool> variables_present(const Model& model, const DataSource& source,
-                                    const std::map<std::string, std::string>& columns);
+                                    const std::map<std::string, std::string>& columns,
+                                    const FileLayout& layout);
 
 }  // namespace momentid

@@ -51,6 +51,13 @@ void add_layout_options(CLI::App* command, FileLayout& layout) {
                    "split-run (starts a new run)")
       ->transform(CLI::CheckedTransformer(rules))
       ->default_str("error");
+  command
+      ->add_option("--names", layout.column_names,
+                   "names for the columns of a 2-D .npy array, in order")
+      ->delimiter(',');
+  command->add_option("--dt-from", layout.dt_from,
+                      "the sample interval from a scalar in a .mat or HDF5 file: NAME, or 1/NAME "
+                      "for a rate");
 }
 
 DataSource data_source(const std::string& path) {

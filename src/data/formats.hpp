@@ -28,6 +28,11 @@ bool is_binary(std::string_view first_bytes);
 std::unique_ptr<DataReader> open_binary(File file, const std::string& path,
                                         const ColumnRequest& request, std::string_view first_bytes);
 
+// NumPy .npy (column_store.hpp).
+bool is_npy(std::string_view first_bytes);
+std::unique_ptr<DataReader> open_npy(File file, const std::string& path,
+                                     const ColumnRequest& request, std::string_view first_bytes);
+
 // CSV takes any file the other formats do not recognise.
 std::unique_ptr<DataReader> open_csv(File file, const std::string& path,
                                      const ColumnRequest& request, std::string_view first_bytes);

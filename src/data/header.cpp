@@ -133,7 +133,7 @@ ColumnMap map_columns(const std::string& path, const Header& header, const Colum
     time_name = renamed->second;
     if (std::find(header.names.begin(), header.names.end(), time_name) == header.names.end()) {
       fail(location(1),
-           "missing column '" + time_name + "' for 't' (the header has: " + listed + ")");
+           "missing column '" + time_name + "' for 't' (" + header.listing + ": " + listed + ")");
     }
   } else if (std::find(header.names.begin(), header.names.end(), "t") != header.names.end()) {
     time_name = "t";
@@ -178,8 +178,8 @@ ColumnMap map_columns(const std::string& path, const Header& header, const Colum
     if (found == first.end()) {
       const std::string& name = request.names[k];
       fail(location(1), "missing column '" + file_names[k] + "'" +
-                            (file_names[k] == name ? "" : " for '" + name + "'") +
-                            " (the header has: " + listed + ")");
+                            (file_names[k] == name ? "" : " for '" + name + "'") + " (" +
+                            header.listing + ": " + listed + ")");
     }
     const std::size_t field = found->second;
     if (map.output[field] < 0) {

@@ -24,6 +24,8 @@ struct Header {
   char separator = ',';                   // ',', ';' or ' ' for runs of blanks and tabs
   long long line = 0;
   std::string text;
+  // How messages introduce the names: "the header has", "the file has the variables", ...
+  std::string listing = "the header has";
 };
 
 // Reads the metadata and comment lines and the header row (`binary`: of a binary file's header

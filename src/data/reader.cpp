@@ -20,6 +20,7 @@ namespace {
 // Checked in order: the first format whose detector accepts the file's first bytes reads it.
 constexpr std::array kFormats{
     data::DataFormat{"binary", data::is_binary, data::open_binary},
+    data::DataFormat{"npy", data::is_npy, data::open_npy},
     data::DataFormat{"csv", [](std::string_view) { return true; }, data::open_csv},
 };
 

@@ -1,0 +1,500 @@
+"""Tests of the Python module `momentid` against the `momentid` program.
+
+What they cover:
+- identify, simulate, derive and validate give the same numbers (JSON, text, files byte for
+  byte) as the command line with the same options;
+- records given as arrays in any layout (2-D with columns=, strided, reversed, float32, int,
+  a pandas DataFrame) give the estimates of contiguous float64 copies, and bad ones (complex,
+  2-D without names, unequal lengths) raise UsageError naming what is wrong;
+- errors are the module's exceptions with the command line's messages and places;
+- simulate's Record (columns, runs, metadata) and its MomentidWarning for a coarse step;
+- check and validate on a clean simulation;
+- no memory leak over 1000 calls, and the GIL released while identify works.
+
+Run from the repository root:
+    PYTHONPATH=build/python MOMENTID=build/momentid python3 -m pytest -q python/tests
+"""
+
+import gc
+import json
+import os
+import pydoc
+import subprocess
+import sys
+import textwrap
+import threading
+import time
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import momentid
+
+ROOT = Path(__file__).resolve().parents[2]
+DUFFING = ROOT / "models" / "duffing.mom"
+TRUE = {"c": 0.5, "k": 4.0, "eps": 1.0}  # duffing.mom's nominal values, used by simulate
+INPUT = "ma:K=10,w=0.1,sigma=20"
+
+
+# --- helpers and fixtures ----------------------------------------------------------------------
+
+@pytest.fixture(scope="session")
+def cli():
+    """Runs the program (path from $MOMENTID) and returns its standard output."""
+    program = os.environ.get("MOMENTID")
+    if not program:
+        pytest.skip("MOMENTID (the path of the momentid program) is not set")
+    program = str(Path(program).resolve())
+
+    def run(*args, cwd=None):
+        done = subprocess.run([program, *map(str, args)], capture_output=True, text=True,
+                              cwd=cwd)
+        assert done.returncode == 0, f"momentid {' '.join(map(str, args))}: {done.stderr}"
+        return done.stdout
+
+    return run
+
+
+@pytest.fixture(scope="session")
+def duffing():
+    return momentid.Model.from_file(DUFFING)
+
+
+@pytest.fixture(scope="session")
+def cli_csv(cli, tmp_path_factory):
+    """The Duffing record the program simulates: 100000 samples, seed 3."""
+    path = tmp_path_factory.mktemp("cli") / "duffing.csv"
+    cli("simulate", DUFFING, "--samples", 100000, "--seed", 3, "--input", INPUT, "-o", path)
+    return path
+
+
+@pytest.fixture(scope="session")
+def cli_json(cli, cli_csv):
+    return json.loads(cli("identify", DUFFING, cli_csv, "--format", "json"))
+
+
+@pytest.fixture(scope="session")
+def record(duffing):
+    """A smaller in-memory Duffing record (20000 samples), with metadata."""
+    return momentid.simulate(duffing, samples=20000, seed=3, inputs={"x": INPUT})
+
+
+def read_csv(path):
+    """The columns of a CSV file written by the program: {name: float64 array}, `#` lines
+    (the metadata) skipped."""
+    lines = Path(path).read_text().splitlines()
+    header = next(i for i, line in enumerate(lines) if not line.startswith("#"))
+    names = lines[header].split(",")
+    values = np.loadtxt(path, delimiter=",", skiprows=header + 1, ndmin=2)
+    return {name: values[:, k] for k, name in enumerate(names)}
+
+
+def read_metadata(path):
+    """The `# momentid:` key=value pairs of a CSV file, as one dict."""
+    out = {}
+    for line in Path(path).read_text().splitlines():
+        if not line.startswith("#"):
+            break
+        if line.startswith("# momentid:"):
+            out.update(item.split("=", 1) for item in line[len("# momentid:"):].split())
+    return out
+
+
+def assert_same_estimates(result, expected, rel=1e-12):
+    """Estimates and standard errors of an IdentifyResult equal those of another result or of
+    the CLI's JSON dict, to `rel` relative."""
+    if isinstance(expected, dict):
+        estimates = {n: p["estimate"] for n, p in expected["parameters"].items()}
+        errors = {n: p["std_error"] for n, p in expected["parameters"].items()}
+    else:
+        estimates, errors = expected.estimates, expected.std_errors
+    assert result.estimates == pytest.approx(estimates, rel=rel, abs=0)
+    assert result.std_errors == pytest.approx(errors, rel=rel, abs=0)
+
+
+def without(values, *keys):
+    return {k: v for k, v in values.items() if k not in keys}
+
+
+def rss_bytes():
+    with open("/proc/self/status") as status:
+        for line in status:
+            if line.startswith("VmRSS:"):
+                return int(line.split()[1]) * 1024
+    raise AssertionError("no VmRSS in /proc/self/status")
+
+
+# --- 1. round trip against the command line ----------------------------------------------------
+
+def test_identify_file_equals_cli(duffing, cli_csv, cli_json):
+    result = momentid.identify(duffing, str(cli_csv))
+    assert result.to_dict() == cli_json
+    assert_same_estimates(result, cli_json)
+    # A model path and a pathlib.Path work as well.
+    assert momentid.identify(DUFFING, cli_csv).to_dict() == cli_json
+
+
+def test_identify_arrays_equal_cli(duffing, cli_csv, cli_json):
+    columns = read_csv(cli_csv)
+    assert list(columns) == ["t", "y", "v", "x"]
+    # The arrays lose the file's metadata, so the hold of the input is given.
+    with_t = momentid.identify(duffing, columns, input_hold="zoh")
+    assert_same_estimates(with_t, cli_json)
+    with_dt = momentid.identify(duffing, without(columns, "t"), dt=0.01, input_hold="zoh")
+    assert_same_estimates(with_dt, cli_json)
+    assert without(with_t.to_dict(), "data") == without(cli_json, "data")
+
+
+def test_simulate_equals_cli_file(duffing, cli_csv, cli_json):
+    simulated = momentid.simulate(duffing, seed=3, samples=100000, inputs={"x": INPUT})
+    columns = read_csv(cli_csv)
+    assert list(simulated) == list(columns)
+    for name in columns:
+        assert simulated[name].dtype == np.float64
+        np.testing.assert_array_equal(simulated[name], columns[name], err_msg=name)
+    assert simulated.metadata == read_metadata(cli_csv)
+    # The Record carries the metadata (input-hold=zoh), so no option is needed.
+    result = momentid.identify(duffing, simulated)
+    assert without(result.to_dict(), "data") == without(cli_json, "data")
+
+
+# --- 2. array layouts ----------------------------------------------------------------------------
+
+def test_2d_array_columns_are_views(duffing, record):
+    names = ["t", "y", "v", "x"]
+    table = np.column_stack([record[n] for n in names])
+    assert table.flags.c_contiguous and table[:, 1].strides == (32,)
+    copies = {n: np.ascontiguousarray(table[:, k]) for k, n in enumerate(names)}
+    expected = momentid.identify(duffing, copies, input_hold="zoh")
+    result = momentid.identify(duffing, table, columns=names, input_hold="zoh")
+    assert_same_estimates(result, expected, rel=0)
+
+
+def test_strided_and_reversed_views(duffing, record):
+    expected = momentid.identify(duffing, dict(record), input_hold="zoh")
+    strided = {}
+    for name, values in record.items():
+        big = np.full(2 * len(values), 1e300)  # every other value garbage
+        big[::2] = values
+        strided[name] = big[::2]
+        assert not strided[name].flags.c_contiguous
+    assert_same_estimates(momentid.identify(duffing, strided, input_hold="zoh"), expected, rel=0)
+    # A negative stride: a time-reversed record, against its contiguous copy.
+    reversed_view = {n: v[::-1] for n, v in record.items() if n != "t"}
+    reversed_copy = {n: v.copy() for n, v in reversed_view.items()}
+    assert_same_estimates(
+        momentid.identify(duffing, reversed_view, dt=0.01, input_hold="zoh"),
+        momentid.identify(duffing, reversed_copy, dt=0.01, input_hold="zoh"), rel=0)
+
+
+def test_float32_arrays_are_converted(duffing, record):
+    data = {n: record[n] for n in ("y", "v", "x")}
+    expected = momentid.identify(duffing, data, dt=0.01, input_hold="zoh")
+    single = momentid.identify(duffing, {n: v.astype(np.float32) for n, v in data.items()},
+                               dt=0.01, input_hold="zoh")
+    assert single.estimates == pytest.approx(expected.estimates, rel=1e-4)
+    assert single.estimates != expected.estimates  # it did read the rounded values
+
+
+def test_int_arrays_are_converted(duffing, record):
+    scaled = {n: np.round(record[n] * 1000) for n in ("y", "v", "x")}
+    as_float = momentid.identify(duffing, scaled, dt=0.01, input_hold="zoh")
+    as_int = momentid.identify(duffing, {n: v.astype(np.int64) for n, v in scaled.items()},
+                               dt=0.01, input_hold="zoh")
+    assert_same_estimates(as_int, as_float, rel=0)
+
+
+def test_complex_array_is_a_usage_error(duffing, record):
+    data = {"y": record["y"].astype(complex), "v": record["v"], "x": record["x"]}
+    with pytest.raises(momentid.UsageError, match="column 'y'.*complex"):
+        momentid.identify(duffing, data, dt=0.01)
+
+
+def test_2d_array_needs_column_names(duffing, record):
+    table = np.column_stack([record[n] for n in ("y", "v", "x")])
+    with pytest.raises(momentid.UsageError, match="columns"):
+        momentid.identify(duffing, table, dt=0.01)
+    with pytest.raises(momentid.UsageError, match="columns"):
+        momentid.identify(duffing, table, columns=["y", "v"], dt=0.01)
+
+
+def test_columns_of_different_lengths(duffing, record):
+    data = {"y": record["y"], "v": record["v"][:-5], "x": record["x"]}
+    with pytest.raises(momentid.UsageError) as raised:
+        momentid.identify(duffing, data, dt=0.01)
+    message = str(raised.value)
+    assert "'v' has 19995" in message and "'y' has 20000" in message
+
+
+def test_path_that_is_not_a_file(duffing, tmp_path):
+    with pytest.raises(momentid.Error, match="cannot open"):
+        momentid.identify(duffing, str(tmp_path / "no such file.csv"))
+
+
+# --- 3. pandas -----------------------------------------------------------------------------------
+
+def test_pandas_dataframe(duffing, record):
+    pandas = pytest.importorskip("pandas")
+    frame = pandas.DataFrame({n: record[n] for n in ("t", "y", "v", "x")})
+    expected = momentid.identify(duffing, dict(record), input_hold="zoh")
+    assert_same_estimates(momentid.identify(duffing, frame, input_hold="zoh"), expected, rel=0)
+    # A frame with more columns than the model needs, in another order.
+    frame["extra"] = 1.0
+    shuffled = frame[["x", "extra", "v", "t", "y"]]
+    assert_same_estimates(momentid.identify(duffing, shuffled, input_hold="zoh"), expected,
+                          rel=0)
+
+
+# --- 4. exceptions -------------------------------------------------------------------------------
+
+def test_model_error_is_located():
+    with pytest.raises(momentid.ModelError) as raised:
+        momentid.Model("state y\ny' = -q*y\n")
+    error = raised.value
+    assert str(error) == "<string>:2:7: 'q' is not declared (declared: states y)"
+    assert (error.file, error.line, error.column) == ("<string>", 2, 7)
+    assert error.source_line == "y' = -q*y"
+    assert isinstance(error, ValueError) and isinstance(error, momentid.Error)
+
+
+def test_nan_is_a_data_error_at_its_row(duffing, record):
+    y = record["y"].copy()
+    y[100] = np.nan
+    data = {"t": record["t"], "y": y, "v": record["v"], "x": record["x"]}
+    with pytest.raises(momentid.DataError, match="column 'y'") as raised:
+        momentid.identify(duffing, data, input_hold="zoh")
+    # Row 100 counted from 0 is line 101; y is the second column.
+    assert (raised.value.line, raised.value.column) == (101, 2)
+    assert isinstance(raised.value, ValueError)
+
+    result = momentid.identify(duffing, data, input_hold="zoh", missing="split-run")
+    assert result.diagnostics["runs"] == 2
+    assert result.diagnostics["samples"] == len(y) - 1
+    assert any("dropped 1 row" in w for w in result.warnings)
+    assert result.estimates == pytest.approx(TRUE, rel=0.05)
+
+
+def test_unknown_fixed_parameter_is_a_usage_error(duffing, record):
+    with pytest.raises(momentid.UsageError, match="'zz' is not a parameter"):
+        momentid.identify(duffing, record, fix={"zz": 1.0})
+    # A known one is fixed.
+    result = momentid.identify(duffing, record, fix={"c": 0.5})
+    assert result.fixed == ["c"] and result.estimates["c"] == 0.5
+
+
+def test_option_of_the_wrong_type_is_a_usage_error(duffing, record):
+    with pytest.raises(momentid.UsageError, match=r"^seed: expected a whole number, 0 or more, "
+                                                  r"found -1$"):
+        momentid.simulate(duffing, seed=-1)
+    with pytest.raises(momentid.UsageError, match=r"^batches: expected a whole number, 0 or "
+                                                  r"more, found 'ten'$"):
+        momentid.identify(duffing, record, batches="ten")
+
+
+def test_bad_dt_is_the_same_error_for_arrays_and_files(duffing, record, cli_csv):
+    for data in (record, cli_csv):
+        with pytest.raises(momentid.UsageError, match="^--dt: expected a positive number$"):
+            momentid.identify(duffing, data, dt=-1.0)
+
+
+def test_model_from_missing_file(tmp_path):
+    with pytest.raises(momentid.Error, match="cannot open the model file"):
+        momentid.Model.from_file(tmp_path / "missing.mom")
+
+
+def test_bad_calls_do_not_crash_the_interpreter():
+    """Bad arguments of every kind raise Python exceptions; the interpreter lives on."""
+    script = textwrap.dedent(f"""
+        import numpy as np, momentid
+        m = momentid.Model.from_file({str(DUFFING)!r})
+        rec = momentid.simulate(m, samples=2000)
+        calls = [
+            lambda: momentid.Model(""),
+            lambda: momentid.Model("state y\\x00\\ny' = -y\\n"),
+            lambda: momentid.Model.from_file("/"),
+            lambda: momentid.identify(m, {{}}),
+            lambda: momentid.identify(m, {{k: v[:0] for k, v in rec.items()}}),
+            lambda: momentid.identify(m, {{k: v[:1] for k, v in rec.items()}}),
+            lambda: momentid.identify(m, {{"y": 1.0, "v": rec["v"], "x": rec["x"]}}, dt=0.01),
+            lambda: momentid.identify(m, {{"y": np.array(["a"] * 2000), "v": rec["v"],
+                                          "x": rec["x"]}}, dt=0.01),
+            lambda: momentid.identify(m, rec, dt=-1),
+            lambda: momentid.identify(m, rec, degree=-1),
+            lambda: momentid.identify(m, rec, batches=-1),
+            lambda: momentid.identify(m, rec, lags=(50, 3)),
+            lambda: momentid.identify(m, rec, rename={{"y": "zz"}}),
+            lambda: momentid.identify(m, rec, input_shift=10**12),
+            lambda: momentid.identify(42, rec),
+            lambda: momentid.identify(m, 42),
+            lambda: momentid.simulate(m, samples=0),
+            lambda: momentid.simulate(m, samples=10, seed=-1),
+            lambda: momentid.simulate(m, samples=10, observe=["zz"]),
+            lambda: momentid.simulate(m, samples=10, inputs={{"zz": "white"}}),
+            lambda: momentid.simulate(m, {{"c": float("nan")}}, samples=10),
+            lambda: momentid.check(rec, lags=-1),
+            lambda: momentid.validate(m, rec, skip=10**9),
+            lambda: momentid.validate(m, rec, substeps=0),
+            lambda: m.derive(lags=(3, 50), measured=["zz"]),
+        ]
+        for n, call in enumerate(calls):
+            try:
+                call()
+            except Exception:
+                pass
+            else:
+                raise SystemExit(f"call {{n}} raised nothing")
+        print("alive")
+    """)
+    env = dict(os.environ, PYTHONPATH=str(Path(momentid.__file__).resolve().parents[1]))
+    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                          timeout=60, env=env)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == "alive"
+
+
+# --- 5. derive -----------------------------------------------------------------------------------
+
+def test_derive_equals_cli(duffing, cli):
+    equations = duffing.derive(degree=2)
+    assert equations.text == cli("derive", DUFFING, "--degree", 2)
+    latex = cli("derive", DUFFING, "--degree", 2, "--format", "latex")
+    assert equations.latex == latex
+    assert equations._repr_latex_() == latex
+    as_dict = json.loads(cli("derive", DUFFING, "--degree", 2, "--format", "json"))
+    assert equations.to_dict() == as_dict
+    assert len(equations) == len(as_dict["equations"]) > 0
+
+
+# --- 6. simulate ---------------------------------------------------------------------------------
+
+def test_simulate_record_with_runs(duffing):
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # a fine step draws no warning
+        simulated = momentid.simulate(duffing, samples=500, runs=2, seed=5)
+    assert isinstance(simulated, momentid.Record)
+    assert list(simulated) == ["t", "y", "v", "x", "run"]
+    for name, values in simulated.items():
+        assert values.shape == (1000,), name
+    np.testing.assert_array_equal(simulated["run"], np.repeat([1.0, 2.0], 500))
+    assert simulated["t"][0] == simulated["t"][500] == 0  # t restarts with each run
+    assert simulated.metadata["runs"] == "2" and simulated.metadata["seed"] == "5"
+
+
+@pytest.mark.parametrize("fmt", ["csv", "bin"])
+def test_simulate_path_equals_cli_bytes(duffing, cli, tmp_path, fmt):
+    ours, theirs = tmp_path / f"ours.{fmt}", tmp_path / f"cli.{fmt}"
+    assert momentid.simulate(duffing, {"c": 0.7}, samples=3000, runs=2, seed=11,
+                             inputs={"x": "ou:tau=0.5"}, path=ours, format=fmt) is None
+    cli("simulate", DUFFING, "--set", "c=0.7", "--samples", 3000, "--runs", 2, "--seed", 11,
+        "--input", "x=ou:tau=0.5", "--format", fmt, "-o", theirs)
+    assert ours.read_bytes() == theirs.read_bytes()
+
+
+def test_simulate_coarse_step_warns(duffing):
+    with pytest.warns(momentid.MomentidWarning, match="coarse"):
+        simulated = momentid.simulate(duffing, dt=0.3, inputs={"x": "ma:K=1,sigma=3"},
+                                      samples=2000)
+    assert len(simulated["y"]) == 2000  # the record is still returned
+
+
+# --- 7. check and validate -----------------------------------------------------------------------
+
+def test_check_clean_record(duffing, record):
+    result = momentid.check(record, duffing)
+    assert list(result.channels) == ["y", "v", "x"]
+    assert result.channels["x"]["input"] and not result.channels["y"]["input"]
+    assert result.warnings == []
+    assert result.identities and all(abs(i["z"]) < 4 for i in result.identities)
+    assert result.to_dict()["rows"] == 20000
+
+
+def test_validate_true_parameters(duffing, record):
+    result = momentid.validate(duffing, record, params=TRUE)
+    assert result.fit["y"] > 99.9
+    assert result.warnings == []
+
+
+def test_validate_identify_result_as_params(duffing, record):
+    estimated = momentid.identify(duffing, record)
+    result = momentid.validate(duffing, record, params=estimated)
+    assert result.to_dict()["parameters"] == pytest.approx(estimated.estimates, rel=1e-15)
+    assert result.fit["y"] > 99
+
+
+def test_validate_json_equals_cli(duffing, cli, tmp_path):
+    path = tmp_path / "validate.csv"
+    momentid.simulate(duffing, samples=20000, seed=3, inputs={"x": INPUT}, path=path)
+    theirs = json.loads(cli("validate", DUFFING, path, "--set", "c=0.5,k=4,eps=1",
+                            "--format", "json"))
+    # The file, and the same record in memory (a Record, with the file's metadata).
+    in_memory = momentid.simulate(duffing, samples=20000, seed=3, inputs={"x": INPUT})
+    for data in (path, in_memory):
+        ours = momentid.validate(duffing, data, params=TRUE).to_dict()
+        # "parameters_from" says where the values came from; see the next test.
+        assert without(ours, "data", "parameters_from") == \
+            without(theirs, "data", "parameters_from")
+
+
+def test_validate_says_where_the_parameters_came_from(duffing, cli, tmp_path):
+    path = tmp_path / "validate.csv"
+    momentid.simulate(duffing, samples=5000, seed=3, inputs={"x": INPUT}, path=path)
+    theirs = json.loads(cli("validate", DUFFING, path, "--format", "json"))
+    result = momentid.validate(duffing, path)
+    assert "parameters ()" not in str(result)
+    assert without(result.to_dict(), "data") == without(theirs, "data")
+
+
+# --- 8. memory -----------------------------------------------------------------------------------
+
+def test_no_leak_over_1000_calls(duffing):
+    small = momentid.simulate(duffing, samples=2000, seed=1, inputs={"x": INPUT})
+    for call in range(1000):
+        momentid.identify(duffing, small)
+        if call == 99:
+            gc.collect()
+            before = rss_bytes()
+    gc.collect()
+    grown = rss_bytes() - before
+    assert grown < 10e6, f"resident memory grew by {grown / 1e6:.1f} MB over 900 calls"
+
+
+# --- 9. the GIL ----------------------------------------------------------------------------------
+
+def test_gil_released_during_identify(duffing):
+    large = momentid.simulate(duffing, samples=2_000_000, seed=1, inputs={"x": INPUT})
+    started, times, results = threading.Event(), {}, []
+
+    def work():
+        times["start"] = time.perf_counter()
+        started.set()
+        results.append(momentid.identify(duffing, large))
+        times["end"] = time.perf_counter()
+
+    thread = threading.Thread(target=work)
+    thread.start()
+    started.wait()
+    # Count, and note the longest stretch in which this thread could not run: with the GIL
+    # held, that is the whole call (however many increments one switch interval allows).
+    counter, last, longest = 0, times["start"], 0.0
+    while thread.is_alive():
+        counter += 1
+        now = time.perf_counter()
+        longest = max(longest, now - last)
+        last = now
+    thread.join()
+    duration = times["end"] - times["start"]
+    assert results and results[0].status == "ok"
+    assert duration > 0.1, f"identify took only {duration:.3f} s: the test needs a longer call"
+    assert counter > 1000
+    assert longest < duration / 3, (
+        f"the main thread stood still for {longest:.3f} s of a {duration:.3f} s call")
+
+
+# --- 10. documentation ---------------------------------------------------------------------------
+
+def test_identify_has_help():
+    text = pydoc.render_doc(momentid.identify, renderer=pydoc.plaintext)
+    assert "data" in text and "Returns" in text
+    assert "data" in momentid.identify.__doc__ and "Returns" in momentid.identify.__doc__

@@ -1,0 +1,47 @@
+#pragma once
+// Files whose channels are arrays read by name rather than rows of text: MATLAB .mat, HDF5 and
+// NumPy .npy. Each format is a ColumnStore; one reader turns any store into rows, so that the
+// checks of the other formats (time steps, runs, missing values, too few rows) apply alike.
+
+#include <cstddef>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "momentid/reader.hpp"
+
+namespace momentid::data {
+
+// The arrays of one file, as channels of equal length. A matrix of N samples and K columns is K
+// channels, `NAME[:, k]` for k from 0.
+class ColumnStore {
+ public:
+  virtual ~ColumnStore() = default;
+  // What a channel is called in messages: "variable", "dataset", "column".
+  virtual const char* kind() const = 0;
+  // Every channel's name, in file order (those that cannot be read too: prepare() says why).
+  virtual std::vector<std::string> names() const = 0;
+  // Readies a channel that will be read, or throws DataError saying why it cannot be (text, a
+  // complex or integer type).
+  virtual void prepare(std::size_t channel) = 0;
+  // The number of samples of a prepared channel.
+  virtual std::size_t length(std::size_t channel) const = 0;
+  // Values [first, first + count) of a prepared channel, as doubles.
+  virtual void read(std::size_t channel, std::size_t first, std::size_t count, double* out) = 0;
+  // A scalar stored in the file under `name` (`--dt-from`), or nullopt when there is none.
+  virtual std::optional<double> scalar(const std::string& name) { return std::nullopt; }
+  // Metadata the file carries (`dt` among them), as a CSV file's `# momentid:` lines.
+  virtual DataMetadata metadata() const { return {}; }
+};
+
+// Reads a store as rows: the requested channels, `t` (or a time-like name, or the channel `t`
+// is renamed to) and `run`. The sample interval comes from ColumnRequest::dt, else from
+// FileLayout::dt_from (a scalar in the file; `1/NAME` for a rate), else from the metadata,
+// else from the time channel. Errors are located at the file, the sample (from 1) as line and
+// the channel's place in names() (from 1) as column.
+std::unique_ptr<DataReader> open_column_store(std::unique_ptr<ColumnStore> store,
+                                              const std::string& path,
+                                              const ColumnRequest& request);
+
+}  // namespace momentid::data

@@ -1,0 +1,235 @@
+// NumPy .npy files (format versions 1 to 3): a header holding a Python dict literal with the
+// keys 'descr', 'fortran_order' and 'shape', then the array's bytes, which are memory-mapped.
+// A 1-D array is one channel named after the file (`disp.npy` is `disp`); an N x K array is K
+// channels, named by FileLayout::column_names (`--names`) or `NAME[:, k]`. Channels in
+// other .npy files join through ColumnRequest::rename (`--columns x=force.npy`): each such file
+// holds one 1-D array, the channel named as written there.
+
+#include <sys/mman.h>
+#include <sys/stat.h>
+
+#include <bit>
+#include <cerrno>
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+
+#include "data/column_store.hpp"
+#include "data/formats.hpp"
+
+namespace momentid::data {
+namespace {
+
+constexpr std::string_view kNpyMagic = "\x93NUMPY";
+
+// One memory-mapped array.
+class NpyArray {
+ public:
+  NpyArray(const std::string& path, int descriptor) : path_(path) {
+    struct stat info;
+    if (fstat(descriptor, &info) != 0 || !S_ISREG(info.st_mode)) {
+      fail(where(), "cannot read the file as a NumPy array: not a regular file");
+    }
+    size_ = static_cast<std::size_t>(info.st_size);
+    if (size_ < 10) fail(where(), "the file ends inside its NumPy header");
+    void* mapped = mmap(nullptr, size_, PROT_READ, MAP_PRIVATE, descriptor, 0);
+    if (mapped == MAP_FAILED) {
+      fail(where(), std::string("cannot map the file: ") + std::strerror(errno));
+    }
+    bytes_ = static_cast<const unsigned char*>(mapped);
+    parse_header();
+  }
+  NpyArray(const NpyArray&) = delete;
+  NpyArray& operator=(const NpyArray&) = delete;
+  ~NpyArray() { munmap(const_cast<unsigned char*>(bytes_), size_); }
+
+  std::size_t rows() const { return shape_[0]; }
+  std::size_t columns() const { return shape_.size() == 2 ? shape_[1] : 1; }
+  bool two_dimensional() const { return shape_.size() == 2; }
+
+  // Values [first, first + count) of column `column`.
+  void read(std::size_t column, std::size_t first, std::size_t count, double* out) const {
+    for (std::size_t i = 0; i < count; ++i) {
+      const std::size_t r = first + i;
+      const std::size_t index = fortran_ ? column * rows() + r : r * columns() + column;
+      out[i] = value(data_ + index * width_);
+    }
+  }
+
+ private:
+  SourceLocation where() const { return {path_, 1, 1, ""}; }
+
+  double value(const unsigned char* at) const {
+    std::uint64_t bits = 0;
+    for (std::size_t b = 0; b < width_; ++b) {
+      const std::size_t shift = little_ ? 8 * b : 8 * (width_ - 1 - b);
+      bits |= std::uint64_t{at[b]} << shift;
+    }
+    if (width_ == 8) return std::bit_cast<double>(bits);
+    return static_cast<double>(std::bit_cast<float>(static_cast<std::uint32_t>(bits)));
+  }
+
+  // The text of key `key` in the header dict, up to the next top-level ',' or '}'.
+  std::string_view entry(std::string_view header, std::string_view key) const {
+    // The key as Python writes it, in single quotes (or double quotes, as JSON would).
+    std::size_t at = std::string_view::npos;
+    for (char quote : {'\'', '"'}) {
+      std::string quoted(1, quote);
+      quoted.append(key);
+      quoted.push_back(quote);
+      at = std::min(at, header.find(quoted));
+    }
+    if (at == std::string_view::npos) {
+      fail(where(), "the NumPy header has no '" + std::string(key) + "'");
+    }
+    const std::size_t colon = header.find(':', at);
+    if (colon == std::string_view::npos) {
+      fail(where(), "the NumPy header has no value for '" + std::string(key) + "'");
+    }
+    std::size_t end = colon + 1;
+    int depth = 0;
+    for (; end < header.size(); ++end) {
+      const char c = header[end];
+      if (c == '(') ++depth;
+      if (c == ')') --depth;
+      if (depth == 0 && (c == ',' || c == '}')) break;
+      if (depth < 0) break;
+    }
+    return trim(header.substr(colon + 1, end - colon - 1));
+  }
+
+  void parse_header() {
+    const unsigned major = bytes_[6];
+    std::size_t length = 0, start = 0;
+    if (major == 1) {
+      length = bytes_[8] | (std::size_t{bytes_[9]} << 8);
+      start = 10;
+    } else if (major == 2 || major == 3) {
+      if (size_ < 12) fail(where(), "the file ends inside its NumPy header");
+      length = bytes_[8] | (std::size_t{bytes_[9]} << 8) | (std::size_t{bytes_[10]} << 16) |
+               (std::size_t{bytes_[11]} << 24);
+      start = 12;
+    } else {
+      fail(where(), "NumPy format version " + std::to_string(major) + " (expected 1, 2 or 3)");
+    }
+    if (start + length > size_) fail(where(), "the file ends inside its NumPy header");
+    const std::string_view header(reinterpret_cast<const char*>(bytes_) + start, length);
+    std::string descr(entry(header, "descr"));
+    if (descr.size() >= 2 && (descr.front() == '\'' || descr.front() == '"')) {
+      descr = descr.substr(1, descr.size() - 2);
+    }
+    if (descr == "<f8" || descr == ">f8" || descr == "<f4" || descr == ">f4") {
+      little_ = descr[0] == '<';
+      width_ = descr[2] == '8' ? 8 : 4;
+    } else {
+      fail(where(), "the array holds '" + descr +
+                        "' values: expected float64 or float32 ('<f8', '>f8', '<f4', '>f4')");
+    }
+    const std::string_view order = entry(header, "fortran_order");
+    fortran_ = order == "True";
+    std::string_view shape = entry(header, "shape");
+    if (shape.size() < 2 || shape.front() != '(' || shape.back() != ')') {
+      fail(where(), "the NumPy header's shape is not a tuple: " + std::string(shape));
+    }
+    shape.remove_prefix(1);
+    shape.remove_suffix(1);
+    while (!trim(shape).empty()) {
+      const std::size_t comma = std::min(shape.find(','), shape.size());
+      const std::string_view item = trim(shape.substr(0, comma));
+      if (!item.empty()) {
+        double n = 0;
+        if (!is_number(item, n) || n < 0 || n != std::floor(n)) {
+          fail(where(), "the NumPy header's shape has '" + std::string(item) + "'");
+        }
+        shape_.push_back(static_cast<std::size_t>(n));
+      }
+      shape.remove_prefix(std::min(comma + 1, shape.size()));
+    }
+    if (shape_.empty() || shape_.size() > 2) {
+      fail(where(), "the array has " + std::to_string(shape_.size()) +
+                        " dimensions: expected 1 (a channel) or 2 (samples x channels)");
+    }
+    data_ = bytes_ + start + length;
+    std::size_t values = 1;
+    for (std::size_t n : shape_) values *= n;
+    if (values * width_ > size_ - start - length) {
+      fail({path_,
+            clamp_to_int(static_cast<long long>((size_ - start - length) / width_ / columns()) + 1),
+            1, ""},
+           "the file ends inside the array: " + plural(size_ - start - length, "byte") +
+               " of data for " + std::to_string(values) + " values of " + std::to_string(width_) +
+               " bytes");
+    }
+  }
+
+  std::string path_;
+  const unsigned char* bytes_ = nullptr;
+  std::size_t size_ = 0;
+  const unsigned char* data_ = nullptr;
+  std::vector<std::size_t> shape_;
+  std::size_t width_ = 8;
+  bool little_ = true, fortran_ = false;
+};
+
+class NpyStore final : public ColumnStore {
+ public:
+  NpyStore(File file, const std::string& path, const ColumnRequest& request) {
+    arrays_.push_back(std::make_unique<NpyArray>(path, fileno(file.get())));
+    const NpyArray& main = *arrays_.front();
+    const std::string stem = std::filesystem::path(path).stem().string();
+    if (!request.layout.column_names.empty() &&
+        request.layout.column_names.size() != main.columns()) {
+      fail({path, 1, 1, ""}, "--names gives " + plural(request.layout.column_names.size(), "name") +
+                                 " for " + plural(main.columns(), "column"));
+    }
+    for (std::size_t k = 0; k < main.columns(); ++k) {
+      names_.push_back(!request.layout.column_names.empty() ? request.layout.column_names[k]
+                       : main.two_dimensional() ? stem + "[:, " + std::to_string(k) + "]"
+                                                : stem);
+      channels_.emplace_back(0, k);
+    }
+    for (const auto& [variable, column] : request.rename) {
+      if (!column.ends_with(".npy") ||
+          std::find(names_.begin(), names_.end(), column) != names_.end()) {
+        continue;
+      }
+      File other(std::fopen(column.c_str(), "rb"));
+      if (!other) fail({column, 1, 1, ""}, std::string("cannot open: ") + std::strerror(errno));
+      arrays_.push_back(std::make_unique<NpyArray>(column, fileno(other.get())));
+      if (arrays_.back()->two_dimensional()) {
+        fail({column, 1, 1, ""}, "a channel in a file of its own must be a 1-D array, found " +
+                                     std::to_string(arrays_.back()->columns()) + " columns");
+      }
+      names_.push_back(column);
+      channels_.emplace_back(arrays_.size() - 1, 0);
+    }
+  }
+
+  const char* kind() const override { return "column"; }
+  std::vector<std::string> names() const override { return names_; }
+  void prepare(std::size_t) override {}
+  std::size_t length(std::size_t channel) const override {
+    return arrays_[channels_[channel].first]->rows();
+  }
+  void read(std::size_t channel, std::size_t first, std::size_t count, double* out) override {
+    const auto [array, column] = channels_[channel];
+    arrays_[array]->read(column, first, count, out);
+  }
+
+ private:
+  std::vector<std::unique_ptr<NpyArray>> arrays_;
+  std::vector<std::string> names_;
+  std::vector<std::pair<std::size_t, std::size_t>> channels_;  // (array, column)
+};
+
+}  // namespace
+
+bool is_npy(std::string_view first_bytes) { return first_bytes.starts_with(kNpyMagic); }
+
+std::unique_ptr<DataReader> open_npy(File file, const std::string& path,
+                                     const ColumnRequest& request, std::string_view) {
+  return open_column_store(std::make_unique<NpyStore>(std::move(file), path, request), path,
+                           request);
+}
+
+}  // namespace momentid::data
