@@ -3,8 +3,8 @@
 #include "momentid/check.hpp"
 
 #include <iostream>
-#include <utility>
 #include <memory>
+#include <utility>
 
 #include "cli/commands.hpp"
 #include "momentid/model.hpp"
@@ -41,7 +41,8 @@ Command add_check(CLI::App& app) {
   auto command = std::make_shared<CheckCommand>();
   CLI::App* sub = app.add_subcommand(
       "check", "statistics of a data file: autocorrelations, smoothness, stationarity");
-  sub->add_option("DATA", command->data, "data file (CSV or binary), - for standard input")->required();
+  sub->add_option("DATA", command->data, "data file (CSV or binary), - for standard input")
+      ->required();
   sub->add_option("MODEL", command->model, "model file: check its stationarity identities");
   sub->add_option("--lags", command->options.lags, "autocorrelation lags")
       ->check(CLI::Range(std::size_t{1}, CheckOptions::kMaxLags));
@@ -50,8 +51,7 @@ Command add_check(CLI::App& app) {
   sub->add_option("--dt", command->options.dt,
                   "sample interval, overriding the data's: the time column is then not read")
       ->check(CLI::PositiveNumber);
-  sub->add_option("--columns", command->columns, "NAME=COLUMN: where a model variable is")
-      ->delimiter(',');
+  sub->add_option("--columns", command->columns, "NAME=COLUMN: where a model variable is");
   add_layout_options(sub, command->options.layout);
   return {sub, [command] { return run_check(*command); }};
 }

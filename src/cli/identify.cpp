@@ -97,7 +97,8 @@ Command add_identify(CLI::App& app) {
   CLI::App* sub = app.add_subcommand(
       "identify", "estimate the parameters of a model from data, with standard errors");
   sub->add_option("MODEL", command->model, "model file")->required();
-  sub->add_option("DATA", command->data, "data file (CSV or binary), - for standard input")->required();
+  sub->add_option("DATA", command->data, "data file (CSV or binary), - for standard input")
+      ->required();
   auto* multipliers =
       sub->add_option("--multipliers", command->multipliers, "multipliers, as for derive");
   sub->add_option("--degree", options.degree, "multipliers up to this degree")
@@ -116,8 +117,7 @@ Command add_identify(CLI::App& app) {
       ->check(CLI::IsMember({"auto", "ls", "gmm"}));
   sub->add_option("--format", command->format, "output format")
       ->check(CLI::IsMember({"text", "json"}));
-  sub->add_option("--columns", command->columns, "NAME=COLUMN: where a model variable is")
-      ->delimiter(',');
+  sub->add_option("--columns", command->columns, "NAME=COLUMN: where a model variable is");
   sub->add_option("--input-shift", options.input_shift,
                   "pair input row n with state row n + k (delayed measurements)")
       ->check(CLI::Range(-IdentifyOptions::kMaxInputShift, IdentifyOptions::kMaxInputShift));

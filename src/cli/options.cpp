@@ -76,9 +76,19 @@ std::map<std::string, std::string> column_map(const std::vector<std::string>& en
 std::map<std::string, std::string> column_map_of(const std::string& text, const std::string& option,
                                                  const std::string& expected) {
   std::map<std::string, std::string> out;
+  // The next ',' outside brackets: `y=V[:, 0]` names a matrix column.
+  const auto next_comma = [&](std::size_t from) {
+    int depth = 0;
+    for (std::size_t i = from; i < text.size(); ++i) {
+      if (text[i] == '[') ++depth;
+      if (text[i] == ']') --depth;
+      if (text[i] == ',' && depth <= 0) return i;
+    }
+    return text.size();
+  };
   std::size_t begin = 0;
   while (begin <= text.size()) {
-    const std::size_t end = std::min(text.find(',', begin), text.size());
+    const std::size_t end = next_comma(begin);
     const std::string e = text.substr(begin, end - begin);
     const std::size_t eq = e.find('=');
     if (eq == std::string::npos || eq == 0 || eq + 1 == e.size()) {

@@ -112,7 +112,6 @@ Command add_simulate(CLI::App& app) {
       ->needs(input_file);
   sub->add_option("--columns", command->columns,
                   "with --input-file: NAME=COLUMN, where a model variable is")
-      ->delimiter(',')
       ->needs(input_file);
   sub->add_option(
       "--input", command->inputs,

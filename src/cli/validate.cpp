@@ -78,7 +78,8 @@ Command add_validate(CLI::App& app) {
       "validate",
       "simulate a model through a record's inputs and compare it with the record's states");
   sub->add_option("MODEL", command->model, "model file")->required();
-  sub->add_option("DATA", command->data, "data file (CSV or binary), - for standard input")->required();
+  sub->add_option("DATA", command->data, "data file (CSV or binary), - for standard input")
+      ->required();
   sub->add_option("--set", command->set,
                   "parameter values NAME=VALUE, overriding the model's nominal values and "
                   "--estimates")
@@ -98,8 +99,7 @@ Command add_validate(CLI::App& app) {
                   "forgotten its initial state)");
   sub->add_option("--lags", command->options.lags, "lags of the correlation checks (default 25)")
       ->check(CLI::Range(1, ValidateOptions::kMaxLags));
-  sub->add_option("--columns", command->columns, "NAME=COLUMN: where a model variable is")
-      ->delimiter(',');
+  sub->add_option("--columns", command->columns, "NAME=COLUMN: where a model variable is");
   sub->add_option("--format", command->format, "output format")
       ->check(CLI::IsMember({"text", "json"}));
   auto* plot = sub->add_option("--plot", command->plot, "draw the comparison into this SVG file");

@@ -33,6 +33,7 @@ class ColumnStoreReader final : public StreamReader {
       header_.metadata_dt_text = *dt;
     }
     if (request_.layout.dt_from && !request_.dt) dt_from_scalar();
+    for (auto& [variable, column] : request_.rename) column = store_->column_name(column);
     map_ = map_columns(path_, header_, request_);
     for (std::size_t field = 0; field < header_.names.size(); ++field) {
       if (!map_.needed[field]) continue;

@@ -22,6 +22,8 @@ class ColumnStore {
   virtual const char* kind() const = 0;
   // Every channel's name, in file order (those that cannot be read too: prepare() says why).
   virtual std::vector<std::string> names() const = 0;
+  // A channel's name as a user may write it (`--columns y=/run1/disp`) in the form of names().
+  virtual std::string column_name(const std::string& written) const { return written; }
   // Readies a channel that will be read, or throws DataError saying why it cannot be (text, a
   // complex or integer type).
   virtual void prepare(std::size_t channel) = 0;

@@ -33,6 +33,16 @@ bool is_npy(std::string_view first_bytes);
 std::unique_ptr<DataReader> open_npy(File file, const std::string& path,
                                      const ColumnRequest& request, std::string_view first_bytes);
 
+// MATLAB .mat, levels 5 and 7.3 (column_store.hpp).
+bool is_mat(std::string_view first_bytes);
+std::unique_ptr<DataReader> open_mat(File file, const std::string& path,
+                                     const ColumnRequest& request, std::string_view first_bytes);
+
+// HDF5 (column_store.hpp).
+bool is_hdf5(std::string_view first_bytes);
+std::unique_ptr<DataReader> open_hdf5(File file, const std::string& path,
+                                      const ColumnRequest& request, std::string_view first_bytes);
+
 // CSV takes any file the other formats do not recognise.
 std::unique_ptr<DataReader> open_csv(File file, const std::string& path,
                                      const ColumnRequest& request, std::string_view first_bytes);

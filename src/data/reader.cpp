@@ -21,6 +21,8 @@ namespace {
 constexpr std::array kFormats{
     data::DataFormat{"binary", data::is_binary, data::open_binary},
     data::DataFormat{"npy", data::is_npy, data::open_npy},
+    data::DataFormat{"mat", data::is_mat, data::open_mat},
+    data::DataFormat{"hdf5", data::is_hdf5, data::open_hdf5},
     data::DataFormat{"csv", [](std::string_view) { return true; }, data::open_csv},
 };
 

@@ -1,0 +1,249 @@
+// HDF5 files, through the HDF5 C library. Each dataset of floating-point values is a channel
+// named by its path without the leading '/' (`run1/disp`; `--columns y=/run1/disp` is the same);
+// a 2-D dataset is one channel per column, `PATH[:, k]`, with the samples along its longer
+// dimension (wider than tall: `PATH[k, :]`). Datasets are read in hyperslabs of a few thousand
+// samples, so memory stays flat whatever their size. The root group's attributes are metadata:
+// `dt`, or `fs` (its reciprocal), and text attributes such as `input-hold`.
+
+#include <hdf5.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+
+#include "common/decimal.hpp"
+#include "data/column_store.hpp"
+#include "data/formats.hpp"
+
+namespace momentid::data {
+namespace {
+
+constexpr std::string_view kSignature = "\x89HDF\r\n\x1a\n";
+
+// Closes an HDF5 identifier when it goes out of scope.
+class Handle {
+ public:
+  Handle() = default;
+  Handle(hid_t id, herr_t (*close)(hid_t)) : id_(id), close_(close) {}
+  Handle(Handle&& other) noexcept : id_(other.id_), close_(other.close_) { other.id_ = -1; }
+  Handle& operator=(Handle&& other) noexcept {
+    std::swap(id_, other.id_);
+    std::swap(close_, other.close_);
+    return *this;
+  }
+  Handle(const Handle&) = delete;
+  Handle& operator=(const Handle&) = delete;
+  ~Handle() {
+    if (id_ >= 0) close_(id_);
+  }
+  hid_t get() const { return id_; }
+  explicit operator bool() const { return id_ >= 0; }
+
+ private:
+  hid_t id_ = -1;
+  herr_t (*close_)(hid_t) = nullptr;
+};
+
+class Hdf5Store final : public ColumnStore {
+ public:
+  explicit Hdf5Store(const std::string& path) : path_(path) {
+    H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // errors are ours to report
+    file_ = Handle(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose);
+    if (!file_) fail(where(), "cannot read the HDF5 file (damaged or truncated?)");
+    if (H5Lvisit(file_.get(), H5_INDEX_NAME, H5_ITER_INC, visit, this) < 0) {
+      fail(where(), "cannot list the datasets of the HDF5 file (damaged or truncated?)");
+    }
+    read_attributes();
+  }
+
+  const char* kind() const override { return "dataset"; }
+  std::vector<std::string> names() const override { return names_; }
+
+  std::string column_name(const std::string& requested) const override {
+    return requested.starts_with('/') ? requested.substr(1) : requested;
+  }
+
+  void prepare(std::size_t channel) override {
+    Channel& c = channels_[channel];
+    if (c.dataset) return;
+    c.dataset = Handle(H5Dopen2(file_.get(), c.path.c_str(), H5P_DEFAULT), H5Dclose);
+    if (!c.dataset) fail(where(channel), "cannot open dataset '" + c.path + "'");
+    const Handle type(H5Dget_type(c.dataset.get()), H5Tclose);
+    const H5T_class_t type_class = H5Tget_class(type.get());
+    if (type_class != H5T_FLOAT) {
+      fail(where(channel), "dataset '" + c.path + "' holds " +
+                               (type_class == H5T_INTEGER    ? std::string("integer")
+                                : type_class == H5T_STRING   ? std::string("text")
+                                : type_class == H5T_COMPOUND ? std::string("compound (complex?)")
+                                                             : std::string("non-numeric")) +
+                               " values: expected floating-point values");
+    }
+    c.space = Handle(H5Dget_space(c.dataset.get()), H5Sclose);
+  }
+
+  std::size_t length(std::size_t channel) const override {
+    const Channel& c = channels_[channel];
+    return c.rank == 1 ? c.dims[0] : c.by_rows ? c.dims[1] : c.dims[0];
+  }
+
+  void read(std::size_t channel, std::size_t first, std::size_t count, double* out) override {
+    Channel& c = channels_[channel];
+    hsize_t start[2] = {first, 0}, counts[2] = {count, 1};
+    if (c.rank == 2) {
+      if (c.by_rows) {
+        start[0] = c.index;
+        start[1] = first;
+        counts[0] = 1;
+        counts[1] = count;
+      } else {
+        start[1] = c.index;
+      }
+    }
+    const hsize_t memory_count = count;
+    const Handle memory(H5Screate_simple(1, &memory_count, nullptr), H5Sclose);
+    if (H5Sselect_hyperslab(c.space.get(), H5S_SELECT_SET, start, nullptr, counts, nullptr) < 0 ||
+        H5Dread(c.dataset.get(), H5T_NATIVE_DOUBLE, memory.get(), c.space.get(), H5P_DEFAULT, out) <
+            0) {
+      fail({path_, clamp_to_int(static_cast<long long>(first) + 1), static_cast<int>(channel) + 1,
+            ""},
+           "cannot read dataset '" + c.path + "' from sample " + std::to_string(first + 1) +
+               " (damaged or truncated?)");
+    }
+  }
+
+  std::optional<double> scalar(const std::string& name) override {
+    const std::string path = column_name(name);
+    if (H5Aexists(file_.get(), path.c_str()) > 0) return number_attribute(file_.get(), path);
+    // A dataset of one value.
+    if (H5Lexists(file_.get(), path.c_str(), H5P_DEFAULT) <= 0) return std::nullopt;
+    const Handle dataset(H5Dopen2(file_.get(), path.c_str(), H5P_DEFAULT), H5Dclose);
+    if (!dataset) return std::nullopt;
+    const Handle space(H5Dget_space(dataset.get()), H5Sclose);
+    if (H5Sget_simple_extent_npoints(space.get()) != 1) return std::nullopt;
+    double value = 0;
+    if (H5Dread(dataset.get(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, &value) < 0) {
+      return std::nullopt;
+    }
+    return value;
+  }
+
+  DataMetadata metadata() const override { return metadata_; }
+
+ private:
+  struct Channel {
+    std::string path;
+    int rank = 1;
+    hsize_t dims[2] = {0, 0};
+    std::size_t index = 0;
+    bool by_rows = false;
+    Handle dataset, space;
+  };
+
+  SourceLocation where(std::size_t channel = 0) const {
+    return {path_, 1, static_cast<int>(channel) + 1, ""};
+  }
+
+  static herr_t visit(hid_t group, const char* name, const H5L_info_t*, void* data) {
+    auto& self = *static_cast<Hdf5Store*>(data);
+    const Handle object(H5Oopen(group, name, H5P_DEFAULT), H5Oclose);
+    if (!object || H5Iget_type(object.get()) != H5I_DATASET) return 0;
+    const Handle space(H5Dget_space(object.get()), H5Sclose);
+    hsize_t dims[H5S_MAX_RANK];
+    const int rank = H5Sget_simple_extent_dims(space.get(), dims, nullptr);
+    const std::string path = name;
+    if (rank == 1 && dims[0] > 1) {
+      self.add(path, path, 1, dims, 0, false);
+    } else if (rank == 2 && dims[0] * dims[1] > 1) {
+      const bool by_rows = dims[1] > dims[0];
+      const std::size_t channels = by_rows ? dims[0] : dims[1];
+      for (std::size_t k = 0; k < channels; ++k) {
+        self.add(by_rows ? path + "[" + std::to_string(k) + ", :]"
+                         : path + "[:, " + std::to_string(k) + "]",
+                 path, 2, dims, k, by_rows);
+      }
+    }
+    return 0;
+  }
+
+  void add(const std::string& name, const std::string& path, int rank, const hsize_t* dims,
+           std::size_t index, bool by_rows) {
+    names_.push_back(name);
+    Channel c;
+    c.path = path;
+    c.rank = rank;
+    c.dims[0] = dims[0];
+    c.dims[1] = rank == 2 ? dims[1] : 1;
+    c.index = index;
+    c.by_rows = by_rows;
+    channels_.push_back(std::move(c));
+  }
+
+  std::optional<double> number_attribute(hid_t object, const std::string& name) const {
+    const Handle attribute(H5Aopen(object, name.c_str(), H5P_DEFAULT), H5Aclose);
+    if (!attribute) return std::nullopt;
+    const Handle type(H5Aget_type(attribute.get()), H5Tclose);
+    const H5T_class_t type_class = H5Tget_class(type.get());
+    if (type_class != H5T_FLOAT && type_class != H5T_INTEGER) return std::nullopt;
+    double value = 0;
+    if (H5Aread(attribute.get(), H5T_NATIVE_DOUBLE, &value) < 0) return std::nullopt;
+    return value;
+  }
+
+  std::optional<std::string> text_attribute(hid_t object, const std::string& name) const {
+    const Handle attribute(H5Aopen(object, name.c_str(), H5P_DEFAULT), H5Aclose);
+    if (!attribute) return std::nullopt;
+    const Handle type(H5Aget_type(attribute.get()), H5Tclose);
+    if (H5Tget_class(type.get()) != H5T_STRING || H5Tis_variable_str(type.get()) > 0) {
+      return std::nullopt;
+    }
+    std::string text(H5Tget_size(type.get()), '\0');
+    if (H5Aread(attribute.get(), type.get(), text.data()) < 0) return std::nullopt;
+    text.resize(std::strlen(text.c_str()));
+    return text;
+  }
+
+  // Root attributes: numbers and fixed-length strings become metadata.
+  void read_attributes() {
+    DataMetadata::Line line;
+    std::pair<const Hdf5Store*, DataMetadata::Line*> context{this, &line};
+    H5Aiterate2(
+        file_.get(), H5_INDEX_NAME, H5_ITER_INC, nullptr,
+        [](hid_t object, const char* name, const H5A_info_t*, void* data) -> herr_t {
+          auto [self, into] = *static_cast<std::pair<const Hdf5Store*, DataMetadata::Line*>*>(data);
+          if (const auto number = self->number_attribute(object, name)) {
+            into->emplace_back(name, shortest_decimal(*number));
+          } else if (const auto text = self->text_attribute(object, name)) {
+            into->emplace_back(name, *text);
+          }
+          return 0;
+        },
+        &context);
+    const auto find = [&](std::string_view key) {
+      return std::find_if(line.begin(), line.end(), [&](const auto& p) { return p.first == key; });
+    };
+    if (const auto fs = find("fs"); fs != line.end() && find("dt") == line.end()) {
+      double rate = 0;
+      if (is_number(fs->second, rate) && rate > 0)
+        line.emplace_back("dt", shortest_decimal(1 / rate));
+    }
+    if (!line.empty()) metadata_.add_line(std::move(line));
+  }
+
+  std::string path_;
+  Handle file_;
+  std::vector<std::string> names_;
+  std::vector<Channel> channels_;
+  DataMetadata metadata_;
+};
+
+}  // namespace
+
+bool is_hdf5(std::string_view first_bytes) { return first_bytes.starts_with(kSignature); }
+
+std::unique_ptr<DataReader> open_hdf5(File file, const std::string& path,
+                                      const ColumnRequest& request, std::string_view) {
+  file.reset();  // the HDF5 library opens the file itself
+  return open_column_store(std::make_unique<Hdf5Store>(path), path, request);
+}
+
+}  // namespace momentid::data

@@ -1,0 +1,200 @@
+// MATLAB .mat files, version 5 (compressed or not) and 7.3 (HDF5 underneath), through matio.
+// Each real double or single vector is a channel named as the variable; a matrix is one channel
+// per column, `NAME[:, k]` (k from 0), with the samples along its longer dimension (a matrix
+// wider than tall holds its channels in rows: `NAME[k, :]`). Scalars serve --dt-from. A
+// requested variable is read whole when the reading starts.
+
+#include <matio.h>
+
+#include <algorithm>
+#include <map>
+#include <mutex>
+
+#include "data/column_store.hpp"
+#include "data/formats.hpp"
+
+namespace momentid::data {
+namespace {
+
+// matio reports through a log function; its first message of a call becomes part of ours
+// instead of going to standard error. Calls into matio take turns, as its logging is global.
+std::mutex matio_lock;
+std::string matio_message;
+
+void log_to_message(int, char* message) {
+  if (matio_message.empty() && message != nullptr) matio_message = message;
+}
+
+struct MatioCall {
+  std::lock_guard<std::mutex> lock{matio_lock};
+  MatioCall() {
+    matio_message.clear();
+    Mat_LogInitFunc("momentid", log_to_message);
+  }
+};
+
+const char* class_name(matio_classes type) {
+  switch (type) {
+    case MAT_C_DOUBLE:
+      return "double";
+    case MAT_C_SINGLE:
+      return "single";
+    case MAT_C_CHAR:
+      return "char (text)";
+    case MAT_C_CELL:
+      return "cell";
+    case MAT_C_STRUCT:
+      return "struct";
+    case MAT_C_INT8:
+      return "int8";
+    case MAT_C_UINT8:
+      return "uint8";
+    case MAT_C_INT16:
+      return "int16";
+    case MAT_C_UINT16:
+      return "uint16";
+    case MAT_C_INT32:
+      return "int32";
+    case MAT_C_UINT32:
+      return "uint32";
+    case MAT_C_INT64:
+      return "int64";
+    case MAT_C_UINT64:
+      return "uint64";
+    case MAT_C_SPARSE:
+      return "sparse";
+    default:
+      return "another kind of";
+  }
+}
+
+struct VariableFree {
+  void operator()(matvar_t* v) const { Mat_VarFree(v); }
+};
+using Variable = std::unique_ptr<matvar_t, VariableFree>;
+
+class MatStore final : public ColumnStore {
+ public:
+  explicit MatStore(const std::string& path) : path_(path) {
+    const MatioCall call;
+    file_ = Mat_Open(path.c_str(), MAT_ACC_RDONLY);
+    if (file_ == nullptr) fail({path_, 1, 1, ""}, "cannot read the MATLAB file" + detail());
+    while (Variable info{Mat_VarReadNextInfo(file_)}) {
+      if (info->name == nullptr) continue;
+      const std::string name = info->name;
+      const std::size_t rows = info->rank >= 1 ? info->dims[0] : 0;
+      const std::size_t columns = info->rank >= 2 ? info->dims[1] : 1;
+      const bool numeric = (info->class_type == MAT_C_DOUBLE || info->class_type == MAT_C_SINGLE) &&
+                           !info->isComplex;
+      if (info->rank == 2 && rows * columns == 1) {
+        if (numeric) scalars_.push_back(name);
+        continue;
+      }
+      const bool by_rows = info->rank == 2 && rows > 1 && columns > rows;  // channels in rows
+      const std::size_t channels = info->rank != 2 || rows == 1 || columns == 1 ? 1
+                                   : by_rows                                    ? rows
+                                                                                : columns;
+      for (std::size_t k = 0; k < channels; ++k) {
+        names_.push_back(channels == 1 ? name
+                         : by_rows     ? name + "[" + std::to_string(k) + ", :]"
+                                       : name + "[:, " + std::to_string(k) + "]");
+        channels_.push_back({name, k, by_rows});
+      }
+    }
+    if (!matio_message.empty()) {
+      fail({path_, 1, 1, ""}, "cannot read the MATLAB file" + detail());
+    }
+  }
+  ~MatStore() override {
+    const MatioCall call;
+    if (file_ != nullptr) Mat_Close(file_);
+  }
+
+  const char* kind() const override { return "variable"; }
+  std::vector<std::string> names() const override { return names_; }
+
+  void prepare(std::size_t channel) override {
+    const Channel& c = channels_[channel];
+    if (loaded_.count(c.variable) != 0) return;
+    const MatioCall call;
+    Variable v{Mat_VarRead(file_, c.variable.c_str())};
+    if (!v || v->data == nullptr) {
+      fail({path_, 1, static_cast<int>(channel) + 1, ""},
+           "cannot read variable '" + c.variable + "'" + detail());
+    }
+    if (v->isComplex || (v->class_type != MAT_C_DOUBLE && v->class_type != MAT_C_SINGLE) ||
+        v->rank != 2) {
+      fail({path_, 1, static_cast<int>(channel) + 1, ""},
+           "variable '" + c.variable + "' holds " +
+               (v->rank != 2 ? std::to_string(v->rank) + "-dimensional "
+                             : std::string(v->isComplex ? "complex " : "")) +
+               class_name(v->class_type) +
+               " values: expected a real double or single vector or matrix");
+    }
+    loaded_.emplace(c.variable, std::move(v));
+  }
+
+  std::size_t length(std::size_t channel) const override {
+    const Channel& c = channels_[channel];
+    const matvar_t& v = *loaded_.at(c.variable);
+    const std::size_t rows = v.dims[0], columns = v.dims[1];
+    if (rows == 1 || columns == 1) return rows * columns;
+    return c.by_rows ? columns : rows;
+  }
+
+  void read(std::size_t channel, std::size_t first, std::size_t count, double* out) override {
+    const Channel& c = channels_[channel];
+    const matvar_t& v = *loaded_.at(c.variable);
+    const std::size_t rows = v.dims[0];
+    const bool vector = rows == 1 || v.dims[1] == 1;
+    // MATLAB stores by columns: element (r, k) at r + k * rows.
+    const auto index = [&](std::size_t n) {
+      return vector ? n : c.by_rows ? c.index + n * rows : n + c.index * rows;
+    };
+    for (std::size_t n = 0; n < count; ++n) {
+      const std::size_t at = index(first + n);
+      out[n] = v.class_type == MAT_C_DOUBLE
+                   ? static_cast<const double*>(v.data)[at]
+                   : static_cast<double>(static_cast<const float*>(v.data)[at]);
+    }
+  }
+
+  std::optional<double> scalar(const std::string& name) override {
+    if (std::find(scalars_.begin(), scalars_.end(), name) == scalars_.end()) return std::nullopt;
+    const MatioCall call;
+    Variable v{Mat_VarRead(file_, name.c_str())};
+    if (!v || v->data == nullptr) return std::nullopt;
+    return v->class_type == MAT_C_DOUBLE ? *static_cast<const double*>(v->data)
+                                         : static_cast<double>(*static_cast<const float*>(v->data));
+  }
+
+ private:
+  struct Channel {
+    std::string variable;
+    std::size_t index = 0;  // the column (or row) of a matrix
+    bool by_rows = false;
+  };
+
+  std::string detail() const { return matio_message.empty() ? "" : ": " + matio_message; }
+
+  std::string path_;
+  mat_t* file_ = nullptr;
+  std::vector<std::string> names_, scalars_;
+  std::vector<Channel> channels_;
+  std::map<std::string, Variable> loaded_;
+};
+
+}  // namespace
+
+bool is_mat(std::string_view first_bytes) {
+  // The 116-byte text header of levels 5 and 7.3 begins with these words.
+  return first_bytes.starts_with("MATLAB 5") || first_bytes.starts_with("MATLAB 7");
+}
+
+std::unique_ptr<DataReader> open_mat(File file, const std::string& path,
+                                     const ColumnRequest& request, std::string_view) {
+  file.reset();  // matio opens the file itself
+  return open_column_store(std::make_unique<MatStore>(path), path, request);
+}
+
+}  // namespace momentid::data
