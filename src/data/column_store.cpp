@@ -34,6 +34,14 @@ class ColumnStoreReader final : public StreamReader {
     }
     if (request_.layout.dt_from && !request_.dt) dt_from_scalar();
     for (auto& [variable, column] : request_.rename) column = store_->column_name(column);
+    for (const std::string& name : request_.names) {
+      const auto renamed = request_.rename.find(name);
+      const std::string& column = renamed == request_.rename.end() ? name : renamed->second;
+      if (std::find(header_.names.begin(), header_.names.end(), column) != header_.names.end()) {
+        continue;
+      }
+      if (const auto why = store_->unusable(column)) fail(start(), *why);
+    }
     map_ = map_columns(path_, header_, request_);
     for (std::size_t field = 0; field < header_.names.size(); ++field) {
       if (!map_.needed[field]) continue;

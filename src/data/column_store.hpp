@@ -20,12 +20,16 @@ class ColumnStore {
   virtual ~ColumnStore() = default;
   // What a channel is called in messages: "variable", "dataset", "column".
   virtual const char* kind() const = 0;
-  // Every channel's name, in file order (those that cannot be read too: prepare() says why).
+  // The channels' names, in file order.
   virtual std::vector<std::string> names() const = 0;
+  // Why `name`, which is not a channel, cannot be one (a text, integer or complex variable), or
+  // nullopt when the file has nothing of that name.
+  virtual std::optional<std::string> unusable(const std::string& name) const {
+    return std::nullopt;
+  }
   // A channel's name as a user may write it (`--columns y=/run1/disp`) in the form of names().
   virtual std::string column_name(const std::string& written) const { return written; }
-  // Readies a channel that will be read, or throws DataError saying why it cannot be (text, a
-  // complex or integer type).
+  // Readies a channel that will be read; throws DataError when it cannot be read.
   virtual void prepare(std::size_t channel) = 0;
   // The number of samples of a prepared channel.
   virtual std::size_t length(std::size_t channel) const = 0;

@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <map>
 
 #include "common/decimal.hpp"
 #include "data/column_store.hpp"
@@ -63,21 +64,17 @@ class Hdf5Store final : public ColumnStore {
     return requested.starts_with('/') ? requested.substr(1) : requested;
   }
 
+  std::optional<std::string> unusable(const std::string& name) const override {
+    const auto found = unusable_.find(name);
+    if (found == unusable_.end()) return std::nullopt;
+    return found->second;
+  }
+
   void prepare(std::size_t channel) override {
     Channel& c = channels_[channel];
     if (c.dataset) return;
     c.dataset = Handle(H5Dopen2(file_.get(), c.path.c_str(), H5P_DEFAULT), H5Dclose);
     if (!c.dataset) fail(where(channel), "cannot open dataset '" + c.path + "'");
-    const Handle type(H5Dget_type(c.dataset.get()), H5Tclose);
-    const H5T_class_t type_class = H5Tget_class(type.get());
-    if (type_class != H5T_FLOAT) {
-      fail(where(channel), "dataset '" + c.path + "' holds " +
-                               (type_class == H5T_INTEGER    ? std::string("integer")
-                                : type_class == H5T_STRING   ? std::string("text")
-                                : type_class == H5T_COMPOUND ? std::string("compound (complex?)")
-                                                             : std::string("non-numeric")) +
-                               " values: expected floating-point values");
-    }
     c.space = Handle(H5Dget_space(c.dataset.get()), H5Sclose);
   }
 
@@ -147,10 +144,26 @@ class Hdf5Store final : public ColumnStore {
     auto& self = *static_cast<Hdf5Store*>(data);
     const Handle object(H5Oopen(group, name, H5P_DEFAULT), H5Oclose);
     if (!object || H5Iget_type(object.get()) != H5I_DATASET) return 0;
+    const std::string path = name;
+    const Handle type(H5Dget_type(object.get()), H5Tclose);
+    const H5T_class_t type_class = H5Tget_class(type.get());
+    if (type_class != H5T_FLOAT) {
+      self.unusable_[path] = "dataset '" + path + "' holds " +
+                             (type_class == H5T_INTEGER    ? "integer"
+                              : type_class == H5T_STRING   ? "text"
+                              : type_class == H5T_COMPOUND ? "compound (complex?)"
+                                                           : "non-numeric") +
+                             " values: expected floating-point values";
+      return 0;
+    }
     const Handle space(H5Dget_space(object.get()), H5Sclose);
     hsize_t dims[H5S_MAX_RANK];
     const int rank = H5Sget_simple_extent_dims(space.get(), dims, nullptr);
-    const std::string path = name;
+    if (rank > 2) {
+      self.unusable_[path] = "dataset '" + path + "' has " + std::to_string(rank) +
+                             " dimensions: expected 1 (a channel) or 2 (samples x channels)";
+      return 0;
+    }
     if (rank == 1 && dims[0] > 1) {
       self.add(path, path, 1, dims, 0, false);
     } else if (rank == 2 && dims[0] * dims[1] > 1) {
@@ -233,6 +246,7 @@ class Hdf5Store final : public ColumnStore {
   Handle file_;
   std::vector<std::string> names_;
   std::vector<Channel> channels_;
+  std::map<std::string, std::string> unusable_;  // dataset -> why it is no channel
   DataMetadata metadata_;
 };
 

@@ -7,14 +7,19 @@
 #include <matio.h>
 
 #include <algorithm>
+#include <cstdint>
 #include <map>
 #include <mutex>
 
 #include "data/column_store.hpp"
+#include "data/format.hpp"
 #include "data/formats.hpp"
 
 namespace momentid::data {
 namespace {
+
+// The text variable in which momentid's writer keeps the metadata lines.
+constexpr const char* kMetadataVariable = "momentid_metadata";
 
 // matio reports through a log function; its first message of a call becomes part of ours
 // instead of going to standard error. Calls into matio take turns, as its logging is global.
@@ -82,18 +87,28 @@ class MatStore final : public ColumnStore {
     while (Variable info{Mat_VarReadNextInfo(file_)}) {
       if (info->name == nullptr) continue;
       const std::string name = info->name;
-      const std::size_t rows = info->rank >= 1 ? info->dims[0] : 0;
-      const std::size_t columns = info->rank >= 2 ? info->dims[1] : 1;
-      const bool numeric = (info->class_type == MAT_C_DOUBLE || info->class_type == MAT_C_SINGLE) &&
-                           !info->isComplex;
-      if (info->rank == 2 && rows * columns == 1) {
-        if (numeric) scalars_.push_back(name);
+      if (name == kMetadataVariable && info->class_type == MAT_C_CHAR) {
+        metadata_text_ = true;
         continue;
       }
-      const bool by_rows = info->rank == 2 && rows > 1 && columns > rows;  // channels in rows
-      const std::size_t channels = info->rank != 2 || rows == 1 || columns == 1 ? 1
-                                   : by_rows                                    ? rows
-                                                                                : columns;
+      const std::size_t rows = info->rank >= 1 ? info->dims[0] : 0;
+      const std::size_t columns = info->rank >= 2 ? info->dims[1] : 1;
+      const bool numeric = (info->class_type == MAT_C_DOUBLE ||
+                            info->class_type == MAT_C_SINGLE) && !info->isComplex;
+      if (!numeric || info->rank != 2) {
+        unusable_[name] = "variable '" + name + "' holds " +
+                          (info->rank != 2 ? std::to_string(info->rank) + "-dimensional "
+                                           : std::string(info->isComplex ? "complex " : "")) +
+                          class_name(info->class_type) +
+                          " values: expected a real double or single vector or matrix";
+        continue;
+      }
+      if (rows * columns == 1) {
+        scalars_.push_back(name);
+        continue;
+      }
+      const bool by_rows = rows > 1 && columns > rows;  // channels in rows
+      const std::size_t channels = rows == 1 || columns == 1 ? 1 : by_rows ? rows : columns;
       for (std::size_t k = 0; k < channels; ++k) {
         names_.push_back(channels == 1 ? name
                          : by_rows     ? name + "[" + std::to_string(k) + ", :]"
@@ -104,6 +119,7 @@ class MatStore final : public ColumnStore {
     if (!matio_message.empty()) {
       fail({path_, 1, 1, ""}, "cannot read the MATLAB file" + detail());
     }
+    if (metadata_text_) read_metadata();
   }
   ~MatStore() override {
     const MatioCall call;
@@ -112,6 +128,12 @@ class MatStore final : public ColumnStore {
 
   const char* kind() const override { return "variable"; }
   std::vector<std::string> names() const override { return names_; }
+
+  std::optional<std::string> unusable(const std::string& name) const override {
+    const auto found = unusable_.find(name);
+    if (found == unusable_.end()) return std::nullopt;
+    return found->second;
+  }
 
   void prepare(std::size_t channel) override {
     const Channel& c = channels_[channel];
@@ -122,17 +144,10 @@ class MatStore final : public ColumnStore {
       fail({path_, 1, static_cast<int>(channel) + 1, ""},
            "cannot read variable '" + c.variable + "'" + detail());
     }
-    if (v->isComplex || (v->class_type != MAT_C_DOUBLE && v->class_type != MAT_C_SINGLE) ||
-        v->rank != 2) {
-      fail({path_, 1, static_cast<int>(channel) + 1, ""},
-           "variable '" + c.variable + "' holds " +
-               (v->rank != 2 ? std::to_string(v->rank) + "-dimensional "
-                             : std::string(v->isComplex ? "complex " : "")) +
-               class_name(v->class_type) +
-               " values: expected a real double or single vector or matrix");
-    }
     loaded_.emplace(c.variable, std::move(v));
   }
+
+  DataMetadata metadata() const override { return metadata_; }
 
   std::size_t length(std::size_t channel) const override {
     const Channel& c = channels_[channel];
@@ -177,11 +192,42 @@ class MatStore final : public ColumnStore {
 
   std::string detail() const { return matio_message.empty() ? "" : ": " + matio_message; }
 
+  // The metadata lines a momentid writer stores in a text variable (`# momentid: dt=0.01 ...`).
+  void read_metadata() {
+    const MatioCall call;
+    Variable v{Mat_VarRead(file_, kMetadataVariable)};
+    if (!v || v->data == nullptr || v->rank != 2) return;
+    const std::size_t count = v->dims[0] * v->dims[1];
+    std::string text;
+    for (std::size_t i = 0; i < count; ++i) {
+      const unsigned value = v->data_size == 2 ? static_cast<const std::uint16_t*>(v->data)[i]
+                                               : static_cast<const unsigned char*>(v->data)[i];
+      text.push_back(value < 128 ? static_cast<char>(value) : '?');
+    }
+    long long number = 0;
+    std::size_t begin = 0;
+    while (begin < text.size()) {
+      const std::size_t end = std::min(text.find('\n', begin), text.size());
+      const std::string_view line = std::string_view(text).substr(begin, end - begin);
+      ++number;
+      const std::size_t tag = line.find(kMetadataTag);
+      if (tag != std::string_view::npos) {
+        DataMetadata::Line pairs =
+            read_metadata_line(path_ + ":" + kMetadataVariable, number, line, tag + kMetadataTag.size());
+        if (!pairs.empty()) metadata_.add_line(std::move(pairs));
+      }
+      begin = end + 1;
+    }
+  }
+
   std::string path_;
   mat_t* file_ = nullptr;
   std::vector<std::string> names_, scalars_;
   std::vector<Channel> channels_;
+  std::map<std::string, std::string> unusable_;  // variable -> why it is no channel
   std::map<std::string, Variable> loaded_;
+  bool metadata_text_ = false;
+  DataMetadata metadata_;
 };
 
 }  // namespace
