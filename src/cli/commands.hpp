@@ -29,6 +29,7 @@ Command add_simulate(CLI::App& app);
 Command add_identify(CLI::App& app);
 Command add_check(CLI::App& app);
 Command add_validate(CLI::App& app);
+Command add_convert(CLI::App& app);
 
 // Whether `path` is a readable model file (small enough to be one: at most 1 MB).
 bool is_model_file(const std::string& path);

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "cli/commands.hpp"
+#include "momentid/convert.hpp"
 #include "momentid/error.hpp"
 #include "momentid/version.hpp"
 #include "momentid/writer.hpp"
@@ -24,14 +25,16 @@ int main(int argc, char** argv) {
   app.option_defaults()->always_capture_default();
   app.set_version_flag("-V,--version",
                        "momentid " MOMENTID_VERSION
-                       "\ndata formats: CSV, momentid binary (read and written)"
-                       "\nvalidate plots: SVG (written by momentid)"
-                       "\ndistributions: Boost.Math; linear algebra: Eigen; algebra: GiNaC");
+                       "\ndata formats: CSV, momentid binary, NumPy .npy, MATLAB .mat (levels 5 "
+                       "and 7.3), HDF5; all read and written (" +
+                           momentid::format_libraries() + ")" +
+                           "\nvalidate plots: SVG (written by momentid)"
+                           "\ndistributions: Boost.Math; linear algebra: Eigen; algebra: GiNaC");
 
   const std::vector<momentid::cli::Command> commands{
-      momentid::cli::add_derive(app), momentid::cli::add_simulate(app),
+      momentid::cli::add_derive(app),   momentid::cli::add_simulate(app),
       momentid::cli::add_identify(app), momentid::cli::add_check(app),
-      momentid::cli::add_validate(app)};
+      momentid::cli::add_validate(app), momentid::cli::add_convert(app)};
 
   try {
     app.parse(argc, argv);

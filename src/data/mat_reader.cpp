@@ -81,8 +81,18 @@ using Variable = std::unique_ptr<matvar_t, VariableFree>;
 class MatStore final : public ColumnStore {
  public:
   explicit MatStore(const std::string& path) : path_(path) {
+    list_variables();
+    if (metadata_text_) read_metadata();
+  }
+  ~MatStore() override {
     const MatioCall call;
-    file_ = Mat_Open(path.c_str(), MAT_ACC_RDONLY);
+    if (file_ != nullptr) Mat_Close(file_);
+  }
+
+ private:
+  void list_variables() {
+    const MatioCall call;
+    file_ = Mat_Open(path_.c_str(), MAT_ACC_RDONLY);
     if (file_ == nullptr) fail({path_, 1, 1, ""}, "cannot read the MATLAB file" + detail());
     while (Variable info{Mat_VarReadNextInfo(file_)}) {
       if (info->name == nullptr) continue;
@@ -93,8 +103,8 @@ class MatStore final : public ColumnStore {
       }
       const std::size_t rows = info->rank >= 1 ? info->dims[0] : 0;
       const std::size_t columns = info->rank >= 2 ? info->dims[1] : 1;
-      const bool numeric = (info->class_type == MAT_C_DOUBLE ||
-                            info->class_type == MAT_C_SINGLE) && !info->isComplex;
+      const bool numeric = (info->class_type == MAT_C_DOUBLE || info->class_type == MAT_C_SINGLE) &&
+                           !info->isComplex;
       if (!numeric || info->rank != 2) {
         unusable_[name] = "variable '" + name + "' holds " +
                           (info->rank != 2 ? std::to_string(info->rank) + "-dimensional "
@@ -119,13 +129,9 @@ class MatStore final : public ColumnStore {
     if (!matio_message.empty()) {
       fail({path_, 1, 1, ""}, "cannot read the MATLAB file" + detail());
     }
-    if (metadata_text_) read_metadata();
-  }
-  ~MatStore() override {
-    const MatioCall call;
-    if (file_ != nullptr) Mat_Close(file_);
   }
 
+ public:
   const char* kind() const override { return "variable"; }
   std::vector<std::string> names() const override { return names_; }
 
@@ -212,8 +218,8 @@ class MatStore final : public ColumnStore {
       ++number;
       const std::size_t tag = line.find(kMetadataTag);
       if (tag != std::string_view::npos) {
-        DataMetadata::Line pairs =
-            read_metadata_line(path_ + ":" + kMetadataVariable, number, line, tag + kMetadataTag.size());
+        DataMetadata::Line pairs = read_metadata_line(path_ + ":" + kMetadataVariable, number, line,
+                                                      tag + kMetadataTag.size());
         if (!pairs.empty()) metadata_.add_line(std::move(pairs));
       }
       begin = end + 1;

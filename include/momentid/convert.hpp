@@ -1,0 +1,36 @@
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "momentid/reader.hpp"
+
+namespace momentid {
+
+// The formats `momentid convert` writes (README, "Data files").
+enum class FileFormat { kCsv, kBinary, kNpy, kMat5, kMat73, kHdf5 };
+
+// By the name's extension: .csv and .txt, .bin, .npy, .mat (level 5), .h5 and .hdf5; nullopt for
+// another. Level 7.3 .mat files are asked for by name: "mat73".
+std::optional<FileFormat> format_for_path(const std::string& path);
+// "csv", "bin", "npy", "mat", "mat73", "h5"; nullopt for another name.
+std::optional<FileFormat> format_named(const std::string& name);
+
+// Copies every column of `source` (`t` and `run` included), read with `layout` and the sample
+// interval `dt` when given, into `path` in `format`, whole or not at all, with the metadata
+// (and `dt` when the interval came from elsewhere than a time column). Returns what the reader
+// of the new file should know: NumPy files keep neither column names nor metadata. Throws as
+// DataReader does, and Error when the file cannot be written.
+//
+// Example:
+//   convert(DataSource::file("run.mat"), "run.h5", FileFormat::kHdf5, {});
+std::vector<std::string> convert(const DataSource& source, const std::string& path,
+                                 FileFormat format, const FileLayout& layout = {},
+                                 std::optional<double> dt = std::nullopt);
+
+// The libraries behind the .mat and HDF5 formats and their versions, e.g. "matio 1.5.23, HDF5
+// 1.10.8".
+std::string format_libraries();
+
+}  // namespace momentid

@@ -1,0 +1,110 @@
+#include "momentid/convert.hpp"
+
+#include <hdf5.h>
+#include <matio.h>
+
+#include <algorithm>
+#include <filesystem>
+
+#include "app/variables.hpp"
+#include "common/decimal.hpp"
+#include "data/array_writers.hpp"
+#include "data/header.hpp"
+#include "momentid/writer.hpp"
+
+namespace momentid {
+
+std::string format_libraries() {
+  unsigned hdf5_major = 0, hdf5_minor = 0, hdf5_release = 0;
+  H5get_libversion(&hdf5_major, &hdf5_minor, &hdf5_release);
+  int major = 0, minor = 0, release = 0;
+  Mat_GetLibraryVersion(&major, &minor, &release);
+  return "matio " + std::to_string(major) + "." + std::to_string(minor) + "." +
+         std::to_string(release) + ", HDF5 " + std::to_string(hdf5_major) + "." +
+         std::to_string(hdf5_minor) + "." + std::to_string(hdf5_release);
+}
+
+std::optional<FileFormat> format_for_path(const std::string& path) {
+  std::string extension = std::filesystem::path(path).extension().string();
+  std::transform(extension.begin(), extension.end(), extension.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  if (extension == ".csv" || extension == ".txt") return FileFormat::kCsv;
+  if (extension == ".bin") return FileFormat::kBinary;
+  if (extension == ".npy") return FileFormat::kNpy;
+  if (extension == ".mat") return FileFormat::kMat5;
+  if (extension == ".h5" || extension == ".hdf5") return FileFormat::kHdf5;
+  return std::nullopt;
+}
+
+std::optional<FileFormat> format_named(const std::string& name) {
+  if (name == "csv") return FileFormat::kCsv;
+  if (name == "bin") return FileFormat::kBinary;
+  if (name == "npy") return FileFormat::kNpy;
+  if (name == "mat") return FileFormat::kMat5;
+  if (name == "mat73") return FileFormat::kMat73;
+  if (name == "h5") return FileFormat::kHdf5;
+  return std::nullopt;
+}
+
+std::vector<std::string> convert(const DataSource& source, const std::string& path,
+                                 FileFormat format, const FileLayout& layout,
+                                 std::optional<double> dt) {
+  const std::vector<std::string> columns = data_columns(source, {}, layout);
+  const ColumnRequest request{
+      .names = columns, .rename = {}, .min_rows = 1, .dt = dt, .layout = layout};
+  const bool has_time = std::any_of(columns.begin(), columns.end(), [&](const std::string& c) {
+    return !dt && (c == "t" || data::is_time_name(c));
+  });
+  // The array formats are given their length first: one pass counts the rows.
+  std::size_t rows = 0;
+  if (format != FileFormat::kCsv && format != FileFormat::kBinary) {
+    const auto counter = source.open(request);
+    DataBlock block;
+    while (counter->next(block, 1 << 16)) {
+    }
+    rows = counter->rows_read();
+  }
+  const auto reader = source.open(request);
+  DataMetadata metadata = reader->metadata();
+  const auto interval = reader->time_step();
+  if (!has_time && interval && (dt || !metadata.get("dt"))) {
+    metadata.add_line({{"dt", shortest_decimal(*interval)}});
+  }
+  std::vector<std::string> notes;
+  DataBlock block;
+  if (format == FileFormat::kCsv || format == FileFormat::kBinary) {
+    DataWriter out(
+        path, format == FileFormat::kCsv ? DataWriter::Format::kCsv : DataWriter::Format::kBinary,
+        metadata, columns);
+    while (reader->next(block, 1 << 16)) {
+      for (std::size_t r = 0; r < block.rows; ++r)
+        out.row(block.values.data() + r * columns.size());
+    }
+    out.commit();
+    return notes;
+  }
+  std::unique_ptr<data::ArrayWriter> out;
+  switch (format) {
+    case FileFormat::kNpy: {
+      out = data::open_npy_writer(path, columns.size(), rows);
+      std::string names;
+      for (const std::string& c : columns) names += (names.empty() ? "" : ",") + c;
+      notes.push_back("a .npy file keeps neither column names nor metadata: read " + path +
+                      " with --names " + names +
+                      (!has_time && interval ? " --dt " + shortest_decimal(*interval) : ""));
+      break;
+    }
+    case FileFormat::kMat5:
+    case FileFormat::kMat73:
+      out = data::open_mat_writer(path, columns, metadata, rows, format == FileFormat::kMat73);
+      break;
+    default:
+      out = data::open_hdf5_writer(path, columns, metadata, rows);
+      break;
+  }
+  while (reader->next(block, 1 << 16)) out->rows(block.values.data(), block.rows);
+  out->commit();
+  return notes;
+}
+
+}  // namespace momentid

@@ -1,0 +1,293 @@
+#include "data/array_writers.hpp"
+
+#include <hdf5.h>
+#include <matio.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <bit>
+#include <cerrno>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <set>
+
+#include "common/decimal.hpp"
+#include "data/format.hpp"
+#include "momentid/error.hpp"
+#include "momentid/writer.hpp"
+
+namespace momentid::data {
+namespace {
+
+// A file name beside the target for a library that opens files itself; removed unless
+// renamed into place.
+class TemporaryPath {
+ public:
+  explicit TemporaryPath(const std::string& target) : target_(target) {
+    path_ = target + ".partial-XXXXXX";
+    const int fd = mkstemp(path_.data());
+    if (fd < 0) throw Error(target + ": cannot write the output file: " + std::strerror(errno));
+    ::close(fd);
+    std::remove(path_.c_str());  // the library creates it afresh
+  }
+  TemporaryPath(const TemporaryPath&) = delete;
+  TemporaryPath& operator=(const TemporaryPath&) = delete;
+  ~TemporaryPath() {
+    if (!done_) std::remove(path_.c_str());
+  }
+  const std::string& path() const { return path_; }
+  void commit() {
+    if (std::rename(path_.c_str(), target_.c_str()) != 0) {
+      throw Error(target_ + ": cannot write the output file: " + std::strerror(errno));
+    }
+    done_ = true;
+  }
+
+ private:
+  std::string target_, path_;
+  bool done_ = false;
+};
+
+// --- NumPy ----------------------------------------------------------------------------------
+
+class NpyWriter final : public ArrayWriter {
+ public:
+  NpyWriter(const std::string& path, std::size_t columns, std::size_t rows)
+      : width_(columns), file_(path) {
+    std::string header = "{'descr': '<f8', 'fortran_order': False, 'shape': (" +
+                         std::to_string(rows) + ", " + std::to_string(columns) + "), }";
+    // Magic, version 1.0, the header length; the whole preamble a multiple of 64 bytes.
+    const std::size_t total = (10 + header.size() + 1 + 63) / 64 * 64;
+    header.append(total - 10 - header.size() - 1, ' ');
+    header.push_back('\n');
+    std::string preamble = "\x93NUMPY\x01";
+    preamble.push_back('\0');
+    preamble.push_back(static_cast<char>(header.size() & 0xff));
+    preamble.push_back(static_cast<char>(header.size() >> 8));
+    file_.write(preamble.data(), preamble.size());
+    file_.write(header.data(), header.size());
+  }
+  void rows(const double* values, std::size_t count) override {
+    bytes_.resize(count * width_ * sizeof(double));
+    // Little-endian float64, whatever this machine's byte order.
+    for (std::size_t i = 0; i < bytes_.size() / 8; ++i) {
+      const auto bits = std::bit_cast<std::uint64_t>(values[i]);
+      for (int b = 0; b < 8; ++b) bytes_[8 * i + b] = static_cast<char>(bits >> (8 * b));
+    }
+    file_.write(bytes_.data(), bytes_.size());
+  }
+  void commit() override { file_.commit(); }
+
+ private:
+  std::size_t width_;
+  OutputFile file_;
+  std::vector<char> bytes_;
+};
+
+// --- MATLAB ---------------------------------------------------------------------------------
+
+class MatWriter final : public ArrayWriter {
+ public:
+  MatWriter(const std::string& path, const std::vector<std::string>& columns,
+            const DataMetadata& metadata, std::size_t rows, bool level_73)
+      : target_(path),
+        temporary_(path),
+        names_(columns),
+        metadata_(metadata),
+        rows_(rows),
+        level_73_(level_73) {
+    data_.resize(columns.size());
+    for (auto& column : data_) column.reserve(rows);
+    std::set<std::string> used;
+    for (std::string& name : names_) {
+      std::string base = matlab_name(name);
+      std::string unique = base;
+      for (int k = 2; used.count(unique) != 0 || unique == "momentid_metadata"; ++k) {
+        unique = base.substr(0, 58) + "_" + std::to_string(k);
+      }
+      used.insert(unique);
+      name = unique;
+    }
+  }
+
+  void rows(const double* values, std::size_t count) override {
+    for (std::size_t r = 0; r < count; ++r) {
+      for (std::size_t c = 0; c < data_.size(); ++c) {
+        data_[c].push_back(values[r * data_.size() + c]);
+      }
+    }
+  }
+
+  void commit() override {
+    mat_t* file =
+        Mat_CreateVer(temporary_.path().c_str(), nullptr, level_73_ ? MAT_FT_MAT73 : MAT_FT_MAT5);
+    if (file == nullptr) throw Error(target_ + ": cannot write the MATLAB file");
+    bool ok = true;
+    const auto write = [&](const char* name, matio_classes type, matio_types data_type,
+                           std::size_t n, void* values) {
+      std::size_t dims[2] = {n, 1};
+      if (type == MAT_C_CHAR) std::swap(dims[0], dims[1]);
+      matvar_t* v = Mat_VarCreate(name, type, data_type, 2, dims, values, MAT_F_DONT_COPY_DATA);
+      ok = ok && v != nullptr &&
+           Mat_VarWrite(file, v, level_73_ ? MAT_COMPRESSION_NONE : MAT_COMPRESSION_ZLIB) == 0;
+      Mat_VarFree(v);
+    };
+    for (std::size_t c = 0; c < data_.size(); ++c) {
+      write(names_[c].c_str(), MAT_C_DOUBLE, MAT_T_DOUBLE, rows_, data_[c].data());
+    }
+    double dt = 0;
+    if (const auto text = metadata_.get("dt");
+        text && std::find(names_.begin(), names_.end(), "dt") == names_.end() &&
+        std::sscanf(text->c_str(), "%lf", &dt) == 1) {
+      write("dt", MAT_C_DOUBLE, MAT_T_DOUBLE, 1, &dt);
+    }
+    std::string lines = header_text(metadata_, {});
+    if (!lines.empty() && lines.back() == '\n') lines.pop_back();
+    if (lines.size() > 1) {
+      write("momentid_metadata", MAT_C_CHAR, MAT_T_UINT8, lines.size(), lines.data());
+    }
+    ok = Mat_Close(file) == 0 && ok;
+    if (!ok) throw Error(target_ + ": cannot write the MATLAB file");
+    temporary_.commit();
+  }
+
+ private:
+  std::string target_;
+  TemporaryPath temporary_;
+  std::vector<std::string> names_;
+  DataMetadata metadata_;
+  std::size_t rows_;
+  bool level_73_;
+  std::vector<std::vector<double>> data_;
+};
+
+// --- HDF5 -----------------------------------------------------------------------------------
+
+class Hdf5Writer final : public ArrayWriter {
+ public:
+  Hdf5Writer(const std::string& path, const std::vector<std::string>& columns,
+             const DataMetadata& metadata, std::size_t rows)
+      : target_(path), temporary_(path), rows_(rows) {
+    H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+    file_ = H5Fcreate(temporary_.path().c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+    if (file_ < 0) throw Error(target_ + ": cannot write the HDF5 file");
+    const hsize_t dims = rows;
+    space_ = H5Screate_simple(1, &dims, nullptr);
+    const hid_t properties = H5Pcreate(H5P_DATASET_CREATE);
+    const hsize_t chunk = std::clamp<hsize_t>(rows, 1, 1 << 16);
+    if (rows > 0) H5Pset_chunk(properties, 1, &chunk);
+    std::set<std::string> used;
+    for (const std::string& column : columns) {
+      std::string name = column;
+      std::replace(name.begin(), name.end(), '/', '_');
+      if (name.empty() || name == ".") name = "_";
+      for (int k = 2; used.count(name) != 0; ++k) name = column + "_" + std::to_string(k);
+      used.insert(name);
+      datasets_.push_back(H5Dcreate2(file_, name.c_str(), H5T_IEEE_F64LE, space_, H5P_DEFAULT,
+                                     properties, H5P_DEFAULT));
+      ok_ = ok_ && datasets_.back() >= 0;
+    }
+    H5Pclose(properties);
+    for (const DataMetadata::Line& line : metadata.lines()) {
+      for (const auto& [key, value] : line) attribute(key, value);
+    }
+  }
+  ~Hdf5Writer() override { close(); }
+
+  void rows(const double* values, std::size_t count) override {
+    const std::size_t width = datasets_.size();
+    column_.resize(count);
+    const hsize_t start = written_, length = count;
+    const hid_t memory = H5Screate_simple(1, &length, nullptr);
+    ok_ =
+        ok_ && H5Sselect_hyperslab(space_, H5S_SELECT_SET, &start, nullptr, &length, nullptr) >= 0;
+    for (std::size_t c = 0; c < width && ok_; ++c) {
+      for (std::size_t r = 0; r < count; ++r) column_[r] = values[r * width + c];
+      ok_ = H5Dwrite(datasets_[c], H5T_NATIVE_DOUBLE, memory, space_, H5P_DEFAULT,
+                     column_.data()) >= 0;
+    }
+    H5Sclose(memory);
+    written_ += count;
+  }
+
+  void commit() override {
+    ok_ = close() && ok_ && written_ == rows_;
+    if (!ok_) throw Error(target_ + ": cannot write the HDF5 file");
+    temporary_.commit();
+  }
+
+ private:
+  void attribute(const std::string& key, const std::string& value) {
+    const hid_t scalar = H5Screate(H5S_SCALAR);
+    double number = 0;
+    hid_t a = -1;
+    if (key == "dt" && std::sscanf(value.c_str(), "%lf", &number) == 1) {
+      a = H5Acreate2(file_, key.c_str(), H5T_IEEE_F64LE, scalar, H5P_DEFAULT, H5P_DEFAULT);
+      ok_ = ok_ && a >= 0 && H5Awrite(a, H5T_NATIVE_DOUBLE, &number) >= 0;
+    } else {
+      const hid_t type = H5Tcopy(H5T_C_S1);
+      H5Tset_size(type, std::max<std::size_t>(value.size(), 1));
+      a = H5Acreate2(file_, key.c_str(), type, scalar, H5P_DEFAULT, H5P_DEFAULT);
+      std::string padded = value;
+      padded.resize(std::max<std::size_t>(value.size(), 1), '\0');
+      ok_ = ok_ && a >= 0 && H5Awrite(a, type, padded.data()) >= 0;
+      H5Tclose(type);
+    }
+    if (a >= 0) H5Aclose(a);
+    H5Sclose(scalar);
+  }
+
+  bool close() {
+    bool ok = true;
+    for (hid_t d : datasets_) ok = (d < 0 || H5Dclose(d) >= 0) && ok;
+    datasets_.clear();
+    if (space_ >= 0) H5Sclose(space_);
+    space_ = -1;
+    if (file_ >= 0) ok = H5Fclose(file_) >= 0 && ok;
+    file_ = -1;
+    return ok;
+  }
+
+  std::string target_;
+  TemporaryPath temporary_;
+  std::size_t rows_, written_ = 0;
+  hid_t file_ = -1, space_ = -1;
+  std::vector<hid_t> datasets_;
+  std::vector<double> column_;
+  bool ok_ = true;
+};
+
+}  // namespace
+
+std::string matlab_name(const std::string& name) {
+  std::string out;
+  for (char c : name) {
+    const bool word = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9');
+    out.push_back(word ? c : '_');
+  }
+  if (out.empty() || !((out[0] >= 'a' && out[0] <= 'z') || (out[0] >= 'A' && out[0] <= 'Z'))) {
+    out = "c_" + out;
+  }
+  return out.substr(0, 63);
+}
+
+std::unique_ptr<ArrayWriter> open_npy_writer(const std::string& path, std::size_t columns,
+                                             std::size_t rows) {
+  return std::make_unique<NpyWriter>(path, columns, rows);
+}
+
+std::unique_ptr<ArrayWriter> open_mat_writer(const std::string& path,
+                                             const std::vector<std::string>& columns,
+                                             const DataMetadata& metadata, std::size_t rows,
+                                             bool level_73) {
+  return std::make_unique<MatWriter>(path, columns, metadata, rows, level_73);
+}
+
+std::unique_ptr<ArrayWriter> open_hdf5_writer(const std::string& path,
+                                              const std::vector<std::string>& columns,
+                                              const DataMetadata& metadata, std::size_t rows) {
+  return std::make_unique<Hdf5Writer>(path, columns, metadata, rows);
+}
+
+}  // namespace momentid::data

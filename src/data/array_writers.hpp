@@ -1,0 +1,44 @@
+#pragma once
+// Writers of the array formats that `momentid convert` produces besides CSV and binary: NumPy
+// .npy, MATLAB .mat (levels 5 and 7.3) and HDF5. Each writes whole or not at all: the file is
+// filled under a temporary name beside the target and renamed into place by commit().
+
+#include <cstddef>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "momentid/metadata.hpp"
+
+namespace momentid::data {
+
+class ArrayWriter {
+ public:
+  virtual ~ArrayWriter() = default;
+  // `count` rows, row-major, one value per column.
+  virtual void rows(const double* values, std::size_t count) = 0;
+  // Throws Error when the file cannot be completed.
+  virtual void commit() = 0;
+};
+
+// A 2-D float64 array, rows x columns, C order. The format keeps neither names nor metadata.
+std::unique_ptr<ArrayWriter> open_npy_writer(const std::string& path, std::size_t columns,
+                                             std::size_t rows);
+// One double vector per column, named as the column where that is a MATLAB name (otherwise made
+// one: `t [s]` becomes `t__s_`), `dt` as a scalar when the metadata give it, and the metadata
+// lines in the text variable `momentid_metadata`. Level 7.3 is HDF5 underneath.
+std::unique_ptr<ArrayWriter> open_mat_writer(const std::string& path,
+                                             const std::vector<std::string>& columns,
+                                             const DataMetadata& metadata, std::size_t rows,
+                                             bool level_73);
+// One float64 dataset per column at the root (a '/' in a name becomes '_'), written in chunks;
+// the metadata as root attributes (`dt` a number, the rest text).
+std::unique_ptr<ArrayWriter> open_hdf5_writer(const std::string& path,
+                                              const std::vector<std::string>& columns,
+                                              const DataMetadata& metadata, std::size_t rows);
+
+// A MATLAB variable name for `name`: letters, digits and '_', beginning with a letter, at most
+// 63 characters.
+std::string matlab_name(const std::string& name);
+
+}  // namespace momentid::data
