@@ -258,7 +258,8 @@ def identify(model: Union[Model, PathLike], data: Any, *, columns: Optional[Sequ
              center: Union[None, str, Sequence[str]] = None, input_hold: Optional[str] = None,
              input_shift: Optional[int] = None, rename: Optional[Mapping[str, str]] = None,
              missing: Optional[str] = None, skip_rows: Optional[int] = None,
-             decimal: Optional[str] = None) -> IdentifyResult:
+             decimal: Optional[str] = None, names: Optional[Sequence[str]] = None,
+             dt_from: Optional[str] = None) -> IdentifyResult:
     """Estimates the model's parameters from a record, as `momentid identify MODEL DATA`.
 
     model: a Model or a model file's path.
@@ -266,7 +267,9 @@ def identify(model: Union[Model, PathLike], data: Any, *, columns: Optional[Sequ
       a 2-D array with `columns` naming its columns, or a data file's path (CSV or binary).
       Columns are named as in a file: the model's variables, `t` for the sample times and `run`
       to separate records. float64 arrays are read in place, strided ones too; other real
-      dtypes are converted. Without a `t` column give `dt`.
+      dtypes are converted. Without a `t` column give `dt`. A path may name a CSV, binary,
+      .npy, .mat or HDF5 file (`names` for a 2-D .npy array's columns, `dt_from` for the
+      interval stored in a .mat or HDF5 file: "Ts", or "1/fs" for a rate).
     dt: the sample interval (overrides the `t` column).
     multipliers, degree: the zero-lag equations (as `derive`); lags=(first, last),
       instruments, noise ({state: variance}; None estimates it): the lagged equations, used
@@ -286,8 +289,8 @@ def identify(model: Union[Model, PathLike], data: Any, *, columns: Optional[Sequ
     options = _options(multipliers=multipliers, degree=degree, batches=batches,
                        weighting=weighting, lags=lags, instruments=instruments, noise=noise,
                        fix=fix, center=center, input_hold=input_hold, input_shift=input_shift,
-                       rename=rename, dt=dt,
-                       missing=missing, skip_rows=skip_rows, decimal=decimal)
+                       rename=rename, dt=dt, missing=missing, skip_rows=skip_rows,
+                       decimal=decimal, names=names, dt_from=dt_from)
     text, json_text = _momentid._identify(model._model, source, name, metadata, options)
     del keep
     return IdentifyResult(text, json_text)
@@ -297,15 +300,16 @@ def check(data: Any, model: Union[None, Model, PathLike] = None, *,
           columns: Optional[Sequence[str]] = None, dt: Optional[float] = None,
           lags: Optional[int] = None, input_hold: Optional[str] = None,
           rename: Optional[Mapping[str, str]] = None, missing: Optional[str] = None,
-          skip_rows: Optional[int] = None, decimal: Optional[str] = None) -> CheckResult:
+          skip_rows: Optional[int] = None, decimal: Optional[str] = None,
+          names: Optional[Sequence[str]] = None, dt_from: Optional[str] = None) -> CheckResult:
     """Whether a record suits the method, as `momentid check DATA [MODEL]`: each channel's
     mean, variance and autocorrelations (`lags` of them), warnings, and with a model the sample
     violations of its stationarity identities. `data` and the options as for identify()."""
     model = None if model is None else _model_of(model)
     source, name, metadata, keep = _data_of(data, columns)
     options = _options(lags=lags, input_hold=input_hold, rename=rename,
-                       dt=dt, missing=missing,
-                       skip_rows=skip_rows, decimal=decimal)
+                       dt=dt, missing=missing, skip_rows=skip_rows, decimal=decimal,
+                       names=names, dt_from=dt_from)
     text, values = _momentid._check(None if model is None else model._model, source, name,
                                     metadata, options)
     del keep
@@ -363,7 +367,8 @@ def validate(model: Union[Model, PathLike], data: Any,
              interpolation: Optional[str] = None, substeps: Optional[int] = None,
              rename: Optional[Mapping[str, str]] = None, plot: Optional[PathLike] = None,
              missing: Optional[str] = None, skip_rows: Optional[int] = None,
-             decimal: Optional[str] = None) -> ValidateResult:
+             decimal: Optional[str] = None, names: Optional[Sequence[str]] = None,
+             dt_from: Optional[str] = None) -> ValidateResult:
     """Simulates the model through the record's inputs and compares its outputs, as
     `momentid validate`: per measured state the RMS error, the fit (100 (1 - |y - ŷ| / |y - ȳ|)
     %), the drift and the residual correlation checks.
@@ -384,7 +389,7 @@ def validate(model: Union[Model, PathLike], data: Any,
                        interpolation=interpolation, substeps=substeps, rename=rename,
                        dt=dt,
                        plot=None if plot is None else _os.fspath(plot), missing=missing,
-                       skip_rows=skip_rows, decimal=decimal)
+                       skip_rows=skip_rows, decimal=decimal, names=names, dt_from=dt_from)
     text, json_text = _momentid._validate(model._model, source, name, metadata, options)
     del keep
     return ValidateResult(text, json_text)

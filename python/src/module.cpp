@@ -127,6 +127,8 @@ FileLayout layout_of(const py::dict& options) {
     }
     layout.decimal = (*decimal)[0];
   }
+  if (auto names = get<std::vector<std::string>>(options, "names")) layout.column_names = *names;
+  layout.dt_from = get<std::string>(options, "dt_from");
   if (auto missing = get<std::string>(options, "missing")) {
     if (*missing == "error") {
       layout.missing = MissingValues::kError;

@@ -1,5 +1,6 @@
-// libFuzzer target: any bytes as a data file (CSV or binary), read to the end by the reader that
-// `identify` uses, asking for the columns y, v and x. Only momentid::Error may escape.
+// libFuzzer target: any bytes as a data file (in any format: CSV, binary, .npy, .mat, HDF5, as
+// chosen by content), read to the end by the reader that `identify` uses, asking for the
+// columns y, v and x. Only momentid::Error may escape.
 
 #include <unistd.h>
 

@@ -12,6 +12,7 @@ shift 2
 cmake -S . -B build-fuzz -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   -DMOMENTID_FUZZ=ON -DMOMENTID_BUILD_TESTS=OFF -DMOMENTID_BUILD_BENCHMARKS=OFF >/dev/null
 cmake --build build-fuzz -j2 --target "fuzz_$target" >/dev/null
+if [[ $target == data ]]; then cmake --build build-fuzz -j2 --target momentid >/dev/null; fi
 corpus=build-fuzz/corpus-$target
 findings=build-fuzz/findings-$target
 mkdir -p "$corpus" "$findings"
@@ -19,6 +20,11 @@ if [[ $target == model ]]; then
   cp -n models/*.mom tests/data/*.mom "$corpus"/ 2>/dev/null || true
 else
   cp -n tests/data/*.csv tests/expected/*.csv "$corpus"/ 2>/dev/null || true
+  # Small files of the other formats, so that mutations reach their readers.
+  for format in bin npy mat mat73 h5; do
+    [[ -e $corpus/seed.$format ]] || build-fuzz/momentid convert tests/data/two_runs.csv \
+      "$corpus/seed.$format" --format "$format" 2>/dev/null || true
+  done
 fi
 exec "build-fuzz/fuzz_$target" "$corpus" -max_total_time="$seconds" -timeout=10 \
   -rss_limit_mb=4096 -max_len=4096 -artifact_prefix="$findings/" -print_final_stats=1 "$@"
