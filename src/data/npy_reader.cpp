@@ -49,11 +49,14 @@ class NpyArray {
 
   // Values [first, first + count) of column `column`.
   void read(std::size_t column, std::size_t first, std::size_t count, double* out) const {
-    for (std::size_t i = 0; i < count; ++i) {
-      const std::size_t r = first + i;
-      const std::size_t index = fortran_ ? column * rows() + r : r * columns() + column;
-      out[i] = value(data_ + index * width_);
+    const std::size_t step = fortran_ ? 1 : columns();
+    const unsigned char* at =
+        data_ + (fortran_ ? column * rows() + first : first * columns() + column) * width_;
+    if (width_ == 8 && little_ == (std::endian::native == std::endian::little)) {
+      for (std::size_t i = 0; i < count; ++i, at += step * 8) std::memcpy(out + i, at, 8);
+      return;
     }
+    for (std::size_t i = 0; i < count; ++i, at += step * width_) out[i] = value(at);
   }
 
  private:
