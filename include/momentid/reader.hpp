@@ -32,6 +32,9 @@ struct FileLayout {
   std::optional<std::string> dt_from;
   // Names for the columns of a file that has none (a 2-D .npy array), in order.
   std::vector<std::string> column_names;
+  // Several runs in one .mat or HDF5 file: each prefix, put in front of every channel's name
+  // (`run1/` reads `run1/y` for `y`, `a_` reads `a_y`), names one run's channels.
+  std::vector<std::string> runs;
 };
 
 // The rows a reader dropped for missing values: how many, the first one's place, and at how

@@ -55,6 +55,11 @@ void add_layout_options(CLI::App* command, FileLayout& layout) {
       ->add_option("--names", layout.column_names,
                    "names for the columns of a 2-D .npy array, in order")
       ->delimiter(',');
+  command
+      ->add_option("--runs", layout.runs,
+                   "runs in one .mat or HDF5 file: prefixes of each run's channels, e.g. "
+                   "run1/,run2/ (HDF5 groups) or a_,b_ (variables a_y, b_y)")
+      ->delimiter(',');
   command->add_option("--dt-from", layout.dt_from,
                       "the sample interval from a scalar in a .mat or HDF5 file: NAME, or 1/NAME "
                       "for a rate");

@@ -19,7 +19,15 @@ class ColumnStoreReader final : public StreamReader {
   ColumnStoreReader(std::unique_ptr<ColumnStore> store, const std::string& path,
                     const ColumnRequest& request)
       : StreamReader(path, request), store_(std::move(store)) {
-    header_.names = store_->names();
+    const std::vector<std::string> all = store_->names();
+    std::vector<std::string> prefixes = request_.layout.runs;
+    if (prefixes.empty()) prefixes.push_back("");
+    // The names a user sees are those of the first run, without its prefix.
+    for (const std::string& name : all) {
+      if (name.starts_with(prefixes.front())) {
+        header_.names.push_back(name.substr(prefixes.front().size()));
+      }
+    }
     header_.listing = std::string("the file has the ") + store_->kind() + "s";
     header_.line = 1;
     for (std::size_t c = 0; c < header_.names.size(); ++c) header_.name_columns.push_back(c + 1);
@@ -34,39 +42,31 @@ class ColumnStoreReader final : public StreamReader {
     }
     if (request_.layout.dt_from && !request_.dt) dt_from_scalar();
     for (auto& [variable, column] : request_.rename) column = store_->column_name(column);
-    for (const std::string& name : request_.names) {
-      const auto renamed = request_.rename.find(name);
-      const std::string& column = renamed == request_.rename.end() ? name : renamed->second;
-      if (std::find(header_.names.begin(), header_.names.end(), column) != header_.names.end()) {
-        continue;
-      }
-      if (const auto why = store_->unusable(column)) fail(start(), *why);
-    }
-    map_ = map_columns(path_, header_, request_);
-    for (std::size_t field = 0; field < header_.names.size(); ++field) {
-      if (!map_.needed[field]) continue;
-      store_->prepare(field);
-      const std::size_t length = store_->length(field);
-      if (!needed_fields_.empty() && length != rows_) {
-        const std::size_t first = needed_fields_.front();
-        fail(start(), std::string(store_->kind()) + " '" + header_.names[field] + "' has " +
-                          plural(length, "value") + " but '" + header_.names[first] + "' has " +
-                          std::to_string(rows_) + ": every channel needs one value per sample");
-      }
-      rows_ = length;
-      needed_fields_.push_back(field);
-    }
-    chunk_.resize(needed_fields_.size());
+    Header every = header_;
+    every.names = all;
+    every.name_columns.clear();
+    for (std::size_t c = 0; c < all.size(); ++c) every.name_columns.push_back(c + 1);
+    for (const std::string& prefix : prefixes) plan_run(every, prefix);
+    map_ = runs_.front().map;
+    chunk_.resize(runs_.front().fields.size());
   }
 
  protected:
   bool read_row(double* row, RowKeys& keys) override {
-    if (row_ == rows_) return false;
+    while (row_ == runs_[run_].rows) {
+      if (run_ + 1 == runs_.size()) return false;
+      ++run_;
+      row_ = chunk_start_ = chunk_end_ = 0;
+      map_ = runs_[run_].map;
+      chunk_.resize(runs_[run_].fields.size());
+    }
+    const RunPlan& plan = runs_[run_];
     if (row_ == chunk_end_) load_chunk();
     const std::size_t at = row_ - chunk_start_;
     ++row_;
-    for (std::size_t k = 0; k < needed_fields_.size(); ++k) {
-      const std::size_t field = needed_fields_[k];
+    if (runs_.size() > 1) keys.run = static_cast<long>(run_) + 1;
+    for (std::size_t k = 0; k < plan.fields.size(); ++k) {
+      const std::size_t field = plan.fields[k];
       const double value = chunk_[k][at];
       if (std::isnan(value)) {
         if (!pass_over_missing(keys, field)) {
@@ -93,14 +93,63 @@ class ColumnStoreReader final : public StreamReader {
   }
 
  private:
+  // The channels, their map and their length in one run.
+  struct RunPlan {
+    std::string prefix;
+    ColumnMap map;
+    std::vector<std::size_t> fields;  // needed channels, in file order
+    std::size_t rows = 0;
+  };
+
   SourceLocation start() const { return {path_, 1, 1, ""}; }
 
+  // The fields of run `prefix` (FileLayout::runs): every requested name, and `t`, read from
+  // the channel of that name with the prefix in front.
+  void plan_run(const Header& every, const std::string& prefix) {
+    ColumnRequest request = request_;
+    const auto present = [&](const std::string& name) {
+      return std::find(every.names.begin(), every.names.end(), name) != every.names.end();
+    };
+    for (const std::string& name : request_.names) {
+      const auto renamed = request_.rename.find(name);
+      const std::string column =
+          prefix + (renamed == request_.rename.end() ? name : renamed->second);
+      request.rename[name] = column;
+      if (!present(column)) {
+        if (const auto why = store_->unusable(column)) fail(start(), *why);
+      }
+    }
+    if (!prefix.empty()) {
+      const auto time = request_.rename.find("t");
+      const std::string column = prefix + (time == request_.rename.end() ? "t" : time->second);
+      if (present(column) || time != request_.rename.end()) request.rename["t"] = column;
+    }
+    RunPlan plan{prefix, map_columns(path_, every, request), {}, 0};
+    for (std::size_t field = 0; field < every.names.size(); ++field) {
+      if (!plan.map.needed[field]) continue;
+      store_->prepare(field);
+      const std::size_t length = store_->length(field);
+      if (!plan.fields.empty() && length != plan.rows) {
+        const std::string& first = every.names[plan.fields.front()];
+        fail(start(), std::string(store_->kind()) + " '" + every.names[field] + "' has " +
+                          plural(length, "value") + " but '" + first + "' has " +
+                          std::to_string(plan.rows) +
+                          ": every channel needs one value per sample");
+      }
+      plan.rows = length;
+      plan.fields.push_back(field);
+    }
+    names_ = every.names;
+    runs_.push_back(std::move(plan));
+  }
+
   void load_chunk() {
+    const RunPlan& plan = runs_[run_];
     chunk_start_ = row_;
-    chunk_end_ = std::min(rows_, row_ + kChunkRows);
-    for (std::size_t k = 0; k < needed_fields_.size(); ++k) {
+    chunk_end_ = std::min(plan.rows, row_ + kChunkRows);
+    for (std::size_t k = 0; k < plan.fields.size(); ++k) {
       chunk_[k].resize(chunk_end_ - chunk_start_);
-      store_->read(needed_fields_[k], chunk_start_, chunk_end_ - chunk_start_, chunk_[k].data());
+      store_->read(plan.fields[k], chunk_start_, chunk_end_ - chunk_start_, chunk_[k].data());
     }
   }
 
@@ -123,14 +172,15 @@ class ColumnStoreReader final : public StreamReader {
   }
 
   [[noreturn]] void bad_value(std::size_t field, double value, const std::string& expected) {
-    fail(field_location(static_cast<int>(field)), "'" + header_.names[field] + "': " + expected +
-                                                      ", found '" + shortest_decimal(value) + "'");
+    fail(field_location(static_cast<int>(field)),
+         "'" + names_[field] + "': " + expected + ", found '" + shortest_decimal(value) + "'");
   }
 
   std::unique_ptr<ColumnStore> store_;
-  std::vector<std::size_t> needed_fields_;
-  std::size_t rows_ = 0, row_ = 0, chunk_start_ = 0, chunk_end_ = 0;
-  std::vector<std::vector<double>> chunk_;  // per needed field
+  std::vector<std::string> names_;  // every channel of the store
+  std::vector<RunPlan> runs_;
+  std::size_t run_ = 0, row_ = 0, chunk_start_ = 0, chunk_end_ = 0;
+  std::vector<std::vector<double>> chunk_;  // per needed field of the current run
 };
 
 }  // namespace
