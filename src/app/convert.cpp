@@ -53,8 +53,12 @@ std::vector<std::string> convert(const DataSource& source, const std::string& pa
   const ColumnRequest request{
       .names = columns, .rename = {}, .min_rows = 1, .dt = dt, .layout = layout};
   const bool has_time = std::any_of(columns.begin(), columns.end(), [&](const std::string& c) {
-    return !dt && (c == "t" || data::is_time_name(c));
+    return c == "t" || data::is_time_name(c);
   });
+  if (dt && has_time) {
+    throw UsageError("--dt: " + source.name() +
+                     " has a time column, which is copied and gives the interval");
+  }
   // The array formats are given their length first: one pass counts the rows.
   std::size_t rows = 0;
   if (format != FileFormat::kCsv && format != FileFormat::kBinary) {

@@ -189,9 +189,15 @@ class Hdf5Writer final : public ArrayWriter {
       ok_ = ok_ && datasets_.back() >= 0;
     }
     H5Pclose(properties);
+    // Each pair as an attribute for other readers, and the lines as they are for momentid.
     for (const DataMetadata::Line& line : metadata.lines()) {
-      for (const auto& [key, value] : line) attribute(key, value);
+      for (const auto& [key, value] : line) {
+        if (key != "momentid_metadata") attribute(key, value);
+      }
     }
+    std::string lines = header_text(metadata, {});
+    if (!lines.empty() && lines.back() == '\n') lines.pop_back();
+    if (lines.size() > 1) attribute("momentid_metadata", lines);
   }
   ~Hdf5Writer() override { close(); }
 

@@ -29,6 +29,7 @@ class ColumnStoreReader final : public StreamReader {
       }
     }
     header_.listing = std::string("the file has the ") + store_->kind() + "s";
+    header_.item = store_->kind();
     header_.line = 1;
     for (std::size_t c = 0; c < header_.names.size(); ++c) header_.name_columns.push_back(c + 1);
     header_.metadata = store_->metadata();
@@ -133,8 +134,7 @@ class ColumnStoreReader final : public StreamReader {
         const std::string& first = every.names[plan.fields.front()];
         fail(start(), std::string(store_->kind()) + " '" + every.names[field] + "' has " +
                           plural(length, "value") + " but '" + first + "' has " +
-                          std::to_string(plan.rows) +
-                          ": every channel needs one value per sample");
+                          std::to_string(plan.rows) + ": every channel needs one value per sample");
       }
       plan.rows = length;
       plan.fields.push_back(field);

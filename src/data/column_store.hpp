@@ -43,10 +43,10 @@ class ColumnStore {
 
 // Reads a store as rows: the requested channels, `t` (or a time-like name, or the channel `t`
 // is renamed to) and `run`; with FileLayout::runs, run after run, each prefix in front of the
-// names (the channels a user sees are those of the first run, without its prefix). The sample interval comes from ColumnRequest::dt, else from
-// FileLayout::dt_from (a scalar in the file; `1/NAME` for a rate), else from the metadata,
-// else from the time channel. Errors are located at the file, the sample (from 1) as line and
-// the channel's place in names() (from 1) as column.
+// names (the channels a user sees are those of the first run, without its prefix). The sample
+// interval comes from ColumnRequest::dt, else from FileLayout::dt_from (a scalar in the file;
+// `1/NAME` for a rate), else from the metadata, else from the time channel. Errors are located at
+// the file, the sample (from 1) as line and the channel's place in names() (from 1) as column.
 std::unique_ptr<DataReader> open_column_store(std::unique_ptr<ColumnStore> store,
                                               const std::string& path,
                                               const ColumnRequest& request);

@@ -36,7 +36,11 @@ DataMetadata::Line read_metadata_line(const std::string& path, long long line_nu
 
 std::string header_text(const DataMetadata& metadata, const std::vector<std::string>& columns) {
   std::string out = metadata.text();
-  for (std::size_t c = 0; c < columns.size(); ++c) out += (c ? "," : "") + columns[c];
+  for (std::size_t c = 0; c < columns.size(); ++c) {
+    // A name holding the separator (`a[:, 0]`) is quoted.
+    const bool quote = columns[c].find(',') != std::string::npos;
+    out += (c ? "," : "") + (quote ? "\"" + columns[c] + "\"" : columns[c]);
+  }
   return out + "\n";
 }
 

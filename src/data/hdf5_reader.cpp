@@ -14,12 +14,15 @@
 
 #include "common/decimal.hpp"
 #include "data/column_store.hpp"
+#include "data/format.hpp"
 #include "data/formats.hpp"
 
 namespace momentid::data {
 namespace {
 
 constexpr std::string_view kSignature = "\x89HDF\r\n\x1a\n";
+// The text attribute in which momentid's writer keeps the metadata lines.
+constexpr const char* kMetadataAttribute = "momentid_metadata";
 
 // Closes an HDF5 identifier when it goes out of scope.
 class Handle {
@@ -191,9 +194,15 @@ class Hdf5Store final : public ColumnStore {
     channels_.push_back(std::move(c));
   }
 
+  // Whether an attribute holds one value (an array of them is not metadata).
+  static bool single(hid_t attribute) {
+    const Handle space(H5Aget_space(attribute), H5Sclose);
+    return space && H5Sget_simple_extent_npoints(space.get()) == 1;
+  }
+
   std::optional<double> number_attribute(hid_t object, const std::string& name) const {
     const Handle attribute(H5Aopen(object, name.c_str(), H5P_DEFAULT), H5Aclose);
-    if (!attribute) return std::nullopt;
+    if (!attribute || !single(attribute.get())) return std::nullopt;
     const Handle type(H5Aget_type(attribute.get()), H5Tclose);
     const H5T_class_t type_class = H5Tget_class(type.get());
     if (type_class != H5T_FLOAT && type_class != H5T_INTEGER) return std::nullopt;
@@ -202,12 +211,23 @@ class Hdf5Store final : public ColumnStore {
     return value;
   }
 
+  // A text attribute of one string, fixed-length or variable-length (as h5py writes a str).
   std::optional<std::string> text_attribute(hid_t object, const std::string& name) const {
     const Handle attribute(H5Aopen(object, name.c_str(), H5P_DEFAULT), H5Aclose);
-    if (!attribute) return std::nullopt;
+    if (!attribute || !single(attribute.get())) return std::nullopt;
     const Handle type(H5Aget_type(attribute.get()), H5Tclose);
-    if (H5Tget_class(type.get()) != H5T_STRING || H5Tis_variable_str(type.get()) > 0) {
-      return std::nullopt;
+    if (H5Tget_class(type.get()) != H5T_STRING) return std::nullopt;
+    if (H5Tis_variable_str(type.get()) > 0) {
+      const Handle memory(H5Tcopy(H5T_C_S1), H5Tclose);
+      H5Tset_size(memory.get(), H5T_VARIABLE);
+      H5Tset_cset(memory.get(), H5Tget_cset(type.get()));
+      char* value = nullptr;
+      if (H5Aread(attribute.get(), memory.get(), &value) < 0 || value == nullptr) {
+        return std::nullopt;
+      }
+      std::string text = value;
+      H5free_memory(value);
+      return text;
     }
     std::string text(H5Tget_size(type.get()), '\0');
     if (H5Aread(attribute.get(), type.get(), text.data()) < 0) return std::nullopt;
@@ -215,8 +235,24 @@ class Hdf5Store final : public ColumnStore {
     return text;
   }
 
-  // Root attributes: numbers and fixed-length strings become metadata.
+  // Root attributes: numbers and strings become metadata; the lines a momentid writer keeps
+  // in `momentid_metadata` are taken as they are, the others after them.
   void read_attributes() {
+    if (const auto text = text_attribute(file_.get(), kMetadataAttribute)) {
+      long long number = 0;
+      for (std::size_t begin = 0; begin < text->size();) {
+        const std::size_t end = std::min(text->find('\n', begin), text->size());
+        const std::string_view line = std::string_view(*text).substr(begin, end - begin);
+        ++number;
+        if (const std::size_t tag = line.find(kMetadataTag); tag != std::string_view::npos) {
+          DataMetadata::Line pairs = read_metadata_line(path_ + ":" + kMetadataAttribute, number,
+                                                        line, tag + kMetadataTag.size());
+          if (!pairs.empty()) metadata_.add_line(std::move(pairs));
+        }
+        begin = end + 1;
+      }
+      return;
+    }
     DataMetadata::Line line;
     std::pair<const Hdf5Store*, DataMetadata::Line*> context{this, &line};
     H5Aiterate2(

@@ -36,9 +36,18 @@ void read_names(const std::string& path, std::string_view line, Header& header) 
       at = end;
     }
   } else {
+    // The next separator outside double quotes: `"a[:, 0]"` is one name.
+    const auto next_separator = [&](std::size_t from) {
+      bool quoted = false;
+      for (std::size_t i = from; i < line.size(); ++i) {
+        if (line[i] == '"') quoted = !quoted;
+        if (line[i] == header.separator && !quoted) return i;
+      }
+      return line.size();
+    };
     std::size_t begin = 0;
     for (;;) {
-      const std::size_t end = std::min(line.find(header.separator, begin), line.size());
+      const std::size_t end = next_separator(begin);
       add(begin, end);
       if (end == line.size()) break;
       begin = end + 1;
@@ -132,8 +141,8 @@ ColumnMap map_columns(const std::string& path, const Header& header, const Colum
   if (const auto renamed = request.rename.find("t"); renamed != request.rename.end()) {
     time_name = renamed->second;
     if (std::find(header.names.begin(), header.names.end(), time_name) == header.names.end()) {
-      fail(location(1),
-           "missing column '" + time_name + "' for 't' (" + header.listing + ": " + listed + ")");
+      fail(location(1), "missing " + header.item + " '" + time_name + "' for 't' (" +
+                            header.listing + ": " + listed + ")");
     }
   } else if (std::find(header.names.begin(), header.names.end(), "t") != header.names.end()) {
     time_name = "t";
@@ -177,7 +186,7 @@ ColumnMap map_columns(const std::string& path, const Header& header, const Colum
     const auto found = first.find(file_names[k]);
     if (found == first.end()) {
       const std::string& name = request.names[k];
-      fail(location(1), "missing column '" + file_names[k] + "'" +
+      fail(location(1), "missing " + header.item + " '" + file_names[k] + "'" +
                             (file_names[k] == name ? "" : " for '" + name + "'") + " (" +
                             header.listing + ": " + listed + ")");
     }

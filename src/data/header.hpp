@@ -26,6 +26,8 @@ struct Header {
   std::string text;
   // How messages introduce the names: "the header has", "the file has the variables", ...
   std::string listing = "the header has";
+  // What one of them is called: "column", "variable", "dataset".
+  std::string item = "column";
 };
 
 // Reads the metadata and comment lines and the header row (`binary`: of a binary file's header

@@ -4,6 +4,7 @@
 // wider than tall holds its channels in rows: `NAME[k, :]`). Scalars serve --dt-from. A
 // requested variable is read whole when the reading starts.
 
+#include <hdf5.h>
 #include <matio.h>
 
 #include <algorithm>
@@ -27,7 +28,9 @@ std::mutex matio_lock;
 std::string matio_message;
 
 void log_to_message(int, char* message) {
-  if (matio_message.empty() && message != nullptr) matio_message = message;
+  if (!matio_message.empty() || message == nullptr) return;
+  matio_message = message;
+  matio_message.resize(std::min(matio_message.find('\n'), matio_message.size()));
 }
 
 struct MatioCall {
@@ -35,6 +38,8 @@ struct MatioCall {
   MatioCall() {
     matio_message.clear();
     Mat_LogInitFunc("momentid", log_to_message);
+    // Level 7.3 files are HDF5: its own error printing would go to standard error.
+    H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
   }
 };
 
@@ -128,6 +133,11 @@ class MatStore final : public ColumnStore {
     }
     if (!matio_message.empty()) {
       fail({path_, 1, 1, ""}, "cannot read the MATLAB file" + detail());
+    }
+    if (names_.empty() && scalars_.empty() && unusable_.empty()) {
+      fail({path_, 1, 1, ""},
+           "cannot read the MATLAB file: it holds no variables (damaged or "
+           "truncated?)");
     }
   }
 

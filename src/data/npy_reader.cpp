@@ -93,8 +93,8 @@ class NpyArray {
     int depth = 0;
     for (; end < header.size(); ++end) {
       const char c = header[end];
-      if (c == '(') ++depth;
-      if (c == ')') --depth;
+      if (c == '(' || c == '[') ++depth;
+      if (c == ')' || c == ']') --depth;
       if (depth == 0 && (c == ',' || c == '}')) break;
       if (depth < 0) break;
     }
@@ -153,16 +153,30 @@ class NpyArray {
                         " dimensions: expected 1 (a channel) or 2 (samples x channels)");
     }
     data_ = bytes_ + start + length;
-    std::size_t values = 1;
-    for (std::size_t n : shape_) values *= n;
-    if (values * width_ > size_ - start - length) {
+    // The array's bytes, which must all be in the file (a shape too large wraps around).
+    std::size_t bytes = width_;
+    bool overflow = false;
+    for (std::size_t n : shape_) overflow = overflow || __builtin_mul_overflow(bytes, n, &bytes);
+    if (overflow || bytes > size_ - start - length) {
       fail({path_,
             clamp_to_int(static_cast<long long>((size_ - start - length) / width_ / columns()) + 1),
             1, ""},
            "the file ends inside the array: " + plural(size_ - start - length, "byte") +
-               " of data for " + std::to_string(values) + " values of " + std::to_string(width_) +
-               " bytes");
+               " of data for an array of shape " + shape_text() + " of " + std::to_string(width_) +
+               "-byte values");
     }
+  }
+
+  // As numpy prints a shape: (5,) or (5, 4).
+  std::string shape_text() const {
+    std::string out(1, '(');
+    out.append(std::to_string(shape_[0]));
+    for (std::size_t k = 1; k < shape_.size(); ++k) {
+      out.append(", ");
+      out.append(std::to_string(shape_[k]));
+    }
+    out.append(shape_.size() == 1 ? ",)" : ")");
+    return out;
   }
 
   std::string path_;

@@ -3,8 +3,7 @@
 One simulated Duffing record, written as CSV by `simulate`, is written again independently by
 numpy, scipy.io and h5py and by `momentid convert`; every copy must give the same estimates to
 1e-12 relative. Bad, truncated and odd files must each draw a message and exit status 2, never a
-crash or a hang; the HDF5 reader's memory must not grow with the file. Known bugs are pinned as
-strict xfails whose reasons give the reproducer.
+crash or a hang; the HDF5 reader's memory must not grow with the file.
 
 Run as: MOMENTID=build/momentid python3 -m pytest -q -p no:cacheprovider tests/formats
 """
@@ -265,20 +264,12 @@ def test_convert_carries_metadata_and_values_back_to_csv(record, tmp_path, targe
     assert sorted(header) == sorted(NAMES)
     for name in NAMES:
         assert np.array_equal(columns[name], record["columns"][name]), name
-    # The same key=value pairs (HDF5 keeps them as attributes; see the xfail below for lines).
+    # The same key=value pairs (HDF5 keeps each as an attribute too; the lines are tested below).
     assert metadata_pairs(metadata) == metadata_pairs(record["metadata"])
     if target != "out.h5":
         assert metadata == record["metadata"]
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="BUG: metadata lines do not survive an HDF5 round trip: `convert rec.csv out.h5; "
-    "convert out.h5 back.csv` gives one `# momentid:` line with every key sorted by name "
-    "(burn-in=... continue=no dt=0.01 input-hold=zoh input.x=... model=duffing param.c=0.5 "
-    "param.eps=1 ...) instead of the three lines of rec.csv: the writer stores the keys as root "
-    "attributes and the reader iterates them by name (H5_INDEX_NAME) into a single line",
-)
 def test_hdf5_round_trip_keeps_metadata_lines(record, tmp_path):
     assert run("convert", record["csv"], "out.h5", cwd=tmp_path).returncode == 0
     assert run("convert", "out.h5", "back.csv", cwd=tmp_path).returncode == 0
@@ -320,7 +311,7 @@ def save_h5(path, c, **changes):
 def bad_mat_missing_variable(d, c):
     save_mat(d / "a.mat", cut(c))
     return (["a.mat", "--columns", "y=z"],
-            "a.mat:1:1: missing column 'z' for 'y' (the file has the variables: t, y, v, x)")
+            "a.mat:1:1: missing variable 'z' for 'y' (the file has the variables: t, y, v, x)")
 
 
 def bad_h5_missing_dataset(d, c):
@@ -330,7 +321,7 @@ def bad_h5_missing_dataset(d, c):
             f[f"run1/{name}"] = c[name]
         f.attrs["dt"] = 0.01
     return (["a.h5", "--columns", "y=/run1/z,v=/run1/v,x=/run1/x"],
-            "a.h5:1:1: missing column 'run1/z' for 'y' "
+            "a.h5:1:1: missing dataset 'run1/z' for 'y' "
             "(the file has the datasets: run1/v, run1/x, run1/y)")
 
 
@@ -629,14 +620,6 @@ def test_empty_file_is_an_error(record, tmp_path, fmt):
     )
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="BUG (message): a truncated level 7.3 .mat file draws the HDF5 library's error stack "
-    "as the message: `convert rec.csv out.mat --format mat73; head -c 800000 out.mat > cut.mat; "
-    "identify duffing.mom cut.mat` prints 'cut.mat:1:1: cannot read the MATLAB file: HDF5 error "
-    "#000 in H5Fopen()' followed by '      file : ../../../src/H5F.c:413', 'major: File "
-    "accessibility', 'minor: Unable to open file' (matio's log message, taken whole)",
-)
 def test_truncated_mat73_message_is_one_line(record, tmp_path):
     name, _ = whole_file("convert-mat73", tmp_path, record["columns"], record["csv"])
     whole = (tmp_path / name).read_bytes()
@@ -650,14 +633,6 @@ def test_truncated_mat73_message_is_one_line(record, tmp_path):
 # --- Bugs found: crashes and wrong results --------------------------------------------------------
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="BUG (crash): a numeric root attribute of more than one value overflows the stack: "
-    "Hdf5Store::number_attribute reads the whole attribute into one double (H5Aread into "
-    "`double value`); `h5py: f.attrs['calib'] = np.arange(1000.0)` makes `identify` die of "
-    "SIGSEGV (exit 139); two values corrupt the stack silently. text_attribute has the same "
-    "fault for an array of fixed-length strings",
-)
 def test_hdf5_array_attribute_is_not_a_crash(record, tmp_path):
     c = record["columns"]
     with h5py.File(tmp_path / "rec.h5", "w") as f:
@@ -677,14 +652,6 @@ def npy_with_header(path, header, data=b"\0" * 800):
                      + data)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="BUG (crash): a .npy header whose shape's product overflows size_t passes the "
-    "'file ends inside the array' check (values * width wraps to 0) and the reader runs off "
-    "the mapping: shape (4611686018427387904, 4) of '<f8' with 800 bytes of data -> "
-    "`identify duffing.mom huge.npy --names t,y,v,x` dies of SIGBUS (exit 135); "
-    "shape (2305843009213693952,) with `convert huge.npy out.csv --dt 0.01` likewise",
-)
 def test_npy_shape_overflow_is_an_error(tmp_path):
     npy_with_header(tmp_path / "huge.npy",
                     "{'descr': '<f8', 'fortran_order': False, 'shape': (4611686018427387904, 4), }")
@@ -700,18 +667,11 @@ def test_npy_shape_within_range_but_missing_data_is_an_error(tmp_path):
     proc = run("identify", MODEL, "long.npy", "--names", "t,y,v,x", cwd=tmp_path)
     assert proc.returncode == 2
     assert first_line(proc.stderr) == (
-        "long.npy:26:1: the file ends inside the array: 800 bytes of data for 4000000 values "
-        "of 8 bytes"
+        "long.npy:26:1: the file ends inside the array: 800 bytes of data for an array of shape "
+        "(1000000, 4) of 8-byte values"
     )
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="BUG (wrong numbers): h5py's ordinary string attribute is variable-length and is "
-    "ignored: `f.attrs['input-hold'] = 'zoh'` is read as no input-hold, so `identify` uses "
-    "`sample` and gives c = 0.4442 instead of 0.49993 (a fixed-length np.bytes_('zoh') works); "
-    "README says the root attributes (`input-hold`, ...) are metadata",
-)
 def test_hdf5_variable_length_string_attribute_is_metadata(record, tmp_path):
     c = record["columns"]
     with h5py.File(tmp_path / "rec.h5", "w") as f:
@@ -736,12 +696,6 @@ def test_hdf5_fixed_length_string_attribute_is_metadata(record, tmp_path):
     assert_same_estimates(estimates(report), record["reference"])
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="BUG (message): a structured .npy array is described by a cut dtype: "
-    "np.save with dtype [('t','<f8'),('y','<f8'),...] draws \"the array holds '[('t', '<f8')' "
-    "values\" (the header's 'descr' is cut at the first comma, brackets not counted)",
-)
 def test_structured_npy_message_names_the_dtype(tmp_path):
     array = np.zeros(100, dtype=[(n, "<f8") for n in NAMES])
     np.save(tmp_path / "s.npy", array)
@@ -751,14 +705,6 @@ def test_structured_npy_message_names_the_dtype(tmp_path):
     assert "structured" in line or "('x', '<f8')" in line, line
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="BUG: `convert` writes matrix channel names such as `a[:, 0]` unquoted into a CSV "
-    "header, where their commas split them: `convert a.npy out.csv` (2-D, no --names) writes "
-    "'a[:, 0],a[:, 1],...' and `identify duffing.mom out.csv --columns \"t=a[:, 0],...\"` fails "
-    "with \"missing column 'a[:, 0]' for 't' (the header has: a[:, 0], a[:, 1], ...)\", a message "
-    "that contradicts itself; the same for `convert V.mat out.csv` with a matrix V",
-)
 def test_convert_matrix_columns_to_csv_reads_back(record, tmp_path):
     np.save(tmp_path / "a.npy", matrix(record["columns"]))
     proc = run("convert", "a.npy", "out.csv", cwd=tmp_path)
