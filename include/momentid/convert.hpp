@@ -29,8 +29,9 @@ std::vector<std::string> convert(const DataSource& source, const std::string& pa
                                  FileFormat format, const FileLayout& layout = {},
                                  std::optional<double> dt = std::nullopt);
 
-// The libraries behind the .mat and HDF5 formats and their versions, e.g. "matio 1.5.23, HDF5
-// 1.10.8".
-std::string format_libraries();
+// The data formats of this build, with the versions of the libraries behind them, e.g. "CSV,
+// momentid binary, NumPy .npy, MATLAB .mat levels 5 and 7.3 (matio 1.5.23), HDF5 (1.10.8); all
+// read and written".
+std::string data_formats();
 
 }  // namespace momentid

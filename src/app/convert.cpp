@@ -1,7 +1,11 @@
 #include "momentid/convert.hpp"
 
+#ifdef MOMENTID_WITH_HDF5
 #include <hdf5.h>
+#endif
+#ifdef MOMENTID_WITH_MATIO
 #include <matio.h>
+#endif
 
 #include <algorithm>
 #include <filesystem>
@@ -14,14 +18,28 @@
 
 namespace momentid {
 
-std::string format_libraries() {
-  unsigned hdf5_major = 0, hdf5_minor = 0, hdf5_release = 0;
-  H5get_libversion(&hdf5_major, &hdf5_minor, &hdf5_release);
+std::string data_formats() {
+  std::string out = "CSV, momentid binary, NumPy .npy";
+#ifdef MOMENTID_WITH_MATIO
   int major = 0, minor = 0, release = 0;
   Mat_GetLibraryVersion(&major, &minor, &release);
-  return "matio " + std::to_string(major) + "." + std::to_string(minor) + "." +
-         std::to_string(release) + ", HDF5 " + std::to_string(hdf5_major) + "." +
-         std::to_string(hdf5_minor) + "." + std::to_string(hdf5_release);
+  out += ", MATLAB .mat levels 5 and 7.3 (matio " + std::to_string(major) + "." +
+         std::to_string(minor) + "." + std::to_string(release) + ")";
+#endif
+#ifdef MOMENTID_WITH_HDF5
+  unsigned hdf5_major = 0, hdf5_minor = 0, hdf5_release = 0;
+  H5get_libversion(&hdf5_major, &hdf5_minor, &hdf5_release);
+  out += ", HDF5 (" + std::to_string(hdf5_major) + "." + std::to_string(hdf5_minor) + "." +
+         std::to_string(hdf5_release) + ")";
+#endif
+  out += "; all read and written";
+#ifndef MOMENTID_WITH_MATIO
+  out += "; built without matio: no .mat";
+#endif
+#ifndef MOMENTID_WITH_HDF5
+  out += "; built without HDF5: no HDF5";
+#endif
+  return out;
 }
 
 std::optional<FileFormat> format_for_path(const std::string& path) {

@@ -24,10 +24,7 @@ int main(int argc, char** argv) {
   // --help shows each option's default (subcommands inherit this).
   app.option_defaults()->always_capture_default();
   app.set_version_flag("-V,--version",
-                       "momentid " MOMENTID_VERSION
-                       "\ndata formats: CSV, momentid binary, NumPy .npy, MATLAB .mat (levels 5 "
-                       "and 7.3), HDF5; all read and written (" +
-                           momentid::format_libraries() + ")" +
+                       "momentid " MOMENTID_VERSION "\ndata formats: " + momentid::data_formats() +
                            "\nvalidate plots: SVG (written by momentid)"
                            "\ndistributions: Boost.Math; linear algebra: Eigen; algebra: GiNaC");
 

@@ -1,8 +1,12 @@
 #include "data/array_writers.hpp"
 
-#include <hdf5.h>
-#include <matio.h>
 #include <unistd.h>
+#ifdef MOMENTID_WITH_HDF5
+#include <hdf5.h>
+#endif
+#ifdef MOMENTID_WITH_MATIO
+#include <matio.h>
+#endif
 
 #include <algorithm>
 #include <bit>
@@ -86,6 +90,7 @@ class NpyWriter final : public ArrayWriter {
 };
 
 // --- MATLAB ---------------------------------------------------------------------------------
+#ifdef MOMENTID_WITH_MATIO
 
 class MatWriter final : public ArrayWriter {
  public:
@@ -162,7 +167,10 @@ class MatWriter final : public ArrayWriter {
   std::vector<std::vector<double>> data_;
 };
 
+#endif
+
 // --- HDF5 -----------------------------------------------------------------------------------
+#ifdef MOMENTID_WITH_HDF5
 
 class Hdf5Writer final : public ArrayWriter {
  public:
@@ -264,6 +272,8 @@ class Hdf5Writer final : public ArrayWriter {
   bool ok_ = true;
 };
 
+#endif
+
 }  // namespace
 
 std::string matlab_name(const std::string& name) {
@@ -287,13 +297,21 @@ std::unique_ptr<ArrayWriter> open_mat_writer(const std::string& path,
                                              const std::vector<std::string>& columns,
                                              const DataMetadata& metadata, std::size_t rows,
                                              bool level_73) {
+#ifdef MOMENTID_WITH_MATIO
   return std::make_unique<MatWriter>(path, columns, metadata, rows, level_73);
+#else
+  throw Error(path + ": this momentid was built without matio: it writes no .mat files");
+#endif
 }
 
 std::unique_ptr<ArrayWriter> open_hdf5_writer(const std::string& path,
                                               const std::vector<std::string>& columns,
                                               const DataMetadata& metadata, std::size_t rows) {
+#ifdef MOMENTID_WITH_HDF5
   return std::make_unique<Hdf5Writer>(path, columns, metadata, rows);
+#else
+  throw Error(path + ": this momentid was built without HDF5: it writes no HDF5 files");
+#endif
 }
 
 }  // namespace momentid::data

@@ -20,7 +20,6 @@
 namespace momentid::data {
 namespace {
 
-constexpr std::string_view kSignature = "\x89HDF\r\n\x1a\n";
 // The text attribute in which momentid's writer keeps the metadata lines.
 constexpr const char* kMetadataAttribute = "momentid_metadata";
 
@@ -287,8 +286,6 @@ class Hdf5Store final : public ColumnStore {
 };
 
 }  // namespace
-
-bool is_hdf5(std::string_view first_bytes) { return first_bytes.starts_with(kSignature); }
 
 std::unique_ptr<DataReader> open_hdf5(File file, const std::string& path,
                                       const ColumnRequest& request, std::string_view) {

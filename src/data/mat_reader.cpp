@@ -4,8 +4,10 @@
 // wider than tall holds its channels in rows: `NAME[k, :]`). Scalars serve --dt-from. A
 // requested variable is read whole when the reading starts.
 
-#include <hdf5.h>
 #include <matio.h>
+#ifdef MOMENTID_WITH_HDF5
+#include <hdf5.h>
+#endif
 
 #include <algorithm>
 #include <cstdint>
@@ -38,8 +40,10 @@ struct MatioCall {
   MatioCall() {
     matio_message.clear();
     Mat_LogInitFunc("momentid", log_to_message);
+#ifdef MOMENTID_WITH_HDF5
     // Level 7.3 files are HDF5: its own error printing would go to standard error.
     H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+#endif
   }
 };
 
@@ -247,11 +251,6 @@ class MatStore final : public ColumnStore {
 };
 
 }  // namespace
-
-bool is_mat(std::string_view first_bytes) {
-  // The 116-byte text header of levels 5 and 7.3 begins with these words.
-  return first_bytes.starts_with("MATLAB 5") || first_bytes.starts_with("MATLAB 7");
-}
 
 std::unique_ptr<DataReader> open_mat(File file, const std::string& path,
                                      const ColumnRequest& request, std::string_view) {

@@ -14,6 +14,31 @@
 
 #include "data/formats.hpp"
 
+namespace momentid::data {
+
+bool is_mat(std::string_view first_bytes) {
+  // The 116-byte text header of levels 5 and 7.3 begins with these words.
+  return first_bytes.starts_with("MATLAB 5") || first_bytes.starts_with("MATLAB 7");
+}
+
+bool is_hdf5(std::string_view first_bytes) { return first_bytes.starts_with("\x89HDF\r\n\x1a\n"); }
+
+// A format this build was made without is recognised, and said to be missing.
+#ifndef MOMENTID_WITH_MATIO
+std::unique_ptr<DataReader> open_mat(File, const std::string& path, const ColumnRequest&,
+                                     std::string_view) {
+  fail({path, 1, 1, ""}, "this is a MATLAB file, and this momentid was built without matio");
+}
+#endif
+#ifndef MOMENTID_WITH_HDF5
+std::unique_ptr<DataReader> open_hdf5(File, const std::string& path, const ColumnRequest&,
+                                      std::string_view) {
+  fail({path, 1, 1, ""}, "this is an HDF5 file, and this momentid was built without HDF5");
+}
+#endif
+
+}  // namespace momentid::data
+
 namespace momentid {
 namespace {
 

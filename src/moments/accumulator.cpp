@@ -10,8 +10,9 @@
 #include <tuple>
 
 // The per-row kernels are also built for AVX2, chosen when the program loads on a processor
-// that has it. Without fused multiply-adds both builds compute the same numbers.
-#if defined(__x86_64__) && defined(__gnu_linux__)
+// that has it. Without fused multiply-adds both builds compute the same numbers. (GCC only:
+// clang refuses clones of functions declared before, as these are, in the class.)
+#if defined(__x86_64__) && defined(__gnu_linux__) && !defined(__clang__)
 #define MOMENTID_KERNEL __attribute__((target_clones("avx2", "default")))
 #else
 #define MOMENTID_KERNEL
