@@ -37,7 +37,10 @@ std::optional<std::map<std::string, double>> noise_option(const Model& model,
   if (text == "auto") return std::nullopt;
   std::map<std::string, double> out;
   if (text == "none") return out;
-  for (const auto& [name, value] : column_map_of(text, "--noise", "NAME=VARIANCE")) {
+  for (const auto& item : column_map_of(text, "--noise", "NAME=VARIANCE")) {
+    // Named, not bound: clang 14 lets no lambda capture a structured binding.
+    const std::string& name = item.first;
+    const std::string& value = item.second;
     const auto& states = model.states();
     if (std::none_of(states.begin(), states.end(), [&](const auto& d) { return d.name == name; })) {
       throw UsageError("--noise: '" + name + "' is not a state of model " + model.name());

@@ -763,5 +763,5 @@ def test_version_lists_the_formats():
     assert proc.returncode == 0
     formats = [line for line in proc.stdout.splitlines() if line.startswith("data formats:")]
     assert len(formats) == 1, proc.stdout
-    for name in ("CSV", "NumPy .npy", "MATLAB .mat (levels 5 and 7.3)", "HDF5", "matio "):
+    for name in ("CSV", "NumPy .npy", "MATLAB .mat levels 5 and 7.3", "HDF5", "matio "):
         assert name in formats[0], formats[0]
