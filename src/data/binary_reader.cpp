@@ -93,18 +93,8 @@ class BinaryReader final : public StreamReader {
     position_ += row_bytes_;
     for (const std::size_t field : needed_fields_) {
       const double value = load_double(bytes + sizeof(double) * field);
-      if (std::isnan(value)) {
-        if (!pass_over_missing(keys, field)) {
-          bad_value(field, value, std::string("expected a number (") + kMissingHint + ")");
-        }
-        continue;
-      }
-      if (!std::isfinite(value)) bad_value(field, value, "expected a finite number");
-      if (map_.output[field] >= 0) row[map_.output[field]] = value;
-      if (static_cast<int>(field) == map_.time) keys.t = value;
-      if (static_cast<int>(field) == map_.run && !to_run(value, keys.run)) {
-        bad_value(field, value, "expected an integer");
-      }
+      take_value(field, value, row, keys,
+                 [&](const std::string& expected) { bad_value(field, value, expected); });
     }
     return true;
   }

@@ -69,18 +69,8 @@ class ColumnStoreReader final : public StreamReader {
     for (std::size_t k = 0; k < plan.fields.size(); ++k) {
       const std::size_t field = plan.fields[k];
       const double value = chunk_[k][at];
-      if (std::isnan(value)) {
-        if (!pass_over_missing(keys, field)) {
-          bad_value(field, value, std::string("expected a number (") + kMissingHint + ")");
-        }
-        continue;
-      }
-      if (!std::isfinite(value)) bad_value(field, value, "expected a finite number");
-      if (map_.output[field] >= 0) row[map_.output[field]] = value;
-      if (static_cast<int>(field) == map_.time) keys.t = value;
-      if (static_cast<int>(field) == map_.run && !to_run(value, keys.run)) {
-        bad_value(field, value, "expected an integer");
-      }
+      take_value(field, value, row, keys,
+                 [&](const std::string& expected) { bad_value(field, value, expected); });
     }
     return true;
   }
@@ -172,8 +162,9 @@ class ColumnStoreReader final : public StreamReader {
   }
 
   [[noreturn]] void bad_value(std::size_t field, double value, const std::string& expected) {
-    fail(field_location(static_cast<int>(field)),
-         "'" + names_[field] + "': " + expected + ", found '" + shortest_decimal(value) + "'");
+    fail(field_location(static_cast<int>(field)), std::string(store_->kind()) + " '" +
+                                                      names_[field] + "': " + expected +
+                                                      ", found '" + shortest_decimal(value) + "'");
   }
 
   std::unique_ptr<ColumnStore> store_;

@@ -40,18 +40,8 @@ class MemoryReader final : public StreamReader {
     for (const std::size_t field : needed_fields_) {
       const MemoryColumn& column = data_.columns[field];
       const double value = column.values[row_ * column.stride];
-      if (std::isnan(value)) {
-        if (!pass_over_missing(keys, field)) {
-          bad_value(field, value, std::string("expected a number (") + kMissingHint + ")");
-        }
-        continue;
-      }
-      if (!std::isfinite(value)) bad_value(field, value, "expected a finite number");
-      if (map_.output[field] >= 0) row[map_.output[field]] = value;
-      if (static_cast<int>(field) == map_.time) keys.t = value;
-      if (static_cast<int>(field) == map_.run && !to_run(value, keys.run)) {
-        bad_value(field, value, "expected an integer");
-      }
+      take_value(field, value, row, keys,
+                 [&](const std::string& expected) { bad_value(field, value, expected); });
     }
     ++row_;
     return true;

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <cmath>
 #include <cstddef>
 #include <optional>
 #include <string>
@@ -60,6 +61,25 @@ class StreamReader : public DataReader {
     if (request_.layout.missing == MissingValues::kError) return false;
     if (keys.missing_field < 0) keys.missing_field = static_cast<int>(field);
     return true;
+  }
+
+  // Takes the value of requested field `field` into the row (or its time or run): NaN is a
+  // missing value (pass_over_missing, else an error), any other value must be finite. `bad`
+  // reports the value as not what was expected and does not return.
+  template <class Bad>
+  void take_value(std::size_t field, double value, double* row, RowKeys& keys, Bad&& bad) {
+    if (std::isnan(value)) {
+      if (!pass_over_missing(keys, field)) {
+        bad(std::string("expected a number (") + kMissingHint + ")");
+      }
+      return;
+    }
+    if (!std::isfinite(value)) bad("expected a finite number");
+    if (map_.output[field] >= 0) row[map_.output[field]] = value;
+    if (static_cast<int>(field) == map_.time) keys.t = value;
+    if (static_cast<int>(field) == map_.run && !to_run(value, keys.run)) {
+      bad("expected an integer");
+    }
   }
 
   std::string path_;

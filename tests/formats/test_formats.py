@@ -392,25 +392,25 @@ def bad_npy_lengths(d, c):
 
 def bad_npy_nan(d, c):
     np.save(d / "a.npy", matrix(with_nan(c)))
-    return (["a.npy", "--names", "t,y,v,x"], f"a.npy:100:2: 'y': {MISSING}, found 'nan'")
+    return (["a.npy", "--names", "t,y,v,x"], f"a.npy:100:2: column 'y': {MISSING}, found 'nan'")
 
 
 def bad_mat_nan(d, c):
     save_mat(d / "a.mat", with_nan(c))
-    return ["a.mat"], f"a.mat:100:2: 'y': {MISSING}, found 'nan'"
+    return ["a.mat"], f"a.mat:100:2: variable 'y': {MISSING}, found 'nan'"
 
 
 def bad_h5_nan(d, c):
     save_h5(d / "a.h5", with_nan(c))
     # HDF5 lists the datasets by name: t, v, x, y.
-    return ["a.h5"], f"a.h5:100:4: 'y': {MISSING}, found 'nan'"
+    return ["a.h5"], f"a.h5:100:4: dataset 'y': {MISSING}, found 'nan'"
 
 
 def bad_h5_infinity(d, c):
     c = cut(c)
     c["x"][6] = np.inf
     save_h5(d / "a.h5", c)
-    return ["a.h5"], "a.h5:7:3: 'x': expected a finite number, found 'inf'"
+    return ["a.h5"], "a.h5:7:3: dataset 'x': expected a finite number, found 'inf'"
 
 
 def bad_directory(d, c):
