@@ -82,6 +82,15 @@ const char* class_name(matio_classes type) {
   }
 }
 
+// Closed also when a constructor that opened it throws.
+struct MatClose {
+  void operator()(mat_t* file) const {
+    const MatioCall call;
+    Mat_Close(file);
+  }
+};
+using MatFile = std::unique_ptr<mat_t, MatClose>;
+
 struct VariableFree {
   void operator()(matvar_t* v) const { Mat_VarFree(v); }
 };
@@ -93,17 +102,13 @@ class MatStore final : public ColumnStore {
     list_variables();
     if (metadata_text_) read_metadata();
   }
-  ~MatStore() override {
-    const MatioCall call;
-    if (file_ != nullptr) Mat_Close(file_);
-  }
 
  private:
   void list_variables() {
     const MatioCall call;
-    file_ = Mat_Open(path_.c_str(), MAT_ACC_RDONLY);
-    if (file_ == nullptr) fail({path_, 1, 1, ""}, "cannot read the MATLAB file" + detail());
-    while (Variable info{Mat_VarReadNextInfo(file_)}) {
+    file_.reset(Mat_Open(path_.c_str(), MAT_ACC_RDONLY));
+    if (!file_) fail({path_, 1, 1, ""}, "cannot read the MATLAB file" + detail());
+    while (Variable info{Mat_VarReadNextInfo(file_.get())}) {
       if (info->name == nullptr) continue;
       const std::string name = info->name;
       if (name == kMetadataVariable && info->class_type == MAT_C_CHAR) {
@@ -159,7 +164,7 @@ class MatStore final : public ColumnStore {
     const Channel& c = channels_[channel];
     if (loaded_.count(c.variable) != 0) return;
     const MatioCall call;
-    Variable v{Mat_VarRead(file_, c.variable.c_str())};
+    Variable v{Mat_VarRead(file_.get(), c.variable.c_str())};
     if (!v || v->data == nullptr) {
       fail({path_, 1, static_cast<int>(channel) + 1, ""},
            "cannot read variable '" + c.variable + "'" + detail());
@@ -197,7 +202,7 @@ class MatStore final : public ColumnStore {
   std::optional<double> scalar(const std::string& name) override {
     if (std::find(scalars_.begin(), scalars_.end(), name) == scalars_.end()) return std::nullopt;
     const MatioCall call;
-    Variable v{Mat_VarRead(file_, name.c_str())};
+    Variable v{Mat_VarRead(file_.get(), name.c_str())};
     if (!v || v->data == nullptr) return std::nullopt;
     return v->class_type == MAT_C_DOUBLE ? *static_cast<const double*>(v->data)
                                          : static_cast<double>(*static_cast<const float*>(v->data));
@@ -215,7 +220,7 @@ class MatStore final : public ColumnStore {
   // The metadata lines a momentid writer stores in a text variable (`# momentid: dt=0.01 ...`).
   void read_metadata() {
     const MatioCall call;
-    Variable v{Mat_VarRead(file_, kMetadataVariable)};
+    Variable v{Mat_VarRead(file_.get(), kMetadataVariable)};
     if (!v || v->data == nullptr || v->rank != 2) return;
     const std::size_t count = v->dims[0] * v->dims[1];
     std::string text;
@@ -241,7 +246,7 @@ class MatStore final : public ColumnStore {
   }
 
   std::string path_;
-  mat_t* file_ = nullptr;
+  MatFile file_;
   std::vector<std::string> names_, scalars_;
   std::vector<Channel> channels_;
   std::map<std::string, std::string> unusable_;  // variable -> why it is no channel
