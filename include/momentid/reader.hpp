@@ -142,12 +142,17 @@ struct MemoryData {
 class DataSource {
  public:
   static DataSource file(std::string path);
+  // Several files, read one after the other as one record of many runs: a file's runs are
+  // never joined to the next file's. The files may be of different formats, and must have the
+  // requested columns and the same sample interval (DataError at the first that does not).
+  // One path is file().
+  static DataSource files(std::vector<std::string> paths);
   static DataSource memory(MemoryData data);
   // Standard input, read to its end now into a temporary file that the source (and its copies)
   // owns and removes; named `<stdin>` in messages. Throws Error when it cannot be stored.
   static DataSource standard_input();
 
-  // The path, or MemoryData::name.
+  // The path (the first and how many more, for several), or MemoryData::name.
   const std::string& name() const { return name_; }
   std::unique_ptr<DataReader> open(const ColumnRequest& request) const;
 
@@ -155,6 +160,7 @@ class DataSource {
   std::string name_;
   std::optional<MemoryData> memory_;
   std::shared_ptr<const std::string> stored_;  // the file standard input was stored in
+  std::vector<std::string> paths_;              // several files
 };
 
 }  // namespace momentid

@@ -13,8 +13,7 @@ namespace momentid::cli {
 namespace {
 
 struct CheckCommand {
-  std::string data;
-  std::string model;
+  std::vector<std::string> data;  // the model, if any, among them
   CheckOptions options;
   std::string hold;
   std::vector<std::string> columns;
@@ -22,15 +21,22 @@ struct CheckCommand {
 
 int run_check(CheckCommand& command) {
   std::optional<Model> model;
-  // Either order: `check MODEL DATA` is read as `check DATA MODEL`.
-  if (!command.model.empty() && !is_model_file(command.model) && is_model_file(command.data)) {
-    std::swap(command.model, command.data);
+  // The model is the last argument, or the first (`check MODEL DATA`), when it is one.
+  std::vector<std::string>& files = command.data;
+  if (files.size() > 1 && is_model_file(files.back())) {
+    model = parse_model_file(files.back());
+    files.pop_back();
+  } else if (files.size() > 1 && is_model_file(files.front())) {
+    model = parse_model_file(files.front());
+    files.erase(files.begin());
+  } else if (files.size() == 2) {
+    model = parse_model_file(files.back());  // reports why it is no model
+    files.pop_back();
   }
-  if (!command.model.empty()) model = parse_model_file(command.model);
   command.options.hold = hold_option(command.hold);
   command.options.columns = column_map(command.columns);
   const CheckResult result =
-      check(data_source(command.data), model ? &*model : nullptr, command.options);
+      check(data_sources(files), model ? &*model : nullptr, command.options);
   std::cout << format_text(result);
   return 0;
 }
@@ -41,9 +47,10 @@ Command add_check(CLI::App& app) {
   auto command = std::make_shared<CheckCommand>();
   CLI::App* sub = app.add_subcommand(
       "check", "statistics of a data file: autocorrelations, smoothness, stationarity");
-  sub->add_option("DATA", command->data, "data file (CSV or binary), - for standard input")
+  sub->add_option("DATA", command->data,
+                  "data files (globs and @LIST files too), then optionally a model file whose "
+                  "stationarity identities to check; - for standard input")
       ->required();
-  sub->add_option("MODEL", command->model, "model file: check its stationarity identities");
   sub->add_option("--lags", command->options.lags, "autocorrelation lags")
       ->check(CLI::Range(std::size_t{1}, CheckOptions::kMaxLags));
   sub->add_option("--input-hold", command->hold, "how the inputs were sampled")

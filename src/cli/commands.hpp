@@ -42,6 +42,10 @@ void add_layout_options(CLI::App* command, FileLayout& layout);
 
 // The data argument: a file, or standard input for `-`.
 DataSource data_source(const std::string& path);
+// The data of several arguments: files, glob patterns (`runs/*.h5`) and `@LIST` files that name
+// one file (or pattern) per line (blank lines and `#` lines skipped), in order; `-` alone is
+// standard input. Throws UsageError for a pattern that matches nothing or an unreadable list.
+DataSource data_sources(const std::vector<std::string>& arguments);
 // `--columns v=velocity,x=force`: the model's names mapped to the data's columns.
 std::map<std::string, std::string> column_map(const std::vector<std::string>& entries);
 // `NAME=VALUE,NAME=VALUE` for `option`, whose entries are described as `expected`.

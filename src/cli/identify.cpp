@@ -17,7 +17,7 @@ namespace {
 
 struct IdentifyCommand {
   std::string model;
-  std::string data;
+  std::vector<std::string> data;
   std::optional<std::string> multipliers;
   IdentifyOptions options;
   std::string hold;
@@ -58,7 +58,8 @@ std::optional<std::map<std::string, double>> noise_option(const Model& model,
 }
 
 int run_identify(IdentifyCommand& command) {
-  const Model model = model_argument(command.model, command.data, "identify MODEL DATA");
+  const Model model =
+      model_argument(command.model, command.data.front(), "identify MODEL DATA...");
   IdentifyOptions& options = command.options;
   if (command.multipliers) {
     options.multipliers = parse_multiplier_list(model, *command.multipliers, "--multipliers");
@@ -83,7 +84,7 @@ int run_identify(IdentifyCommand& command) {
   } else {
     options.center = command.center;
   }
-  const IdentifyResult result = identify(model, data_source(command.data), options);
+  const IdentifyResult result = identify(model, data_sources(command.data), options);
   std::cout << (command.format == "json" ? format_json(result) : format_text(result));
   if (result.estimate.status == Estimate::Status::kNothingIdentifiable) {
     std::cerr << "momentid: nothing identifiable: " << result.estimate.message << "\n";
@@ -100,7 +101,9 @@ Command add_identify(CLI::App& app) {
   CLI::App* sub = app.add_subcommand(
       "identify", "estimate the parameters of a model from data, with standard errors");
   sub->add_option("MODEL", command->model, "model file")->required();
-  sub->add_option("DATA", command->data, "data file (CSV or binary), - for standard input")
+  sub->add_option("DATA", command->data,
+                  "data files (CSV, binary, .npy, .mat, HDF5), glob patterns or @LIST files "
+                  "naming one per line, each file its own runs; - for standard input")
       ->required();
   auto* multipliers =
       sub->add_option("--multipliers", command->multipliers, "multipliers, as for derive");

@@ -1,4 +1,7 @@
+#include <glob.h>
+
 #include <algorithm>
+#include <fstream>
 #include <charconv>
 #include <filesystem>
 #include <string_view>
@@ -67,6 +70,48 @@ void add_layout_options(CLI::App* command, FileLayout& layout) {
 
 DataSource data_source(const std::string& path) {
   return path == "-" ? DataSource::standard_input() : DataSource::file(path);
+}
+
+namespace {
+
+void add_paths(const std::string& argument, std::vector<std::string>& out, int depth) {
+  if (argument.starts_with('@') && argument.size() > 1 && depth < 8) {
+    std::ifstream list(argument.substr(1));
+    if (!list) throw UsageError("cannot read the list file '" + argument.substr(1) + "'");
+    std::string line;
+    while (std::getline(list, line)) {
+      const std::size_t begin = line.find_first_not_of(" \t\r");
+      if (begin == std::string::npos || line[begin] == '#') continue;
+      const std::size_t end = line.find_last_not_of(" \t\r");
+      add_paths(line.substr(begin, end - begin + 1), out, depth + 1);
+    }
+    return;
+  }
+  if (argument.find_first_of("*?[") == std::string::npos) {
+    out.push_back(argument);
+    return;
+  }
+  glob_t found{};
+  const int status = glob(argument.c_str(), 0, nullptr, &found);
+  if (status != 0) {
+    globfree(&found);
+    throw UsageError("no file matches '" + argument + "'");
+  }
+  for (std::size_t i = 0; i < found.gl_pathc; ++i) out.emplace_back(found.gl_pathv[i]);
+  globfree(&found);
+}
+
+}  // namespace
+
+DataSource data_sources(const std::vector<std::string>& arguments) {
+  if (arguments.size() == 1 && arguments.front() == "-") return DataSource::standard_input();
+  std::vector<std::string> paths;
+  for (const std::string& argument : arguments) {
+    if (argument == "-") throw UsageError("- (standard input) must be the only data argument");
+    add_paths(argument, paths, 0);
+  }
+  if (paths.empty()) throw UsageError("the data arguments name no file");
+  return DataSource::files(std::move(paths));
 }
 
 std::map<std::string, std::string> column_map(const std::vector<std::string>& entries) {

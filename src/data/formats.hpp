@@ -51,6 +51,10 @@ std::unique_ptr<DataReader> open_csv(File file, const std::string& path,
 
 namespace momentid::data {
 
+// Reads several files one after the other (DataSource::files).
+std::unique_ptr<DataReader> open_chain(const std::vector<std::string>& paths,
+                                       const ColumnRequest& request);
+
 // Reads columns in memory; `data` must outlive the reader.
 std::unique_ptr<DataReader> open_memory(const MemoryData& data, const ColumnRequest& request);
 

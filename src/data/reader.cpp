@@ -77,6 +77,16 @@ DataSource DataSource::file(std::string path) {
   return source;
 }
 
+DataSource DataSource::files(std::vector<std::string> paths) {
+  if (paths.size() == 1) return file(std::move(paths.front()));
+  DataSource source;
+  source.name_ = paths.empty() ? std::string("<no files>")
+                               : paths.front() + " and " + std::to_string(paths.size() - 1) +
+                                     (paths.size() == 2 ? " more file" : " more files");
+  source.paths_ = std::move(paths);
+  return source;
+}
+
 DataSource DataSource::memory(MemoryData data) {
   DataSource source;
   source.name_ = data.name;
@@ -118,6 +128,7 @@ DataSource DataSource::standard_input() {
 
 std::unique_ptr<DataReader> DataSource::open(const ColumnRequest& request) const {
   if (memory_) return data::open_memory(*memory_, request);
+  if (!paths_.empty()) return data::open_chain(paths_, request);
   if (stored_) return DataReader::open(*stored_, request, name_);
   return DataReader::open(name_, request);
 }
