@@ -6,8 +6,10 @@
 
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <limits>
 #include <memory>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -110,6 +112,40 @@ TEST_SUITE("app") {
       CHECK(std::isnan(fixed.estimate.correlation[1][0]));
       CHECK(momentid::format_json(fixed).find("\"fixed\": true") != std::string::npos);
       CHECK(momentid::format_text(fixed).find("fixed\n") != std::string::npos);
+    }
+  }
+
+  TEST_CASE("a record split into files gives the estimates of the same runs in one file") {
+    const DuffingFile whole(4000, 2);
+    // The runs of the whole file, each in a file of its own.
+    std::ifstream in(whole.path);
+    std::string line, header;
+    std::vector<std::string> metadata;
+    std::vector<std::ostringstream> parts(2);
+    while (std::getline(in, line)) {
+      if (line.starts_with("#")) {
+        metadata.push_back(line);
+      } else if (header.empty()) {
+        header = line.substr(0, line.rfind(','));  // without `run`
+      } else {
+        const std::size_t comma = line.rfind(',');
+        parts[std::stoul(line.substr(comma + 1)) - 1] << line.substr(0, comma) << "\n";
+      }
+    }
+    std::vector<std::string> paths;
+    for (std::size_t k = 0; k < parts.size(); ++k) {
+      paths.push_back(whole.path.string() + ".part" + std::to_string(k));
+      std::ofstream out(paths.back());
+      for (const std::string& m : metadata) out << m << "\n";
+      out << header << "\n" << parts[k].str();
+    }
+    const auto a = momentid::identify(whole.model, momentid::DataSource::file(whole.path.string()));
+    const auto b = momentid::identify(whole.model, momentid::DataSource::files(paths));
+    for (const std::string& p : paths) std::filesystem::remove(p);
+    CHECK(b.data.runs == 2);
+    for (std::size_t i = 0; i < a.parameters().size(); ++i) {
+      CHECK(a.parameters()[i].estimate == b.parameters()[i].estimate);
+      CHECK(a.parameters()[i].std_error == b.parameters()[i].std_error);
     }
   }
 

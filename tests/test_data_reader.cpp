@@ -347,6 +347,50 @@ TEST_SUITE("data reader") {
     CHECK(contents.time_step == 0.125);
   }
 
+  // --- Several files -------------------------------------------------------------------------
+
+  TEST_CASE("several files are one record whose files are never joined") {
+    const TempFile a("t,y,run\n0,1,1\n1,2,1\n0,3,2\n1,4,2\n");
+    const TempFile b("# momentid: dt=1\ny\n5\n6\n7\n");
+    const auto reader = momentid::DataSource::files({a.path(), b.path()}).open(columns({"y"}));
+    std::vector<double> values;
+    std::vector<bool> starts;
+    DataBlock block;
+    while (reader->next(block, 100)) {
+      starts.push_back(block.run_starts);
+      values.insert(values.end(), block.values.begin(), block.values.end());
+    }
+    CHECK(values == std::vector<double>{1, 2, 3, 4, 5, 6, 7});
+    CHECK(starts == std::vector<bool>{true, true, true});  // two runs in a, one in b
+    CHECK(reader->rows_read() == 7);
+    CHECK(reader->time_step() == 1);
+    CHECK(momentid::DataSource::files({a.path(), b.path()}).name() ==
+          a.path() + " and 1 more file");
+  }
+
+  TEST_CASE("files of several sample intervals, or too few rows in all, are refused") {
+    const TempFile a("t,y\n0,1\n1,2\n");
+    const TempFile b("t,y\n0,1\n0.5,2\n");
+    const auto read = [](const momentid::DataSource& source, const ColumnRequest& request) {
+      const auto reader = source.open(request);
+      DataBlock block;
+      while (reader->next(block, 100)) {
+      }
+    };
+    const DataError e = error_from<DataError>([&] {
+      read(momentid::DataSource::files({a.path(), b.path()}), columns({"y"}));
+    });
+    CHECK(std::string(e.what()) == b.path() + ":1:1: this file has dt = 0.5, but " + a.path() +
+                                       " has dt = 1: the files of one identification need one "
+                                       "interval");
+    ColumnRequest request = columns({"y"});
+    request.min_rows = 5;
+    const DataError few = error_from<DataError>([&] {
+      read(momentid::DataSource::files({a.path(), a.path()}), request);
+    });
+    CHECK(few.message() == "the data have 4 rows in 2 files; at least 5 are needed");
+  }
+
   // --- Blocks and runs ------------------------------------------------------------------------
 
   TEST_CASE("splits blocks at max_rows and where the run changes") {

@@ -35,8 +35,7 @@ int run_check(CheckCommand& command) {
   }
   command.options.hold = hold_option(command.hold);
   command.options.columns = column_map(command.columns);
-  const CheckResult result =
-      check(data_sources(files), model ? &*model : nullptr, command.options);
+  const CheckResult result = check(data_sources(files), model ? &*model : nullptr, command.options);
   std::cout << format_text(result);
   return 0;
 }

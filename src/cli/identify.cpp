@@ -58,8 +58,7 @@ std::optional<std::map<std::string, double>> noise_option(const Model& model,
 }
 
 int run_identify(IdentifyCommand& command) {
-  const Model model =
-      model_argument(command.model, command.data.front(), "identify MODEL DATA...");
+  const Model model = model_argument(command.model, command.data.front(), "identify MODEL DATA...");
   IdentifyOptions& options = command.options;
   if (command.multipliers) {
     options.multipliers = parse_multiplier_list(model, *command.multipliers, "--multipliers");

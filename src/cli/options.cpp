@@ -1,9 +1,9 @@
 #include <glob.h>
 
 #include <algorithm>
-#include <fstream>
 #include <charconv>
 #include <filesystem>
+#include <fstream>
 #include <string_view>
 
 #include "cli/commands.hpp"
