@@ -22,7 +22,8 @@ bool LineReader::next(std::string_view& line) {
   for (;;) {
     const char* const start = buffer_.data() + begin_;
     const std::size_t available = end_ - begin_;
-    const void* const newline = std::memchr(start, '\n', available);
+    // (An empty buffer may have no storage: memchr must not see its null pointer.)
+    const void* const newline = available == 0 ? nullptr : std::memchr(start, '\n', available);
     if (newline != nullptr) {
       const std::size_t length = static_cast<const char*>(newline) - start;
       begin_ += length + 1;
