@@ -264,7 +264,8 @@ def identify(model: Union[Model, PathLike], data: Any, *, columns: Optional[Sequ
 
     model: a Model or a model file's path.
     data: a mapping of column name to 1-D array (a dict of numpy arrays, a pandas DataFrame),
-      a 2-D array with `columns` naming its columns, or a data file's path (CSV or binary).
+      a 2-D array with `columns` naming its columns, a data file's path, or a list of paths
+      (read one after the other as one record whose files are never joined).
       Columns are named as in a file: the model's variables, `t` for the sample times and `run`
       to separate records. float64 arrays are read in place, strided ones too; other real
       dtypes are converted. Without a `t` column give `dt`. A path may name a CSV, binary,
@@ -434,6 +435,10 @@ def _data_of(data: Any, columns: Optional[Sequence[str]]):
         if columns is not None:
             raise UsageError("columns: only for a 2-D array; a file names its own columns")
         return _os.fspath(data), "", {}, None
+    if (isinstance(data, (list, tuple)) and data
+            and all(isinstance(d, (str, _os.PathLike)) for d in data)):
+        # Several files: one record whose files are never joined.
+        return [_os.fspath(d) for d in data], "", {}, None
     metadata = dict(getattr(data, "metadata", None) or {})
     if isinstance(data, _np.ndarray) and data.ndim == 2:
         if columns is None or len(columns) != data.shape[1]:

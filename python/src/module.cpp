@@ -57,12 +57,16 @@ void translate(std::exception_ptr thrown) {
 DataSource data_source(const py::object& data, const std::string& name,
                        const std::map<std::string, std::string>& metadata) {
   if (py::isinstance<py::str>(data)) return DataSource::file(data.cast<std::string>());
+  const auto items = data.cast<py::list>();
+  if (!items.empty() && py::isinstance<py::str>(items[0])) {
+    return DataSource::files(data.cast<std::vector<std::string>>());
+  }
   MemoryData memory;
   memory.name = name;
   DataMetadata::Line line(metadata.begin(), metadata.end());
   if (!line.empty()) memory.metadata.add_line(std::move(line));
   bool first = true;
-  for (const py::handle item : data.cast<py::list>()) {
+  for (const py::handle item : items) {
     const auto pair = item.cast<py::tuple>();
     const std::string column = pair[0].cast<std::string>();
     const auto array = pair[1].cast<py::array>();

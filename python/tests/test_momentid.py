@@ -498,3 +498,25 @@ def test_identify_has_help():
     text = pydoc.render_doc(momentid.identify, renderer=pydoc.plaintext)
     assert "data" in text and "Returns" in text
     assert "data" in momentid.identify.__doc__ and "Returns" in momentid.identify.__doc__
+
+
+# --- 11. several files ----------------------------------------------------------------------------
+
+def test_list_of_files_is_one_record_of_their_runs(duffing, tmp_path):
+    """Two files give the estimates of the same two runs in one file."""
+    both = tmp_path / "both.csv"
+    momentid.simulate(duffing, samples=3000, seed=5, runs=2, inputs={"x": INPUT}, path=both)
+    lines = both.read_text().splitlines()
+    metadata = [line for line in lines if line.startswith("#")]
+    header, *rows = [line for line in lines if not line.startswith("#")]
+    paths = []
+    for run in ("1", "2"):
+        path = tmp_path / f"run{run}.csv"
+        kept = [row.rsplit(",", 1)[0] for row in rows if row.rsplit(",", 1)[1] == run]
+        path.write_text("\n".join(metadata + [header.rsplit(",", 1)[0]] + kept) + "\n")
+        paths.append(path)
+    whole = momentid.identify(duffing, both)
+    split = momentid.identify(duffing, paths)
+    assert split.diagnostics["runs"] == 2
+    assert split.estimates == whole.estimates
+    assert split.std_errors == whole.std_errors
