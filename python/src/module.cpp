@@ -21,10 +21,9 @@ namespace py = pybind11;
 namespace momentid::python {
 namespace {
 
-// Raises the module's exception for `kind` (a class of momentid/__init__.py) with the message
-// and, for a located error, its place.
-[[noreturn]] void raise(const char* kind, const std::string& message,
-                        const SourceLocation* where = nullptr) {
+// Sets the module's exception for `kind` (a class of momentid/__init__.py) with the message
+// and, for a located error, its place, as an exception translator must.
+void raise(const char* kind, const std::string& message, const SourceLocation* where = nullptr) {
   py::object type = py::module_::import("momentid").attr(kind);
   py::object error = type(message);
   if (where != nullptr) {
@@ -34,7 +33,6 @@ namespace {
     error.attr("source_line") = where->text;
   }
   PyErr_SetObject(type.ptr(), error.ptr());
-  throw py::error_already_set();
 }
 
 void translate(std::exception_ptr thrown) {
@@ -106,7 +104,7 @@ const char* describe() {
   } else if constexpr (std::is_same_v<T, std::string>) {
     return "a string";
   } else {
-    return "of the documented type";
+    return "of the type documented";
   }
 }
 
