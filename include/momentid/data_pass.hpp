@@ -1,5 +1,6 @@
 #pragma once
 
+#include <functional>
 #include <map>
 #include <optional>
 #include <string>
@@ -43,6 +44,9 @@ struct DataOptions {
   // The sample interval, overriding the data's (ColumnRequest::dt).
   std::optional<double> dt;
   FileLayout layout;
+  // Called after each block with the rows read so far and the fraction of the data read, when
+  // known (e.g. to show progress); none: nothing is called.
+  std::function<void(std::size_t rows, std::optional<double> fraction)> progress;
 };
 
 // What one pass over a data file yields.

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstddef>
+#include <functional>
 #include <map>
 #include <memory>
 #include <optional>
@@ -54,6 +55,8 @@ struct IdentifyOptions {
   // Model variables whose mean is removed before the moments are formed (a sensor offset on a
   // symmetric system): the means come from a first pass over the data.
   std::vector<std::string> center;
+  // Progress of each pass over the data (DataOptions::progress).
+  std::function<void(std::size_t rows, std::optional<double> fraction)> progress;
 
   static constexpr std::size_t kMinBatches = 2, kMaxBatches = 10000, kDefaultBatches = 50;
   static constexpr int kMaxDegree = 12;

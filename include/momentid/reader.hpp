@@ -114,6 +114,8 @@ class DataReader {
   virtual std::size_t rows_read() const = 0;
   // Rows dropped so far for missing values (FileLayout::missing).
   virtual const MissingSummary& missing() const = 0;
+  // How much of the data has been read, from 0 to 1, when the reader can tell.
+  virtual std::optional<double> fraction_read() const { return std::nullopt; }
 };
 
 // Columns held in memory by the caller, e.g. numpy arrays: no copy is made, so the values must
@@ -160,7 +162,7 @@ class DataSource {
   std::string name_;
   std::optional<MemoryData> memory_;
   std::shared_ptr<const std::string> stored_;  // the file standard input was stored in
-  std::vector<std::string> paths_;              // several files
+  std::vector<std::string> paths_;             // several files
 };
 
 }  // namespace momentid

@@ -7,6 +7,7 @@
 #include <utility>
 
 #include "cli/commands.hpp"
+#include "cli/progress.hpp"
 #include "momentid/model.hpp"
 
 namespace momentid::cli {
@@ -14,6 +15,7 @@ namespace {
 
 struct CheckCommand {
   std::vector<std::string> data;  // the model, if any, among them
+  bool quiet = false;
   CheckOptions options;
   std::string hold;
   std::vector<std::string> columns;
@@ -35,7 +37,10 @@ int run_check(CheckCommand& command) {
   }
   command.options.hold = hold_option(command.hold);
   command.options.columns = column_map(command.columns);
+  TerminalProgress progress(!command.quiet);
+  command.options.progress = progress.callback();
   const CheckResult result = check(data_sources(files), model ? &*model : nullptr, command.options);
+  progress.finish();
   std::cout << format_text(result);
   return 0;
 }
@@ -59,6 +64,8 @@ Command add_check(CLI::App& app) {
       ->check(CLI::PositiveNumber);
   sub->add_option("--columns", command->columns, "NAME=COLUMN: where a model variable is");
   add_layout_options(sub, command->options.layout);
+  sub->add_flag("-q,--quiet", command->quiet,
+                "no progress on standard error (shown only on a terminal)");
   return {sub, [command] { return run_check(*command); }};
 }
 

@@ -9,6 +9,7 @@
 #include <memory>
 
 #include "cli/commands.hpp"
+#include "cli/progress.hpp"
 #include "momentid/model.hpp"
 #include "momentid/simulate.hpp"
 
@@ -18,6 +19,7 @@ namespace {
 struct IdentifyCommand {
   std::string model;
   std::vector<std::string> data;
+  bool quiet = false;
   std::optional<std::string> multipliers;
   IdentifyOptions options;
   std::string hold;
@@ -83,7 +85,10 @@ int run_identify(IdentifyCommand& command) {
   } else {
     options.center = command.center;
   }
+  TerminalProgress progress(!command.quiet && command.format != "json");
+  options.progress = progress.callback();
   const IdentifyResult result = identify(model, data_sources(command.data), options);
+  progress.finish();
   std::cout << (command.format == "json" ? format_json(result) : format_text(result));
   if (result.estimate.status == Estimate::Status::kNothingIdentifiable) {
     std::cerr << "momentid: nothing identifiable: " << result.estimate.message << "\n";
@@ -147,6 +152,8 @@ Command add_identify(CLI::App& app) {
                   "moments: a sensor offset on a symmetric system")
       ->delimiter(',');
   add_layout_options(sub, options.layout);
+  sub->add_flag("-q,--quiet", command->quiet,
+                "no progress on standard error (shown only on a terminal, never with JSON)");
   return {sub, [command] { return run_identify(*command); }};
 }
 

@@ -99,6 +99,8 @@ class BinaryReader final : public StreamReader {
     return true;
   }
 
+  std::optional<double> fraction_read() const override { return file_fraction(file_.get()); }
+
   SourceLocation field_location(int field) const override {
     return {path_, clamp_to_int(row_number_), field + 1, ""};
   }

@@ -49,6 +49,12 @@ class ChainReader final : public DataReader {
   }
 
   std::size_t rows_read() const override { return rows_; }
+
+  // Each file counts alike.
+  std::optional<double> fraction_read() const override {
+    const double within = current_->fraction_read().value_or(0);
+    return (static_cast<double>(file_) + within) / static_cast<double>(paths_.size());
+  }
   const MissingSummary& missing() const override { return missing_; }
 
  private:

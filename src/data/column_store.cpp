@@ -75,6 +75,16 @@ class ColumnStoreReader final : public StreamReader {
     return true;
   }
 
+  std::optional<double> fraction_read() const override {
+    std::size_t total = 0, done = row_;
+    for (std::size_t r = 0; r < runs_.size(); ++r) {
+      total += runs_[r].rows;
+      if (r < run_) done += runs_[r].rows;
+    }
+    if (total == 0) return std::nullopt;
+    return static_cast<double>(done) / static_cast<double>(total);
+  }
+
   SourceLocation field_location(int field) const override {
     return {path_, clamp_to_int(static_cast<long long>(row_)), field + 1, ""};
   }

@@ -79,6 +79,8 @@ class CsvReader final : public StreamReader {
     return true;
   }
 
+  std::optional<double> fraction_read() const override { return file_fraction(file_.get()); }
+
   SourceLocation field_location(int field) const override {
     return location(field_starts_[static_cast<std::size_t>(field)]);
   }

@@ -47,6 +47,11 @@ class MemoryReader final : public StreamReader {
     return true;
   }
 
+  std::optional<double> fraction_read() const override {
+    if (data_.rows == 0) return std::nullopt;
+    return static_cast<double>(row_) / static_cast<double>(data_.rows);
+  }
+
   SourceLocation field_location(int field) const override {
     return {path_, clamp_to_int(static_cast<long long>(row_)), field + 1, ""};
   }

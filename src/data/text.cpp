@@ -1,5 +1,7 @@
 #include "data/text.hpp"
 
+#include <sys/stat.h>
+
 #include <algorithm>
 #include <array>
 #include <cerrno>
@@ -70,6 +72,16 @@ SourceLocation text_location(const std::string& path, long long line, std::size_
 
 [[noreturn]] void fail(SourceLocation where, const std::string& message) {
   throw DataError(std::move(where), message);
+}
+
+std::optional<double> file_fraction(std::FILE* file) {
+  struct stat info;
+  if (fstat(fileno(file), &info) != 0 || !S_ISREG(info.st_mode) || info.st_size <= 0) {
+    return std::nullopt;
+  }
+  const long at = std::ftell(file);
+  if (at < 0) return std::nullopt;
+  return std::min(1.0, static_cast<double>(at) / static_cast<double>(info.st_size));
 }
 
 std::size_t read_fully(std::FILE* file, const std::string& path, void* into, std::size_t size) {

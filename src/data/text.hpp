@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -75,6 +76,9 @@ SourceLocation text_location(const std::string& path, long long line, std::size_
                              std::string_view text);
 
 [[noreturn]] void fail(SourceLocation where, const std::string& message);
+
+// The position in `file` as a fraction of its size; nullopt for a pipe or an empty file.
+std::optional<double> file_fraction(std::FILE* file);
 
 // Reads up to `size` bytes, fewer only at the end of the file.
 std::size_t read_fully(std::FILE* file, const std::string& path, void* into, std::size_t size);

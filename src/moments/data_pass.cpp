@@ -1,6 +1,7 @@
 #include "momentid/data_pass.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <condition_variable>
 #include <cstdio>
@@ -229,6 +230,8 @@ DataMoments moments_from_data(const DataSource& source, const std::vector<std::s
   InputShift shift(states.size(), inputs.size(), options.input_shift);
 
   BlockQueue queue(3);
+  // The reader's progress, as the producer last saw it (the reader is the producer's alone).
+  std::atomic<double> fraction{-1};
   std::thread producer([&] {
     try {
       while (auto block = queue.take_free()) {
@@ -236,6 +239,7 @@ DataMoments moments_from_data(const DataSource& source, const std::vector<std::s
           queue.give_free(std::move(block));
           break;
         }
+        if (options.progress) fraction = reader->fraction_read().value_or(-1);
         queue.push_full(std::move(block));
       }
       queue.finish(nullptr);
@@ -265,6 +269,10 @@ DataMoments moments_from_data(const DataSource& source, const std::vector<std::s
       }
       lags.add(block->values.data(), block->rows);
       out.rows += block->rows;
+      if (options.progress) {
+        const double f = fraction;
+        options.progress(out.rows, f >= 0 ? std::optional<double>(f) : std::nullopt);
+      }
       queue.give_free(std::move(block));
     }
   } catch (...) {
