@@ -118,7 +118,7 @@ TEST_SUITE("formats") {
         layout.column_names = {"t", "y", "x"};
       }
       const Table copy = read_all(dir / name, layout);
-      for (const std::string& c : {"t", "y", "x"}) {
+      for (const char* c : {"t", "y", "x"}) {
         const auto& a = column(original, c);
         const auto& b = column(copy, c);
         REQUIRE(a.size() == b.size());

@@ -261,6 +261,10 @@ std::vector<double> noise_standard_deviations(const Model& model, const Simulati
 DataMetadata simulation_metadata(const Model& model, const SimulationOptions& options,
                                  const std::vector<double>& noise_sd = {});
 
+// The indices (states, then inputs) of the channels that `options.observe` names, in its order;
+// every channel when it is empty. The options must be valid (SimulationOptions::validate).
+std::vector<std::size_t> observed_channels(const Model& model, const SimulationOptions& options);
+
 // Simulates into a data file in the layout of `momentid simulate`: columns t, the observed
 // channels (by default the states, then the inputs) and, for several runs, `run` (from 1), after
 // simulation_metadata(); written whole or not at all (see DataWriter). `path` "-" is standard

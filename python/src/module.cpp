@@ -82,9 +82,9 @@ DataSource data_source(const py::object& data, const std::string& name,
                        memory.columns.front().name + "' has " + std::to_string(memory.rows) +
                        ": every column needs one value per sample");
     }
-    memory.columns.push_back({column, static_cast<const double*>(array.data()),
-                              static_cast<std::size_t>(array.strides(0) /
-                                                       static_cast<py::ssize_t>(sizeof(double)))});
+    memory.columns.push_back(
+        {column, static_cast<const double*>(array.data()),
+         static_cast<std::size_t>(array.strides(0) / static_cast<py::ssize_t>(sizeof(double)))});
   }
   if (first) throw UsageError("the data have no columns");
   return DataSource::memory(std::move(memory));
@@ -139,8 +139,8 @@ FileLayout layout_of(const py::dict& options) {
     } else if (*missing == "split-run") {
       layout.missing = MissingValues::kSplitRun;
     } else {
-      throw UsageError("missing: expected 'error', 'drop-row' or 'split-run', found '" +
-                       *missing + "'");
+      throw UsageError("missing: expected 'error', 'drop-row' or 'split-run', found '" + *missing +
+                       "'");
     }
   }
   return layout;
@@ -364,15 +364,7 @@ py::tuple simulate_record(const Model& model, const py::dict& options) {
   }
   simulation.validate(model);
   const std::vector<std::string>& variables = model.variables();
-  std::vector<std::size_t> channels;
-  if (simulation.observe.empty()) {
-    for (std::size_t c = 0; c < variables.size(); ++c) channels.push_back(c);
-  } else {
-    for (const std::string& name : simulation.observe) {
-      channels.push_back(static_cast<std::size_t>(
-          std::find(variables.begin(), variables.end(), name) - variables.begin()));
-    }
-  }
+  const std::vector<std::size_t> channels = observed_channels(model, simulation);
   const auto rows = static_cast<py::ssize_t>(simulation.samples * simulation.runs);
   py::dict out;
   py::array_t<double> time(rows);
@@ -533,18 +525,18 @@ PYBIND11_MODULE(_momentid, m) {
     return py::make_tuple(d.text, d.latex, d.json, d.equations);
   });
 
-  m.def("_identify", [](const Model& model, const py::object& data, const std::string& name,
-                        const std::map<std::string, std::string>& metadata,
-                        const py::dict& options) {
-    const IdentifyOptions identify_with = identify_options(model, options);
-    const DataSource source = data_source(data, name, metadata);
-    std::optional<IdentifyResult> result;
-    {
-      py::gil_scoped_release release;
-      result = identify(model, source, identify_with);
-    }
-    return py::make_tuple(format_text(*result), format_json(*result));
-  });
+  m.def("_identify",
+        [](const Model& model, const py::object& data, const std::string& name,
+           const std::map<std::string, std::string>& metadata, const py::dict& options) {
+          const IdentifyOptions identify_with = identify_options(model, options);
+          const DataSource source = data_source(data, name, metadata);
+          std::optional<IdentifyResult> result;
+          {
+            py::gil_scoped_release release;
+            result = identify(model, source, identify_with);
+          }
+          return py::make_tuple(format_text(*result), format_json(*result));
+        });
 
   m.def("_check", [](const py::object& model, const py::object& data, const std::string& name,
                      const std::map<std::string, std::string>& metadata, const py::dict& options) {
@@ -569,24 +561,23 @@ PYBIND11_MODULE(_momentid, m) {
   m.def("_simulate", &simulate_record);
 
   m.def("_replay", [](const Model& model, const py::object& data, const std::string& name,
-                      const std::map<std::string, std::string>& metadata,
-                      const py::dict& options) {
+                      const std::map<std::string, std::string>& metadata, const py::dict& options) {
     return replay_record(model, data_source(data, name, metadata), options);
   });
 
-  m.def("_validate", [](const Model& model, const py::object& data, const std::string& name,
-                        const std::map<std::string, std::string>& metadata,
-                        const py::dict& options) {
-    const ValidateOptions validate_with = validate_options(model, options);
-    const DataSource source = data_source(data, name, metadata);
-    std::optional<ValidateResult> result;
-    {
-      py::gil_scoped_release release;
-      result = validate(model, source, validate_with);
-    }
-    result->parameters_from =
-        get<std::string>(options, "parameters_from").value_or("the model's nominal values");
-    if (auto plot = get<std::string>(options, "plot")) write_plot(*result, *plot);
-    return py::make_tuple(format_text(*result), format_json(*result));
-  });
+  m.def("_validate",
+        [](const Model& model, const py::object& data, const std::string& name,
+           const std::map<std::string, std::string>& metadata, const py::dict& options) {
+          const ValidateOptions validate_with = validate_options(model, options);
+          const DataSource source = data_source(data, name, metadata);
+          std::optional<ValidateResult> result;
+          {
+            py::gil_scoped_release release;
+            result = validate(model, source, validate_with);
+          }
+          result->parameters_from =
+              get<std::string>(options, "parameters_from").value_or("the model's nominal values");
+          if (auto plot = get<std::string>(options, "plot")) write_plot(*result, *plot);
+          return py::make_tuple(format_text(*result), format_json(*result));
+        });
 }

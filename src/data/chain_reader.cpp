@@ -12,8 +12,8 @@ namespace {
 class ChainReader final : public DataReader {
  public:
   ChainReader(const std::vector<std::string>& paths, const ColumnRequest& request)
-      : paths_(paths), request_(request) {
-    // The minimum is the whole record's, checked at its end.
+      : paths_(paths), request_(request), min_rows_(request.min_rows) {
+    // The minimum is the whole record's, checked at its end, not each file's.
     request_.min_rows = 0;
     if (paths_.empty()) throw UsageError("no data files");
     open_next();
@@ -90,7 +90,7 @@ class ChainReader final : public DataReader {
 
   std::vector<std::string> paths_;
   ColumnRequest request_;
-  std::size_t min_rows_ = request_.min_rows;
+  std::size_t min_rows_;
   std::size_t file_ = 0, rows_ = 0;
   bool fresh_ = false;
   std::unique_ptr<DataReader> current_;

@@ -43,6 +43,7 @@ class ColumnStoreReader final : public StreamReader {
     }
     if (request_.layout.dt_from && !request_.dt) dt_from_scalar();
     for (auto& [variable, column] : request_.rename) column = store_->column_name(column);
+    names_ = all;
     Header every = header_;
     every.names = all;
     every.name_columns.clear();
@@ -139,7 +140,6 @@ class ColumnStoreReader final : public StreamReader {
       plan.rows = length;
       plan.fields.push_back(field);
     }
-    names_ = every.names;
     runs_.push_back(std::move(plan));
   }
 

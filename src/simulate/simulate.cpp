@@ -544,10 +544,7 @@ DataMetadata simulation_metadata(const Model& model, const SimulationOptions& op
   return metadata;
 }
 
-std::vector<std::string> simulate_to_file(const Model& model, const SimulationOptions& options,
-                                          const std::string& path, DataWriter::Format format) {
-  options.validate(model);
-  const std::vector<double> noise_sd = noise_standard_deviations(model, options);
+std::vector<std::size_t> observed_channels(const Model& model, const SimulationOptions& options) {
   const std::vector<std::string>& variables = model.variables();
   std::vector<std::size_t> channels;
   if (options.observe.empty()) {
@@ -558,6 +555,15 @@ std::vector<std::string> simulate_to_file(const Model& model, const SimulationOp
           std::find(variables.begin(), variables.end(), name) - variables.begin()));
     }
   }
+  return channels;
+}
+
+std::vector<std::string> simulate_to_file(const Model& model, const SimulationOptions& options,
+                                          const std::string& path, DataWriter::Format format) {
+  options.validate(model);
+  const std::vector<double> noise_sd = noise_standard_deviations(model, options);
+  const std::vector<std::string>& variables = model.variables();
+  const std::vector<std::size_t> channels = observed_channels(model, options);
   std::vector<std::string> columns{"t"};
   for (std::size_t c : channels) columns.push_back(variables[c]);
   const bool with_run = options.runs > 1;
