@@ -695,11 +695,8 @@ std::string format_json(const IdentifyResult& r) {
     for (std::size_t i = 0; i < r.lagged->instruments.size(); ++i) {
       out << (i ? ", " : "") << json_string(format_monomial(*r.model, r.lagged->instruments[i]));
     }
-    out << "], \"not_measured\": [";
-    for (std::size_t i = 0; i < r.lagged->derivatives.size(); ++i) {
-      out << (i ? ", " : "") << json_string(r.lagged->derivatives[i]);
-    }
-    out << "], \"noise_variance\": {";
+    out << "], \"not_measured\": " << json_strings(r.lagged->derivatives)
+        << ", \"noise_variance\": {";
     for (std::size_t c = 0; c < r.noise.size(); ++c) {
       out << (c ? ", " : "") << json_string(r.channels[c]) << ": " << json_number(r.noise[c]);
     }
@@ -713,12 +710,7 @@ std::string format_json(const IdentifyResult& r) {
     }
     out << "}";
   }
-  out << ",\n  \"equations\": [";
-  const std::vector<std::string> equations = identified_equations(r);
-  for (std::size_t i = 0; i < equations.size(); ++i) {
-    out << (i ? ", " : "") << json_string(equations[i]);
-  }
-  out << "]";
+  out << ",\n  \"equations\": " << json_strings(identified_equations(r));
   out << ",\n  \"moments\": {";
   for (std::size_t k = 0; k < d.estimates.mean.size(); ++k) {
     const std::string name = r.lagged ? lagged_moment_text(r.channels, r.lagged_moments[k])
@@ -750,12 +742,7 @@ std::string format_json(const IdentifyResult& r) {
     }
     out << "]";
   }
-  out << "],\n    \"warnings\": [";
-  const std::vector<std::string> all = warnings(r);
-  for (std::size_t i = 0; i < all.size(); ++i) {
-    out << (i ? ", " : "") << json_string(all[i]);
-  }
-  out << "]\n  }\n}\n";
+  out << "],\n    \"warnings\": " << json_strings(warnings(r)) << "\n  }\n}\n";
   return out.str();
 }
 

@@ -802,11 +802,7 @@ std::string format_json(const ValidateResult& r) {
     }
     out << "}}";
   }
-  out << "\n  },\n  \"warnings\": [";
-  for (std::size_t k = 0; k < r.warnings.size(); ++k) {
-    out << (k ? ", " : "") << json_string(r.warnings[k]);
-  }
-  out << "]\n}\n";
+  out << "\n  },\n  \"warnings\": " << json_strings(r.warnings) << "\n}\n";
   return out.str();
 }
 

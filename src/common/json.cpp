@@ -66,6 +66,12 @@ std::string json_string(std::string_view s) {
   return out + "\"";
 }
 
+std::string json_strings(const std::vector<std::string>& items) {
+  std::string out = "[";
+  for (std::size_t i = 0; i < items.size(); ++i) out += (i ? ", " : "") + json_string(items[i]);
+  return out + "]";
+}
+
 std::string json_number(double x) {
   if (!std::isfinite(x)) return "null";
   char text[64];

@@ -584,11 +584,7 @@ std::string format_json(const LaggedSystem& system) {
     out << (first ? "" : ", ") << json_string(model.variables()[v]);
     first = false;
   }
-  out << "],\n  \"not_measured\": [";
-  for (std::size_t i = 0; i < system.derivatives.size(); ++i) {
-    out << (i ? ", " : "") << json_string(system.derivatives[i]);
-  }
-  out << "]\n}\n";
+  out << "],\n  \"not_measured\": " << json_strings(system.derivatives) << "\n}\n";
   return out.str();
 }
 
