@@ -60,7 +60,23 @@ struct ColumnRequest {
   std::optional<double> dt;
 
   FileLayout layout;
+
+  // Part `index` of `count` parts of the file, cut at row boundaries (a CSV file by bytes, at
+  // line starts; the other formats by rows): the reader delivers up to `before` rows before the
+  // part, its own rows, then up to `after` rows past it (see DataBlock::zone), and stops. The
+  // rows before and after are those of the neighbouring parts, read as context; row counts,
+  // time steps and min_rows concern the part's own rows only (min_rows is not checked).
+  // count == 1: the whole file.
+  struct Part {
+    std::size_t index = 0, count = 1;
+    std::size_t before = 0, after = 0;
+  };
+  Part part;
 };
+
+// Where the rows of a block lie with respect to the part a reader was opened on
+// (ColumnRequest::part): before it, in it, or past it.
+enum class RowZone { kBefore, kOwned, kAfter };
 
 // Consecutive rows of one run (one continuous record). A block never spans two runs.
 struct DataBlock {
@@ -68,6 +84,7 @@ struct DataBlock {
   std::size_t rows = 0;
   long run = 0;             // the `run` column's value, 0 when the file has none
   bool run_starts = false;  // the first block of a run
+  RowZone zone = RowZone::kOwned;  // a block never spans two zones
 };
 
 // Streams a data file in blocks, so that memory does not grow with its length. Two layouts:
@@ -116,6 +133,15 @@ class DataReader {
   virtual const MissingSummary& missing() const = 0;
   // How much of the data has been read, from 0 to 1, when the reader can tell.
   virtual std::optional<double> fraction_read() const { return std::nullopt; }
+
+  // The time steps of the rows delivered so far (steps to a part's own rows only): how many
+  // there are and their sum. A reader whose interval comes from elsewhere (ColumnRequest::dt,
+  // the metadata) has none. time_step() is their mean.
+  struct Steps {
+    std::size_t count = 0;
+    double sum = 0;
+  };
+  virtual Steps steps() const { return {}; }
 };
 
 // Columns held in memory by the caller, e.g. numpy arrays: no copy is made, so the values must
@@ -157,6 +183,22 @@ class DataSource {
   // The path (the first and how many more, for several), or MemoryData::name.
   const std::string& name() const { return name_; }
   std::unique_ptr<DataReader> open(const ColumnRequest& request) const;
+
+  // A piece of the source that a reader of its own can read (ColumnRequest::Part): part
+  // `index` of the `count` parts of file `file` (of paths()).
+  struct Piece {
+    std::size_t file = 0;
+    std::size_t index = 0, count = 1;
+  };
+  // The source cut into pieces in record order: each file into parts of about `bytes` bytes
+  // (at least one), columns in memory into parts of about `bytes` / 8 values per column. The
+  // cut depends on the sizes only, so that every reader of the source cuts it alike.
+  std::vector<Piece> pieces(std::size_t bytes) const;
+  // A reader of one piece, rows as ColumnRequest::part says (its index and count are the
+  // piece's).
+  std::unique_ptr<DataReader> open(const Piece& piece, ColumnRequest request) const;
+  // The files read (one for a file or standard input), none for columns in memory.
+  std::vector<std::string> paths() const;
 
  private:
   std::string name_;

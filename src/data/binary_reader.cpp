@@ -3,6 +3,7 @@
 // number (from 1).
 
 #include <array>
+#include <cerrno>
 #include <bit>
 #include <cmath>
 #include <cstdint>
@@ -70,6 +71,7 @@ class BinaryReader final : public StreamReader {
       if (map_.needed[field]) needed_fields_.push_back(field);
     }
     row_bytes_ = sizeof(double) * header_.names.size();
+    data_start_ = kMagic.size() + 4 + length;
     buffer_.resize(std::max<std::size_t>(1, kChunkBytes / row_bytes_) * row_bytes_);
   }
 
@@ -101,6 +103,23 @@ class BinaryReader final : public StreamReader {
 
   std::optional<double> fraction_read() const override { return file_fraction(file_.get()); }
 
+  Bounds seek_part(const ColumnRequest::Part& part) override {
+    const std::uint64_t size = file_size(file_.get()).value_or(data_start_);
+    std::uint64_t first = 0;
+    // A row cut short at the end belongs to the last part, which reports it.
+    const Bounds bounds =
+        row_bounds(size > data_start_ ? (size - data_start_) / row_bytes_ : 0, part, first);
+    if (fseeko(file_.get(), static_cast<off_t>(data_start_ + first * row_bytes_), SEEK_SET) != 0) {
+      throw Error(path_ + ": cannot read the data file: " + std::strerror(errno));
+    }
+    row_number_ = static_cast<long long>(first);
+    return bounds;
+  }
+
+  std::uint64_t row_position() const override {
+    return static_cast<std::uint64_t>(row_number_ - 1);
+  }
+
   SourceLocation field_location(int field) const override {
     return {path_, clamp_to_int(row_number_), field + 1, ""};
   }
@@ -120,6 +139,7 @@ class BinaryReader final : public StreamReader {
   File file_;
   std::vector<std::size_t> needed_fields_;
   std::size_t row_bytes_ = 0;
+  std::uint64_t data_start_ = 0;  // the offset of the first row
   std::vector<unsigned char> buffer_;  // whole rows
   std::size_t position_ = 0, filled_ = 0;
   bool at_end_ = false;

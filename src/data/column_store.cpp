@@ -86,6 +86,25 @@ class ColumnStoreReader final : public StreamReader {
     return static_cast<double>(done) / static_cast<double>(total);
   }
 
+  // A row's position counts the rows of the runs before it.
+  Bounds seek_part(const ColumnRequest::Part& part) override {
+    std::uint64_t total = 0, first = 0;
+    for (const RunPlan& plan : runs_) total += plan.rows;
+    const Bounds bounds = row_bounds(total, part, first);
+    run_ = 0;
+    while (run_ + 1 < runs_.size() && first >= runs_[run_].rows) first -= runs_[run_++].rows;
+    row_ = chunk_start_ = chunk_end_ = static_cast<std::size_t>(first);
+    map_ = runs_[run_].map;
+    chunk_.resize(runs_[run_].fields.size());
+    return bounds;
+  }
+
+  std::uint64_t row_position() const override {
+    std::uint64_t position = row_ - 1;
+    for (std::size_t r = 0; r < run_; ++r) position += runs_[r].rows;
+    return position;
+  }
+
   SourceLocation field_location(int field) const override {
     return {path_, clamp_to_int(static_cast<long long>(row_)), field + 1, ""};
   }

@@ -10,7 +10,10 @@
 // - Columns count bytes from the start of the line; on the first line they count from after a
 //   UTF-8 byte order mark, so that they match the line text the error carries.
 
+#include <unistd.h>
+
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <cstring>
 
@@ -41,6 +44,7 @@ class CsvReader final : public StreamReader {
     for (std::size_t k = 0; k < request_.layout.skip_rows; ++k) {
       if (!lines_.next(line_)) break;
     }
+    data_start_ = lines_.next_offset();
   }
 
  protected:
@@ -83,6 +87,34 @@ class CsvReader final : public StreamReader {
 
   SourceLocation field_location(int field) const override {
     return location(field_starts_[static_cast<std::size_t>(field)]);
+  }
+
+  // A part is a range of bytes: its rows are the lines that start in it.
+  Bounds seek_part(const ColumnRequest::Part& part) override {
+    const std::uint64_t size = file_size(file_.get()).value_or(data_start_);
+    const std::uint64_t data = size > data_start_ ? size - data_start_ : 0;
+    std::uint64_t ignored = 0;
+    Bounds bounds = row_bounds(data, part, ignored);
+    bounds.begin += data_start_;
+    if (part.index + 1 < part.count) bounds.end += data_start_;
+    // The context: `before` rows (not blank lines) before the first line that starts in the part.
+    std::uint64_t start = first_line_at(bounds.begin);
+    for (std::size_t k = 0; k < part.before && start > data_start_; ++k) {
+      start = previous_row(start);
+    }
+    lines_.seek(start);
+    seek_start_ = start;
+    // The units-row hint is for the file's first row.
+    if (start > data_start_) rows_parsed_ = 1;
+    return bounds;
+  }
+
+  std::uint64_t row_position() const override { return lines_.line_offset(); }
+
+  long long lines_skipped() const override {
+    if (seek_start_ == 0) return 0;
+    if (!lines_before_) lines_before_ = count_lines(seek_start_);
+    return *lines_before_;
   }
 
   SourceLocation last_row_location() const override {
@@ -178,8 +210,76 @@ class CsvReader final : public StreamReader {
                               std::to_string(count));
   }
 
+  // Reads bytes [offset, offset + size) of the file (fewer at its end).
+  std::size_t read_at(std::uint64_t offset, char* into, std::size_t size) const {
+    std::size_t got = 0;
+    while (got < size) {
+      const ssize_t n = pread(fileno(file_.get()), into + got, size - got,
+                              static_cast<off_t>(offset + got));
+      if (n < 0 && errno == EINTR) continue;
+      if (n < 0) throw Error(path_ + ": cannot read the data file: " + std::strerror(errno));
+      if (n == 0) break;
+      got += static_cast<std::size_t>(n);
+    }
+    return got;
+  }
+
+  // The offset of the first line that starts at or after `offset` (past the data's start).
+  std::uint64_t first_line_at(std::uint64_t offset) const {
+    if (offset <= data_start_) return data_start_;
+    std::vector<char> buffer(1 << 16);
+    for (std::uint64_t at = offset - 1;;) {
+      const std::size_t got = read_at(at, buffer.data(), buffer.size());
+      if (got == 0) return at;
+      const void* newline = std::memchr(buffer.data(), '\n', got);
+      if (newline != nullptr) return at + (static_cast<const char*>(newline) - buffer.data()) + 1;
+      at += got;
+    }
+  }
+
+  // The start of the last row (a line that is not blank) that begins before `offset`, a line
+  // start past the data's start; the data's start when there is none.
+  std::uint64_t previous_row(std::uint64_t offset) const {
+    std::vector<char> buffer;
+    for (std::size_t window = 1 << 12;; window *= 2) {
+      const std::uint64_t low = offset - std::min<std::uint64_t>(window, offset - data_start_);
+      buffer.resize(static_cast<std::size_t>(offset - low));
+      buffer.resize(read_at(low, buffer.data(), buffer.size()));
+      // Lines end at the newlines; the one just before `offset` is buffer's last byte.
+      std::size_t end = buffer.size();
+      while (end > 0) {
+        std::size_t begin = end - 1;
+        while (begin > 0 && buffer[begin - 1] != '\n') --begin;
+        if (begin == 0 && low > data_start_) break;  // the line may start before the window
+        if (!is_blank_line(std::string_view(buffer.data() + begin, end - 1 - begin))) {
+          return low + begin;
+        }
+        end = begin;
+      }
+      if (low == data_start_ && end == 0) return data_start_;
+    }
+  }
+
+  // Newlines before byte `offset`: the lines that precede it.
+  long long count_lines(std::uint64_t offset) const {
+    std::vector<char> buffer(1 << 20);
+    long long lines = 0;
+    for (std::uint64_t at = 0; at < offset;) {
+      const std::size_t got =
+          read_at(at, buffer.data(), static_cast<std::size_t>(std::min<std::uint64_t>(
+                                         buffer.size(), offset - at)));
+      if (got == 0) break;
+      lines += std::count(buffer.data(), buffer.data() + got, '\n');
+      at += got;
+    }
+    return lines;
+  }
+
   File file_;
   LineReader lines_;
+  std::uint64_t data_start_ = 0;  // the offset of the first line after the header
+  std::uint64_t seek_start_ = 0;  // where seek_part() put the reader
+  mutable std::optional<long long> lines_before_;
   char separator_ = ',';
   std::size_t fields_ = 0;
   std::string_view line_;

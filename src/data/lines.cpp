@@ -26,12 +26,14 @@ bool LineReader::next(std::string_view& line) {
     const void* const newline = available == 0 ? nullptr : std::memchr(start, '\n', available);
     if (newline != nullptr) {
       const std::size_t length = static_cast<const char*>(newline) - start;
+      line_offset_ = base_ + begin_;
       begin_ += length + 1;
       line = deliver(start, length);
       return true;
     }
     if (at_end_) {
       if (available == 0) return false;
+      line_offset_ = base_ + begin_;
       begin_ = end_;
       line = deliver(start, available);
       return true;
@@ -46,6 +48,16 @@ std::string_view LineReader::deliver(const char* start, std::size_t length) {
   return {start, length};
 }
 
+void LineReader::seek(std::uint64_t offset) {
+  if (fseeko(file_, static_cast<off_t>(offset), SEEK_SET) != 0) {
+    throw Error(path_ + ": cannot read the data file: " + std::strerror(errno));
+  }
+  base_ = offset;
+  begin_ = end_ = 0;
+  at_end_ = false;
+  line_number_ = 0;
+}
+
 void LineReader::refill() {
   const std::size_t kept = end_ - begin_;
   if (kept == buffer_.size()) {
@@ -57,6 +69,7 @@ void LineReader::refill() {
     buffer_.resize(buffer_.size() * 2);
   }
   std::memmove(buffer_.data(), buffer_.data() + begin_, kept);
+  base_ += begin_;
   begin_ = 0;
   end_ = kept;
   const std::size_t got = std::fread(buffer_.data() + end_, 1, buffer_.size() - end_, file_);

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <cstdio>
 #include <string>
 #include <string_view>
@@ -24,8 +25,13 @@ class LineReader {
 
   bool next(std::string_view& line);
 
-  // The line the last call of next() delivered, from 1.
+  // The line the last call of next() delivered, from 1 (from where seek() put the reader).
   long long line_number() const { return line_number_; }
+  // The byte offset in the file of that line, and of the next line.
+  std::uint64_t line_offset() const { return line_offset_; }
+  std::uint64_t next_offset() const { return base_ + begin_; }
+  // Reads on from byte `offset` of the file, which starts a line; lines are numbered from there.
+  void seek(std::uint64_t offset);
 
  private:
   std::string_view deliver(const char* start, std::size_t length);
@@ -38,6 +44,8 @@ class LineReader {
   std::size_t begin_ = 0, end_ = 0;
   bool at_end_ = false;
   long long line_number_ = 0;
+  std::uint64_t base_ = 0;  // the file offset of buffer_[0]
+  std::uint64_t line_offset_ = 0;
 };
 
 }  // namespace momentid::data

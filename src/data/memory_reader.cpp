@@ -52,6 +52,15 @@ class MemoryReader final : public StreamReader {
     return static_cast<double>(row_) / static_cast<double>(data_.rows);
   }
 
+  Bounds seek_part(const ColumnRequest::Part& part) override {
+    std::uint64_t first = 0;
+    const Bounds bounds = row_bounds(data_.rows, part, first);
+    row_ = static_cast<std::size_t>(first);
+    return bounds;
+  }
+
+  std::uint64_t row_position() const override { return row_ - 1; }
+
   SourceLocation field_location(int field) const override {
     return {path_, clamp_to_int(static_cast<long long>(row_)), field + 1, ""};
   }

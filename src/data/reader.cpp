@@ -4,6 +4,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
 #include <cerrno>
 #include <cstdio>
@@ -129,6 +130,44 @@ DataSource DataSource::standard_input() {
 std::unique_ptr<DataReader> DataSource::open(const ColumnRequest& request) const {
   if (memory_) return data::open_memory(*memory_, request);
   if (!paths_.empty()) return data::open_chain(paths_, request);
+  if (stored_) return DataReader::open(*stored_, request, name_);
+  return DataReader::open(name_, request);
+}
+
+std::vector<std::string> DataSource::paths() const {
+  if (memory_) return {};
+  if (!paths_.empty()) return paths_;
+  return {stored_ ? *stored_ : name_};
+}
+
+std::vector<DataSource::Piece> DataSource::pieces(std::size_t bytes) const {
+  bytes = std::max<std::size_t>(bytes, 1);
+  const auto cut = [&](std::uint64_t size) {
+    return static_cast<std::size_t>(std::max<std::uint64_t>(1, (size + bytes - 1) / bytes));
+  };
+  std::vector<Piece> out;
+  const auto add = [&](std::size_t file, std::size_t count) {
+    for (std::size_t k = 0; k < count; ++k) out.push_back({file, k, count});
+  };
+  if (memory_) {
+    add(0, cut(std::uint64_t{8} * memory_->rows * std::max<std::size_t>(1, memory_->columns.size())));
+    return out;
+  }
+  const std::vector<std::string> files = paths();
+  for (std::size_t f = 0; f < files.size(); ++f) {
+    // A file that cannot be sized is one piece, and its reader says what is wrong with it.
+    std::error_code error;
+    const std::uintmax_t size = std::filesystem::file_size(files[f], error);
+    add(f, error ? 1 : cut(size));
+  }
+  return out;
+}
+
+std::unique_ptr<DataReader> DataSource::open(const Piece& piece, ColumnRequest request) const {
+  request.part.index = piece.index;
+  request.part.count = piece.count;
+  if (memory_) return data::open_memory(*memory_, request);
+  if (!paths_.empty()) return DataReader::open(paths_.at(piece.file), request);
   if (stored_) return DataReader::open(*stored_, request, name_);
   return DataReader::open(name_, request);
 }

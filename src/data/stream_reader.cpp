@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "common/decimal.hpp"
 #include "data/text.hpp"
@@ -26,23 +27,63 @@ bool to_run(double value, long& run) {
 }
 
 bool StreamReader::next(DataBlock& block, std::size_t max_rows) {
+  try {
+    return next_rows(block, max_rows);
+  } catch (const DataError& e) {
+    // A part's layout may number lines from where it began reading.
+    const long long skipped = lines_skipped();
+    if (skipped == 0) throw;
+    SourceLocation at = e.location();
+    at.line = clamp_to_int(at.line + skipped);
+    throw DataError(at, e.message());
+  }
+}
+
+StreamReader::Bounds StreamReader::row_bounds(std::uint64_t rows, const ColumnRequest::Part& part,
+                                              std::uint64_t& first) {
+  // rows * k / count, without overflow for fewer than 2^32 parts.
+  const auto cut = [&](std::uint64_t k) {
+    return rows / part.count * k + rows % part.count * k / part.count;
+  };
+  Bounds bounds{cut(part.index), part.index + 1 == part.count
+                                     ? std::numeric_limits<std::uint64_t>::max()
+                                     : cut(part.index + 1)};
+  first = bounds.begin - std::min<std::uint64_t>(part.before, bounds.begin);
+  return bounds;
+}
+
+RowZone StreamReader::zone_of_last_row() const {
+  const std::uint64_t position = row_position();
+  if (position < bounds_->begin) return RowZone::kBefore;
+  return position < bounds_->end ? RowZone::kOwned : RowZone::kAfter;
+}
+
+bool StreamReader::next_rows(DataBlock& block, std::size_t max_rows) {
   const std::size_t width = request_.names.size();
+  const bool parted = request_.part.count > 1;
+  if (parted && !bounds_) bounds_ = seek_part(request_.part);
   max_rows = std::max<std::size_t>(max_rows, 1);
   block.values.resize(max_rows * width);
   block.rows = 0;
+  block.zone = RowZone::kOwned;
   if (has_pending_) {
     std::copy(pending_.begin(), pending_.end(), block.values.begin());
     block.run = current_run_;
-    block.run_starts = true;
+    block.run_starts = pending_run_starts_;
+    block.zone = pending_zone_;
     block.rows = 1;
     has_pending_ = false;
   }
   RowKeys keys;
-  while (block.rows < max_rows) {
+  while (block.rows < max_rows && !part_done_) {
     double* const row = block.values.data() + block.rows * width;
     keys.missing_field = -1;
     if (!read_row(row, keys)) {
-      finish(rows_read_ + block.rows);
+      if (parted) {
+        part_done_ = true;
+      } else {
+        finish(rows_read_ + block.rows);
+      }
       break;
     }
     if (keys.missing_field >= 0) {
@@ -54,6 +95,15 @@ bool StreamReader::next(DataBlock& block, std::size_t max_rows) {
     for (const auto& [to, from] : map_.copies) row[to] = row[from];
     const bool split = dropped_ && request_.layout.missing == MissingValues::kSplitRun;
     const bool run_starts = !started_ || keys.run != current_run_ || split;
+    const RowZone zone = parted ? zone_of_last_row() : RowZone::kOwned;
+    if (zone == RowZone::kAfter) {
+      // Past the part: rows of its last run only, as many as asked for.
+      if (run_starts || after_rows_ == request_.part.after) {
+        part_done_ = true;
+        break;
+      }
+      ++after_rows_;
+    }
     if (dropped_ && keys.run == current_run_) ++(split ? missing_.splits : missing_.joins);
     joined_ = dropped_;
     dropped_ = false;
@@ -62,21 +112,24 @@ bool StreamReader::next(DataBlock& block, std::size_t max_rows) {
       current_run_ = keys.run;
       has_previous_time_ = false;
     }
-    if (map_.time >= 0 && !request_.dt) check_time(keys.t);
-    if (run_starts && block.rows > 0) {
-      // The row begins the next block: a block never spans two runs.
+    if (map_.time >= 0 && !request_.dt) check_time(keys.t, zone == RowZone::kOwned);
+    if (block.rows > 0 && (run_starts || zone != block.zone)) {
+      // The row begins the next block: a block never spans two runs or two zones.
       pending_.assign(row, row + width);
       has_pending_ = true;
+      pending_run_starts_ = run_starts;
+      pending_zone_ = zone;
       break;
     }
     if (block.rows == 0) {
       block.run = current_run_;
       block.run_starts = run_starts;
+      block.zone = zone;
     }
     ++block.rows;
   }
   block.values.resize(block.rows * width);
-  rows_read_ += block.rows;
+  if (block.zone == RowZone::kOwned) rows_read_ += block.rows;
   return block.rows > 0;
 }
 
@@ -87,7 +140,7 @@ std::optional<double> StreamReader::time_step() const {
   return span_ / static_cast<double>(steps_);
 }
 
-void StreamReader::check_time(double t) {
+void StreamReader::check_time(double t, bool owned) {
   if (has_previous_time_) {
     const double step = t - previous_time_;
     if (!(step > 0)) {
@@ -113,7 +166,7 @@ void StreamReader::check_time(double t) {
                                           "; samples must be equally spaced)");
     }
   }
-  if (has_previous_time_ && !joined_) {
+  if (has_previous_time_ && !joined_ && owned) {
     span_ += t - previous_time_;
     ++steps_;
   }

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
@@ -42,6 +43,8 @@ class StreamReader : public DataReader {
 
   bool next(DataBlock& block, std::size_t max_rows) override;
 
+  Steps steps() const override { return {steps_, span_}; }
+
  protected:
   StreamReader(std::string path, const ColumnRequest& request)
       : path_(std::move(path)), request_(request) {}
@@ -54,6 +57,25 @@ class StreamReader : public DataReader {
   virtual SourceLocation field_location(int field) const = 0;
   // Where the last data row is, or the header when there is none.
   virtual SourceLocation last_row_location() const = 0;
+
+  // Parts (ColumnRequest::part). The rows of part `index` of `count` are those whose position
+  // lies in [begin, end): a row's index from 0, or for CSV the byte offset of its line.
+  struct Bounds {
+    std::uint64_t begin = 0, end = 0;
+  };
+  // Positions the layout `before` rows (fewer at the start of the data) ahead of the first row
+  // of the part, and returns the part's bounds. Called once, before the first read_row().
+  virtual Bounds seek_part(const ColumnRequest::Part& part) = 0;
+  // The position of the row read last.
+  virtual std::uint64_t row_position() const = 0;
+  // How many lines precede the first one read, for a layout that numbers lines from where
+  // seek_part() put it (CSV); 0 for one whose numbers are the file's.
+  virtual long long lines_skipped() const { return 0; }
+
+  // For layouts that number their rows, over `rows` rows in all: the part's bounds, and in
+  // `first` the row to read first.
+  static Bounds row_bounds(std::uint64_t rows, const ColumnRequest::Part& part,
+                           std::uint64_t& first);
 
   // Marks field `field` of the row as missing when the rule passes over missing values; false
   // when it is an error, which the layout reports with kMissingHint.
@@ -88,7 +110,9 @@ class StreamReader : public DataReader {
   ColumnMap map_;
 
  private:
-  void check_time(double t);
+  bool next_rows(DataBlock& block, std::size_t max_rows);
+  void check_time(double t, bool owned);
+  RowZone zone_of_last_row() const;
 
   // Fails when the data have fewer than the requested minimum of rows.
   void finish(std::size_t rows);
@@ -105,6 +129,12 @@ class StreamReader : public DataReader {
   long current_run_ = 0;
   std::vector<double> pending_;
   bool has_pending_ = false;
+  bool pending_run_starts_ = false;
+  RowZone pending_zone_ = RowZone::kOwned;
+  // A part: its bounds (once positioned), the rows delivered past it, and whether it is done.
+  std::optional<Bounds> bounds_;
+  std::size_t after_rows_ = 0;
+  bool part_done_ = false;
   std::size_t rows_read_ = 0;
 };
 

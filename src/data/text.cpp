@@ -74,6 +74,12 @@ SourceLocation text_location(const std::string& path, long long line, std::size_
   throw DataError(std::move(where), message);
 }
 
+std::optional<std::uint64_t> file_size(std::FILE* file) {
+  struct stat info;
+  if (fstat(fileno(file), &info) != 0 || !S_ISREG(info.st_mode)) return std::nullopt;
+  return static_cast<std::uint64_t>(info.st_size);
+}
+
 std::optional<double> file_fraction(std::FILE* file) {
   struct stat info;
   if (fstat(fileno(file), &info) != 0 || !S_ISREG(info.st_mode) || info.st_size <= 0) {

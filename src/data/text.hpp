@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cstddef>
+#include <cstdint>
 #include <cstdio>
 #include <limits>
 #include <memory>
@@ -79,6 +80,8 @@ SourceLocation text_location(const std::string& path, long long line, std::size_
 
 // The position in `file` as a fraction of its size; nullopt for a pipe or an empty file.
 std::optional<double> file_fraction(std::FILE* file);
+// The size of a regular file, or nullopt.
+std::optional<std::uint64_t> file_size(std::FILE* file);
 
 // Reads up to `size` bytes, fewer only at the end of the file.
 std::size_t read_fully(std::FILE* file, const std::string& path, void* into, std::size_t size);
