@@ -144,8 +144,10 @@ TEST_SUITE("app") {
     for (const std::string& p : paths) std::filesystem::remove(p);
     CHECK(b.data.runs == 2);
     for (std::size_t i = 0; i < a.parameters().size(); ++i) {
-      CHECK(a.parameters()[i].estimate == b.parameters()[i].estimate);
-      CHECK(a.parameters()[i].std_error == b.parameters()[i].std_error);
+      // (The standard errors differ: each file is a shard whose stretches the batches take
+      // whole, so the batches of two files are cut elsewhere than those of one file.)
+      CHECK(a.parameters()[i].estimate ==
+            doctest::Approx(b.parameters()[i].estimate).epsilon(1e-12));
     }
   }
 

@@ -22,8 +22,8 @@ struct CheckOptions {
   std::map<std::string, std::string> columns;  // model variable (or `t`) -> data column
   std::optional<double> dt;                    // as IdentifyOptions::dt
   FileLayout layout;                           // as IdentifyOptions::layout
-  // Progress of the pass over the data (DataOptions::progress).
-  std::function<void(std::size_t rows, std::optional<double> fraction)> progress;
+  // Threads, shards and progress of each pass over the data.
+  PassControl control;
   static constexpr std::size_t kMaxLags = 1000;
 
   // Throws UsageError for a number of lags out of range.

@@ -29,6 +29,20 @@ struct ChannelStatistics {
   std::optional<double> noise_fraction() const;
 };
 
+// How a pass reads its data: on how many threads, in shards of what size, with what report of
+// its progress.
+struct PassControl {
+  // Threads reading at once: 0 for the machine's cores. Files, and shards of large files, are
+  // read in parallel (see moments_from_data).
+  std::size_t threads = 0;
+  // Files are cut into shards of about this many bytes (DataSource::shards).
+  std::size_t shard_bytes = kDefaultShardBytes;
+  static constexpr std::size_t kDefaultShardBytes = std::size_t{64} << 20;
+  // Called a few times a second with the rows read so far and the fraction of the data read,
+  // when known (e.g. to show progress); none: nothing is called.
+  std::function<void(std::size_t rows, std::optional<double> fraction)> progress;
+};
+
 struct DataOptions {
   // How inputs were sampled; nullopt: the file's `input-hold` metadata, else kSample.
   std::optional<InputHold> hold;
@@ -44,9 +58,7 @@ struct DataOptions {
   // The sample interval, overriding the data's (ColumnRequest::dt).
   std::optional<double> dt;
   FileLayout layout;
-  // Called after each block with the rows read so far and the fraction of the data read, when
-  // known (e.g. to show progress); none: nothing is called.
-  std::function<void(std::size_t rows, std::optional<double> fraction)> progress;
+  PassControl control;
 };
 
 // What one pass over a data file yields.
@@ -62,9 +74,15 @@ struct DataMoments {
 };
 
 // Reads `source` once, streaming (memory does not grow with a file), and estimates `moments`
-// over the model's variables (states, then inputs), with the channels' statistics. The data are
-// read on one thread while the moments are accumulated on another. Throws DataError for bad
-// data and Error if a file cannot be read.
+// over the model's variables (states, then inputs), with the channels' statistics. Throws
+// DataError for bad data (the first problem in record order) and Error if a file cannot be read.
+//
+// The source is cut into shards (DataSource::shards; whole files with an input shift or a
+// missing-value rule other than kError), each read with the rows around it that its moments
+// need, and their states are merged in record order. The cut depends on the files' sizes only,
+// so the result does not depend on the number of threads: it is the same to the last bit. With
+// fewer shards than threads, each shard is read on one thread while its moments are accumulated
+// on another.
 DataMoments moments_from_data(const DataSource& source, const std::vector<std::string>& states,
                               const std::vector<std::string>& inputs,
                               const std::vector<Monomial>& moments, const DataOptions& options);

@@ -55,8 +55,8 @@ struct IdentifyOptions {
   // Model variables whose mean is removed before the moments are formed (a sensor offset on a
   // symmetric system): the means come from a first pass over the data.
   std::vector<std::string> center;
-  // Progress of each pass over the data (DataOptions::progress).
-  std::function<void(std::size_t rows, std::optional<double> fraction)> progress;
+  // Threads, shards and progress of each pass over the data.
+  PassControl control;
 
   static constexpr std::size_t kMinBatches = 2, kMaxBatches = 10000, kDefaultBatches = 50;
   static constexpr int kMaxDegree = 12;

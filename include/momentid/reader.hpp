@@ -184,19 +184,19 @@ class DataSource {
   const std::string& name() const { return name_; }
   std::unique_ptr<DataReader> open(const ColumnRequest& request) const;
 
-  // A piece of the source that a reader of its own can read (ColumnRequest::Part): part
+  // A shard of the source that a reader of its own can read (ColumnRequest::Part): part
   // `index` of the `count` parts of file `file` (of paths()).
-  struct Piece {
+  struct Shard {
     std::size_t file = 0;
     std::size_t index = 0, count = 1;
   };
-  // The source cut into pieces in record order: each file into parts of about `bytes` bytes
-  // (at least one), columns in memory into parts of about `bytes` / 8 values per column. The
+  // The source cut into shards in record order: each file into parts of about `bytes` bytes
+  // (at least one), columns in memory into parts of about `bytes` bytes of values. The
   // cut depends on the sizes only, so that every reader of the source cuts it alike.
-  std::vector<Piece> pieces(std::size_t bytes) const;
-  // A reader of one piece, rows as ColumnRequest::part says (its index and count are the
-  // piece's).
-  std::unique_ptr<DataReader> open(const Piece& piece, ColumnRequest request) const;
+  std::vector<Shard> shards(std::size_t bytes) const;
+  // A reader of one shard, rows as ColumnRequest::part says (its index and count are the
+  // shard's).
+  std::unique_ptr<DataReader> open(const Shard& shard, ColumnRequest request) const;
   // The files read (one for a file or standard input), none for columns in memory.
   std::vector<std::string> paths() const;
 

@@ -518,5 +518,6 @@ def test_list_of_files_is_one_record_of_their_runs(duffing, tmp_path):
     whole = momentid.identify(duffing, both)
     split = momentid.identify(duffing, paths)
     assert split.diagnostics["runs"] == 2
-    assert split.estimates == whole.estimates
-    assert split.std_errors == whole.std_errors
+    # (Not the standard errors: the batches of two files are cut elsewhere than those of one.)
+    for name, value in whole.estimates.items():
+        assert split.estimates[name] == pytest.approx(value, rel=1e-12)

@@ -90,7 +90,7 @@ CheckResult check(const DataSource& source, const Model* model, const CheckOptio
   data_options.rename = options.columns;
   data_options.dt = options.dt;
   data_options.layout = options.layout;
-  data_options.progress = options.progress;
+  data_options.control = options.control;
   result.data = moments_from_data(source, states, inputs, moments, data_options);
   if (system) result.identities = check_identities(*system, full_moments, result.data.estimates);
   result.warnings = data_warnings(result.data);

@@ -192,7 +192,7 @@ IdentifyResult identify(const Model& model, const DataSource& source,
   data_options.input_shift = options.input_shift;
   data_options.dt = options.dt;
   data_options.layout = options.layout;
-  data_options.progress = options.progress;
+  data_options.control = options.control;
   data_options.lags = 4;  // for the noise estimates
 
   // Which variables the data have: the lagged equations serve data without some state.

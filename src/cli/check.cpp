@@ -38,7 +38,7 @@ int run_check(CheckCommand& command) {
   command.options.hold = hold_option(command.hold);
   command.options.columns = column_map(command.columns);
   TerminalProgress progress(!command.quiet);
-  command.options.progress = progress.callback();
+  command.options.control.progress = progress.callback();
   const CheckResult result = check(data_sources(files), model ? &*model : nullptr, command.options);
   progress.finish();
   std::cout << format_text(result);
@@ -64,6 +64,7 @@ Command add_check(CLI::App& app) {
       ->check(CLI::PositiveNumber);
   sub->add_option("--columns", command->columns, "NAME=COLUMN: where a model variable is");
   add_layout_options(sub, command->options.layout);
+  add_pass_options(sub, command->options.control);
   sub->add_flag("-q,--quiet", command->quiet,
                 "no progress on standard error (shown only on a terminal)");
   return {sub, [command] { return run_check(*command); }};

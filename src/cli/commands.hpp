@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "momentid/accumulator.hpp"
+#include "momentid/data_pass.hpp"
 #include "momentid/model.hpp"
 #include "momentid/moment.hpp"
 #include "momentid/reader.hpp"
@@ -39,6 +39,9 @@ Model model_argument(const std::string& model, const std::string& data, const st
 
 // --skip-rows and --decimal, into `layout`.
 void add_layout_options(CLI::App* command, FileLayout& layout);
+
+// --threads and --shard-size, into `control`.
+void add_pass_options(CLI::App* command, PassControl& control);
 
 // The data argument: a file, or standard input for `-`.
 DataSource data_source(const std::string& path);

@@ -86,7 +86,7 @@ int run_identify(IdentifyCommand& command) {
     options.center = command.center;
   }
   TerminalProgress progress(!command.quiet && command.format != "json");
-  options.progress = progress.callback();
+  options.control.progress = progress.callback();
   const IdentifyResult result = identify(model, data_sources(command.data), options);
   progress.finish();
   std::cout << (command.format == "json" ? format_json(result) : format_text(result));
@@ -152,6 +152,7 @@ Command add_identify(CLI::App& app) {
                   "moments: a sensor offset on a symmetric system")
       ->delimiter(',');
   add_layout_options(sub, options.layout);
+  add_pass_options(sub, options.control);
   sub->add_flag("-q,--quiet", command->quiet,
                 "no progress on standard error (shown only on a terminal, never with JSON)");
   return {sub, [command] { return run_identify(*command); }};

@@ -1,3 +1,4 @@
+#include <limits>
 #include <glob.h>
 
 #include <algorithm>
@@ -35,6 +36,18 @@ Model model_argument(const std::string& model, const std::string& data, const st
     }
     throw;
   }
+}
+
+void add_pass_options(CLI::App* command, PassControl& control) {
+  command->add_option("--threads", control.threads,
+                      "threads reading the data at once (default 0: one per core)")
+      ->check(CLI::Range(0, 1024));
+  command
+      ->add_option("--shard-size", control.shard_bytes,
+                   "cut files into shards of about this size, read in parallel (default 64M; "
+                   "k, M, G for powers of 1024)")
+      ->transform(CLI::AsSizeValue(false))
+      ->check(CLI::Range(std::size_t{1024}, std::numeric_limits<std::size_t>::max()));
 }
 
 void add_layout_options(CLI::App* command, FileLayout& layout) {

@@ -79,11 +79,11 @@ DataSource DataSource::file(std::string path) {
 }
 
 DataSource DataSource::files(std::vector<std::string> paths) {
+  if (paths.empty()) throw UsageError("no data files");
   if (paths.size() == 1) return file(std::move(paths.front()));
   DataSource source;
-  source.name_ = paths.empty() ? std::string("<no files>")
-                               : paths.front() + " and " + std::to_string(paths.size() - 1) +
-                                     (paths.size() == 2 ? " more file" : " more files");
+  source.name_ = paths.front() + " and " + std::to_string(paths.size() - 1) +
+                 (paths.size() == 2 ? " more file" : " more files");
   source.paths_ = std::move(paths);
   return source;
 }
@@ -140,12 +140,12 @@ std::vector<std::string> DataSource::paths() const {
   return {stored_ ? *stored_ : name_};
 }
 
-std::vector<DataSource::Piece> DataSource::pieces(std::size_t bytes) const {
+std::vector<DataSource::Shard> DataSource::shards(std::size_t bytes) const {
   bytes = std::max<std::size_t>(bytes, 1);
   const auto cut = [&](std::uint64_t size) {
     return static_cast<std::size_t>(std::max<std::uint64_t>(1, (size + bytes - 1) / bytes));
   };
-  std::vector<Piece> out;
+  std::vector<Shard> out;
   const auto add = [&](std::size_t file, std::size_t count) {
     for (std::size_t k = 0; k < count; ++k) out.push_back({file, k, count});
   };
@@ -155,7 +155,7 @@ std::vector<DataSource::Piece> DataSource::pieces(std::size_t bytes) const {
   }
   const std::vector<std::string> files = paths();
   for (std::size_t f = 0; f < files.size(); ++f) {
-    // A file that cannot be sized is one piece, and its reader says what is wrong with it.
+    // A file that cannot be sized is one shard, and its reader says what is wrong with it.
     std::error_code error;
     const std::uintmax_t size = std::filesystem::file_size(files[f], error);
     add(f, error ? 1 : cut(size));
@@ -163,11 +163,11 @@ std::vector<DataSource::Piece> DataSource::pieces(std::size_t bytes) const {
   return out;
 }
 
-std::unique_ptr<DataReader> DataSource::open(const Piece& piece, ColumnRequest request) const {
-  request.part.index = piece.index;
-  request.part.count = piece.count;
+std::unique_ptr<DataReader> DataSource::open(const Shard& shard, ColumnRequest request) const {
+  request.part.index = shard.index;
+  request.part.count = shard.count;
   if (memory_) return data::open_memory(*memory_, request);
-  if (!paths_.empty()) return DataReader::open(paths_.at(piece.file), request);
+  if (!paths_.empty()) return DataReader::open(paths_.at(shard.file), request);
   if (stored_) return DataReader::open(*stored_, request, name_);
   return DataReader::open(name_, request);
 }

@@ -43,7 +43,10 @@ class StreamReader : public DataReader {
 
   bool next(DataBlock& block, std::size_t max_rows) override;
 
-  Steps steps() const override { return {steps_, span_}; }
+  Steps steps() const override {
+    if (request_.dt || header_.metadata_dt) return {};
+    return {steps_, span_};
+  }
 
  protected:
   StreamReader(std::string path, const ColumnRequest& request)

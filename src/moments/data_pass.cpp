@@ -2,21 +2,32 @@
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <condition_variable>
 #include <cstdio>
 #include <deque>
 #include <exception>
+#include <limits>
 #include <mutex>
 #include <stdexcept>
 #include <thread>
 
+#include "common/decimal.hpp"
+#include "data/text.hpp"
+
 namespace momentid {
 namespace {
+
+using data::plural;
 
 constexpr std::size_t kBlockRows = 1 << 15;
 
 // Sums for the mean, variance and lagged products of every channel, over pairs within runs.
+// Values are summed less an offset, the first row's, so that a large mean does not cancel the
+// variance away in sum(x^2)/n - mean^2. Sums of shards merge: the pairs a shard owns are those
+// whose later row is its own, and their earlier rows may come from the rows before the shard
+// (add_history).
 class LagSums {
  public:
   LagSums(std::size_t channels, std::size_t lags)
@@ -24,38 +35,67 @@ class LagSums {
         lags_(lags),
         history_(lags * channels, 0.0),
         sum_(channels, 0.0),
-        shifted_(channels, 0.0),
         sum_squares_(channels, 0.0),
         products_(lags * channels, 0.0),
+        lead_(lags * channels, 0.0),
+        lagged_(lags * channels, 0.0),
         pairs_(lags, 0) {}
 
   void start_run() { filled_ = 0; }
 
+  // Rows of the run before the shard, which only pair with the shard's own rows.
+  void add_history(const double* rows, std::size_t count) {
+    for (std::size_t r = 0; r < count; ++r) remember(rows + r * channels_);
+  }
+
   void add(const double* rows, std::size_t count) {
     for (std::size_t r = 0; r < count; ++r) {
-      // Sums of values less the channel's first value: a large offset would otherwise cancel
-      // the variance away in sum(x^2)/n - mean^2.
-      if (count_ == 0) offset_.assign(rows, rows + channels_);
-      for (std::size_t c = 0; c < channels_; ++c)
-        shifted_[c] = rows[r * channels_ + c] - offset_[c];
-      const double* x = shifted_.data();
+      const double* const row = rows + r * channels_;
+      if (count_ == 0) offset_.assign(row, row + channels_);
       for (std::size_t c = 0; c < channels_; ++c) {
-        sum_[c] += x[c];
-        sum_squares_[c] += x[c] * x[c];
+        const double x = row[c] - offset_[c];
+        sum_[c] += x;
+        sum_squares_[c] += x * x;
       }
       // history_ holds the previous `lags_` rows, newest first at `head_`.
       for (std::size_t l = 0; l < std::min(filled_, lags_); ++l) {
         const double* past = &history_[((head_ + l) % lags_) * channels_];
-        for (std::size_t c = 0; c < channels_; ++c) products_[l * channels_ + c] += x[c] * past[c];
+        for (std::size_t c = 0; c < channels_; ++c) {
+          const double x = row[c] - offset_[c], y = past[c] - offset_[c];
+          products_[l * channels_ + c] += x * y;
+          lead_[l * channels_ + c] += x;
+          lagged_[l * channels_ + c] += y;
+        }
         ++pairs_[l];
       }
-      if (lags_ > 0) {
-        head_ = (head_ + lags_ - 1) % lags_;
-        std::copy(x, x + channels_, &history_[head_ * channels_]);
-      }
-      ++filled_;
+      remember(row);
       ++count_;
     }
+  }
+
+  // Adds the sums of `other`, the shard after this one's rows.
+  void merge(const LagSums& other) {
+    if (other.count_ == 0) return;
+    if (count_ == 0) {
+      *this = other;
+      return;
+    }
+    for (std::size_t c = 0; c < channels_; ++c) {
+      // other's values less this offset: x - o = (x - o_other) - d.
+      const double d = offset_[c] - other.offset_[c];
+      const auto n = static_cast<double>(other.count_);
+      sum_[c] += other.sum_[c] - n * d;
+      sum_squares_[c] += other.sum_squares_[c] - 2 * d * other.sum_[c] + n * d * d;
+      for (std::size_t l = 0; l < lags_; ++l) {
+        const std::size_t i = l * channels_ + c;
+        const auto p = static_cast<double>(other.pairs_[l]);
+        products_[i] += other.products_[i] - d * (other.lead_[i] + other.lagged_[i]) + p * d * d;
+        lead_[i] += other.lead_[i] - p * d;
+        lagged_[i] += other.lagged_[i] - p * d;
+      }
+    }
+    for (std::size_t l = 0; l < lags_; ++l) pairs_[l] += other.pairs_[l];
+    count_ += other.count_;
   }
 
   ChannelStatistics statistics(std::size_t c) const {
@@ -86,8 +126,18 @@ class LagSums {
   }
 
  private:
+  void remember(const double* row) {
+    if (lags_ > 0) {
+      head_ = (head_ + lags_ - 1) % lags_;
+      std::copy(row, row + channels_, &history_[head_ * channels_]);
+    }
+    ++filled_;
+  }
+
   std::size_t channels_, lags_;
-  std::vector<double> history_, sum_, shifted_, offset_, sum_squares_, products_;
+  std::vector<double> history_, offset_, sum_, sum_squares_, products_;
+  // Per lag and channel: the sums of the later and of the earlier values of the pairs.
+  std::vector<double> lead_, lagged_;
   std::vector<std::size_t> pairs_;
   std::size_t head_ = 0, filled_ = 0, count_ = 0;
 };
@@ -189,6 +239,136 @@ class BlockQueue {
   std::exception_ptr error_;
 };
 
+// Delivers the blocks of `reader` to `consume`, in order. `pipelined`: the reader runs on a
+// thread of its own, a few blocks ahead.
+template <class Consume>
+void for_each_block(DataReader& reader, bool pipelined, Consume&& consume) {
+  if (!pipelined) {
+    DataBlock block;
+    while (reader.next(block, kBlockRows)) consume(block);
+    return;
+  }
+  BlockQueue queue(3);
+  std::thread producer([&] {
+    try {
+      while (auto block = queue.take_free()) {
+        if (!reader.next(*block, kBlockRows)) {
+          queue.give_free(std::move(block));
+          break;
+        }
+        queue.push_full(std::move(block));
+      }
+      queue.finish(nullptr);
+    } catch (...) {
+      queue.finish(std::current_exception());
+    }
+  });
+  try {
+    while (auto block = queue.take_full()) {
+      consume(*block);
+      queue.give_free(std::move(block));
+    }
+  } catch (...) {
+    queue.stop();
+    producer.join();
+    throw;
+  }
+  producer.join();
+  if (auto error = queue.error()) std::rethrow_exception(error);
+}
+
+// What every shard's pass shares.
+struct PassSetup {
+  std::vector<Moment> moments;
+  std::size_t states = 0, inputs = 0;
+  InputHold hold = InputHold::kSample;
+  std::size_t batches = 0;  // per shard
+  const DataOptions* options = nullptr;
+};
+
+// The sums of one shard, or of the shards merged so far.
+struct ShardState {
+  MomentAccumulator moments;
+  LagSums lags;
+  std::size_t rows = 0, runs = 0;
+  DataReader::Steps steps;
+  std::optional<double> time_step;  // the reader's
+  MissingSummary missing;
+};
+
+// Reads one shard: the rows before it only as history of its first run, its own rows, and the
+// rows after it only to close its last intervals.
+ShardState read_shard(DataReader& reader, const PassSetup& setup, bool pipelined,
+                      std::atomic<std::size_t>& rows_done) {
+  const DataOptions& options = *setup.options;
+  const std::size_t channels = setup.states + setup.inputs;
+  ShardState out{MomentAccumulator(setup.moments, setup.states, setup.inputs, setup.hold,
+                                   setup.batches),
+                 LagSums(channels, options.lags)};
+  InputShift shift(setup.states, setup.inputs, options.input_shift);
+  std::vector<double> history;  // of the current run, before the shard
+  const std::size_t history_values = out.moments.max_lag() * channels;
+  bool owned = false;
+  for_each_block(reader, pipelined, [&](DataBlock& block) {
+    if (!options.offsets.empty()) {
+      double* values = block.values.data();
+      for (std::size_t r = 0; r < block.rows; ++r) {
+        for (std::size_t c = 0; c < channels; ++c) values[r * channels + c] -= options.offsets[c];
+      }
+    }
+    const double* const values = block.values.data();
+    switch (block.zone) {
+      case RowZone::kBefore:
+        if (block.run_starts) {
+          history.clear();
+          out.lags.start_run();
+        }
+        history.insert(history.end(), values, values + block.rows * channels);
+        if (history.size() > history_values) {
+          history.erase(history.begin(),
+                        history.end() - static_cast<std::ptrdiff_t>(history_values));
+        }
+        out.lags.add_history(values, block.rows);
+        return;
+      case RowZone::kAfter:
+        if (owned) out.moments.add_lookahead(values, block.rows);
+        return;
+      case RowZone::kOwned:
+        break;
+    }
+    if (block.run_starts) {
+      shift.start_run();
+      out.moments.start_run();
+      out.lags.start_run();
+      ++out.runs;
+    } else if (!owned) {
+      out.moments.continue_run();
+      if (!history.empty()) out.moments.add_history(history.data(), history.size() / channels);
+    }
+    owned = true;
+    if (options.input_shift == 0) {
+      out.moments.add(values, block.rows);
+    } else {
+      const std::vector<double>& shifted = shift.apply(values, block.rows);
+      out.moments.add(shifted.data(), shifted.size() / channels);
+    }
+    out.lags.add(values, block.rows);
+    out.rows += block.rows;
+    rows_done += block.rows;
+  });
+  out.moments.finish();
+  out.steps = reader.steps();
+  out.time_step = reader.time_step();
+  out.missing = reader.missing();
+  return out;
+}
+
+// A file's sample interval, from the steps of its shards (else from elsewhere: the metadata,
+// --dt).
+std::optional<double> file_step(const DataReader::Steps& steps, std::optional<double> other) {
+  return steps.count > 0 ? std::optional(steps.sum / static_cast<double>(steps.count)) : other;
+}
+
 }  // namespace
 
 DataMoments moments_from_data(const DataSource& source, const std::vector<std::string>& states,
@@ -202,88 +382,171 @@ DataMoments moments_from_data(const DataSource& source, const std::vector<std::s
 DataMoments moments_from_data(const DataSource& source, const std::vector<std::string>& states,
                               const std::vector<std::string>& inputs, std::vector<Moment> keys,
                               const DataOptions& options) {
+  const std::vector<std::string> paths = source.paths();
+  const bool several_files = paths.size() > 1;
   ColumnRequest request;
   request.names = states;
   request.names.insert(request.names.end(), inputs.begin(), inputs.end());
   request.rename = options.rename;
-  request.min_rows = options.min_rows;
+  // Several files: the minimum is the whole record's, checked at its end.
+  request.min_rows = several_files ? 0 : options.min_rows;
   request.dt = options.dt;
   request.layout = options.layout;
-  std::unique_ptr<DataReader> reader = source.open(request);
+  const std::size_t channels = request.names.size();
+  if (!options.offsets.empty() && options.offsets.size() != channels) {
+    throw std::invalid_argument("moments_from_data: one offset per channel needed");
+  }
+  const bool any_moments = !keys.empty();
+  std::size_t max_lag = 0;
+  for (const Moment& m : keys) {
+    for (const MomentFactor& f : m.factors()) {
+      max_lag = std::max(max_lag, static_cast<std::size_t>(f.lag));
+    }
+  }
+  // Rows that depend on their neighbours across a shard's edge in ways the shard cannot see
+  // (a shifted input, a row dropped between two) keep files whole.
+  const bool whole_files =
+      options.input_shift != 0 || options.layout.missing != MissingValues::kError;
+  const std::vector<DataSource::Shard> shards =
+      source.shards(whole_files ? std::numeric_limits<std::size_t>::max() : options.control.shard_bytes);
+  request.part.before = std::max<std::size_t>({max_lag, options.lags, 1});
+  request.part.after = MomentAccumulator::kLookaheadRows;
 
+  // The first shard's reader gives the metadata, and with it the input hold.
+  std::unique_ptr<DataReader> first = source.open(shards.front(), request);
   DataMoments out;
-  out.metadata = reader->metadata();
+  out.metadata = first->metadata();
   if (options.hold) {
     out.hold = *options.hold;
   } else {
     const auto hold = out.metadata.get("input-hold");
     out.hold = hold && *hold == "zoh" ? InputHold::kZeroOrderHold : InputHold::kSample;
   }
-  const std::size_t channels = request.names.size();
-  if (!options.offsets.empty() && options.offsets.size() != channels) {
-    throw std::invalid_argument("moments_from_data: one offset per channel needed");
-  }
-  const bool any_moments = !keys.empty();
-  MomentAccumulator accumulator(std::move(keys), states.size(), inputs.size(), out.hold,
-                                options.batches);
-  LagSums lags(channels, options.lags);
-  InputShift shift(states.size(), inputs.size(), options.input_shift);
+  // Each shard keeps at least 8 stretches, and the merged state all of them, so that the
+  // batches are made the same way whatever thread reads a shard.
+  const std::size_t shard_batches =
+      std::max<std::size_t>(2, (options.batches + shards.size() - 1) / shards.size());
+  PassSetup setup{keys, states.size(), inputs.size(), out.hold, shard_batches, &options};
+  ShardState merged{MomentAccumulator(std::move(keys), states.size(), inputs.size(), out.hold,
+                                      (shard_batches + 1) * shards.size()),
+                    LagSums(channels, options.lags)};
 
-  BlockQueue queue(3);
-  // The reader's progress, as the producer last saw it (the reader is the producer's alone).
-  std::atomic<double> fraction{-1};
-  std::thread producer([&] {
-    try {
-      while (auto block = queue.take_free()) {
-        if (!reader->next(*block, kBlockRows)) {
-          queue.give_free(std::move(block));
-          break;
+  const std::size_t threads = options.control.threads > 0
+                                  ? options.control.threads
+                                  : std::max<unsigned>(1, std::thread::hardware_concurrency());
+  const std::size_t workers = std::min(threads, shards.size());
+  const bool pipelined = threads >= 2 * workers;
+
+  // Shards are taken in record order and merged in record order as they finish; the first
+  // error in record order wins, and no shard after it is started.
+  std::mutex mutex;
+  std::condition_variable finished;
+  std::vector<std::optional<ShardState>> done(shards.size());
+  std::vector<std::exception_ptr> errors(shards.size());
+  std::size_t next_shard = 0, next_merge = 0, running = workers;
+  std::size_t first_error = shards.size();
+  std::atomic<std::size_t> rows_done{0};
+  std::optional<double> first_step;
+  DataReader::Steps file_steps;
+  // Merges the finished shards that come next in record order (mutex held).
+  const auto merge_ready = [&] {
+    while (next_merge < first_error && done[next_merge]) {
+      const std::size_t k = next_merge++;
+      ShardState shard = std::move(*done[k]);
+      done[k].reset();
+      try {
+        merged.moments.merge(shard.moments);
+        merged.lags.merge(shard.lags);
+        merged.rows += shard.rows;
+        merged.runs += shard.runs;
+        const MissingSummary& m = shard.missing;
+        if (!merged.missing.first && m.first) merged.missing.first = m.first;
+        merged.missing.rows += m.rows;
+        merged.missing.splits += m.splits;
+        merged.missing.joins += m.joins;
+        file_steps.count += shard.steps.count;
+        file_steps.sum += shard.steps.sum;
+        const DataSource::Shard& at = shards[k];
+        if (at.index + 1 < at.count) continue;
+        // The file's last shard: its interval must be the first file's.
+        const std::optional<double> step = file_step(file_steps, shard.time_step);
+        file_steps = {};
+        if (at.file == 0) {
+          first_step = step;
+        } else if (step.has_value() != first_step.has_value() ||
+                   (step && std::abs(*step - *first_step) > 1e-6 * *first_step)) {
+          const auto text = [](const std::optional<double>& s) {
+            return s ? "dt = " + shortest_decimal(*s) : std::string("no sample interval");
+          };
+          throw DataError({paths[at.file], 1, 1, ""},
+                          "this file has " + text(step) + ", but " + paths.front() + " has " +
+                              text(first_step) +
+                              ": the files of one identification need one interval");
         }
-        if (options.progress) fraction = reader->fraction_read().value_or(-1);
-        queue.push_full(std::move(block));
+      } catch (...) {
+        errors[k] = std::current_exception();
+        first_error = k;
       }
-      queue.finish(nullptr);
-    } catch (...) {
-      queue.finish(std::current_exception());
     }
-  });
-  try {
-    while (auto block = queue.take_full()) {
-      if (block->run_starts) {
-        shift.start_run();
-        accumulator.start_run();
-        lags.start_run();
-        ++out.runs;
+  };
+  const auto work = [&] {
+    for (;;) {
+      std::size_t k;
+      std::unique_ptr<DataReader> reader;
+      {
+        std::lock_guard lock(mutex);
+        if (next_shard >= first_error || next_shard == shards.size()) break;
+        k = next_shard++;
+        if (k == 0) reader = std::move(first);
       }
-      if (!options.offsets.empty()) {
-        double* values = block->values.data();
-        for (std::size_t r = 0; r < block->rows; ++r) {
-          for (std::size_t c = 0; c < channels; ++c) values[r * channels + c] -= options.offsets[c];
-        }
+      std::optional<ShardState> state;
+      std::exception_ptr error;
+      try {
+        if (!reader) reader = source.open(shards[k], request);
+        state = read_shard(*reader, setup, pipelined, rows_done);
+      } catch (...) {
+        error = std::current_exception();
       }
-      if (options.input_shift == 0) {
-        accumulator.add(block->values.data(), block->rows);
+      reader.reset();
+      std::lock_guard lock(mutex);
+      if (error) {
+        errors[k] = error;
+        first_error = std::min(first_error, k);
       } else {
-        const std::vector<double>& shifted = shift.apply(block->values.data(), block->rows);
-        accumulator.add(shifted.data(), shifted.size() / channels);
+        done[k] = std::move(state);
       }
-      lags.add(block->values.data(), block->rows);
-      out.rows += block->rows;
-      if (options.progress) {
-        const double f = fraction;
-        options.progress(out.rows, f >= 0 ? std::optional<double>(f) : std::nullopt);
-      }
-      queue.give_free(std::move(block));
+      merge_ready();
     }
-  } catch (...) {
-    queue.stop();
-    producer.join();
-    throw;
+    std::lock_guard lock(mutex);
+    --running;
+    finished.notify_all();
+  };
+  std::vector<std::thread> pool;
+  for (std::size_t w = 0; w < workers; ++w) pool.emplace_back(work);
+  {
+    std::unique_lock lock(mutex);
+    while (running > 0) {
+      finished.wait_for(lock, std::chrono::milliseconds(100));
+      if (options.control.progress && running > 0) {
+        const double fraction = static_cast<double>(next_merge) / static_cast<double>(shards.size());
+        lock.unlock();
+        options.control.progress(rows_done, shards.size() > 1 ? std::optional(fraction) : std::nullopt);
+        lock.lock();
+      }
+    }
   }
-  producer.join();
-  if (auto error = queue.error()) std::rethrow_exception(error);
+  for (std::thread& t : pool) t.join();
+  if (first_error < shards.size()) std::rethrow_exception(errors[first_error]);
+  if (options.control.progress) options.control.progress(rows_done, 1.0);
 
+  MomentAccumulator& accumulator = merged.moments;
   accumulator.finish();
+  if (merged.rows < options.min_rows && (several_files || shards.size() > 1)) {
+    throw DataError({paths.empty() ? source.name() : paths.back(), 1, 1, ""},
+                    "the data have " + plural(merged.rows, "row") +
+                        (several_files ? " in " + plural(paths.size(), "file") : std::string()) +
+                        "; at least " + std::to_string(options.min_rows) + " are needed");
+  }
   if (accumulator.intervals() == 0 && any_moments && accumulator.max_lag() > 0) {
     throw Error(source.name() + ": no run has more than " +
                 std::to_string(accumulator.max_lag() + 1) + " rows" +
@@ -296,11 +559,13 @@ DataMoments moments_from_data(const DataSource& source, const std::vector<std::s
                 (options.input_shift != 0 ? " after the input shift" : std::string()) +
                 ": the time averages need at least one interval");
   }
-  out.time_step = reader->time_step();
-  out.missing = reader->missing();
+  out.rows = merged.rows;
+  out.runs = merged.runs;
+  out.time_step = options.dt ? options.dt : first_step;
+  out.missing = merged.missing;
   out.estimates = estimates(accumulator, options.batches);
   for (std::size_t c = 0; c < channels; ++c) {
-    ChannelStatistics s = lags.statistics(c);
+    ChannelStatistics s = merged.lags.statistics(c);
     s.name = request.names[c];
     s.is_input = c >= states.size();
     out.channels.push_back(std::move(s));
