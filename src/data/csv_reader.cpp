@@ -251,9 +251,9 @@ class CsvReader final : public StreamReader {
         std::size_t begin = end - 1;
         while (begin > 0 && buffer[begin - 1] != '\n') --begin;
         if (begin == 0 && low > data_start_) break;  // the line may start before the window
-        if (!is_blank_line(std::string_view(buffer.data() + begin, end - 1 - begin))) {
-          return low + begin;
-        }
+        std::string_view line(buffer.data() + begin, end - 1 - begin);
+        if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+        if (!is_blank_line(line)) return low + begin;
         end = begin;
       }
       if (low == data_start_ && end == 0) return data_start_;

@@ -1,0 +1,213 @@
+// Reading a record in shards, on several threads: the result does not depend on the thread
+// count, and the cut (shards of any size, in any format) changes the moments by rounding only.
+
+#include <doctest/doctest.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "momentid/convert.hpp"
+#include "momentid/data_pass.hpp"
+#include "test_support.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+using momentid::DataMoments;
+using momentid::DataOptions;
+using momentid::DataSource;
+using momentid::Moment;
+
+// A directory of its own, removed at the end.
+struct Directory {
+  fs::path path = fs::temp_directory_path() / ("momentid_test_shards_" +
+                                               std::to_string(::getpid()) + "_" +
+                                               std::to_string(count++));
+  Directory() { fs::create_directories(path); }
+  ~Directory() { fs::remove_all(path); }
+  std::string operator/(const std::string& name) const { return (path / name).string(); }
+  static inline int count = 0;
+};
+
+// Two runs of the Duffing oscillator, 3000 samples each, as CSV.
+std::string duffing_csv(const Directory& dir) {
+  const momentid::Model model = momentid::testing::model_file("duffing.mom");
+  auto options = momentid::testing::options_for(model, 3000, 7);
+  options.runs = 2;
+  const std::string path = dir / "d.csv";
+  momentid::simulate_to_file(model, options, path, momentid::DataWriter::Format::kCsv);
+  return path;
+}
+
+// Plain, input and lagged moments over y, v (states) and x (input): lags reach 7 rows back.
+std::vector<Moment> some_moments() {
+  return {Moment({{0, 2, 0}}),           Moment({{1, 2, 0}}),
+          Moment({{0, 1, 0}, {2, 1, 0}}), Moment({{0, 3, 0}, {1, 1, 0}}),
+          Moment({{0, 1, 0}, {0, 1, 7}}), Moment({{1, 1, 3}, {2, 1, 0}})};
+}
+
+DataMoments pass(const std::string& path, std::size_t shard_bytes, std::size_t threads,
+                 std::size_t lags = 4) {
+  DataOptions options;
+  options.control.shard_bytes = shard_bytes;
+  options.control.threads = threads;
+  options.lags = lags;
+  options.batches = 20;
+  return momentid::moments_from_data(DataSource::file(path), {"y", "v"}, {"x"}, some_moments(),
+                                     options);
+}
+
+// Everything a pass yields, to the last bit.
+void check_identical(const DataMoments& a, const DataMoments& b) {
+  CHECK(a.rows == b.rows);
+  CHECK(a.runs == b.runs);
+  CHECK(a.time_step == b.time_step);
+  CHECK(a.estimates.intervals == b.estimates.intervals);
+  CHECK(a.estimates.mean == b.estimates.mean);
+  CHECK(a.estimates.batch_means == b.estimates.batch_means);
+  for (std::size_t c = 0; c < a.channels.size(); ++c) {
+    CHECK(a.channels[c].mean == b.channels[c].mean);
+    CHECK(a.channels[c].variance == b.channels[c].variance);
+    CHECK(a.channels[c].autocorrelation == b.channels[c].autocorrelation);
+  }
+}
+
+// The same record cut otherwise: the same sums, up to their rounding.
+void check_same_sums(const DataMoments& a, const DataMoments& b) {
+  CHECK(a.rows == b.rows);
+  CHECK(a.runs == b.runs);
+  REQUIRE(a.time_step.has_value() == b.time_step.has_value());
+  if (a.time_step) CHECK(*a.time_step == doctest::Approx(*b.time_step).epsilon(1e-12));
+  CHECK(a.estimates.intervals == b.estimates.intervals);
+  for (std::size_t k = 0; k < a.estimates.mean.size(); ++k) {
+    CHECK(a.estimates.mean[k] == doctest::Approx(b.estimates.mean[k]).epsilon(1e-12));
+  }
+  for (std::size_t c = 0; c < a.channels.size(); ++c) {
+    CHECK(a.channels[c].mean == doctest::Approx(b.channels[c].mean).epsilon(1e-12));
+    CHECK(a.channels[c].variance == doctest::Approx(b.channels[c].variance).epsilon(1e-12));
+    for (std::size_t l = 0; l < a.channels[c].autocorrelation.size(); ++l) {
+      CHECK(a.channels[c].autocorrelation[l] ==
+            doctest::Approx(b.channels[c].autocorrelation[l]).epsilon(1e-12));
+    }
+  }
+}
+
+constexpr std::size_t kWhole = std::size_t{1} << 40;
+
+}  // namespace
+
+TEST_SUITE("shards") {
+  TEST_CASE("the thread count changes nothing, to the last bit") {
+    const Directory dir;
+    const std::string path = duffing_csv(dir);
+    const DataMoments one = pass(path, 8192, 1);
+    for (std::size_t threads : {2, 3, 8}) {
+      CAPTURE(threads);
+      check_identical(one, pass(path, 8192, threads));
+    }
+  }
+
+  TEST_CASE("any cut of the record into shards gives its sums, in every format") {
+    const Directory dir;
+    const std::string csv = duffing_csv(dir);
+    const DataMoments whole = pass(csv, kWhole, 1);
+    CHECK(whole.rows == 6000);
+    CHECK(whole.runs == 2);
+    std::vector<std::string> files{csv};
+    for (const auto& [format, name] :
+         std::vector<std::pair<momentid::FileFormat, std::string>>{
+             {momentid::FileFormat::kBinary, "d.bin"},
+             {momentid::FileFormat::kMat5, "d.mat"},
+             {momentid::FileFormat::kMat73, "d73.mat"},
+             {momentid::FileFormat::kHdf5, "d.h5"}}) {
+      momentid::convert(DataSource::file(csv), dir / name, format);
+      files.push_back(dir / name);
+    }
+    for (const std::string& file : files) {
+      const std::uintmax_t size = fs::file_size(file);
+      // One shard, two, a few, many; cuts inside the header of a CSV file too.
+      for (std::size_t shards : {1, 2, 7, 60}) {
+        CAPTURE(file);
+        CAPTURE(shards);
+        check_same_sums(whole, pass(file, static_cast<std::size_t>(size / shards + 1), 2));
+      }
+    }
+  }
+
+  TEST_CASE("blank lines, CR LF line ends and rows cut by a shard edge read alike") {
+    const Directory dir;
+    const std::string csv = duffing_csv(dir);
+    // The same rows with a blank line after every tenth and Windows line ends.
+    std::ifstream in(csv);
+    std::ofstream out(dir / "crlf.csv", std::ios::binary);
+    std::string line;
+    for (int n = 0; std::getline(in, line); ++n) {
+      out << line << "\r\n";
+      if (n > 10 && n % 10 == 0) out << "  \r\n";
+    }
+    out.close();
+    const DataMoments whole = pass(csv, kWhole, 1);
+    for (std::size_t bytes : {1024, 1500, 4096}) {
+      CAPTURE(bytes);
+      check_same_sums(whole, pass(dir / "crlf.csv", bytes, 2));
+    }
+  }
+
+  TEST_CASE("an error in a later shard is located as in one pass") {
+    const Directory dir;
+    const std::string csv = duffing_csv(dir);
+    std::ifstream in(csv);
+    std::ostringstream text;
+    std::string line;
+    for (int n = 1; std::getline(in, line); ++n) {
+      // Line 5000 gets a field that is not a number.
+      text << (n == 5000 ? line.substr(0, line.find(',')) + ",oops" +
+                               line.substr(line.find(',', line.find(',') + 1))
+                         : line)
+           << "\n";
+    }
+    std::ofstream(dir / "bad.csv") << text.str();
+    const auto whole = momentid::testing::error_from<momentid::DataError>(
+        [&] { pass(dir / "bad.csv", kWhole, 1); });
+    CHECK(whole.location().line == 5000);
+    for (std::size_t bytes : {1024, 50000}) {
+      const auto sharded = momentid::testing::error_from<momentid::DataError>(
+          [&] { pass(dir / "bad.csv", bytes, 2); });
+      CHECK(std::string(sharded.what()) == whole.what());
+    }
+    // A binary file: the row is the error's line.
+    momentid::convert(DataSource::file(csv), dir / "d.bin", momentid::FileFormat::kBinary);
+    const std::uintmax_t size = fs::file_size(dir / "d.bin");
+    {
+      std::fstream bin(dir / "d.bin", std::ios::in | std::ios::out | std::ios::binary);
+      const double nan = std::nan("");
+      bin.seekp(static_cast<std::streamoff>(size - 40 * 5 * sizeof(double) + sizeof(double)));
+      bin.write(reinterpret_cast<const char*>(&nan), sizeof nan);
+    }
+    const auto one = momentid::testing::error_from<momentid::DataError>(
+        [&] { pass(dir / "d.bin", kWhole, 1); });
+    const auto many = momentid::testing::error_from<momentid::DataError>(
+        [&] { pass(dir / "d.bin", 4096, 2); });
+    CHECK(std::string(many.what()) == one.what());
+    CHECK(one.location().line == 5961);
+  }
+
+  TEST_CASE("a file of few rows cut into shards is refused for them") {
+    const Directory dir;
+    std::ofstream(dir / "short.csv") << "# " << std::string(5000, 'x') << "\nt,y,v,x\n0,1,2,3\n"
+                                     << "0.1,1,2,3\n0.2,1,2,3\n";
+    DataOptions options;
+    options.control.shard_bytes = 1024;
+    options.min_rows = 10;
+    const auto e = momentid::testing::error_from<momentid::DataError>([&] {
+      momentid::moments_from_data(DataSource::file(dir / "short.csv"), {"y", "v"}, {"x"},
+                                  some_moments(), options);
+    });
+    CHECK(std::string(e.what()) == dir / "short.csv" + ":1:1: the data have 3 rows; at least 10 are needed");
+  }
+}
