@@ -38,6 +38,10 @@ struct PassControl {
   // Files are cut into shards of about this many bytes (DataSource::shards).
   std::size_t shard_bytes = kDefaultShardBytes;
   static constexpr std::size_t kDefaultShardBytes = std::size_t{64} << 20;
+  // In an MPI job (momentid built with MOMENTID_MPI, MPI started): every process of the job
+  // takes part in each pass, reading a contiguous range of the shards, and every process gets
+  // the whole result. Every process must then make the same passes.
+  bool across_processes = false;
   // Called a few times a second with the rows read so far and the fraction of the data read,
   // when known (e.g. to show progress); none: nothing is called.
   std::function<void(std::size_t rows, std::optional<double> fraction)> progress;

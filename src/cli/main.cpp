@@ -2,10 +2,16 @@
 // 1 usage error, 2 bad model or data, 3 nothing identifiable.
 
 #include <CLI/CLI.hpp>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <fstream>
 #include <iostream>
 #include <vector>
 
 #include "cli/commands.hpp"
+#include "common/cluster.hpp"
 #include "momentid/convert.hpp"
 #include "momentid/error.hpp"
 #include "momentid/version.hpp"
@@ -17,7 +23,41 @@ extern "C" const char* __lsan_default_suppressions() { return "leak:libcln.so\n"
 extern "C" const char* __lsan_default_options() { return "print_suppressions=0"; }
 #endif
 
+namespace {
+
+// The message of an error as the command line shows it.
+std::string message_of(const std::exception& e) {
+  if (const auto* located = dynamic_cast<const momentid::LocatedError*>(&e)) {
+    return momentid::render_with_caret(*located);
+  }
+  if (dynamic_cast<const momentid::Error*>(&e) != nullptr) {
+    return "momentid: " + momentid::printable(e.what());
+  }
+  // Everything momentid checks is reported above; this is a failure it did not foresee.
+  return "momentid: internal error: " + momentid::printable(e.what());
+}
+
+int exit_code_of(const std::exception& e) {
+  const auto* error = dynamic_cast<const momentid::Error*>(&e);
+  return error != nullptr ? error->exit_code() : 2;
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
+  // Under mpirun, the processes of the job share each pass over the data (identify, check);
+  // the first prints, the others are silent.
+  const momentid::cluster::Session mpi(argc, argv);
+  const int rank = momentid::cluster::rank();
+  const bool several = momentid::cluster::size() > 1;
+  const int errors_fd = several ? dup(STDERR_FILENO) : STDERR_FILENO;
+  if (several && rank != 0) {
+    if (std::freopen("/dev/null", "w", stdout) == nullptr ||
+        std::freopen("/dev/null", "w", stderr) == nullptr) {
+      momentid::cluster::abort(2);
+    }
+  }
+
   momentid::remove_partial_output_on_interrupt();
   CLI::App app{"momentid: identify the parameters of polynomial ODE models from random data"};
   app.require_subcommand(1);
@@ -26,7 +66,11 @@ int main(int argc, char** argv) {
   app.set_version_flag("-V,--version",
                        "momentid " MOMENTID_VERSION "\ndata formats: " + momentid::data_formats() +
                            "\nvalidate plots: SVG (written by momentid)"
-                           "\ndistributions: Boost.Math; linear algebra: Eigen; algebra: GiNaC");
+                           "\ndistributions: Boost.Math; linear algebra: Eigen; algebra: GiNaC"
+#ifdef MOMENTID_WITH_MPI
+                           "\nMPI: passes shared by the processes of mpirun"
+#endif
+  );
 
   const std::vector<momentid::cli::Command> commands{
       momentid::cli::add_derive(app),   momentid::cli::add_simulate(app),
@@ -42,18 +86,37 @@ int main(int argc, char** argv) {
 
   try {
     for (const momentid::cli::Command& command : commands) {
-      if (command.app->parsed()) return command.run();
+      if (!command.app->parsed()) continue;
+      const std::string name = command.app->get_name();
+      if (several && name != "identify" && name != "check") {
+        throw momentid::UsageError("under mpirun only identify and check share their work among "
+                                   "processes: run " + name + " as one process");
+      }
+      return command.run();
     }
-  } catch (const momentid::LocatedError& e) {
-    std::cerr << momentid::render_with_caret(e) << "\n";
-    return e.exit_code();
-  } catch (const momentid::Error& e) {
-    std::cerr << "momentid: " << momentid::printable(e.what()) << "\n";
-    return e.exit_code();
   } catch (const std::exception& e) {
-    // Everything momentid checks is reported above; this is a failure it did not foresee.
-    std::cerr << "momentid: internal error: " << momentid::printable(e.what()) << "\n";
-    return 2;
+    const std::string text = message_of(e);
+    if (!several) {
+      std::cerr << text << "\n";
+      return exit_code_of(e);
+    }
+    // Every process fails alike (the same model or data error): the first says it, and the
+    // others' messages where they differ.
+    if (const auto all = momentid::cluster::all_failed(text, std::chrono::seconds(10))) {
+      for (std::size_t r = 0; r < all->size(); ++r) {
+        if (r == 0 || (*all)[r] != all->front()) {
+          std::cerr << (r == 0 ? "" : "process " + std::to_string(r) + ": ") << (*all)[r]
+                    << "\n";
+        }
+      }
+      return exit_code_of(e);
+    }
+    // This process alone fails, and the others may wait for it: it says so, and ends them all.
+    const std::string alone = "momentid (process " + std::to_string(rank) + "): " + text + "\n";
+    if (write(errors_fd, alone.data(), alone.size()) < 0) {
+      // Nowhere left to say it.
+    }
+    momentid::cluster::abort(exit_code_of(e));
   }
   return 0;
 }

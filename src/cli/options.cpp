@@ -39,6 +39,8 @@ Model model_argument(const std::string& model, const std::string& data, const st
 }
 
 void add_pass_options(CLI::App* command, PassControl& control) {
+  // Under mpirun, the job's processes share the passes.
+  control.across_processes = true;
   command->add_option("--threads", control.threads,
                       "threads reading the data at once (default 0: one per core)")
       ->check(CLI::Range(0, 1024));

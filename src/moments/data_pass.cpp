@@ -4,6 +4,8 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <condition_variable>
 #include <cstdio>
 #include <deque>
@@ -15,11 +17,78 @@
 
 #include "common/decimal.hpp"
 #include "data/text.hpp"
+#include "common/cluster.hpp"
 
 namespace momentid {
 namespace {
 
 using data::plural;
+
+// The bytes another process needs of a range's result (native byte order: the processes of one
+// job run on one kind of machine).
+class WireOut {
+ public:
+  void u64(std::uint64_t v) { put(&v, sizeof v); }
+  void f64(double v) { put(&v, sizeof v); }
+  void text(const std::string& s) {
+    u64(s.size());
+    put(s.data(), s.size());
+  }
+  void bytes(const std::vector<std::uint8_t>& b) {
+    u64(b.size());
+    put(b.data(), b.size());
+  }
+  std::vector<std::uint8_t> data;
+
+ private:
+  void put(const void* p, std::size_t n) {
+    const auto* b = static_cast<const std::uint8_t*>(p);
+    data.insert(data.end(), b, b + n);
+  }
+};
+
+class WireIn {
+ public:
+  explicit WireIn(const std::vector<std::uint8_t>& data) : data_(data) {}
+  std::uint64_t u64() {
+    std::uint64_t v;
+    get(&v, sizeof v);
+    return v;
+  }
+  double f64() {
+    double v;
+    get(&v, sizeof v);
+    return v;
+  }
+  std::string text() {
+    std::string s(u64_size(), '\0');
+    get(s.data(), s.size());
+    return s;
+  }
+  std::vector<std::uint8_t> bytes() {
+    std::vector<std::uint8_t> b(u64_size());
+    get(b.data(), b.size());
+    return b;
+  }
+
+ private:
+  std::size_t u64_size() {
+    const std::uint64_t n = u64();
+    if (n > data_.size() - at_) cut_short();
+    return static_cast<std::size_t>(n);
+  }
+  void get(void* p, std::size_t n) {
+    if (n > data_.size() - at_) cut_short();
+    std::memcpy(p, data_.data() + at_, n);
+    at_ += n;
+  }
+  [[noreturn]] static void cut_short() {
+    throw Error("the result of another process arrived cut short");
+  }
+  const std::vector<std::uint8_t>& data_;
+  std::size_t at_ = 0;
+};
+
 
 constexpr std::size_t kBlockRows = 1 << 15;
 
@@ -71,6 +140,31 @@ class LagSums {
       remember(row);
       ++count_;
     }
+  }
+
+  // The sums, for another process (load()).
+  void save(WireOut& out) const {
+    out.u64(count_);
+    for (const auto* v : {&offset_, &sum_, &sum_squares_, &products_, &lead_, &lagged_}) {
+      out.u64(v->size());
+      for (double x : *v) out.f64(x);
+    }
+    for (std::size_t p : pairs_) out.u64(p);
+  }
+  static LagSums load(WireIn& in, std::size_t channels, std::size_t lags) {
+    LagSums out(channels, lags);
+    out.count_ = in.u64();
+    for (auto* v : {&out.offset_, &out.sum_, &out.sum_squares_, &out.products_, &out.lead_,
+                    &out.lagged_}) {
+      const std::uint64_t n = in.u64();
+      if (n != v->size() && !(v == &out.offset_ && n == channels)) {
+        throw Error("the result of another process does not match this one's channels");
+      }
+      v->resize(n);
+      for (double& x : *v) x = in.f64();
+    }
+    for (std::size_t& p : out.pairs_) p = in.u64();
+    return out;
   }
 
   // Adds the sums of `other`, the shard after this one's rows.
@@ -286,14 +380,20 @@ struct PassSetup {
   const DataOptions* options = nullptr;
 };
 
+// What the merge needs to know of each shard besides its sums: its time steps (each file's
+// interval is checked against the first file's) and the rows it dropped.
+struct ShardSummary {
+  DataReader::Steps steps;
+  std::optional<double> time_step;  // the reader's
+  MissingSummary missing;
+};
+
 // The sums of one shard, or of the shards merged so far.
 struct ShardState {
   MomentAccumulator moments;
   LagSums lags;
   std::size_t rows = 0, runs = 0;
-  DataReader::Steps steps;
-  std::optional<double> time_step;  // the reader's
-  MissingSummary missing;
+  ShardSummary summary;
 };
 
 // Reads one shard: the rows before it only as history of its first run, its own rows, and the
@@ -357,9 +457,7 @@ ShardState read_shard(DataReader& reader, const PassSetup& setup, bool pipelined
     rows_done += block.rows;
   });
   out.moments.finish();
-  out.steps = reader.steps();
-  out.time_step = reader.time_step();
-  out.missing = reader.missing();
+  out.summary = {reader.steps(), reader.time_step(), reader.missing()};
   return out;
 }
 
@@ -367,6 +465,246 @@ ShardState read_shard(DataReader& reader, const PassSetup& setup, bool pipelined
 // --dt).
 std::optional<double> file_step(const DataReader::Steps& steps, std::optional<double> other) {
   return steps.count > 0 ? std::optional(steps.sum / static_cast<double>(steps.count)) : other;
+}
+
+// What a process makes of a range of shards: their sums merged in record order, the summary of
+// each, and the first error in record order with its shard (`error` is then set).
+struct RangeResult {
+  std::optional<ShardState> state;
+  std::vector<ShardSummary> summaries;  // of the shards merged, from the range's first
+  std::size_t first_error = std::numeric_limits<std::size_t>::max();
+  std::exception_ptr error;
+};
+
+// What every shard of one pass shares, and how the pass reads.
+struct Pass {
+  const DataSource& source;
+  const std::vector<DataSource::Shard>& shards;
+  const ColumnRequest& request;
+  const PassSetup& setup;
+  std::size_t merged_batches;  // of the merged state: it never compacts its stretches
+};
+
+// Reads shards [begin, end) on the pass's threads; the first error in record order stops the
+// shards after it from starting. Nothing throws out of it.
+RangeResult read_range(const Pass& pass, std::size_t begin, std::size_t end,
+                       std::unique_ptr<DataReader> first_reader) {
+  const DataOptions& options = *pass.setup.options;
+  RangeResult out;
+  out.state.emplace(ShardState{
+      MomentAccumulator(pass.setup.moments, pass.setup.states, pass.setup.inputs, pass.setup.hold,
+                        pass.merged_batches),
+      LagSums(pass.setup.states + pass.setup.inputs, options.lags)});
+  if (begin == end) return out;
+  const std::size_t threads = options.control.threads > 0
+                                  ? options.control.threads
+                                  : std::max<unsigned>(1, std::thread::hardware_concurrency());
+  const std::size_t workers = std::min(threads, end - begin);
+  const bool pipelined = threads >= 2 * workers;
+
+  std::mutex mutex;
+  std::condition_variable finished;
+  std::vector<std::optional<ShardState>> done(end - begin);
+  std::size_t next_shard = begin, next_merge = begin, running = workers;
+  std::atomic<std::size_t> rows_done{0};
+  const auto fail_at = [&](std::size_t k, std::exception_ptr error) {
+    if (k < out.first_error) {
+      out.first_error = k;
+      out.error = error;
+    }
+  };
+  // Merges the finished shards that come next in record order (mutex held).
+  const auto merge_ready = [&] {
+    while (next_merge < std::min(end, out.first_error) && done[next_merge - begin]) {
+      ShardState shard = std::move(*done[next_merge - begin]);
+      done[next_merge - begin].reset();
+      try {
+        out.state->moments.merge(shard.moments);
+        out.state->lags.merge(shard.lags);
+        out.state->rows += shard.rows;
+        out.state->runs += shard.runs;
+        out.summaries.push_back(std::move(shard.summary));
+      } catch (...) {
+        fail_at(next_merge, std::current_exception());
+      }
+      ++next_merge;
+    }
+  };
+  const auto work = [&] {
+    for (;;) {
+      std::size_t k;
+      std::unique_ptr<DataReader> reader;
+      {
+        std::lock_guard lock(mutex);
+        if (next_shard >= std::min(end, out.first_error)) break;
+        k = next_shard++;
+        if (k == begin) reader = std::move(first_reader);
+      }
+      std::optional<ShardState> state;
+      std::exception_ptr error;
+      try {
+        if (!reader) reader = pass.source.open(pass.shards[k], pass.request);
+        state = read_shard(*reader, pass.setup, pipelined, rows_done);
+      } catch (...) {
+        error = std::current_exception();
+      }
+      reader.reset();
+      std::lock_guard lock(mutex);
+      if (error) {
+        fail_at(k, error);
+      } else {
+        done[k - begin] = std::move(state);
+      }
+      merge_ready();
+    }
+    std::lock_guard lock(mutex);
+    --running;
+    finished.notify_all();
+  };
+  std::vector<std::thread> pool;
+  for (std::size_t w = 0; w < workers; ++w) pool.emplace_back(work);
+  {
+    std::unique_lock lock(mutex);
+    while (running > 0) {
+      finished.wait_for(lock, std::chrono::milliseconds(100));
+      if (options.control.progress && running > 0) {
+        const double fraction =
+            static_cast<double>(next_merge - begin) / static_cast<double>(end - begin);
+        lock.unlock();
+        options.control.progress(rows_done, end - begin > 1 ? std::optional(fraction)
+                                                            : std::nullopt);
+        lock.lock();
+      }
+    }
+  }
+  for (std::thread& t : pool) t.join();
+  if (options.control.progress && !out.error) options.control.progress(rows_done, 1.0);
+  return out;
+}
+
+void write_optional(WireOut& out, const std::optional<double>& v) {
+  out.u64(v ? 1 : 0);
+  out.f64(v.value_or(0));
+}
+
+std::optional<double> read_optional(WireIn& in) {
+  const bool has = in.u64() != 0;
+  const double v = in.f64();
+  return has ? std::optional(v) : std::nullopt;
+}
+
+void write_location(WireOut& out, const SourceLocation& at) {
+  out.text(at.file);
+  out.u64(static_cast<std::uint64_t>(at.line));
+  out.u64(static_cast<std::uint64_t>(at.column));
+  out.text(at.text);
+}
+
+SourceLocation read_location(WireIn& in) {
+  SourceLocation at;
+  at.file = in.text();
+  at.line = static_cast<int>(in.u64());
+  at.column = static_cast<int>(in.u64());
+  at.text = in.text();
+  return at;
+}
+
+// An error as another process rethrows it: its kind, place and message.
+enum class ErrorKind : std::uint64_t { kData = 1, kUsage, kOther };
+
+void write_error(WireOut& out, const std::exception_ptr& error) {
+  try {
+    std::rethrow_exception(error);
+  } catch (const DataError& e) {
+    out.u64(static_cast<std::uint64_t>(ErrorKind::kData));
+    write_location(out, e.location());
+    out.text(e.message());
+  } catch (const UsageError& e) {
+    out.u64(static_cast<std::uint64_t>(ErrorKind::kUsage));
+    out.text(e.what());
+  } catch (const std::exception& e) {
+    out.u64(static_cast<std::uint64_t>(ErrorKind::kOther));
+    out.text(e.what());
+  }
+}
+
+std::exception_ptr read_error(WireIn& in) {
+  switch (static_cast<ErrorKind>(in.u64())) {
+    case ErrorKind::kData: {
+      SourceLocation at = read_location(in);
+      return std::make_exception_ptr(DataError(std::move(at), in.text()));
+    }
+    case ErrorKind::kUsage:
+      return std::make_exception_ptr(UsageError(in.text()));
+    default:
+      return std::make_exception_ptr(Error(in.text()));
+  }
+}
+
+std::vector<std::uint8_t> encode(const RangeResult& r) {
+  WireOut out;
+  out.bytes(r.state->moments.serialize());
+  r.state->lags.save(out);
+  out.u64(r.state->rows);
+  out.u64(r.state->runs);
+  out.u64(r.summaries.size());
+  for (const ShardSummary& s : r.summaries) {
+    out.u64(s.steps.count);
+    out.f64(s.steps.sum);
+    write_optional(out, s.time_step);
+    out.u64(s.missing.rows);
+    out.u64(s.missing.splits);
+    out.u64(s.missing.joins);
+    out.u64(s.missing.first ? 1 : 0);
+    if (s.missing.first) write_location(out, *s.missing.first);
+  }
+  out.u64(r.error ? r.first_error : std::numeric_limits<std::uint64_t>::max());
+  if (r.error) write_error(out, r.error);
+  return std::move(out.data);
+}
+
+RangeResult decode(const std::vector<std::uint8_t>& bytes, std::size_t channels,
+                   std::size_t lags) {
+  WireIn in(bytes);
+  RangeResult r;
+  MomentAccumulator moments = MomentAccumulator::deserialize(in.bytes());
+  LagSums sums = LagSums::load(in, channels, lags);
+  r.state.emplace(ShardState{std::move(moments), std::move(sums)});
+  r.state->rows = in.u64();
+  r.state->runs = in.u64();
+  r.summaries.resize(in.u64());
+  for (ShardSummary& s : r.summaries) {
+    s.steps.count = in.u64();
+    s.steps.sum = in.f64();
+    s.time_step = read_optional(in);
+    s.missing.rows = in.u64();
+    s.missing.splits = in.u64();
+    s.missing.joins = in.u64();
+    if (in.u64() != 0) s.missing.first = read_location(in);
+  }
+  const std::uint64_t first_error = in.u64();
+  if (first_error != std::numeric_limits<std::uint64_t>::max()) {
+    r.first_error = static_cast<std::size_t>(first_error);
+    r.error = read_error(in);
+  }
+  return r;
+}
+
+// The ranges of all processes, merged in record order (each range's result, in rank order).
+RangeResult merge_ranges(std::vector<RangeResult> ranges) {
+  RangeResult out = std::move(ranges.front());
+  for (std::size_t r = 1; r < ranges.size(); ++r) {
+    RangeResult& next = ranges[r];
+    if (out.error) break;
+    out.state->moments.merge(next.state->moments);
+    out.state->lags.merge(next.state->lags);
+    out.state->rows += next.state->rows;
+    out.state->runs += next.state->runs;
+    for (ShardSummary& s : next.summaries) out.summaries.push_back(std::move(s));
+    out.first_error = next.first_error;
+    out.error = next.error;
+  }
+  return out;
 }
 
 }  // namespace
@@ -407,15 +745,28 @@ DataMoments moments_from_data(const DataSource& source, const std::vector<std::s
   // (a shifted input, a row dropped between two) keep files whole.
   const bool whole_files =
       options.input_shift != 0 || options.layout.missing != MissingValues::kError;
-  const std::vector<DataSource::Shard> shards =
-      source.shards(whole_files ? std::numeric_limits<std::size_t>::max() : options.control.shard_bytes);
+  const std::vector<DataSource::Shard> shards = source.shards(
+      whole_files ? std::numeric_limits<std::size_t>::max() : options.control.shard_bytes);
   request.part.before = std::max<std::size_t>({max_lag, options.lags, 1});
   request.part.after = MomentAccumulator::kLookaheadRows;
 
+  // With several processes (MPI), each reads a contiguous range of the shards.
+  const bool shared = options.control.across_processes;
+  const std::size_t ranks = shared ? static_cast<std::size_t>(cluster::size()) : 1;
+  const std::size_t rank = shared ? static_cast<std::size_t>(cluster::rank()) : 0;
+  const std::size_t begin = shards.size() * rank / ranks;
+  const std::size_t end = shards.size() * (rank + 1) / ranks;
+
   // The first shard's reader gives the metadata, and with it the input hold.
-  std::unique_ptr<DataReader> first = source.open(shards.front(), request);
   DataMoments out;
-  out.metadata = first->metadata();
+  std::unique_ptr<DataReader> first;
+  std::exception_ptr open_error;
+  try {
+    first = source.open(shards.front(), request);
+    out.metadata = first->metadata();
+  } catch (...) {
+    open_error = std::current_exception();
+  }
   if (options.hold) {
     out.hold = *options.hold;
   } else {
@@ -423,127 +774,63 @@ DataMoments moments_from_data(const DataSource& source, const std::vector<std::s
     out.hold = hold && *hold == "zoh" ? InputHold::kZeroOrderHold : InputHold::kSample;
   }
   // Each shard keeps at least 8 stretches, and the merged state all of them, so that the
-  // batches are made the same way whatever thread reads a shard.
+  // batches are made the same way whatever thread or process reads a shard.
   const std::size_t shard_batches =
       std::max<std::size_t>(2, (options.batches + shards.size() - 1) / shards.size());
-  PassSetup setup{keys, states.size(), inputs.size(), out.hold, shard_batches, &options};
-  ShardState merged{MomentAccumulator(std::move(keys), states.size(), inputs.size(), out.hold,
-                                      (shard_batches + 1) * shards.size()),
-                    LagSums(channels, options.lags)};
+  const PassSetup setup{keys, states.size(), inputs.size(), out.hold, shard_batches, &options};
+  const Pass pass{source, shards, request, setup, (shard_batches + 1) * shards.size()};
+  RangeResult result;
+  if (open_error) {
+    result = read_range(pass, 0, 0, nullptr);
+    result.first_error = 0;
+    result.error = open_error;
+  } else {
+    result = read_range(pass, begin, end, begin == 0 ? std::move(first) : nullptr);
+  }
+  if (ranks > 1) {
+    std::vector<RangeResult> ranges;
+    for (const std::vector<std::uint8_t>& bytes : cluster::all_gather(encode(result))) {
+      ranges.push_back(decode(bytes, channels, options.lags));
+    }
+    result = merge_ranges(std::move(ranges));
+  }
 
-  const std::size_t threads = options.control.threads > 0
-                                  ? options.control.threads
-                                  : std::max<unsigned>(1, std::thread::hardware_concurrency());
-  const std::size_t workers = std::min(threads, shards.size());
-  const bool pipelined = threads >= 2 * workers;
-
-  // Shards are taken in record order and merged in record order as they finish; the first
-  // error in record order wins, and no shard after it is started.
-  std::mutex mutex;
-  std::condition_variable finished;
-  std::vector<std::optional<ShardState>> done(shards.size());
-  std::vector<std::exception_ptr> errors(shards.size());
-  std::size_t next_shard = 0, next_merge = 0, running = workers;
-  std::size_t first_error = shards.size();
-  std::atomic<std::size_t> rows_done{0};
+  // Each file's interval must be the first file's: checked in record order, up to the first
+  // shard that failed.
   std::optional<double> first_step;
   DataReader::Steps file_steps;
-  // Merges the finished shards that come next in record order (mutex held).
-  const auto merge_ready = [&] {
-    while (next_merge < first_error && done[next_merge]) {
-      const std::size_t k = next_merge++;
-      ShardState shard = std::move(*done[k]);
-      done[k].reset();
-      try {
-        merged.moments.merge(shard.moments);
-        merged.lags.merge(shard.lags);
-        merged.rows += shard.rows;
-        merged.runs += shard.runs;
-        const MissingSummary& m = shard.missing;
-        if (!merged.missing.first && m.first) merged.missing.first = m.first;
-        merged.missing.rows += m.rows;
-        merged.missing.splits += m.splits;
-        merged.missing.joins += m.joins;
-        file_steps.count += shard.steps.count;
-        file_steps.sum += shard.steps.sum;
-        const DataSource::Shard& at = shards[k];
-        if (at.index + 1 < at.count) continue;
-        // The file's last shard: its interval must be the first file's.
-        const std::optional<double> step = file_step(file_steps, shard.time_step);
-        file_steps = {};
-        if (at.file == 0) {
-          first_step = step;
-        } else if (step.has_value() != first_step.has_value() ||
-                   (step && std::abs(*step - *first_step) > 1e-6 * *first_step)) {
-          const auto text = [](const std::optional<double>& s) {
-            return s ? "dt = " + shortest_decimal(*s) : std::string("no sample interval");
-          };
-          throw DataError({paths[at.file], 1, 1, ""},
-                          "this file has " + text(step) + ", but " + paths.front() + " has " +
-                              text(first_step) +
-                              ": the files of one identification need one interval");
-        }
-      } catch (...) {
-        errors[k] = std::current_exception();
-        first_error = k;
-      }
-    }
-  };
-  const auto work = [&] {
-    for (;;) {
-      std::size_t k;
-      std::unique_ptr<DataReader> reader;
-      {
-        std::lock_guard lock(mutex);
-        if (next_shard >= first_error || next_shard == shards.size()) break;
-        k = next_shard++;
-        if (k == 0) reader = std::move(first);
-      }
-      std::optional<ShardState> state;
-      std::exception_ptr error;
-      try {
-        if (!reader) reader = source.open(shards[k], request);
-        state = read_shard(*reader, setup, pipelined, rows_done);
-      } catch (...) {
-        error = std::current_exception();
-      }
-      reader.reset();
-      std::lock_guard lock(mutex);
-      if (error) {
-        errors[k] = error;
-        first_error = std::min(first_error, k);
-      } else {
-        done[k] = std::move(state);
-      }
-      merge_ready();
-    }
-    std::lock_guard lock(mutex);
-    --running;
-    finished.notify_all();
-  };
-  std::vector<std::thread> pool;
-  for (std::size_t w = 0; w < workers; ++w) pool.emplace_back(work);
-  {
-    std::unique_lock lock(mutex);
-    while (running > 0) {
-      finished.wait_for(lock, std::chrono::milliseconds(100));
-      if (options.control.progress && running > 0) {
-        const double fraction = static_cast<double>(next_merge) / static_cast<double>(shards.size());
-        lock.unlock();
-        options.control.progress(rows_done, shards.size() > 1 ? std::optional(fraction) : std::nullopt);
-        lock.lock();
-      }
+  for (std::size_t k = 0; k < result.summaries.size(); ++k) {
+    const ShardSummary& s = result.summaries[k];
+    const MissingSummary& m = s.missing;
+    if (!out.missing.first && m.first) out.missing.first = m.first;
+    out.missing.rows += m.rows;
+    out.missing.splits += m.splits;
+    out.missing.joins += m.joins;
+    file_steps.count += s.steps.count;
+    file_steps.sum += s.steps.sum;
+    if (shards[k].index + 1 < shards[k].count) continue;
+    const std::optional<double> step = file_step(file_steps, s.time_step);
+    file_steps = {};
+    if (shards[k].file == 0) {
+      first_step = step;
+    } else if (step.has_value() != first_step.has_value() ||
+               (step && std::abs(*step - *first_step) > 1e-6 * *first_step)) {
+      const auto text = [](const std::optional<double>& interval) {
+        return interval ? "dt = " + shortest_decimal(*interval) : std::string("no sample interval");
+      };
+      throw DataError({paths[shards[k].file], 1, 1, ""},
+                      "this file has " + text(step) + ", but " + paths.front() + " has " +
+                          text(first_step) +
+                          ": the files of one identification need one interval");
     }
   }
-  for (std::thread& t : pool) t.join();
-  if (first_error < shards.size()) std::rethrow_exception(errors[first_error]);
-  if (options.control.progress) options.control.progress(rows_done, 1.0);
+  if (result.error) std::rethrow_exception(result.error);
 
-  MomentAccumulator& accumulator = merged.moments;
+  MomentAccumulator& accumulator = result.state->moments;
   accumulator.finish();
-  if (merged.rows < options.min_rows && (several_files || shards.size() > 1)) {
+  if (result.state->rows < options.min_rows && (several_files || shards.size() > 1)) {
     throw DataError({paths.empty() ? source.name() : paths.back(), 1, 1, ""},
-                    "the data have " + plural(merged.rows, "row") +
+                    "the data have " + plural(result.state->rows, "row") +
                         (several_files ? " in " + plural(paths.size(), "file") : std::string()) +
                         "; at least " + std::to_string(options.min_rows) + " are needed");
   }
@@ -559,13 +846,12 @@ DataMoments moments_from_data(const DataSource& source, const std::vector<std::s
                 (options.input_shift != 0 ? " after the input shift" : std::string()) +
                 ": the time averages need at least one interval");
   }
-  out.rows = merged.rows;
-  out.runs = merged.runs;
+  out.rows = result.state->rows;
+  out.runs = result.state->runs;
   out.time_step = options.dt ? options.dt : first_step;
-  out.missing = merged.missing;
   out.estimates = estimates(accumulator, options.batches);
   for (std::size_t c = 0; c < channels; ++c) {
-    ChannelStatistics s = merged.lags.statistics(c);
+    ChannelStatistics s = result.state->lags.statistics(c);
     s.name = request.names[c];
     s.is_input = c >= states.size();
     out.channels.push_back(std::move(s));

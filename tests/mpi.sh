@@ -1,0 +1,45 @@
+#!/usr/bin/env bash
+# mpirun -np 2 and 4 give the one-process result to the last bit, on a record cut into shards
+# and on a record in several files, and a data error in a shard that another process reads
+# stops every process with the located error and exit status 2.
+# Usage: mpi.sh MPIRUN MOMENTID MODEL DIRECTORY
+set -euo pipefail
+mpirun=$1 momentid=$2 model=$3 dir=$4
+rm -rf "$dir" && mkdir -p "$dir"
+# The tests run as root in CI; Open MPI refuses root unless told.
+export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
+launch() { "$mpirun" --oversubscribe -np "$@"; }
+
+"$momentid" simulate "$model" --samples 60000 --runs 2 --seed 4 -o "$dir/record.csv"
+for k in 1 2 3; do
+  "$momentid" simulate "$model" --samples 20000 --seed "$k" --format bin -o "$dir/part$k.bin"
+done
+for data in "$dir/record.csv" "$dir/part*.bin"; do
+  # shellcheck disable=SC2086  # the glob is momentid's to expand
+  "$momentid" identify "$model" $data --shard-size 64k --format json >"$dir/one.json"
+  for n in 2 4; do
+    # shellcheck disable=SC2086
+    launch "$n" "$momentid" identify "$model" $data --shard-size 64k --format json >"$dir/many.json"
+    if ! cmp -s "$dir/one.json" "$dir/many.json"; then
+      echo "mpirun -np $n on $data differs from one process:"
+      diff "$dir/one.json" "$dir/many.json" | head -20
+      exit 1
+    fi
+    echo "mpirun -np $n on $data: the one-process result"
+  done
+done
+
+# Row 100000 of the 120000, in the second half that the second process reads, is bad.
+awk 'NR == 100000 { sub(/,[^,]*,/, ",oops,") } 1' "$dir/record.csv" >"$dir/bad.csv"
+line=$(grep -n oops "$dir/bad.csv" | cut -d: -f1)
+status=0
+launch 2 "$momentid" identify "$model" "$dir/bad.csv" --shard-size 64k >"$dir/out.txt" 2>"$dir/err.txt" ||
+  status=$?
+expected="$dir/bad.csv:$line:"
+if [[ $status -ne 2 ]] || [[ $(grep -c "^$expected.*expected a number, found 'oops'" "$dir/err.txt") -ne 1 ]] ||
+  [[ -s $dir/out.txt ]]; then
+  echo "a bad row read by the second process: exit $status (expected 2), standard error:"
+  cat "$dir/err.txt"
+  exit 1
+fi
+echo "a bad row read by the second process: exit 2, located once at line $line"
