@@ -37,7 +37,7 @@ struct PassControl {
   std::size_t threads = 0;
   // Files are cut into shards of about this many bytes (DataSource::shards).
   std::size_t shard_bytes = kDefaultShardBytes;
-  static constexpr std::size_t kDefaultShardBytes = std::size_t{64} << 20;
+  static constexpr std::size_t kDefaultShardBytes = std::size_t{16} << 20;
   // In an MPI job (momentid built with MOMENTID_MPI, MPI started): every process of the job
   // takes part in each pass, reading a contiguous range of the shards, and every process gets
   // the whole result. Every process must then make the same passes.

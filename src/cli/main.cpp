@@ -63,14 +63,13 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   // --help shows each option's default (subcommands inherit this).
   app.option_defaults()->always_capture_default();
+  const std::string mpi_library = momentid::cluster::library();
   app.set_version_flag("-V,--version",
                        "momentid " MOMENTID_VERSION "\ndata formats: " + momentid::data_formats() +
                            "\nvalidate plots: SVG (written by momentid)"
-                           "\ndistributions: Boost.Math; linear algebra: Eigen; algebra: GiNaC"
-#ifdef MOMENTID_WITH_MPI
-                           "\nMPI: passes shared by the processes of mpirun"
-#endif
-  );
+                           "\ndistributions: Boost.Math; linear algebra: Eigen; algebra: GiNaC" +
+                           (mpi_library.empty() ? std::string()
+                                                : "\nMPI: " + mpi_library + ", passes shared under mpirun"));
 
   const std::vector<momentid::cli::Command> commands{
       momentid::cli::add_derive(app),   momentid::cli::add_simulate(app),

@@ -46,7 +46,7 @@ void add_pass_options(CLI::App* command, PassControl& control) {
       ->check(CLI::Range(0, 1024));
   command
       ->add_option("--shard-size", control.shard_bytes,
-                   "cut files into shards of about this size, read in parallel (default 64M; "
+                   "cut files into shards of about this size, read in parallel (default 16M; "
                    "k, M, G for powers of 1024)")
       ->transform(CLI::AsSizeValue(false))
       ->check(CLI::Range(std::size_t{1024}, std::numeric_limits<std::size_t>::max()));

@@ -29,6 +29,15 @@ bool running() {
 
 }  // namespace
 
+std::string library() {
+#ifdef OMPI_MAJOR_VERSION
+  return "Open MPI " + std::to_string(OMPI_MAJOR_VERSION) + "." +
+         std::to_string(OMPI_MINOR_VERSION) + "." + std::to_string(OMPI_RELEASE_VERSION);
+#else
+  return "MPI " + std::to_string(MPI_VERSION) + "." + std::to_string(MPI_SUBVERSION);
+#endif
+}
+
 int rank() {
   int r = 0;
   if (running()) MPI_Comm_rank(MPI_COMM_WORLD, &r);
@@ -124,6 +133,7 @@ void abort(int status) {
 
 #else
 
+std::string library() { return {}; }
 int rank() { return 0; }
 int size() { return 1; }
 std::vector<std::vector<std::uint8_t>> all_gather(const std::vector<std::uint8_t>& bytes) {

@@ -10,6 +10,9 @@
 
 namespace momentid::cluster {
 
+// The MPI library this build uses ("Open MPI 4.1.4"), or empty without MPI.
+std::string library();
+
 int rank();
 int size();
 
