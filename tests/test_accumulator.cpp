@@ -462,6 +462,25 @@ TEST_SUITE("accumulator") {
     }
   }
 
+  TEST_CASE("collapsing a finished accumulator keeps its sums in one stretch") {
+    const Record record = make_record({200, 150});
+    MomentAccumulator acc = one_pass(record, InputHold::kZeroOrderHold);
+    const auto before = momentid::estimates(acc, kBatches);
+    acc.collapse();
+    CHECK(acc.stretches().size() == 2);  // the sums and the open stretch
+    CHECK(acc.stretches().back().intervals == 0);
+    const auto after = momentid::estimates(acc, kBatches);
+    CHECK(after.intervals == before.intervals);
+    for (std::size_t k = 0; k < before.mean.size(); ++k) {
+      CHECK(after.mean[k] == doctest::Approx(before.mean[k]).epsilon(1e-13));
+    }
+    MomentAccumulator open(all_moments(), kStates, kInputs, InputHold::kSample, kBatches);
+    open.add(record.row(0), 5);
+    CHECK(std::string(error_from<momentid::Error>([&] { open.collapse(); }).what()) ==
+          "cannot collapse a moment accumulator in the middle of a run: call finish() on it "
+          "first");
+  }
+
   TEST_CASE("an accumulator in the middle of a run is neither serialised nor merged") {
     MomentAccumulator acc(all_moments(), kStates, kInputs, InputHold::kSample, kBatches);
     const Record record = make_record({10});

@@ -105,10 +105,14 @@ TEST_SUITE("shards") {
   TEST_CASE("the thread count changes nothing, to the last bit") {
     const Directory dir;
     const std::string path = duffing_csv(dir);
-    const DataMoments one = pass(path, 8192, 1);
-    for (std::size_t threads : {2, 3, 8}) {
-      CAPTURE(threads);
-      check_identical(one, pass(path, 8192, threads));
+    // About 75 shards, and 300: then each shard is one stretch.
+    for (std::size_t bytes : {8192, 2048}) {
+      const DataMoments one = pass(path, bytes, 1);
+      for (std::size_t threads : {2, 3, 8}) {
+        CAPTURE(bytes);
+        CAPTURE(threads);
+        check_identical(one, pass(path, bytes, threads));
+      }
     }
   }
 
@@ -130,8 +134,9 @@ TEST_SUITE("shards") {
     }
     for (const std::string& file : files) {
       const std::uintmax_t size = fs::file_size(file);
-      // One shard, two, a few, many; cuts inside the header of a CSV file too.
-      for (std::size_t shards : {1, 2, 7, 60}) {
+      // One shard, two, a few, many (100: each one stretch); cuts inside the header of a CSV
+      // file too.
+      for (std::size_t shards : {1, 2, 7, 60, 100}) {
         CAPTURE(file);
         CAPTURE(shards);
         check_same_sums(whole, pass(file, static_cast<std::size_t>(size / shards + 1), 2));

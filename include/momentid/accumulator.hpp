@@ -94,6 +94,9 @@ class MomentAccumulator {
   // Closes the current run (or the shard): call after the last rows, before reading the
   // stretches, serialising or merging.
   void finish();
+  // Adds the stretches of a finished accumulator into one: for a shard among so many that the
+  // batches of the record are made of whole shards. Throws Error in the middle of a run.
+  void collapse();
   // Appends the stretches of `other` (finished, the shard after this one's rows) after this
   // one's, closing this one's current run first. Throws Error if `other` is in the middle of a
   // run or if its moments, hold or channel counts differ.

@@ -449,6 +449,21 @@ void MomentAccumulator::flush() {
 }
 
 // Halves the number of stretches by adding neighbours; the open (last) stretch stays last.
+void MomentAccumulator::collapse() {
+  if (seen_rows_ > 0) {
+    throw Error("cannot collapse a moment accumulator in the middle of a run: call finish() on it "
+                "first");
+  }
+  Stretch whole{std::vector<double>(moments_.size(), 0.0), 0};
+  for (const Stretch& s : stretches_) {
+    for (std::size_t j = 0; j < s.sums.size(); ++j) whole.sums[j] += s.sums[j];
+    whole.intervals += s.intervals;
+  }
+  stretches_.clear();
+  if (whole.intervals > 0) stretches_.push_back(std::move(whole));
+  stretches_.push_back({std::vector<double>(moments_.size(), 0.0), 0});
+}
+
 void MomentAccumulator::compact() {
   std::vector<Stretch> merged;
   const std::size_t closed = stretches_.size() - 1;

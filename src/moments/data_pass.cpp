@@ -377,6 +377,7 @@ struct PassSetup {
   std::size_t states = 0, inputs = 0;
   InputHold hold = InputHold::kSample;
   std::size_t batches = 0;  // per shard
+  bool collapse = false;    // each shard one stretch (many shards)
   const DataOptions* options = nullptr;
 };
 
@@ -398,8 +399,8 @@ struct ShardState {
 
 // Reads one shard: the rows before it only as history of its first run, its own rows, and the
 // rows after it only to close its last intervals.
-ShardState read_shard(DataReader& reader, const PassSetup& setup, bool pipelined,
-                      std::atomic<std::size_t>& rows_done) {
+ShardState read_shard(DataReader& reader, bool whole, const PassSetup& setup, bool pipelined,
+                      std::atomic<std::size_t>& rows_done, std::atomic<double>& fraction) {
   const DataOptions& options = *setup.options;
   const std::size_t channels = setup.states + setup.inputs;
   ShardState out{MomentAccumulator(setup.moments, setup.states, setup.inputs, setup.hold,
@@ -455,8 +456,13 @@ ShardState read_shard(DataReader& reader, const PassSetup& setup, bool pipelined
     out.lags.add(values, block.rows);
     out.rows += block.rows;
     rows_done += block.rows;
+    // A part of a file cannot tell how far it is; a whole file can.
+    if (options.control.progress && whole) {
+      fraction = reader.fraction_read().value_or(0);
+    }
   });
   out.moments.finish();
+  if (setup.collapse) out.moments.collapse();
   out.summary = {reader.steps(), reader.time_step(), reader.missing()};
   return out;
 }
@@ -507,6 +513,8 @@ RangeResult read_range(const Pass& pass, std::size_t begin, std::size_t end,
   std::vector<std::optional<ShardState>> done(end - begin);
   std::size_t next_shard = begin, next_merge = begin, running = workers;
   std::atomic<std::size_t> rows_done{0};
+  // How far each worker is in its shard, when it can tell.
+  std::vector<std::atomic<double>> partial(workers);
   const auto fail_at = [&](std::size_t k, std::exception_ptr error) {
     if (k < out.first_error) {
       out.first_error = k;
@@ -530,7 +538,7 @@ RangeResult read_range(const Pass& pass, std::size_t begin, std::size_t end,
       ++next_merge;
     }
   };
-  const auto work = [&] {
+  const auto work = [&](std::size_t worker) {
     for (;;) {
       std::size_t k;
       std::unique_ptr<DataReader> reader;
@@ -544,7 +552,10 @@ RangeResult read_range(const Pass& pass, std::size_t begin, std::size_t end,
       std::exception_ptr error;
       try {
         if (!reader) reader = pass.source.open(pass.shards[k], pass.request);
-        state = read_shard(*reader, pass.setup, pipelined, rows_done);
+        partial[worker] = 0;
+        state = read_shard(*reader, pass.shards[k].count == 1, pass.setup, pipelined, rows_done,
+                           partial[worker]);
+        partial[worker] = 0;
       } catch (...) {
         error = std::current_exception();
       }
@@ -562,17 +573,17 @@ RangeResult read_range(const Pass& pass, std::size_t begin, std::size_t end,
     finished.notify_all();
   };
   std::vector<std::thread> pool;
-  for (std::size_t w = 0; w < workers; ++w) pool.emplace_back(work);
+  for (std::size_t w = 0; w < workers; ++w) pool.emplace_back(work, w);
   {
     std::unique_lock lock(mutex);
     while (running > 0) {
       finished.wait_for(lock, std::chrono::milliseconds(100));
       if (options.control.progress && running > 0) {
-        const double fraction =
-            static_cast<double>(next_merge - begin) / static_cast<double>(end - begin);
+        double shards_done = static_cast<double>(next_merge - begin);
+        for (const std::atomic<double>& f : partial) shards_done += f;
+        const double fraction = std::min(1.0, shards_done / static_cast<double>(end - begin));
         lock.unlock();
-        options.control.progress(rows_done, end - begin > 1 ? std::optional(fraction)
-                                                            : std::nullopt);
+        options.control.progress(rows_done, fraction);
         lock.lock();
       }
     }
@@ -773,11 +784,14 @@ DataMoments moments_from_data(const DataSource& source, const std::vector<std::s
     const auto hold = out.metadata.get("input-hold");
     out.hold = hold && *hold == "zoh" ? InputHold::kZeroOrderHold : InputHold::kSample;
   }
-  // Each shard keeps at least 8 stretches, and the merged state all of them, so that the
-  // batches are made the same way whatever thread or process reads a shard.
+  // The merged state keeps the stretches of every shard, so that the batches are made the same
+  // way whatever thread or process reads a shard: at least 8 per shard for few shards, one for
+  // as many as four per batch (its memory grows by one stretch per shard: 16 MB of data).
+  const bool collapse = shards.size() >= 4 * options.batches;
   const std::size_t shard_batches =
       std::max<std::size_t>(2, (options.batches + shards.size() - 1) / shards.size());
-  const PassSetup setup{keys, states.size(), inputs.size(), out.hold, shard_batches, &options};
+  const PassSetup setup{keys,          states.size(), inputs.size(), out.hold,
+                        shard_batches, collapse,      &options};
   const Pass pass{source, shards, request, setup, (shard_batches + 1) * shards.size()};
   RangeResult result;
   if (open_error) {
