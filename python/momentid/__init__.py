@@ -259,7 +259,7 @@ def identify(model: Union[Model, PathLike], data: Any, *, columns: Optional[Sequ
              input_shift: Optional[int] = None, rename: Optional[Mapping[str, str]] = None,
              missing: Optional[str] = None, skip_rows: Optional[int] = None,
              decimal: Optional[str] = None, names: Optional[Sequence[str]] = None,
-             dt_from: Optional[str] = None) -> IdentifyResult:
+             dt_from: Optional[str] = None, threads: Optional[int] = None) -> IdentifyResult:
     """Estimates the model's parameters from a record, as `momentid identify MODEL DATA`.
 
     model: a Model or a model file's path.
@@ -279,6 +279,8 @@ def identify(model: Union[Model, PathLike], data: Any, *, columns: Optional[Sequ
     fix: {parameter: value} taken as known. center: variables (or "all") whose mean is removed.
     input_hold ("zoh" or "sample"), input_shift, rename ({model name: column}), and for files
       missing ("error", "drop-row", "split-run"), skip_rows, decimal: as on the command line.
+    threads: threads reading the data at once (default: one per core); the result is the same
+      to the last bit with any number.
 
     Returns an IdentifyResult. Raises ModelError, DataError or UsageError with the command
     line's messages. The GIL is released during the pass over the data.
@@ -291,7 +293,7 @@ def identify(model: Union[Model, PathLike], data: Any, *, columns: Optional[Sequ
                        weighting=weighting, lags=lags, instruments=instruments, noise=noise,
                        fix=fix, center=center, input_hold=input_hold, input_shift=input_shift,
                        rename=rename, dt=dt, missing=missing, skip_rows=skip_rows,
-                       decimal=decimal, names=names, dt_from=dt_from)
+                       decimal=decimal, names=names, dt_from=dt_from, threads=threads)
     text, json_text = _momentid._identify(model._model, source, name, metadata, options)
     del keep
     return IdentifyResult(text, json_text)
@@ -302,7 +304,8 @@ def check(data: Any, model: Union[None, Model, PathLike] = None, *,
           lags: Optional[int] = None, input_hold: Optional[str] = None,
           rename: Optional[Mapping[str, str]] = None, missing: Optional[str] = None,
           skip_rows: Optional[int] = None, decimal: Optional[str] = None,
-          names: Optional[Sequence[str]] = None, dt_from: Optional[str] = None) -> CheckResult:
+          names: Optional[Sequence[str]] = None, dt_from: Optional[str] = None,
+          threads: Optional[int] = None) -> CheckResult:
     """Whether a record suits the method, as `momentid check DATA [MODEL]`: each channel's
     mean, variance and autocorrelations (`lags` of them), warnings, and with a model the sample
     violations of its stationarity identities. `data` and the options as for identify()."""
@@ -310,7 +313,7 @@ def check(data: Any, model: Union[None, Model, PathLike] = None, *,
     source, name, metadata, keep = _data_of(data, columns)
     options = _options(lags=lags, input_hold=input_hold, rename=rename,
                        dt=dt, missing=missing, skip_rows=skip_rows, decimal=decimal,
-                       names=names, dt_from=dt_from)
+                       names=names, dt_from=dt_from, threads=threads)
     text, values = _momentid._check(None if model is None else model._model, source, name,
                                     metadata, options)
     del keep

@@ -239,6 +239,7 @@ IdentifyOptions identify_options(const Model& model, const py::dict& options) {
   out.noise = get<std::map<std::string, double>>(options, "noise");
   if (auto fixed = get<std::map<std::string, double>>(options, "fix")) out.fixed = *fixed;
   if (auto center = get<std::vector<std::string>>(options, "center")) out.center = *center;
+  if (auto threads = get<std::size_t>(options, "threads")) out.control.threads = *threads;
   return out;
 }
 
@@ -548,6 +549,7 @@ PYBIND11_MODULE(_momentid, m) {
     }
     check_with.dt = get<double>(options, "dt");
     check_with.layout = layout_of(options);
+    if (auto threads = get<std::size_t>(options, "threads")) check_with.control.threads = *threads;
     const Model* with = model.is_none() ? nullptr : &model.cast<const Model&>();
     const DataSource source = data_source(data, name, metadata);
     std::optional<CheckResult> result;

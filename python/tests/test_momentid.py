@@ -502,6 +502,18 @@ def test_identify_has_help():
 
 # --- 11. several files ----------------------------------------------------------------------------
 
+def test_threads_change_nothing(duffing):
+    """Arrays of 16 MB or more are read in shards on the threads asked for: any number gives the
+    one-thread result to the last bit."""
+    record = momentid.simulate(duffing, samples=800_000, seed=2, inputs={"x": INPUT})
+    one = momentid.identify(duffing, record, threads=1)
+    for threads in (2, 3):
+        other = momentid.identify(duffing, record, threads=threads)
+        assert other.estimates == one.estimates
+        assert other.std_errors == one.std_errors
+    assert momentid.check(record, threads=2).to_dict() == momentid.check(record, threads=1).to_dict()
+
+
 def test_list_of_files_is_one_record_of_their_runs(duffing, tmp_path):
     """Two files give the estimates of the same two runs in one file."""
     both = tmp_path / "both.csv"
