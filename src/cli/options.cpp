@@ -49,7 +49,14 @@ void add_pass_options(CLI::App* command, PassControl& control) {
                    "cut files into shards of about this size, read in parallel (default 16M; "
                    "k, M, G for powers of 1024)")
       ->transform(CLI::AsSizeValue(false))
-      ->check(CLI::Range(std::size_t{1024}, std::numeric_limits<std::size_t>::max()));
+      ->check(CLI::Validator(
+          [](std::string& bytes) {
+            // The value arrives in bytes, converted from the units.
+            return std::stoull(bytes) >= 1024
+                       ? std::string()
+                       : "expected at least 1k (1024 bytes), found " + bytes + " bytes";
+          },
+          "SIZE"));
 }
 
 void add_layout_options(CLI::App* command, FileLayout& layout) {
