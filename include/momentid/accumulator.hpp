@@ -1,5 +1,6 @@
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <span>
@@ -155,8 +156,21 @@ class MomentAccumulator {
     std::vector<BlockFactor> factors;
   };
   std::vector<Block> blocks_;
+  // The blocks of one moment with one to four factors (every moment without lags), flat for the
+  // per-row loops: the moment's working position, its state factors (held moments) and the
+  // history offsets of its factors. The other blocks, by index in blocks_.
+  struct Single {
+    std::uint32_t position, state_factors, factors;
+    std::array<std::uint32_t, 4> offsets;
+  };
+  std::vector<Single> held_singles_, plain_singles_;
+  std::vector<std::size_t> held_blocks_, plain_blocks_;
+  // The product of factors [first, last) (at least one) of a single.
+  static double single_product(const Single& one, const double* history, std::uint32_t first,
+                               std::uint32_t last);
   static void product(double* out, const Block& b, const double* history, std::size_t first,
                       std::size_t last);
+
   std::vector<std::size_t> order_;  // working position -> moment; the held ones first
   std::size_t held_count_ = 0;      // moments averaged with a held input
   std::size_t max_lag_ = 0;

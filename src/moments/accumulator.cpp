@@ -134,6 +134,26 @@ MomentAccumulator::MomentAccumulator(std::vector<Moment> moments, std::size_t st
     blocks_.push_back(std::move(block));
     q = end;
   }
+  for (std::size_t i = 0; i < blocks_.size(); ++i) {
+    const Block& b = blocks_[i];
+    const bool held = b.begin < held_count_;
+    const std::size_t n = b.factors.size();
+    // A held moment needs both parts; one without an input factor is not held.
+    const bool fits = std::all_of(b.factors.begin(), b.factors.end(), [](const BlockFactor& f) {
+      return f.offset <= std::numeric_limits<std::uint32_t>::max();
+    });
+    if (b.size == 1 && n >= 1 && n <= 4 && fits &&
+        (!held || (b.state_factors > 0 && b.state_factors < n))) {
+      Single single{static_cast<std::uint32_t>(b.begin), static_cast<std::uint32_t>(b.state_factors),
+                    static_cast<std::uint32_t>(n), {}};
+      for (std::size_t f = 0; f < n; ++f) {
+        single.offsets[f] = static_cast<std::uint32_t>(b.factors[f].offset);
+      }
+      (held ? held_singles_ : plain_singles_).push_back(single);
+    } else {
+      (held ? held_blocks_ : plain_blocks_).push_back(i);
+    }
+  }
   const std::size_t k = moments_.size();
   state_ring_.assign(4 * held_count_, 0.0);
   input_ring_.assign(4 * held_count_, 0.0);
@@ -269,6 +289,16 @@ template <bool Add>
 
 }  // namespace
 
+// In the order of the block loops below.
+[[gnu::always_inline]] inline double MomentAccumulator::single_product(const Single& one,
+                                                                       const double* history,
+                                                                       std::uint32_t first,
+                                                                       std::uint32_t last) {
+  double p = history[one.offsets[first]];
+  for (std::uint32_t f = first + 1; f < last; ++f) p *= history[one.offsets[f]];
+  return p;
+}
+
 // out[m] = the product of the block's factors [first, last) for its m-th member, 1 with none;
 // the first two factors in one sweep, since most moments have two.
 MOMENTID_KERNEL void MomentAccumulator::product(double* out, const Block& b, const double* history,
@@ -314,8 +344,12 @@ void MomentAccumulator::push_rows(const double* rows, std::size_t count) {
     // the interval, the input held), in the rings for close_interval.
     double* state = state_ring_.data() + (m % 4) * held_count_;
     double* input = input_ring_.data() + (m % 4) * held_count_;
-    for (const Block& b : blocks_) {
-      if (b.begin >= held_count_) break;
+    for (const Single& one : held_singles_) {
+      state[one.position] = single_product(one, history, 0, one.state_factors);
+      input[one.position] = single_product(one, history, one.state_factors, one.factors);
+    }
+    for (const std::size_t i : held_blocks_) {
+      const Block& b = blocks_[i];
       product(state + b.begin, b, history, 0, b.state_factors);
       product(input + b.begin, b, history, b.state_factors, b.factors.size());
     }
@@ -344,8 +378,11 @@ void MomentAccumulator::push_rows(const double* rows, std::size_t count) {
 // open sums, the products of one or two factors (most) without storing them.
 MOMENTID_KERNEL void MomentAccumulator::add_plain_products(const double* history) {
   double* sums = open_sums_.data();
-  for (const Block& b : blocks_) {
-    if (b.begin < held_count_) continue;
+  for (const Single& one : plain_singles_) {
+    sums[one.position] += single_product(one, history, 0, one.factors);
+  }
+  for (const std::size_t i : plain_blocks_) {
+    const Block& b = blocks_[i];
     const std::size_t n = b.factors.size();
     if (n <= 2) {
       const auto at = [&](std::size_t f) { return history + b.factors[f].offset; };

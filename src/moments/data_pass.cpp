@@ -127,8 +127,9 @@ class LagSums {
         sum_squares_[c] += x * x;
       }
       // history_ holds the previous `lags_` rows, newest first at `head_`.
-      for (std::size_t l = 0; l < std::min(filled_, lags_); ++l) {
-        const double* past = &history_[((head_ + l) % lags_) * channels_];
+      for (std::size_t l = 0, slot = head_; l < std::min(filled_, lags_); ++l) {
+        const double* past = &history_[slot * channels_];
+        if (++slot == lags_) slot = 0;
         for (std::size_t c = 0; c < channels_; ++c) {
           const double x = row[c] - offset_[c], y = past[c] - offset_[c];
           products_[l * channels_ + c] += x * y;
@@ -222,7 +223,7 @@ class LagSums {
  private:
   void remember(const double* row) {
     if (lags_ > 0) {
-      head_ = (head_ + lags_ - 1) % lags_;
+      head_ = head_ == 0 ? lags_ - 1 : head_ - 1;
       std::copy(row, row + channels_, &history_[head_ * channels_]);
     }
     ++filled_;
