@@ -52,12 +52,15 @@ std::vector<Moment> some_moments() {
 }
 
 DataMoments pass(const std::string& path, std::size_t shard_bytes, std::size_t threads,
-                 std::size_t lags = 4) {
+                 const momentid::FileLayout& layout = {}) {
   DataOptions options;
+  options.layout = layout;
   options.control.shard_bytes = shard_bytes;
   options.control.threads = threads;
-  options.lags = lags;
+  options.lags = 4;
   options.batches = 20;
+  // As the simulation wrote (a .npy file keeps no metadata).
+  options.hold = momentid::InputHold::kZeroOrderHold;
   return momentid::moments_from_data(DataSource::file(path), {"y", "v"}, {"x"}, some_moments(),
                                      options);
 }
@@ -132,14 +135,21 @@ TEST_SUITE("shards") {
       momentid::convert(DataSource::file(csv), dir / name, format);
       files.push_back(dir / name);
     }
+    // A 2-D .npy array: its columns named as the CSV file's.
+    momentid::convert(DataSource::file(csv), dir / "d.npy", momentid::FileFormat::kNpy);
+    files.push_back(dir / "d.npy");
+    momentid::FileLayout npy;
+    npy.column_names = {"t", "y", "v", "x", "run"};
     for (const std::string& file : files) {
       const std::uintmax_t size = fs::file_size(file);
+      const momentid::FileLayout layout = file.ends_with(".npy") ? npy : momentid::FileLayout{};
       // One shard, two, a few, many (100: each one stretch); cuts inside the header of a CSV
-      // file too.
+      // file too. (A .mat file is always one shard.)
       for (std::size_t shards : {1, 2, 7, 60, 100}) {
         CAPTURE(file);
         CAPTURE(shards);
-        check_same_sums(whole, pass(file, static_cast<std::size_t>(size / shards + 1), 2));
+        check_same_sums(whole,
+                        pass(file, static_cast<std::size_t>(size / shards + 1), 2, layout));
       }
     }
   }

@@ -191,8 +191,9 @@ class DataSource {
     std::size_t index = 0, count = 1;
   };
   // The source cut into shards in record order: each file into parts of about `bytes` bytes
-  // (at least one), columns in memory into parts of about `bytes` bytes of values. The
-  // cut depends on the sizes only, so that every reader of the source cuts it alike.
+  // (at least one; a .mat file, whose variables are read whole, is one), columns in memory into
+  // parts of about `bytes` bytes of values. The cut depends on the sizes and formats only, so
+  // that every reader of the source cuts it alike.
   std::vector<Shard> shards(std::size_t bytes) const;
   // A reader of one shard, rows as ColumnRequest::part says (its index and count are the
   // shard's).

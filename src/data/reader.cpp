@@ -155,10 +155,17 @@ std::vector<DataSource::Shard> DataSource::shards(std::size_t bytes) const {
   }
   const std::vector<std::string> files = paths();
   for (std::size_t f = 0; f < files.size(); ++f) {
-    // A file that cannot be sized is one shard, and its reader says what is wrong with it.
+    // A file that cannot be sized is one shard, and its reader says what is wrong with it. A
+    // .mat file is one too: matio reads a variable whole, so every shard would read it all.
     std::error_code error;
     const std::uintmax_t size = std::filesystem::file_size(files[f], error);
-    add(f, error ? 1 : cut(size));
+    std::array<char, data::kDetectBytes> start{};
+    std::size_t got = 0;
+    if (data::File file{std::fopen(files[f].c_str(), "rb")}) {
+      got = std::fread(start.data(), 1, start.size(), file.get());
+    }
+    const bool whole = data::is_mat(std::string_view(start.data(), got));
+    add(f, error || whole ? 1 : cut(size));
   }
   return out;
 }
