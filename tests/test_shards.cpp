@@ -25,9 +25,9 @@ using momentid::Moment;
 
 // A directory of its own, removed at the end.
 struct Directory {
-  fs::path path = fs::temp_directory_path() / ("momentid_test_shards_" +
-                                               std::to_string(::getpid()) + "_" +
-                                               std::to_string(count++));
+  fs::path path =
+      fs::temp_directory_path() /
+      ("momentid_test_shards_" + std::to_string(::getpid()) + "_" + std::to_string(count++));
   Directory() { fs::create_directories(path); }
   ~Directory() { fs::remove_all(path); }
   std::string operator/(const std::string& name) const { return (path / name).string(); }
@@ -46,9 +46,12 @@ std::string duffing_csv(const Directory& dir) {
 
 // Plain, input and lagged moments over y, v (states) and x (input): lags reach 7 rows back.
 std::vector<Moment> some_moments() {
-  return {Moment({{0, 2, 0}}),           Moment({{1, 2, 0}}),
-          Moment({{0, 1, 0}, {2, 1, 0}}), Moment({{0, 3, 0}, {1, 1, 0}}),
-          Moment({{0, 1, 0}, {0, 1, 7}}), Moment({{1, 1, 3}, {2, 1, 0}})};
+  return {Moment({{0, 2, 0}}),
+          Moment({{1, 2, 0}}),
+          Moment({{0, 1, 0}, {2, 1, 0}}),
+          Moment({{0, 3, 0}, {1, 1, 0}}),
+          Moment({{0, 1, 0}, {0, 1, 7}}),
+          Moment({{1, 1, 3}, {2, 1, 0}})};
 }
 
 DataMoments pass(const std::string& path, std::size_t shard_bytes, std::size_t threads,
@@ -126,8 +129,7 @@ TEST_SUITE("shards") {
     CHECK(whole.rows == 6000);
     CHECK(whole.runs == 2);
     std::vector<std::string> files{csv};
-    for (const auto& [format, name] :
-         std::vector<std::pair<momentid::FileFormat, std::string>>{
+    for (const auto& [format, name] : std::vector<std::pair<momentid::FileFormat, std::string>>{
              {momentid::FileFormat::kBinary, "d.bin"},
              {momentid::FileFormat::kMat5, "d.mat"},
              {momentid::FileFormat::kMat73, "d73.mat"},
@@ -148,8 +150,7 @@ TEST_SUITE("shards") {
       for (std::size_t shards : {1, 2, 7, 60, 100}) {
         CAPTURE(file);
         CAPTURE(shards);
-        check_same_sums(whole,
-                        pass(file, static_cast<std::size_t>(size / shards + 1), 2, layout));
+        check_same_sums(whole, pass(file, static_cast<std::size_t>(size / shards + 1), 2, layout));
       }
     }
   }
@@ -204,10 +205,10 @@ TEST_SUITE("shards") {
       bin.seekp(static_cast<std::streamoff>(size - 40 * 5 * sizeof(double) + sizeof(double)));
       bin.write(reinterpret_cast<const char*>(&nan), sizeof nan);
     }
-    const auto one = momentid::testing::error_from<momentid::DataError>(
-        [&] { pass(dir / "d.bin", kWhole, 1); });
-    const auto many = momentid::testing::error_from<momentid::DataError>(
-        [&] { pass(dir / "d.bin", 4096, 2); });
+    const auto one =
+        momentid::testing::error_from<momentid::DataError>([&] { pass(dir / "d.bin", kWhole, 1); });
+    const auto many =
+        momentid::testing::error_from<momentid::DataError>([&] { pass(dir / "d.bin", 4096, 2); });
     CHECK(std::string(many.what()) == one.what());
     CHECK(one.location().line == 5961);
   }
@@ -223,6 +224,7 @@ TEST_SUITE("shards") {
       momentid::moments_from_data(DataSource::file(dir / "short.csv"), {"y", "v"}, {"x"},
                                   some_moments(), options);
     });
-    CHECK(std::string(e.what()) == dir / "short.csv" + ":1:1: the data have 3 rows; at least 10 are needed");
+    CHECK(std::string(e.what()) ==
+          dir / "short.csv" + ":1:1: the data have 3 rows; at least 10 are needed");
   }
 }

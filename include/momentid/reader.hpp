@@ -82,8 +82,8 @@ enum class RowZone { kBefore, kOwned, kAfter };
 struct DataBlock {
   std::vector<double> values;  // row-major, rows() x ColumnRequest::names.size()
   std::size_t rows = 0;
-  long run = 0;             // the `run` column's value, 0 when the file has none
-  bool run_starts = false;  // the first block of a run
+  long run = 0;                    // the `run` column's value, 0 when the file has none
+  bool run_starts = false;         // the first block of a run
   RowZone zone = RowZone::kOwned;  // a block never spans two zones
 };
 

@@ -1,12 +1,11 @@
 // The momentid command line: maps options to library calls and prints. Exit status: 0 success,
 // 1 usage error, 2 bad model or data, 3 nothing identifiable.
 
-#include <CLI/CLI.hpp>
 #include <unistd.h>
 
+#include <CLI/CLI.hpp>
 #include <chrono>
 #include <cstdio>
-#include <fstream>
 #include <iostream>
 #include <vector>
 
@@ -64,12 +63,13 @@ int main(int argc, char** argv) {
   // --help shows each option's default (subcommands inherit this).
   app.option_defaults()->always_capture_default();
   const std::string mpi_library = momentid::cluster::library();
-  app.set_version_flag("-V,--version",
-                       "momentid " MOMENTID_VERSION "\ndata formats: " + momentid::data_formats() +
-                           "\nvalidate plots: SVG (written by momentid)"
-                           "\ndistributions: Boost.Math; linear algebra: Eigen; algebra: GiNaC" +
-                           (mpi_library.empty() ? std::string()
-                                                : "\nMPI: " + mpi_library + ", passes shared under mpirun"));
+  app.set_version_flag(
+      "-V,--version",
+      "momentid " MOMENTID_VERSION "\ndata formats: " + momentid::data_formats() +
+          "\nvalidate plots: SVG (written by momentid)"
+          "\ndistributions: Boost.Math; linear algebra: Eigen; algebra: GiNaC" +
+          (mpi_library.empty() ? std::string()
+                               : "\nMPI: " + mpi_library + ", passes shared under mpirun"));
 
   const std::vector<momentid::cli::Command> commands{
       momentid::cli::add_derive(app),   momentid::cli::add_simulate(app),
@@ -88,8 +88,10 @@ int main(int argc, char** argv) {
       if (!command.app->parsed()) continue;
       const std::string name = command.app->get_name();
       if (several && name != "identify" && name != "check") {
-        throw momentid::UsageError("under mpirun only identify and check share their work among "
-                                   "processes: run " + name + " as one process");
+        throw momentid::UsageError(
+            "under mpirun only identify and check share their work among "
+            "processes: run " +
+            name + " as one process");
       }
       return command.run();
     }
@@ -104,8 +106,7 @@ int main(int argc, char** argv) {
     if (const auto all = momentid::cluster::all_failed(text, std::chrono::seconds(10))) {
       for (std::size_t r = 0; r < all->size(); ++r) {
         if (r == 0 || (*all)[r] != all->front()) {
-          std::cerr << (r == 0 ? "" : "process " + std::to_string(r) + ": ") << (*all)[r]
-                    << "\n";
+          std::cerr << (r == 0 ? "" : "process " + std::to_string(r) + ": ") << (*all)[r] << "\n";
         }
       }
       return exit_code_of(e);

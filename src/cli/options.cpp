@@ -1,10 +1,10 @@
-#include <limits>
 #include <glob.h>
 
 #include <algorithm>
 #include <charconv>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <string_view>
 
 #include "cli/commands.hpp"
@@ -41,8 +41,9 @@ Model model_argument(const std::string& model, const std::string& data, const st
 void add_pass_options(CLI::App* command, PassControl& control) {
   // Under mpirun, the job's processes share the passes.
   control.across_processes = true;
-  command->add_option("--threads", control.threads,
-                      "threads reading the data at once (default 0: one per core)")
+  command
+      ->add_option("--threads", control.threads,
+                   "threads reading the data at once (default 0: one per core)")
       ->check(CLI::Range(0, 1024));
   command
       ->add_option("--shard-size", control.shard_bytes,

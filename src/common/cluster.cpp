@@ -1,16 +1,15 @@
 #include "common/cluster.hpp"
 
-#include <thread>
 #include <cstdlib>
 #include <limits>
 #include <stdexcept>
+#include <thread>
 
 #ifdef MOMENTID_WITH_MPI
 #include <mpi.h>
 #endif
 
 namespace momentid::cluster {
-
 
 #ifdef MOMENTID_WITH_MPI
 
@@ -70,8 +69,8 @@ std::vector<std::vector<std::uint8_t>> gather_in(MPI_Comm comm,
     total += static_cast<std::size_t>(counts[static_cast<std::size_t>(r)]);
   }
   std::vector<std::uint8_t> all(total);
-  MPI_Allgatherv(bytes.data(), mine, MPI_BYTE, all.data(), counts.data(), offsets.data(),
-                 MPI_BYTE, comm);
+  MPI_Allgatherv(bytes.data(), mine, MPI_BYTE, all.data(), counts.data(), offsets.data(), MPI_BYTE,
+                 comm);
   std::vector<std::vector<std::uint8_t>> out;
   for (int r = 0; r < n; ++r) {
     const auto at = all.begin() + offsets[static_cast<std::size_t>(r)];

@@ -3,8 +3,8 @@
 // number (from 1).
 
 #include <array>
-#include <cerrno>
 #include <bit>
+#include <cerrno>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -139,7 +139,7 @@ class BinaryReader final : public StreamReader {
   File file_;
   std::vector<std::size_t> needed_fields_;
   std::size_t row_bytes_ = 0;
-  std::uint64_t data_start_ = 0;  // the offset of the first row
+  std::uint64_t data_start_ = 0;       // the offset of the first row
   std::vector<unsigned char> buffer_;  // whole rows
   std::size_t position_ = 0, filled_ = 0;
   bool at_end_ = false;

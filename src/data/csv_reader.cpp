@@ -214,8 +214,8 @@ class CsvReader final : public StreamReader {
   std::size_t read_at(std::uint64_t offset, char* into, std::size_t size) const {
     std::size_t got = 0;
     while (got < size) {
-      const ssize_t n = pread(fileno(file_.get()), into + got, size - got,
-                              static_cast<off_t>(offset + got));
+      const ssize_t n =
+          pread(fileno(file_.get()), into + got, size - got, static_cast<off_t>(offset + got));
       if (n < 0 && errno == EINTR) continue;
       if (n < 0) throw Error(path_ + ": cannot read the data file: " + std::strerror(errno));
       if (n == 0) break;
@@ -266,8 +266,8 @@ class CsvReader final : public StreamReader {
     long long lines = 0;
     for (std::uint64_t at = 0; at < offset;) {
       const std::size_t got =
-          read_at(at, buffer.data(), static_cast<std::size_t>(std::min<std::uint64_t>(
-                                         buffer.size(), offset - at)));
+          read_at(at, buffer.data(),
+                  static_cast<std::size_t>(std::min<std::uint64_t>(buffer.size(), offset - at)));
       if (got == 0) break;
       lines += std::count(buffer.data(), buffer.data() + got, '\n');
       at += got;

@@ -150,7 +150,8 @@ std::vector<DataSource::Shard> DataSource::shards(std::size_t bytes) const {
     for (std::size_t k = 0; k < count; ++k) out.push_back({file, k, count});
   };
   if (memory_) {
-    add(0, cut(std::uint64_t{8} * memory_->rows * std::max<std::size_t>(1, memory_->columns.size())));
+    add(0,
+        cut(std::uint64_t{8} * memory_->rows * std::max<std::size_t>(1, memory_->columns.size())));
     return out;
   }
   const std::vector<std::string> files = paths();

@@ -144,8 +144,10 @@ MomentAccumulator::MomentAccumulator(std::vector<Moment> moments, std::size_t st
     });
     if (b.size == 1 && n >= 1 && n <= 4 && fits &&
         (!held || (b.state_factors > 0 && b.state_factors < n))) {
-      Single single{static_cast<std::uint32_t>(b.begin), static_cast<std::uint32_t>(b.state_factors),
-                    static_cast<std::uint32_t>(n), {}};
+      Single single{static_cast<std::uint32_t>(b.begin),
+                    static_cast<std::uint32_t>(b.state_factors),
+                    static_cast<std::uint32_t>(n),
+                    {}};
       for (std::size_t f = 0; f < n; ++f) {
         single.offsets[f] = static_cast<std::uint32_t>(b.factors[f].offset);
       }
@@ -488,8 +490,9 @@ void MomentAccumulator::flush() {
 // Halves the number of stretches by adding neighbours; the open (last) stretch stays last.
 void MomentAccumulator::collapse() {
   if (seen_rows_ > 0) {
-    throw Error("cannot collapse a moment accumulator in the middle of a run: call finish() on it "
-                "first");
+    throw Error(
+        "cannot collapse a moment accumulator in the middle of a run: call finish() on it "
+        "first");
   }
   Stretch whole{std::vector<double>(moments_.size(), 0.0), 0};
   for (const Stretch& s : stretches_) {

@@ -4,10 +4,10 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
-#include <cstdint>
-#include <cstring>
 #include <condition_variable>
+#include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <deque>
 #include <exception>
 #include <limits>
@@ -15,9 +15,9 @@
 #include <stdexcept>
 #include <thread>
 
+#include "common/cluster.hpp"
 #include "common/decimal.hpp"
 #include "data/text.hpp"
-#include "common/cluster.hpp"
 
 namespace momentid {
 namespace {
@@ -89,7 +89,6 @@ class WireIn {
   std::size_t at_ = 0;
 };
 
-
 constexpr std::size_t kBlockRows = 1 << 15;
 
 // Sums for the mean, variance and lagged products of every channel, over pairs within runs.
@@ -155,8 +154,8 @@ class LagSums {
   static LagSums load(WireIn& in, std::size_t channels, std::size_t lags) {
     LagSums out(channels, lags);
     out.count_ = in.u64();
-    for (auto* v : {&out.offset_, &out.sum_, &out.sum_squares_, &out.products_, &out.lead_,
-                    &out.lagged_}) {
+    for (auto* v :
+         {&out.offset_, &out.sum_, &out.sum_squares_, &out.products_, &out.lead_, &out.lagged_}) {
       const std::uint64_t n = in.u64();
       if (n != v->size() && !(v == &out.offset_ && n == channels)) {
         throw Error("the result of another process does not match this one's channels");
@@ -404,9 +403,9 @@ ShardState read_shard(DataReader& reader, bool whole, const PassSetup& setup, bo
                       std::atomic<std::size_t>& rows_done, std::atomic<double>& fraction) {
   const DataOptions& options = *setup.options;
   const std::size_t channels = setup.states + setup.inputs;
-  ShardState out{MomentAccumulator(setup.moments, setup.states, setup.inputs, setup.hold,
-                                   setup.batches),
-                 LagSums(channels, options.lags)};
+  ShardState out{
+      MomentAccumulator(setup.moments, setup.states, setup.inputs, setup.hold, setup.batches),
+      LagSums(channels, options.lags)};
   InputShift shift(setup.states, setup.inputs, options.input_shift);
   std::vector<double> history;  // of the current run, before the shard
   const std::size_t history_values = out.moments.max_lag() * channels;
@@ -498,10 +497,10 @@ RangeResult read_range(const Pass& pass, std::size_t begin, std::size_t end,
                        std::unique_ptr<DataReader> first_reader) {
   const DataOptions& options = *pass.setup.options;
   RangeResult out;
-  out.state.emplace(ShardState{
-      MomentAccumulator(pass.setup.moments, pass.setup.states, pass.setup.inputs, pass.setup.hold,
-                        pass.merged_batches),
-      LagSums(pass.setup.states + pass.setup.inputs, options.lags)});
+  out.state.emplace(
+      ShardState{MomentAccumulator(pass.setup.moments, pass.setup.states, pass.setup.inputs,
+                                   pass.setup.hold, pass.merged_batches),
+                 LagSums(pass.setup.states + pass.setup.inputs, options.lags)});
   if (begin == end) return out;
   const std::size_t threads = options.control.threads > 0
                                   ? options.control.threads
@@ -675,8 +674,7 @@ std::vector<std::uint8_t> encode(const RangeResult& r) {
   return std::move(out.data);
 }
 
-RangeResult decode(const std::vector<std::uint8_t>& bytes, std::size_t channels,
-                   std::size_t lags) {
+RangeResult decode(const std::vector<std::uint8_t>& bytes, std::size_t channels, std::size_t lags) {
   WireIn in(bytes);
   RangeResult r;
   MomentAccumulator moments = MomentAccumulator::deserialize(in.bytes());
@@ -835,8 +833,7 @@ DataMoments moments_from_data(const DataSource& source, const std::vector<std::s
       };
       throw DataError({paths[shards[k].file], 1, 1, ""},
                       "this file has " + text(step) + ", but " + paths.front() + " has " +
-                          text(first_step) +
-                          ": the files of one identification need one interval");
+                          text(first_step) + ": the files of one identification need one interval");
     }
   }
   if (result.error) std::rethrow_exception(result.error);
