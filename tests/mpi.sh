@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # mpirun -np 2 and 4 give the one-process result to the last bit, on a record cut into shards
-# and on a record in several files, and a data error in a shard that another process reads
-# stops every process with the located error and exit status 2.
+# and on a record in several files; a data error in a shard that another process reads stops
+# every process with the located error and exit status 2; an error every process finds is said
+# once.
 # Usage: mpi.sh MPIRUN MOMENTID MODEL DIRECTORY
 set -euo pipefail
 mpirun=$1 momentid=$2 model=$3 dir=$4
@@ -43,3 +44,22 @@ if [[ $status -ne 2 ]] || [[ $(grep -c "^$expected.*expected a number, found 'oo
   exit 1
 fi
 echo "a bad row read by the second process: exit 2, located once at line $line"
+
+# An error every process finds before any pass (a model file that does not exist), and a
+# command that does not share its work: said once, with the command's exit status.
+status=0
+launch 2 "$momentid" identify "$dir/none.mom" "$dir/record.csv" >"$dir/out.txt" 2>"$dir/err.txt" ||
+  status=$?
+if [[ $status -ne 2 ]] || [[ $(grep -c "none.mom: cannot open the model file" "$dir/err.txt") -ne 1 ]]; then
+  echo "a missing model under mpirun: exit $status (expected 2), standard error:"
+  cat "$dir/err.txt"
+  exit 1
+fi
+status=0
+launch 2 "$momentid" derive "$model" >"$dir/out.txt" 2>"$dir/err.txt" || status=$?
+if [[ $status -ne 1 ]] || [[ $(grep -c "run derive as one process" "$dir/err.txt") -ne 1 ]]; then
+  echo "derive under mpirun: exit $status (expected 1), standard error:"
+  cat "$dir/err.txt"
+  exit 1
+fi
+echo "errors every process has: said once, exit 2 and 1"
