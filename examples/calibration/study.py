@@ -133,7 +133,8 @@ def main():
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
         fig, axes = plt.subplots(1, 2, figsize=(10, 4))
-        for noise in noises:
+        # Colour: the noise level; line: the method; marker: the parameter.
+        for colour, noise in enumerate(noises):
             for method, style in (("ls", "-"), ("gmm", "--")):
                 for name, marker in zip(TRUTH, "osd"):
                     points = [(s, r["coverage"], r["spread_se"]) for s, n, rows in results
@@ -141,8 +142,12 @@ def main():
                               if r["method"] == method and r["parameter"] == name]
                     s, coverage, ratio = zip(*points)
                     label = f"{name}, {method}, noise {noise:.0%}"
-                    axes[0].semilogx(s, coverage, style, marker=marker, label=label)
-                    axes[1].loglog(s, ratio, style, marker=marker, label=label)
+                    for axis, values in ((axes[0], coverage), (axes[1], ratio)):
+                        axis.plot(s, values, style, marker=marker, color=f"C{colour}",
+                                  label=label)
+        axes[0].set_xscale("log")
+        axes[1].set_xscale("log")
+        axes[1].set_yscale("log")
         axes[0].axhline(0.95, color="k", lw=0.5)
         axes[0].set(xlabel="samples", ylabel="coverage of the 95% intervals")
         axes[1].axhline(1, color="k", lw=0.5)
