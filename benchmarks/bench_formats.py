@@ -28,9 +28,10 @@ def run(*args):
                           text=True).stdout
 
 
-def identify_with_peak(path, extra=()):
-    """Seconds, the program's peak resident MB, and the estimates: a wrapper process runs the
-    program alone, so that its children's high-water mark is the program's."""
+def run_with_peak(command, env=None):
+    """Seconds, the program's peak resident MB and its standard output: a wrapper process runs
+    the command alone, so that its children's high-water mark is the program's (under mpirun,
+    the largest of the processes')."""
     script = ("import resource, subprocess, sys, time\n"
               "t = time.perf_counter()\n"
               "p = subprocess.run(sys.argv[1:], capture_output=True, text=True)\n"
@@ -39,15 +40,21 @@ def identify_with_peak(path, extra=()):
               "sys.stderr.write(p.stderr)\n"
               "print(t, peak, p.returncode)\n"
               "print(p.stdout)\n")
-    out = subprocess.run(["/usr/bin/python3", "-c", script, MOMENTID, "identify", MODEL, path,
-                          "--format", "json", *extra], check=True, capture_output=True,
-                         text=True)
+    out = subprocess.run(["/usr/bin/python3", "-c", script, *command], check=True,
+                         capture_output=True, text=True, env=env)
     first, rest = out.stdout.split("\n", 1)
     seconds, peak, status = first.split()
     if status != "0":
-        raise RuntimeError(out.stderr)
-    estimates = {n: p["estimate"] for n, p in json.loads(rest)["parameters"].items()}
-    return float(seconds), float(peak), estimates
+        raise RuntimeError(" ".join(command) + ": " + out.stderr)
+    return float(seconds), float(peak), rest
+
+
+def identify_with_peak(path, extra=()):
+    """Seconds, the program's peak resident MB, and the estimates."""
+    seconds, peak, out = run_with_peak([MOMENTID, "identify", MODEL, path, "--format", "json",
+                                        *extra])
+    estimates = {n: p["estimate"] for n, p in json.loads(out)["parameters"].items()}
+    return seconds, peak, estimates
 
 
 def main():

@@ -20,6 +20,8 @@ import shutil
 import subprocess
 import tempfile
 
+from bench_formats import run_with_peak
+
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 MOMENTID = os.environ.get("MOMENTID", os.path.join(ROOT, "build", "momentid"))
 MODEL = os.path.join(ROOT, "models", "duffing.mom")
@@ -32,29 +34,8 @@ def run(*args):
                           text=True).stdout
 
 
-def timed(command):
-    """Seconds, the peak resident MB of one process, and the standard output: a wrapper process
-    runs the command alone, so that its children's high-water mark is the program's (under
-    mpirun, the largest of the processes')."""
-    script = ("import resource, subprocess, sys, time\n"
-              "t = time.perf_counter()\n"
-              "p = subprocess.run(sys.argv[1:], capture_output=True, text=True)\n"
-              "t = time.perf_counter() - t\n"
-              "peak = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024\n"
-              "sys.stderr.write(p.stderr)\n"
-              "print(t, peak, p.returncode)\n"
-              "print(p.stdout)\n")
-    out = subprocess.run(["/usr/bin/python3", "-c", script, *command], check=True,
-                         capture_output=True, text=True, env=MPI_ENV)
-    first, rest = out.stdout.split("\n", 1)
-    seconds, peak, status = first.split()
-    if status != "0":
-        raise RuntimeError(" ".join(command) + ": " + out.stderr)
-    return float(seconds), float(peak), rest
-
-
 def best(command, repeat):
-    runs = [timed(command) for _ in range(repeat)]
+    runs = [run_with_peak(command, MPI_ENV) for _ in range(repeat)]
     return min(r[0] for r in runs), max(r[1] for r in runs), runs[0][2]
 
 

@@ -3,7 +3,6 @@
 // programs (numpy, scipy, h5py) are tested in tests/formats/test_formats.py.
 
 #include <doctest/doctest.h>
-#include <unistd.h>
 
 #include <cmath>
 #include <filesystem>
@@ -22,14 +21,8 @@ namespace fs = std::filesystem;
 using momentid::FileFormat;
 
 // A directory of its own, removed at the end.
-struct Directory {
-  fs::path path =
-      fs::temp_directory_path() /
-      ("momentid_test_formats_" + std::to_string(::getpid()) + "_" + std::to_string(count++));
-  Directory() { fs::create_directories(path); }
-  ~Directory() { fs::remove_all(path); }
-  std::string operator/(const std::string& name) const { return (path / name).string(); }
-  static inline int count = 0;
+struct Directory : momentid::testing::Directory {
+  Directory() : momentid::testing::Directory("momentid_test_formats") {}
 };
 
 // Every column of a file, by name, with its metadata.

@@ -2,7 +2,6 @@
 // count, and the cut (shards of any size, in any format) changes the moments by rounding only.
 
 #include <doctest/doctest.h>
-#include <unistd.h>
 
 #include <cmath>
 #include <filesystem>
@@ -24,14 +23,8 @@ using momentid::DataSource;
 using momentid::Moment;
 
 // A directory of its own, removed at the end.
-struct Directory {
-  fs::path path =
-      fs::temp_directory_path() /
-      ("momentid_test_shards_" + std::to_string(::getpid()) + "_" + std::to_string(count++));
-  Directory() { fs::create_directories(path); }
-  ~Directory() { fs::remove_all(path); }
-  std::string operator/(const std::string& name) const { return (path / name).string(); }
-  static inline int count = 0;
+struct Directory : momentid::testing::Directory {
+  Directory() : momentid::testing::Directory("momentid_test_shards") {}
 };
 
 // Two runs of the Duffing oscillator, 3000 samples each, as CSV.

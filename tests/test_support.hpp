@@ -2,8 +2,10 @@
 // Helpers shared by the unit tests.
 
 #include <doctest/doctest.h>
+#include <unistd.h>
 
 #include <exception>
+#include <filesystem>
 #include <string>
 #include <typeinfo>
 #include <vector>
@@ -29,6 +31,21 @@ struct Recorder : SampleSink {
     for (const auto& row : rows) out.push_back(row[c]);
     return out;
   }
+};
+
+// A temporary directory of its own (`prefix`, the process and a count), removed at the end.
+struct Directory {
+  explicit Directory(const std::string& prefix)
+      : path(std::filesystem::temp_directory_path() /
+             (prefix + "_" + std::to_string(::getpid()) + "_" + std::to_string(count++))) {
+    std::filesystem::create_directories(path);
+  }
+  ~Directory() { std::filesystem::remove_all(path); }
+  Directory(const Directory&) = delete;
+  Directory& operator=(const Directory&) = delete;
+  std::string operator/(const std::string& name) const { return (path / name).string(); }
+  std::filesystem::path path;
+  static inline int count = 0;
 };
 
 // Nominal parameters, the default input process for every input, 2000 steps of burn-in.

@@ -45,6 +45,9 @@ struct MissingSummary {
   std::optional<SourceLocation> first;
   std::size_t splits = 0;
   std::size_t joins = 0;
+
+  // Adds what a later part of the record dropped.
+  void add(const MissingSummary& later);
 };
 
 // What to read from a data file: the columns to deliver, in this order (normally the model's

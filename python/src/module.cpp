@@ -209,6 +209,13 @@ Derivation derive_equations(const Model& model, const py::dict& options) {
   return {format_text(system), format_latex(system), format_json(system), system.equations.size()};
 }
 
+// The result of `work`, run with the GIL released so that other Python threads run meanwhile.
+template <class Work>
+auto without_gil(Work&& work) {
+  py::gil_scoped_release release;
+  return work();
+}
+
 // --- identify -------------------------------------------------------------------------------
 
 IdentifyOptions identify_options(const Model& model, const py::dict& options) {
@@ -531,12 +538,9 @@ PYBIND11_MODULE(_momentid, m) {
            const std::map<std::string, std::string>& metadata, const py::dict& options) {
           const IdentifyOptions identify_with = identify_options(model, options);
           const DataSource source = data_source(data, name, metadata);
-          std::optional<IdentifyResult> result;
-          {
-            py::gil_scoped_release release;
-            result = identify(model, source, identify_with);
-          }
-          return py::make_tuple(format_text(*result), format_json(*result));
+          const IdentifyResult result =
+              without_gil([&] { return identify(model, source, identify_with); });
+          return py::make_tuple(format_text(result), format_json(result));
         });
 
   m.def("_check", [](const py::object& model, const py::object& data, const std::string& name,
@@ -552,12 +556,8 @@ PYBIND11_MODULE(_momentid, m) {
     if (auto threads = get<std::size_t>(options, "threads")) check_with.control.threads = *threads;
     const Model* with = model.is_none() ? nullptr : &model.cast<const Model&>();
     const DataSource source = data_source(data, name, metadata);
-    std::optional<CheckResult> result;
-    {
-      py::gil_scoped_release release;
-      result = check(source, with, check_with);
-    }
-    return py::make_tuple(format_text(*result), check_dict(*result));
+    const CheckResult result = without_gil([&] { return check(source, with, check_with); });
+    return py::make_tuple(format_text(result), check_dict(result));
   });
 
   m.def("_simulate", &simulate_record);
@@ -567,19 +567,15 @@ PYBIND11_MODULE(_momentid, m) {
     return replay_record(model, data_source(data, name, metadata), options);
   });
 
-  m.def("_validate",
-        [](const Model& model, const py::object& data, const std::string& name,
-           const std::map<std::string, std::string>& metadata, const py::dict& options) {
-          const ValidateOptions validate_with = validate_options(model, options);
-          const DataSource source = data_source(data, name, metadata);
-          std::optional<ValidateResult> result;
-          {
-            py::gil_scoped_release release;
-            result = validate(model, source, validate_with);
-          }
-          result->parameters_from =
-              get<std::string>(options, "parameters_from").value_or("the model's nominal values");
-          if (auto plot = get<std::string>(options, "plot")) write_plot(*result, *plot);
-          return py::make_tuple(format_text(*result), format_json(*result));
-        });
+  m.def(
+      "_validate", [](const Model& model, const py::object& data, const std::string& name,
+                      const std::map<std::string, std::string>& metadata, const py::dict& options) {
+        const ValidateOptions validate_with = validate_options(model, options);
+        const DataSource source = data_source(data, name, metadata);
+        ValidateResult result = without_gil([&] { return validate(model, source, validate_with); });
+        result.parameters_from =
+            get<std::string>(options, "parameters_from").value_or("the model's nominal values");
+        if (auto plot = get<std::string>(options, "plot")) write_plot(result, *plot);
+        return py::make_tuple(format_text(result), format_json(result));
+      });
 }

@@ -72,20 +72,10 @@ class ChainReader final : public DataReader {
     const std::optional<double> step = current_->time_step();
     if (file_ == 0) {
       first_step_ = step;
-    } else if (step.has_value() != first_step_.has_value() ||
-               (step && std::abs(*step - *first_step_) > 1e-6 * *first_step_)) {
-      const auto text = [](const std::optional<double>& s) {
-        return s ? "dt = " + shortest_decimal(*s) : std::string("no sample interval");
-      };
-      fail({paths_[file_], 1, 1, ""}, "this file has " + text(step) + ", but " + paths_.front() +
-                                          " has " + text(first_step_) +
-                                          ": the files of one identification need one interval");
+    } else {
+      check_file_interval(paths_[file_], step, paths_.front(), first_step_);
     }
-    const MissingSummary& m = current_->missing();
-    if (!missing_.first && m.first) missing_.first = m.first;
-    missing_.rows += m.rows;
-    missing_.splits += m.splits;
-    missing_.joins += m.joins;
+    missing_.add(current_->missing());
   }
 
   std::vector<std::string> paths_;
@@ -101,6 +91,20 @@ class ChainReader final : public DataReader {
 };
 
 }  // namespace
+
+void check_file_interval(const std::string& file, const std::optional<double>& step,
+                         const std::string& first_file, const std::optional<double>& first_step) {
+  if (step.has_value() == first_step.has_value() &&
+      (!step || std::abs(*step - *first_step) <= 1e-6 * *first_step)) {
+    return;
+  }
+  const auto text = [](const std::optional<double>& s) {
+    return s ? "dt = " + shortest_decimal(*s) : std::string("no sample interval");
+  };
+  fail({file, 1, 1, ""}, "this file has " + text(step) + ", but " + first_file + " has " +
+                             text(first_step) +
+                             ": the files of one identification need one interval");
+}
 
 std::unique_ptr<DataReader> open_chain(const std::vector<std::string>& paths,
                                        const ColumnRequest& request) {

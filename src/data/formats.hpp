@@ -3,6 +3,7 @@
 // file that defines its detector and opener, and one entry in the table in reader.cpp.
 
 #include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
 
@@ -51,6 +52,10 @@ std::unique_ptr<DataReader> open_csv(File file, const std::string& path,
 
 namespace momentid::data {
 
+// Fails (DataError at `file`) unless its sample interval is the first file's, to 1e-6: the
+// files of one record need one interval.
+void check_file_interval(const std::string& file, const std::optional<double>& step,
+                         const std::string& first_file, const std::optional<double>& first_step);
 // Reads several files one after the other (DataSource::files).
 std::unique_ptr<DataReader> open_chain(const std::vector<std::string>& paths,
                                        const ColumnRequest& request);

@@ -72,6 +72,13 @@ std::unique_ptr<DataReader> DataReader::open(const std::string& path, const Colu
   return nullptr;  // not reached: CSV takes every file
 }
 
+void MissingSummary::add(const MissingSummary& later) {
+  if (!first && later.first) first = later.first;
+  rows += later.rows;
+  splits += later.splits;
+  joins += later.joins;
+}
+
 DataSource DataSource::file(std::string path) {
   DataSource source;
   source.name_ = std::move(path);

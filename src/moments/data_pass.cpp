@@ -7,16 +7,17 @@
 #include <condition_variable>
 #include <cstdint>
 #include <cstdio>
-#include <cstring>
 #include <deque>
 #include <exception>
 #include <limits>
 #include <mutex>
 #include <stdexcept>
+#include <string_view>
 #include <thread>
 
+#include "common/bytes.hpp"
 #include "common/cluster.hpp"
-#include "common/decimal.hpp"
+#include "data/formats.hpp"
 #include "data/text.hpp"
 
 namespace momentid {
@@ -24,72 +25,18 @@ namespace {
 
 using data::plural;
 
-// The bytes another process needs of a range's result (native byte order: the processes of one
-// job run on one kind of machine).
-class WireOut {
- public:
-  void u64(std::uint64_t v) { put(&v, sizeof v); }
-  void f64(double v) { put(&v, sizeof v); }
-  void text(const std::string& s) {
-    u64(s.size());
-    put(s.data(), s.size());
-  }
-  void bytes(const std::vector<std::uint8_t>& b) {
-    u64(b.size());
-    put(b.data(), b.size());
-  }
-  std::vector<std::uint8_t> data;
-
- private:
-  void put(const void* p, std::size_t n) {
-    const auto* b = static_cast<const std::uint8_t*>(p);
-    data.insert(data.end(), b, b + n);
-  }
-};
-
-class WireIn {
- public:
-  explicit WireIn(const std::vector<std::uint8_t>& data) : data_(data) {}
-  std::uint64_t u64() {
-    std::uint64_t v;
-    get(&v, sizeof v);
-    return v;
-  }
-  double f64() {
-    double v;
-    get(&v, sizeof v);
-    return v;
-  }
-  std::string text() {
-    std::string s(u64_size(), '\0');
-    get(s.data(), s.size());
-    return s;
-  }
-  std::vector<std::uint8_t> bytes() {
-    std::vector<std::uint8_t> b(u64_size());
-    get(b.data(), b.size());
-    return b;
-  }
-
- private:
-  std::size_t u64_size() {
-    const std::uint64_t n = u64();
-    if (n > data_.size() - at_) cut_short();
-    return static_cast<std::size_t>(n);
-  }
-  void get(void* p, std::size_t n) {
-    if (n > data_.size() - at_) cut_short();
-    std::memcpy(p, data_.data() + at_, n);
-    at_ += n;
-  }
-  [[noreturn]] static void cut_short() {
-    throw Error("the result of another process arrived cut short");
-  }
-  const std::vector<std::uint8_t>& data_;
-  std::size_t at_ = 0;
-};
-
 constexpr std::size_t kBlockRows = 1 << 15;
+
+// Strings in the result of another process: a length, then the bytes.
+void put_text(ByteWriter& out, std::string_view text) {
+  out.u64(text.size());
+  out.bytes(text.data(), text.size());
+}
+
+std::string get_text(ByteReader& in) {
+  const auto bytes = in.take(in.count(1, "characters"), "a text");
+  return {bytes.begin(), bytes.end()};
+}
 
 // Sums for the mean, variance and lagged products of every channel, over pairs within runs.
 // Values are summed less an offset, the first row's, so that a large mean does not cancel the
@@ -143,7 +90,7 @@ class LagSums {
   }
 
   // The sums, for another process (load()).
-  void save(WireOut& out) const {
+  void save(ByteWriter& out) const {
     out.u64(count_);
     for (const auto* v : {&offset_, &sum_, &sum_squares_, &products_, &lead_, &lagged_}) {
       out.u64(v->size());
@@ -151,19 +98,19 @@ class LagSums {
     }
     for (std::size_t p : pairs_) out.u64(p);
   }
-  static LagSums load(WireIn& in, std::size_t channels, std::size_t lags) {
+  static LagSums load(ByteReader& in, std::size_t channels, std::size_t lags) {
     LagSums out(channels, lags);
-    out.count_ = in.u64();
+    out.count_ = in.u64("the row count of the channel sums");
     for (auto* v :
          {&out.offset_, &out.sum_, &out.sum_squares_, &out.products_, &out.lead_, &out.lagged_}) {
-      const std::uint64_t n = in.u64();
+      const std::uint64_t n = in.u64("a count of channel sums");
       if (n != v->size() && !(v == &out.offset_ && n == channels)) {
         throw Error("the result of another process does not match this one's channels");
       }
       v->resize(n);
-      for (double& x : *v) x = in.f64();
+      for (double& x : *v) x = in.f64("a channel sum");
     }
-    for (std::size_t& p : out.pairs_) p = in.u64();
+    for (std::size_t& p : out.pairs_) p = in.u64("a count of pairs");
     return out;
   }
 
@@ -593,68 +540,70 @@ RangeResult read_range(const Pass& pass, std::size_t begin, std::size_t end,
   return out;
 }
 
-void write_optional(WireOut& out, const std::optional<double>& v) {
+void write_optional(ByteWriter& out, const std::optional<double>& v) {
   out.u64(v ? 1 : 0);
   out.f64(v.value_or(0));
 }
 
-std::optional<double> read_optional(WireIn& in) {
-  const bool has = in.u64() != 0;
-  const double v = in.f64();
+std::optional<double> read_optional(ByteReader& in) {
+  const bool has = in.u64("whether a value is there") != 0;
+  const double v = in.f64("a value");
   return has ? std::optional(v) : std::nullopt;
 }
 
-void write_location(WireOut& out, const SourceLocation& at) {
-  out.text(at.file);
-  out.u64(static_cast<std::uint64_t>(at.line));
-  out.u64(static_cast<std::uint64_t>(at.column));
-  out.text(at.text);
+void write_location(ByteWriter& out, const SourceLocation& at) {
+  put_text(out, at.file);
+  out.i32(at.line);
+  out.i32(at.column);
+  put_text(out, at.text);
 }
 
-SourceLocation read_location(WireIn& in) {
+SourceLocation read_location(ByteReader& in) {
   SourceLocation at;
-  at.file = in.text();
-  at.line = static_cast<int>(in.u64());
-  at.column = static_cast<int>(in.u64());
-  at.text = in.text();
+  at.file = get_text(in);
+  at.line = in.i32("a line");
+  at.column = in.i32("a column");
+  at.text = get_text(in);
   return at;
 }
 
 // An error as another process rethrows it: its kind, place and message.
 enum class ErrorKind : std::uint64_t { kData = 1, kUsage, kOther };
 
-void write_error(WireOut& out, const std::exception_ptr& error) {
+void write_error(ByteWriter& out, const std::exception_ptr& error) {
   try {
     std::rethrow_exception(error);
   } catch (const DataError& e) {
     out.u64(static_cast<std::uint64_t>(ErrorKind::kData));
     write_location(out, e.location());
-    out.text(e.message());
+    put_text(out, e.message());
   } catch (const UsageError& e) {
     out.u64(static_cast<std::uint64_t>(ErrorKind::kUsage));
-    out.text(e.what());
+    put_text(out, e.what());
   } catch (const std::exception& e) {
     out.u64(static_cast<std::uint64_t>(ErrorKind::kOther));
-    out.text(e.what());
+    put_text(out, e.what());
   }
 }
 
-std::exception_ptr read_error(WireIn& in) {
-  switch (static_cast<ErrorKind>(in.u64())) {
+std::exception_ptr read_error(ByteReader& in) {
+  switch (static_cast<ErrorKind>(in.u64("the kind of an error"))) {
     case ErrorKind::kData: {
       SourceLocation at = read_location(in);
-      return std::make_exception_ptr(DataError(std::move(at), in.text()));
+      return std::make_exception_ptr(DataError(std::move(at), get_text(in)));
     }
     case ErrorKind::kUsage:
-      return std::make_exception_ptr(UsageError(in.text()));
+      return std::make_exception_ptr(UsageError(get_text(in)));
     default:
-      return std::make_exception_ptr(Error(in.text()));
+      return std::make_exception_ptr(Error(get_text(in)));
   }
 }
 
 std::vector<std::uint8_t> encode(const RangeResult& r) {
-  WireOut out;
-  out.bytes(r.state->moments.serialize());
+  ByteWriter out;
+  const std::vector<std::uint8_t> moments = r.state->moments.serialize();
+  out.u64(moments.size());
+  out.bytes(reinterpret_cast<const char*>(moments.data()), moments.size());
   r.state->lags.save(out);
   out.u64(r.state->rows);
   out.u64(r.state->runs);
@@ -671,28 +620,29 @@ std::vector<std::uint8_t> encode(const RangeResult& r) {
   }
   out.u64(r.error ? r.first_error : std::numeric_limits<std::uint64_t>::max());
   if (r.error) write_error(out, r.error);
-  return std::move(out.data);
+  return out.take();
 }
 
 RangeResult decode(const std::vector<std::uint8_t>& bytes, std::size_t channels, std::size_t lags) {
-  WireIn in(bytes);
+  ByteReader in(bytes, "the bytes of another process");
   RangeResult r;
-  MomentAccumulator moments = MomentAccumulator::deserialize(in.bytes());
+  MomentAccumulator moments =
+      MomentAccumulator::deserialize(in.take(in.count(1, "accumulator bytes"), "its state"));
   LagSums sums = LagSums::load(in, channels, lags);
   r.state.emplace(ShardState{std::move(moments), std::move(sums)});
-  r.state->rows = in.u64();
-  r.state->runs = in.u64();
-  r.summaries.resize(in.u64());
+  r.state->rows = in.u64("the row count");
+  r.state->runs = in.u64("the run count");
+  r.summaries.resize(in.count(8, "shard summaries"));
   for (ShardSummary& s : r.summaries) {
-    s.steps.count = in.u64();
-    s.steps.sum = in.f64();
+    s.steps.count = in.u64("a step count");
+    s.steps.sum = in.f64("a sum of steps");
     s.time_step = read_optional(in);
-    s.missing.rows = in.u64();
-    s.missing.splits = in.u64();
-    s.missing.joins = in.u64();
-    if (in.u64() != 0) s.missing.first = read_location(in);
+    s.missing.rows = in.u64("a count of missing rows");
+    s.missing.splits = in.u64("a count of splits");
+    s.missing.joins = in.u64("a count of joins");
+    if (in.u64("whether a missing row is located") != 0) s.missing.first = read_location(in);
   }
-  const std::uint64_t first_error = in.u64();
+  const std::uint64_t first_error = in.u64("the first failed shard");
   if (first_error != std::numeric_limits<std::uint64_t>::max()) {
     r.first_error = static_cast<std::size_t>(first_error);
     r.error = read_error(in);
@@ -814,11 +764,7 @@ DataMoments moments_from_data(const DataSource& source, const std::vector<std::s
   DataReader::Steps file_steps;
   for (std::size_t k = 0; k < result.summaries.size(); ++k) {
     const ShardSummary& s = result.summaries[k];
-    const MissingSummary& m = s.missing;
-    if (!out.missing.first && m.first) out.missing.first = m.first;
-    out.missing.rows += m.rows;
-    out.missing.splits += m.splits;
-    out.missing.joins += m.joins;
+    out.missing.add(s.missing);
     file_steps.count += s.steps.count;
     file_steps.sum += s.steps.sum;
     if (shards[k].index + 1 < shards[k].count) continue;
@@ -826,14 +772,8 @@ DataMoments moments_from_data(const DataSource& source, const std::vector<std::s
     file_steps = {};
     if (shards[k].file == 0) {
       first_step = step;
-    } else if (step.has_value() != first_step.has_value() ||
-               (step && std::abs(*step - *first_step) > 1e-6 * *first_step)) {
-      const auto text = [](const std::optional<double>& interval) {
-        return interval ? "dt = " + shortest_decimal(*interval) : std::string("no sample interval");
-      };
-      throw DataError({paths[shards[k].file], 1, 1, ""},
-                      "this file has " + text(step) + ", but " + paths.front() + " has " +
-                          text(first_step) + ": the files of one identification need one interval");
+    } else {
+      data::check_file_interval(paths[shards[k].file], step, paths.front(), first_step);
     }
   }
   if (result.error) std::rethrow_exception(result.error);
