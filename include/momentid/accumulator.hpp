@@ -199,14 +199,14 @@ class MomentAccumulator {
   std::size_t intervals_ = 0;
 };
 
-// Moment estimates with their sampling covariance from batch means.
+// Moment estimates with the means over contiguous batches of the record, from which their
+// sampling covariance is estimated (solve/long_run.hpp).
 struct MomentEstimates {
   std::vector<double> mean;                      // one per moment: the time average
   std::vector<std::vector<double>> batch_means;  // batches x moments
+  // Per batch, its intervals: batches differ in length by up to one stretch. Empty: all alike.
+  std::vector<std::size_t> batch_intervals;
   std::size_t intervals = 0;
-  // Covariance of `mean` from the spread of the batch means: S / B with S their sample
-  // covariance (batches of equal length).
-  std::vector<std::vector<double>> covariance() const;
 };
 
 // Groups the accumulator's stretches into `batches` contiguous batches (fewer if the record is

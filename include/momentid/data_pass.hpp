@@ -50,7 +50,14 @@ struct PassControl {
 struct DataOptions {
   // How inputs were sampled; nullopt: the file's `input-hold` metadata, else kSample.
   std::optional<InputHold> hold;
-  std::size_t batches = 50;
+  // Contiguous batches of the record for the moments' sampling covariance; 0: automatic, one per
+  // kAutoBatchIntervals intervals, at least min_batches, and from kMinAutoBatches to
+  // kMaxAutoBatches (long_run_covariance needs batches longer than the states' correlation time,
+  // and enough of them for its degrees of freedom).
+  std::size_t batches = 0;
+  std::size_t min_batches = 0;
+  static constexpr std::size_t kAutoBatchIntervals = 400, kMinAutoBatches = 50,
+                               kMaxAutoBatches = 1000;
   std::map<std::string, std::string> rename;  // model name -> file column
   std::size_t lags = 1;                       // autocorrelations computed, per channel
   std::size_t min_rows = 2;

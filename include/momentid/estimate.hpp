@@ -45,6 +45,9 @@ struct Estimate {
   std::size_t rank = 0;
   double condition = 0;  // of the column-scaled coefficient matrix
   std::size_t batches = 0;
+  // Degrees of freedom of the standard errors (long_run_covariance): of the least-squares and of
+  // the optimally weighted estimate. The 95% intervals take Student's t quantile at them.
+  double dof = 0, gmm_dof = 0;
   std::size_t intervals = 0;  // sample intervals the moments average over
   std::optional<double> j_statistic, j_pvalue;
   int j_dof = 0;
@@ -73,7 +76,9 @@ std::vector<IdentityCheck> check_identities(const MomentSystem& system,
                                             const MomentEstimates& estimates);
 
 // Solves A(mu) theta = b(mu) by least squares with scaled columns and a rank-revealing SVD, and
-// propagates the moments' batch covariance to the parameters (delta method). `estimates` are
+// estimates the parameters' covariance from the batch series of their first-order errors (delta
+// method), with a long-run covariance that holds whether the moment conditions telescope (records
+// without noise) or not (README, "Uncertainty"). `estimates` are
 // for moments_to_estimate(system), in that order.
 Estimate solve(const MomentSystem& system, const MomentEstimates& estimates,
                const SolveOptions& options = {});
@@ -90,12 +95,9 @@ struct MomentRows {
   std::vector<Entry> b;
 };
 
-// Solves `rows` as solve() does, for parameters named `names`, with `covariance` the moments'
-// covariance (MomentEstimates::covariance()).
+// Solves `rows` as solve() does, for parameters named `names`.
 Estimate solve_rows(const MomentRows& rows, const std::vector<std::string>& names,
-                    const MomentEstimates& estimates,
-                    const std::vector<std::vector<double>>& covariance,
-                    const SolveOptions& options = {});
+                    const MomentEstimates& estimates, const SolveOptions& options = {});
 
 // The numbers behind lagged moment equations for data sampled every `dt`: one row per test
 // function and equation, whose entries are lagged moments weighted by the test function (its

@@ -26,9 +26,8 @@ struct IdentifyOptions {
   int degree = 0;
   // How the inputs were sampled; nullopt: the data's `input-hold` metadata, else kSample.
   std::optional<InputHold> hold;
-  // Contiguous batches for the standard errors, kMinBatches..kMaxBatches; nullopt: 50 for the
-  // zero-lag equations, and four per lagged equation (at least 50) for the lagged ones, which
-  // the optimal weighting needs.
+  // Contiguous batches for the standard errors, kMinBatches..kMaxBatches; nullopt: automatic
+  // (DataOptions::batches), and at least four per equation for the optimal weighting.
   std::optional<std::size_t> batches;
   // Two-step optimally weighted estimate (GMM) with the J test, besides least squares; nullopt:
   // for the lagged equations only, whose many strongly correlated rows it weights.
@@ -58,11 +57,11 @@ struct IdentifyOptions {
   // Threads, shards and progress of each pass over the data.
   PassControl control;
 
-  static constexpr std::size_t kMinBatches = 2, kMaxBatches = 10000, kDefaultBatches = 50;
+  static constexpr std::size_t kMinBatches = 2, kMaxBatches = 10000;
   static constexpr int kMaxDegree = 12;
   static constexpr long kMaxInputShift = 1000;
-  // The lagged equations may need at most this many moments: their covariance is a square
-  // matrix of that size.
+  // The lagged equations may need at most this many moments: the accumulator keeps each of them
+  // per stretch of the record.
   static constexpr std::size_t kMaxLaggedMoments = 3000;
 
   // Throws UsageError naming the first option that is out of range or that names a variable

@@ -17,8 +17,7 @@ namespace {
 // estimate cannot tell noise from the roughness of a state whose derivative holds a held input.
 constexpr double kNoiseWarning = 0.02;
 
-// Four batches per equation keep the optimal weighting's finite-sample correction (see
-// solve_rows) below 1.5.
+// Four batches per equation keep the optimal weighting's batch covariance well conditioned.
 constexpr std::size_t kBatchesPerEquation = 4;
 
 // What makes a result doubtful, and what draws a warning (README, "Warnings").
@@ -186,9 +185,9 @@ IdentifyResult identify(const Model& model, const DataSource& source,
   result.data_name = source.name();
   DataOptions data_options;
   data_options.hold = options.hold;
-  data_options.batches = options.batches.value_or(IdentifyOptions::kDefaultBatches);
+  data_options.batches = options.batches.value_or(0);
   data_options.rename = options.columns;
-  data_options.min_rows = 2 * data_options.batches;
+  data_options.min_rows = 2 * (options.batches ? *options.batches : DataOptions::kMinAutoBatches);
   data_options.input_shift = options.input_shift;
   data_options.dt = options.dt;
   data_options.layout = options.layout;
@@ -212,11 +211,7 @@ IdentifyResult identify(const Model& model, const DataSource& source,
     for (const auto& d : model.inputs()) inputs.push_back(d.name);
     result.gmm = options.gmm.value_or(false);
     // The optimal weighting estimates the equations' covariance from the batches.
-    if (result.gmm && !options.batches) {
-      data_options.batches =
-          std::clamp(kBatchesPerEquation * result.system.equations.size(),
-                     IdentifyOptions::kDefaultBatches, IdentifyOptions::kMaxBatches);
-    }
+    if (result.gmm) data_options.min_batches = kBatchesPerEquation * result.system.equations.size();
     data_options.offsets =
         channel_offsets(source, states, inputs, data_options, options.center, result.centered);
     result.data = moments_from_data(source, states, inputs, result.moments, data_options);
@@ -270,11 +265,7 @@ IdentifyResult identify(const Model& model, const DataSource& source,
     }
     result.lagged_moments = probe.moments;
     // The optimal weighting estimates the equations' covariance from the batches.
-    if (!options.batches) {
-      data_options.batches =
-          std::clamp(kBatchesPerEquation * probe.rows.a.size(), IdentifyOptions::kDefaultBatches,
-                     IdentifyOptions::kMaxBatches);
-    }
+    data_options.min_batches = kBatchesPerEquation * probe.rows.a.size();
     data_options.offsets =
         channel_offsets(source, states, inputs, data_options, options.center, result.centered);
     result.data = moments_from_data(source, states, inputs, probe.moments, data_options);
@@ -317,7 +308,7 @@ IdentifyResult identify(const Model& model, const DataSource& source,
   for (const Declaration& p : model.parameters()) names.push_back(p.name);
   result.gmm = options.gmm.value_or(true);
   result.estimate = solve_rows(
-      rows.rows, names, result.data.estimates, result.data.estimates.covariance(),
+      rows.rows, names, result.data.estimates,
       {.gmm = result.gmm, .fixed = fixed_values(model, options.fixed), .normalise_rows = true});
   return result;
 }
@@ -650,7 +641,13 @@ std::string format_text(const IdentifyResult& r) {
   for (const std::string& w : all) out << "  warning: " << w << "\n";
   out << "  equations: " << e.rows << ", rank " << e.rank << " of " << e.parameters.size()
       << ", condition number " << number(e.condition, "%.3g") << "\n";
-  out << "  batches: " << e.batches << " (standard errors from the spread of batch means)\n";
+  out << "  batches: " << e.batches
+      << "; standard errors from their long-run covariance on " << number(e.dof, "%.0f")
+      << " degrees of freedom";
+  if (!e.gmm_parameters.empty()) {
+    out << " (optimally weighted: " << number(e.gmm_dof, "%.0f") << ")";
+  }
+  out << "\n";
   if (e.j_statistic) {
     out << "  J test: J = " << number(*e.j_statistic, "%.4g") << " on " << e.j_dof
         << " degrees of freedom, p = " << number(*e.j_pvalue, "%.3g")
@@ -721,6 +718,7 @@ std::string format_json(const IdentifyResult& r) {
   out << ",\n  \"diagnostics\": {\n    \"status\": " << json_string(status_name(r))
       << ",\n    \"rows\": " << e.rows << ",\n    \"rank\": " << e.rank
       << ",\n    \"condition\": " << json_number(e.condition) << ",\n    \"batches\": " << e.batches
+      << ",\n    \"error_dof\": " << json_number(gmm ? e.gmm_dof : e.dof)
       << ",\n    \"samples\": " << d.rows << ",\n    \"runs\": " << d.runs
       << ",\n    \"input_hold\": " << json_string(hold_name(d.hold))
       << ",\n    \"j_statistic\": " << (e.j_statistic ? json_number(*e.j_statistic) : "null")

@@ -118,8 +118,8 @@ Command add_identify(CLI::App& app) {
                   "how the inputs were sampled (default: the file's metadata, else sample)")
       ->check(CLI::IsMember({"sample", "zoh"}));
   sub->add_option("--batches", options.batches,
-                  "batches for the standard errors (default 50; for the lagged equations 4 per "
-                  "equation)")
+                  "batches for the standard errors (default one per 400 samples, 50 to 1000, and "
+                  "at least 4 per equation for the optimal weighting)")
       ->check(CLI::Range(IdentifyOptions::kMinBatches, IdentifyOptions::kMaxBatches));
   sub->add_option("--weighting", command->weighting,
                   "ls (least squares), gmm (two-step optimal), or auto: gmm for the lagged "

@@ -1,6 +1,5 @@
 #include "momentid/accumulator.hpp"
 
-#include <Eigen/Dense>
 #include <algorithm>
 #include <bit>
 #include <limits>
@@ -763,32 +762,10 @@ MomentEstimates estimates(const MomentAccumulator& accumulator, std::size_t batc
     if (counts[i] == 0) continue;
     for (double& s : sums[i]) s /= static_cast<double>(counts[i]);
     means.push_back(std::move(sums[i]));
+    out.batch_intervals.push_back(counts[i]);
   }
   out.batch_means = std::move(means);
   return out;
-}
-
-std::vector<std::vector<double>> MomentEstimates::covariance() const {
-  const std::size_t k = mean.size(), b = batch_means.size();
-  std::vector<std::vector<double>> c(k, std::vector<double>(k, 0.0));
-  if (b < 2) return c;
-  // The batch means as the rows of a matrix, centred; the covariance is its Gram matrix.
-  Eigen::MatrixXd d(static_cast<Eigen::Index>(b), static_cast<Eigen::Index>(k));
-  for (std::size_t r = 0; r < b; ++r) {
-    for (std::size_t i = 0; i < k; ++i) {
-      d(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(i)) = batch_means[r][i];
-    }
-  }
-  d.rowwise() -= d.colwise().mean();
-  const double scale = 1.0 / (static_cast<double>(b - 1) * static_cast<double>(b));
-  Eigen::MatrixXd gram = Eigen::MatrixXd::Zero(d.cols(), d.cols());
-  gram.selfadjointView<Eigen::Lower>().rankUpdate(d.transpose(), scale);
-  for (std::size_t i = 0; i < k; ++i) {
-    for (std::size_t j = 0; j <= i; ++j) {
-      c[i][j] = c[j][i] = gram(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j));
-    }
-  }
-  return c;
 }
 
 }  // namespace momentid

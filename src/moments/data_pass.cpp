@@ -736,9 +736,12 @@ DataMoments moments_from_data(const DataSource& source, const std::vector<std::s
   // The merged state keeps the stretches of every shard, so that the batches are made the same
   // way whatever thread or process reads a shard: at least 8 per shard for few shards, one for
   // as many as four per batch (its memory grows by one stretch per shard: 16 MB of data).
-  const bool collapse = shards.size() >= 4 * options.batches;
+  const std::size_t batches =
+      options.batches > 0 ? options.batches
+                          : std::max(DataOptions::kMaxAutoBatches, options.min_batches);
+  const bool collapse = shards.size() >= 4 * batches;
   const std::size_t shard_batches =
-      std::max<std::size_t>(2, (options.batches + shards.size() - 1) / shards.size());
+      std::max<std::size_t>(2, (batches + shards.size() - 1) / shards.size());
   const PassSetup setup{keys,          states.size(), inputs.size(), out.hold,
                         shard_batches, collapse,      &options};
   const Pass pass{source, shards, request, setup, (shard_batches + 1) * shards.size()};
@@ -801,7 +804,13 @@ DataMoments moments_from_data(const DataSource& source, const std::vector<std::s
   out.rows = result.state->rows;
   out.runs = result.state->runs;
   out.time_step = options.dt ? options.dt : first_step;
-  out.estimates = estimates(accumulator, options.batches);
+  out.estimates =
+      estimates(accumulator, options.batches > 0
+                                 ? options.batches
+                                 : std::clamp(std::max(accumulator.intervals() /
+                                                           DataOptions::kAutoBatchIntervals,
+                                                       options.min_batches),
+                                              DataOptions::kMinAutoBatches, batches));
   for (std::size_t c = 0; c < channels; ++c) {
     ChannelStatistics s = result.state->lags.statistics(c);
     s.name = request.names[c];

@@ -10,6 +10,7 @@
 #include <stdexcept>
 
 #include "solve/distributions.hpp"
+#include "solve/long_run.hpp"
 
 namespace momentid {
 namespace {
@@ -50,11 +51,46 @@ std::vector<Monomial> moments_to_estimate(const MomentSystem& system) {
 
 namespace {
 
-// check_identities with the moments' covariance already computed.
+// Row b: n_b / n (mu_b - mu) for batch b of n_b intervals (n their average) and the record's means
+// mu: the batch series that long_run_covariance expects.
+MatrixXd batch_deviations(const MomentEstimates& estimates) {
+  const auto b = static_cast<Eigen::Index>(estimates.batch_means.size());
+  const auto k = static_cast<Eigen::Index>(estimates.mean.size());
+  MatrixXd means(b, k);
+  VectorXd length = VectorXd::Ones(b);
+  for (Eigen::Index i = 0; i < b; ++i) {
+    const auto row = static_cast<std::size_t>(i);
+    for (Eigen::Index j = 0; j < k; ++j) {
+      means(i, j) = estimates.batch_means[row][static_cast<std::size_t>(j)];
+    }
+    if (!estimates.batch_intervals.empty()) {
+      length(i) = static_cast<double>(estimates.batch_intervals[row]);
+    }
+  }
+  if (b == 0) return means;
+  length /= length.mean();
+  const Eigen::RowVectorXd mean = (length.transpose() * means) / static_cast<double>(b);
+  return length.asDiagonal() * (means.rowwise() - mean);
+}
+
+// The warnings that say the standard errors are rough.
+void warn_about_errors(Estimate& out, const LongRunCovariance& errors) {
+  if (errors.order == 0 && out.batches >= 2) {
+    out.warnings.push_back("only " + std::to_string(out.batches) +
+                           " batches: the standard errors take the batch means as independent, "
+                           "which overstates them for records without noise (use a longer record "
+                           "or more batches)");
+  } else if (errors.dof < 10) {
+    out.warnings.push_back("the standard errors rest on " + format_number(errors.dof) +
+                           " degrees of freedom: they are rough (use a longer record)");
+  }
+}
+
+// check_identities with the batch series at hand.
 std::vector<IdentityCheck> identity_checks(const MomentSystem& system,
                                            const std::vector<Monomial>& moments,
                                            const MomentEstimates& estimates,
-                                           const std::vector<std::vector<double>>& cov) {
+                                           const MatrixXd& deviations) {
   const Model& model = *system.model;
   const Monomial one(model.variables().size(), 0);
   std::map<Monomial, std::size_t> index;
@@ -62,15 +98,15 @@ std::vector<IdentityCheck> identity_checks(const MomentSystem& system,
   std::vector<IdentityCheck> out;
   for (const DataIdentity& id : system.identities) {
     // Weights over the moments: +1 for E[m], minus the value's weights; E[1] is a constant.
-    std::vector<std::pair<std::size_t, double>> weights;
+    VectorXd weights = VectorXd::Zero(deviations.cols());
     double constant = 0;
     bool available = index.count(id.moment) != 0;
-    if (available) weights.emplace_back(index.at(id.moment), 1.0);
+    if (available) weights(static_cast<Eigen::Index>(index.at(id.moment))) += 1.0;
     for (const auto& [m, w] : id.value) {
       if (m == one) {
         constant += w.to_double();
       } else if (index.count(m) != 0) {
-        weights.emplace_back(index.at(m), -w.to_double());
+        weights(static_cast<Eigen::Index>(index.at(m))) -= w.to_double();
       } else {
         available = false;
       }
@@ -79,11 +115,10 @@ std::vector<IdentityCheck> identity_checks(const MomentSystem& system,
     IdentityCheck check;
     check.identity = format_moment(model, id.moment) + " = " + format_combination(model, id.value);
     check.violation = -constant;
-    double variance = 0;
-    for (const auto& [i, wi] : weights) {
-      check.violation += wi * estimates.mean[i];
-      for (const auto& [j, wj] : weights) variance += wi * wj * cov[i][j];
+    for (Eigen::Index i = 0; i < weights.size(); ++i) {
+      check.violation += weights(i) * estimates.mean[static_cast<std::size_t>(i)];
     }
+    const double variance = long_run_covariance(deviations * weights).covariance(0, 0);
     check.z = variance > 0 ? check.violation / std::sqrt(variance) : kNaN;
     out.push_back(check);
   }
@@ -95,7 +130,7 @@ std::vector<IdentityCheck> identity_checks(const MomentSystem& system,
 std::vector<IdentityCheck> check_identities(const MomentSystem& system,
                                             const std::vector<Monomial>& moments,
                                             const MomentEstimates& estimates) {
-  return identity_checks(system, moments, estimates, estimates.covariance());
+  return identity_checks(system, moments, estimates, batch_deviations(estimates));
 }
 
 Estimate solve(const MomentSystem& system, const MomentEstimates& estimates,
@@ -125,9 +160,8 @@ Estimate solve(const MomentSystem& system, const MomentEstimates& estimates,
   }
   std::vector<std::string> names;
   for (const Declaration& p : model.parameters()) names.push_back(p.name);
-  const auto c = estimates.covariance();
-  Estimate out = solve_rows(rows, names, estimates, c, options);
-  out.identities = identity_checks(system, moments, estimates, c);
+  Estimate out = solve_rows(rows, names, estimates, options);
+  out.identities = identity_checks(system, moments, estimates, batch_deviations(estimates));
   return out;
 }
 
@@ -214,8 +248,7 @@ Estimate with_fixed(Estimate free, const std::vector<std::string>& names,
 }  // namespace
 
 Estimate solve_rows(const MomentRows& system, const std::vector<std::string>& names,
-                    const MomentEstimates& estimates, const std::vector<std::vector<double>>& c,
-                    const SolveOptions& options) {
+                    const MomentEstimates& estimates, const SolveOptions& options) {
   if (std::any_of(options.fixed.begin(), options.fixed.end(), [](const auto& v) { return v; })) {
     if (options.fixed.size() != names.size()) {
       throw std::invalid_argument("solve_rows: one fixed value or nullopt per parameter needed");
@@ -227,7 +260,7 @@ Estimate solve_rows(const MomentRows& system, const std::vector<std::string>& na
     SolveOptions free_options = options;
     free_options.fixed.clear();
     return with_fixed(
-        solve_rows(without_fixed(system, options.fixed), free_names, estimates, c, free_options),
+        solve_rows(without_fixed(system, options.fixed), free_names, estimates, free_options),
         names, options.fixed);
   }
   const auto rows = static_cast<Eigen::Index>(system.a.size());
@@ -249,12 +282,6 @@ Estimate solve_rows(const MomentRows& system, const std::vector<std::string>& na
 
   VectorXd mu(k_count);
   for (Eigen::Index k = 0; k < k_count; ++k) mu(k) = estimates.mean[static_cast<std::size_t>(k)];
-  MatrixXd cov_mu(k_count, k_count);
-  for (Eigen::Index i = 0; i < k_count; ++i) {
-    for (Eigen::Index j = 0; j < k_count; ++j) {
-      cov_mu(i, j) = c[static_cast<std::size_t>(i)][static_cast<std::size_t>(j)];
-    }
-  }
 
   MatrixXd a = MatrixXd::Zero(rows, params);
   VectorXd b = VectorXd::Zero(rows);
@@ -345,39 +372,43 @@ Estimate solve_rows(const MomentRows& system, const std::vector<std::string>& na
                   " parameter combinations are determined";
   }
 
-  // Delta method: d theta / d mu_k for every moment, then Cov(theta) = J Cov(mu) J^T.
-  MatrixXd jacobian = MatrixXd::Zero(params, k_count);
-  for (Eigen::Index k = 0; k < k_count; ++k) {
-    const MomentUse& use = uses[static_cast<std::size_t>(k)];
-    if (use.a.empty() && use.b.empty()) continue;
-    MatrixXd da = MatrixXd::Zero(rows, params);
-    VectorXd db = VectorXd::Zero(rows);
-    for (const auto& [r, p, w] : use.a) da(r, p) += w / scale(p);
-    for (const auto& [r, w] : use.b) db(r) += w;
-    const VectorXd d_theta_scaled =
-        normal_pinv * (da.transpose() * residual) + pinv * (db - da * theta_scaled);
-    jacobian.col(k) = d_theta_scaled.cwiseQuotient(scale);
-  }
-  const MatrixXd cov_theta = jacobian * cov_mu * jacobian.transpose();
-  const double t975 =
-      out.batches >= 2 ? student_t_quantile(0.975, static_cast<double>(out.batches - 1)) : kNaN;
+  // The sensitivity d theta / d mu_k of theta = N^-1 A' W b for every moment, with N^-1 =
+  // `normal_inverse`, `left` = N^-1 A' W and `weighted_residual` = W (b - A theta), all in
+  // scaled columns; unscaled on return.
+  const auto sensitivity = [&](const MatrixXd& normal_inverse, const MatrixXd& left,
+                               const VectorXd& weighted_residual, const VectorXd& at) {
+    MatrixXd jacobian = MatrixXd::Zero(params, k_count);
+    for (Eigen::Index k = 0; k < k_count; ++k) {
+      const MomentUse& use = uses[static_cast<std::size_t>(k)];
+      if (use.a.empty() && use.b.empty()) continue;
+      MatrixXd da = MatrixXd::Zero(rows, params);
+      VectorXd db = VectorXd::Zero(rows);
+      for (const auto& [r, p, w] : use.a) da(r, p) += w / scale(p);
+      for (const auto& [r, w] : use.b) db(r) += w;
+      jacobian.col(k) =
+          (normal_inverse * (da.transpose() * weighted_residual) + left * (db - da * at))
+              .cwiseQuotient(scale);
+    }
+    return jacobian;
+  };
+  // The errors: the long-run covariance of the parameters' batch series (delta method).
+  const MatrixXd deviations = batch_deviations(estimates);
+  const LongRunCovariance ls_errors = long_run_covariance(
+      deviations * sensitivity(normal_pinv, pinv, residual, theta_scaled).transpose());
+  out.dof = ls_errors.dof;
+  const double t975 = out.batches >= 2 ? student_t_quantile(0.975, out.dof) : kNaN;
   for (Eigen::Index p = 0; p < params; ++p) {
     ParameterEstimate& e = out.parameters[static_cast<std::size_t>(p)];
     e.estimate = theta(p);
     e.identifiable = identifiable[static_cast<std::size_t>(p)];
-    e.std_error =
-        e.identifiable && out.batches >= 2 ? std::sqrt(std::max(0.0, cov_theta(p, p))) : kNaN;
+    e.std_error = e.identifiable && out.batches >= 2
+                      ? std::sqrt(std::max(0.0, ls_errors.covariance(p, p)))
+                      : kNaN;
     e.ci_low = e.estimate - t975 * e.std_error;
     e.ci_high = e.estimate + t975 * e.std_error;
   }
-
-  if (out.batches >= 2) out.correlation = correlation_of(cov_theta, identifiable);
-
-  if (out.batches < 10) {
-    out.warnings.push_back("only " + std::to_string(out.batches) +
-                           " batches: the standard errors are rough (use a longer record or "
-                           "more batches)");
-  }
+  if (out.batches >= 2) out.correlation = correlation_of(ls_errors.covariance, identifiable);
+  warn_about_errors(out, ls_errors);
   if (out.condition > 1e8) {
     out.warnings.push_back("the equations are ill-conditioned (condition number " +
                            format_number(out.condition) +
@@ -385,14 +416,16 @@ Estimate solve_rows(const MomentRows& system, const std::vector<std::string>& na
   }
 
   if (!options.gmm) return out;
-  // Two-step optimal weighting: the moment conditions g = A theta - b have covariance
-  // S = G Cov(mu) G^T with G = dg/dmu at the first-step estimate; weight by S^-1.
+  // Two-step weighting: the equations g = A theta - b weighted by the inverse of their batch
+  // covariance S / B at the first-step estimate (batch_covariance: many degrees of freedom; for
+  // equations without noise too large by a common factor, which the weights do not feel). The
+  // estimate's errors and the J test come from the long-run covariance, not from S.
   if (rank < params) {
     out.warnings.push_back("no optimally weighted estimate: the system is rank-deficient");
     return out;
   }
-  // S is estimated from B batch means, so it has rank B - 1 at most: with as many equations or
-  // more it is singular and the weighting meaningless.
+  // S has rank B - 1 at most: with as many equations or more it is singular and the weighting
+  // meaningless.
   if (out.batches < system.a.size() + 2) {
     out.warnings.push_back(
         "no optimally weighted estimate: it needs more batches than equations (" +
@@ -400,13 +433,17 @@ Estimate solve_rows(const MomentRows& system, const std::vector<std::string>& na
         " equations): use --batches");
     return out;
   }
-  MatrixXd g_mu = MatrixXd::Zero(rows, k_count);
-  for (Eigen::Index k = 0; k < k_count; ++k) {
-    const MomentUse& use = uses[static_cast<std::size_t>(k)];
-    for (const auto& [r, p, w] : use.a) g_mu(r, k) += w * theta(p);
-    for (const auto& [r, w] : use.b) g_mu(r, k) -= w;
-  }
-  const MatrixXd s = g_mu * cov_mu * g_mu.transpose();
+  // dg / dmu at theta.
+  const auto equations_of = [&](const VectorXd& at) {
+    MatrixXd g_mu = MatrixXd::Zero(rows, k_count);
+    for (Eigen::Index k = 0; k < k_count; ++k) {
+      const MomentUse& use = uses[static_cast<std::size_t>(k)];
+      for (const auto& [r, p, w] : use.a) g_mu(r, k) += w * at(p);
+      for (const auto& [r, w] : use.b) g_mu(r, k) -= w;
+    }
+    return g_mu;
+  };
+  const MatrixXd s = batch_covariance(deviations * equations_of(theta).transpose());
   Eigen::SelfAdjointEigenSolver<MatrixXd> eigen(s);
   const VectorXd lambda = eigen.eigenvalues();
   const double lambda_max = lambda.maxCoeff();
@@ -418,48 +455,76 @@ Estimate solve_rows(const MomentRows& system, const std::vector<std::string>& na
       ++s_rank;
     }
   }
-  if (static_cast<std::size_t>(s_rank) + 1 > out.batches) {
-    out.warnings.push_back("optimal weighting needs more batches than equations (" +
-                           std::to_string(out.batches) + " batches for " + std::to_string(rows) +
-                           " equations): use --batches");
-  }
   const MatrixXd w =
       eigen.eigenvectors() * inverse_lambda.asDiagonal() * eigen.eigenvectors().transpose();
   const MatrixXd information = as.transpose() * w * as;
-  Eigen::LDLT<MatrixXd> ldlt(information);
-  const VectorXd theta_gmm_scaled = ldlt.solve(as.transpose() * w * b);
-  const VectorXd g = as * theta_gmm_scaled - b;
-  // S comes from the same B batches as the estimate. With n = B - 1 degrees of freedom, m
-  // equations and q parameters, Gaussian batch means give (A' S^-1 A)^-1 a Wishart law of
-  // n - m + q degrees of freedom: its mean is (n - m + q) / n times the true covariance of the
-  // optimally weighted estimate. And the noise in the weights costs efficiency: the estimate's
-  // covariance is (n - 1) / (n - m + q - 1) times that optimum (generalised least squares with
-  // an estimated covariance). Both factors are undone here.
+  const MatrixXd information_inverse = information.ldlt().solve(MatrixXd::Identity(params, params));
+  const MatrixXd gmm_left = information_inverse * as.transpose() * w;
+  const VectorXd theta_gmm_scaled = gmm_left * b;
+  const VectorXd theta_gmm = theta_gmm_scaled.cwiseQuotient(scale);
+  const VectorXd gmm_residual = b - as * theta_gmm_scaled;
+  // The weights come from the same batches as the errors, which makes the batch series of the
+  // estimate's errors look too small by (n - m + q) / n and the estimate less efficient than with
+  // known weights by (n - 1) / (n - m + q - 1), for n = B - 1 degrees of freedom of S, m
+  // equations and q parameters (Gaussian batch means, Wishart S): both factors are undone.
   const auto n = static_cast<double>(out.batches - 1);
   const auto m = static_cast<double>(s_rank);
   const auto q = static_cast<double>(params);
   const double finite_sample = n * (n - 1) / ((n - m + q) * (n - m + q - 1));
-  const MatrixXd cov_gmm_scaled = finite_sample * ldlt.solve(MatrixXd::Identity(params, params));
+  LongRunCovariance gmm_errors = long_run_covariance(
+      deviations *
+      sensitivity(information_inverse, gmm_left, w * gmm_residual, theta_gmm_scaled).transpose());
+  gmm_errors.covariance *= finite_sample;
+  out.gmm_dof = gmm_errors.dof;
+  const double gmm_t975 = student_t_quantile(0.975, out.gmm_dof);
   for (Eigen::Index p = 0; p < params; ++p) {
     ParameterEstimate e{names[static_cast<std::size_t>(p)]};
-    e.estimate = theta_gmm_scaled(p) / scale(p);
-    e.std_error = std::sqrt(std::max(0.0, cov_gmm_scaled(p, p))) / scale(p);
-    e.ci_low = e.estimate - t975 * e.std_error;
-    e.ci_high = e.estimate + t975 * e.std_error;
+    e.estimate = theta_gmm(p);
+    e.std_error = std::sqrt(std::max(0.0, gmm_errors.covariance(p, p)));
+    e.ci_low = e.estimate - gmm_t975 * e.std_error;
+    e.ci_high = e.estimate + gmm_t975 * e.std_error;
     out.gmm_parameters.push_back(e);
   }
-  out.gmm_correlation = correlation_of(cov_gmm_scaled, identifiable);
+  out.gmm_correlation = correlation_of(gmm_errors.covariance, identifiable);
+
+  // The J test. The residual g = A theta - b lies in the d = m - q directions that the estimate
+  // leaves free, with covariance V there: the long-run covariance of the batch series of
+  // M g(mu_b), M = I - A N^-1 A' W. J = g' W g is then a weighted sum of chi-square variables,
+  // with weights the eigenvalues of W V, which a scaled chi-square matches in mean and variance
+  // (Satterthwaite): J / c ~ chi-square(k), c k = tr(W V), c^2 k = tr((W V)^2), the latter less
+  // the excess that the noise of V, on nu degrees of freedom, adds to it as it does to a Wishart
+  // matrix: E tr((W V^)^2) = (1 + 1/nu) tr((W V)^2) + tr(W V)^2 / nu. The scale comes from V:
+  // J / (c k) ~ F(k, nu'), where tr(W V) sums k components of nu degrees of freedom each (nu
+  // counts those of one standardised series). W from the same batches makes J Hotelling's T^2
+  // rather than a chi-square: J (n - d + 1) / n over its scale is F(d, n - d + 1), so the
+  // denominator's relative variances add, 1 / nu' = 1 / (n - d + 1) + 1 / (k nu). (With W from
+  // few batches, n not far above d, the test is conservative: tr(W V) is then biased upwards,
+  // W being fitted to the batches that V also sees.) Reported:
+  // J d / tr(W V), whose mean is d for the right model whether the equations telescope (W too
+  // small by a factor near B) or not.
   out.j_dof = static_cast<int>(s_rank - params);
-  if (out.j_dof > 0) {
-    // With S from the batches, J is Hotelling's T^2 of the d = m - q combinations of the
-    // equations that do not involve the parameters: J (n - d + 1) / (n d) ~ F(d, n - d + 1) for
-    // Gaussian batch means (chi-square in d only as n grows).
-    out.j_statistic = g.dot(w * g);
-    const auto d = static_cast<double>(out.j_dof);
-    out.j_pvalue = f_upper_tail(*out.j_statistic * (n - d + 1) / (n * d), d, n - d + 1);
-  } else {
+  if (out.j_dof <= 0) {
     out.warnings.push_back("no J test: as many equations as parameters (add multipliers)");
+    return out;
   }
+  const auto d = static_cast<double>(out.j_dof);
+  const MatrixXd free_part = MatrixXd::Identity(rows, rows) - as * gmm_left;
+  const LongRunCovariance residual_errors = long_run_covariance(
+      deviations * equations_of(theta_gmm).transpose() * free_part.transpose());
+  const MatrixXd wv = w * residual_errors.covariance;
+  const double nu = residual_errors.dof, trace = wv.trace();
+  const double trace_square = std::max(((wv * wv).trace() - trace * trace / nu) / (1 + 1 / nu),
+                                       trace * trace / out.j_dof);
+  if (!(trace > 0 && trace_square > 0)) {
+    out.warnings.push_back("no J test: the residuals show no sampling error");
+    out.j_dof = 0;
+    return out;
+  }
+  const double j = gmm_residual.dot(w * gmm_residual);
+  const double k = trace * trace / trace_square;
+  out.j_statistic = j * out.j_dof / trace;
+  out.j_pvalue =
+      f_upper_tail(j / trace * (n - d + 1) / n, k, 1 / (1 / (n - d + 1) + 1 / (k * nu)));
   return out;
 }
 
