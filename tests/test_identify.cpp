@@ -38,6 +38,7 @@ struct Columns : momentid::SampleSink {
 
 struct Case {
   std::size_t samples = 1000000;
+  double dt = 0.01;
   std::uint64_t seed = 1;
   std::string input = "ma:K=10,w=0.1";
   InputHold hold = InputHold::kZeroOrderHold;
@@ -54,6 +55,7 @@ Estimate identify(const Model& truth, const Case& c, const Model* fitted = nullp
   options.parameters = momentid::parameter_values(truth, {});
   options.inputs.assign(truth.inputs().size(), momentid::InputSpec::parse(c.input, "test"));
   options.samples = c.samples;
+  options.dt = c.dt;
   options.burn_in = 5000;
   options.seed = c.seed;
   Columns columns(truth.variables().size());
@@ -137,6 +139,8 @@ TEST_SUITE("identify") {
   }
 
   TEST_CASE("95% intervals contain the truth in at least 16 of 20 seeds at 10^5 samples") {
+    // Sampled at dt = 0.0025: at dt = 0.01 the bias of sampling in a of (4.1b) is about three
+    // standard errors of these records.
     for (const auto& [file, input] : std::vector<std::pair<std::string, std::string>>{
              {"kozin_4_1b.mom", "ma:K=10,w=0.1"}, {"duffing.mom", "ma:K=10,w=0.1,sigma=20"}}) {
       const Model model = model_file(file);
@@ -144,6 +148,7 @@ TEST_SUITE("identify") {
       for (std::uint64_t seed = 1; seed <= 20; ++seed) {
         Case c;
         c.samples = 100000;
+        c.dt = 0.0025;
         c.seed = seed;
         c.input = input;
         const Estimate e = identify(model, c);
@@ -257,13 +262,17 @@ TEST_SUITE("identify") {
     check_near_truth(model, r, 0.005);
   }
 
-  TEST_CASE("by default the zero-lag equations are solved by least squares with 50 batches") {
+  TEST_CASE("by default the zero-lag equations are solved by least squares, a batch per 200 rows") {
     Case c;
-    c.samples = 20000;
+    c.samples = 60001;  // 60000 intervals
     c.input = "ma:K=10,w=0.1,sigma=20";
     const Estimate e = identify(model_file("duffing.mom"), c);
     CHECK(e.gmm_parameters.empty());
-    CHECK(e.batches == 50);
+    CHECK(e.batches == 300);
+    c.samples = 10000;  // at least 100
+    CHECK(identify(model_file("duffing.mom"), c).batches == 100);
+    c.samples = 1000000;  // at most 1000
+    CHECK(identify(model_file("duffing.mom"), c).batches == 1000);
   }
 
   TEST_CASE("no optimally weighted estimate when there are not more batches than equations") {
@@ -357,13 +366,13 @@ TEST_SUITE("identify") {
 
   TEST_CASE("by default the lagged equations are optimally weighted, and 5% noise is within 0.3%") {
     // The equations at neighbouring lags are strongly correlated: the two-step GMM weighting
-    // halves the spread of equal weights. It is the default for them, with four batches per
-    // equation. The bound is the measured-data method's promise at 5% noise over 10^6 samples.
+    // halves the spread of equal weights. It is the default for them, with at least four batches
+    // per equation. The bound is the measured-data method's promise at 5% noise over 10^6 samples.
     const Model model = model_file("duffing.mom");
     const momentid::IdentifyResult r = identify_from_displacement(model, 0.05);
     CHECK(r.gmm);
     REQUIRE(r.lagged.has_value());
-    CHECK(r.estimate.batches == 4 * r.estimate.rows);
+    CHECK(r.estimate.batches >= 4 * r.estimate.rows);
     REQUIRE(r.estimate.gmm_parameters.size() == 3);
     check_near_truth(model, r, 0.003);
     REQUIRE(r.estimate.j_pvalue.has_value());

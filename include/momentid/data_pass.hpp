@@ -56,13 +56,17 @@ struct DataOptions {
   // and enough of them for its degrees of freedom).
   std::size_t batches = 0;
   std::size_t min_batches = 0;
-  static constexpr std::size_t kAutoBatchIntervals = 400, kMinAutoBatches = 50,
+  static constexpr std::size_t kAutoBatchIntervals = 200, kMinAutoBatches = 100,
                                kMaxAutoBatches = 1000;
   std::map<std::string, std::string> rename;  // model name -> file column
   std::size_t lags = 1;                       // autocorrelations computed, per channel
   std::size_t min_rows = 2;
   // Pair input row n with state row n + input_shift (0: the same row).
   long input_shift = 0;
+  // The moments of every `stride`-th row of each run, from row `phase` on (after the input
+  // shift), at a sample interval `stride` times the data's: the record sampled more coarsely, for
+  // the sampling bias. The channel statistics still see every row.
+  std::size_t stride = 1, phase = 0;
   // Per channel (states, then inputs): a value subtracted from every sample as it is read, such
   // as the channel's mean; empty: none.
   std::vector<double> offsets;

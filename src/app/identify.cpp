@@ -641,11 +641,13 @@ std::string format_text(const IdentifyResult& r) {
   for (const std::string& w : all) out << "  warning: " << w << "\n";
   out << "  equations: " << e.rows << ", rank " << e.rank << " of " << e.parameters.size()
       << ", condition number " << number(e.condition, "%.3g") << "\n";
-  out << "  batches: " << e.batches
-      << "; standard errors from their long-run covariance on " << number(e.dof, "%.0f")
-      << " degrees of freedom";
-  if (!e.gmm_parameters.empty()) {
-    out << " (optimally weighted: " << number(e.gmm_dof, "%.0f") << ")";
+  out << "  batches: " << e.batches;
+  if (e.dof > 0) {
+    out << "; standard errors from their long-run covariance on " << number(e.dof, "%.0f")
+        << " degrees of freedom";
+    if (!e.gmm_parameters.empty()) {
+      out << " (optimally weighted: " << number(e.gmm_dof, "%.0f") << ")";
+    }
   }
   out << "\n";
   if (e.j_statistic) {

@@ -118,7 +118,7 @@ Command add_identify(CLI::App& app) {
                   "how the inputs were sampled (default: the file's metadata, else sample)")
       ->check(CLI::IsMember({"sample", "zoh"}));
   sub->add_option("--batches", options.batches,
-                  "batches for the standard errors (default one per 400 samples, 50 to 1000, and "
+                  "batches for the standard errors (default one per 200 samples, 100 to 1000, and "
                   "at least 4 per equation for the optimal weighting)")
       ->check(CLI::Range(IdentifyOptions::kMinBatches, IdentifyOptions::kMaxBatches));
   sub->add_option("--weighting", command->weighting,

@@ -346,6 +346,29 @@ struct ShardState {
 
 // Reads one shard: the rows before it only as history of its first run, its own rows, and the
 // rows after it only to close its last intervals.
+// Every `stride`-th row of each run from row `phase` on (DataOptions::stride).
+class Decimate {
+ public:
+  Decimate(std::size_t width, std::size_t stride, std::size_t phase)
+      : width_(width), stride_(stride), phase_(phase) {}
+
+  void start_run() { row_ = 0; }
+
+  const std::vector<double>& apply(const double* rows, std::size_t count) {
+    out_.clear();
+    for (std::size_t r = 0; r < count; ++r, ++row_) {
+      if (row_ >= phase_ && (row_ - phase_) % stride_ == 0) {
+        out_.insert(out_.end(), rows + r * width_, rows + (r + 1) * width_);
+      }
+    }
+    return out_;
+  }
+
+ private:
+  std::size_t width_, stride_, phase_, row_ = 0;
+  std::vector<double> out_;
+};
+
 ShardState read_shard(DataReader& reader, bool whole, const PassSetup& setup, bool pipelined,
                       std::atomic<std::size_t>& rows_done, std::atomic<double>& fraction) {
   const DataOptions& options = *setup.options;
@@ -354,6 +377,7 @@ ShardState read_shard(DataReader& reader, bool whole, const PassSetup& setup, bo
       MomentAccumulator(setup.moments, setup.states, setup.inputs, setup.hold, setup.batches),
       LagSums(channels, options.lags)};
   InputShift shift(setup.states, setup.inputs, options.input_shift);
+  Decimate decimate(channels, options.stride, options.phase);
   std::vector<double> history;  // of the current run, before the shard
   const std::size_t history_values = out.moments.max_lag() * channels;
   bool owned = false;
@@ -386,6 +410,7 @@ ShardState read_shard(DataReader& reader, bool whole, const PassSetup& setup, bo
     }
     if (block.run_starts) {
       shift.start_run();
+      decimate.start_run();
       out.moments.start_run();
       out.lags.start_run();
       ++out.runs;
@@ -394,12 +419,19 @@ ShardState read_shard(DataReader& reader, bool whole, const PassSetup& setup, bo
       if (!history.empty()) out.moments.add_history(history.data(), history.size() / channels);
     }
     owned = true;
-    if (options.input_shift == 0) {
-      out.moments.add(values, block.rows);
-    } else {
-      const std::vector<double>& shifted = shift.apply(values, block.rows);
-      out.moments.add(shifted.data(), shifted.size() / channels);
+    const double* rows = values;
+    std::size_t count = block.rows;
+    if (options.input_shift != 0) {
+      const std::vector<double>& shifted = shift.apply(rows, count);
+      rows = shifted.data();
+      count = shifted.size() / channels;
     }
+    if (options.stride > 1) {
+      const std::vector<double>& kept = decimate.apply(rows, count);
+      rows = kept.data();
+      count = kept.size() / channels;
+    }
+    out.moments.add(rows, count);
     out.lags.add(values, block.rows);
     out.rows += block.rows;
     rows_done += block.rows;
@@ -702,9 +734,9 @@ DataMoments moments_from_data(const DataSource& source, const std::vector<std::s
     }
   }
   // Rows that depend on their neighbours across a shard's edge in ways the shard cannot see
-  // (a shifted input, a row dropped between two) keep files whole.
-  const bool whole_files =
-      options.input_shift != 0 || options.layout.missing != MissingValues::kError;
+  // (a shifted input, a row dropped between two, every other row kept) keep files whole.
+  const bool whole_files = options.input_shift != 0 || options.stride > 1 ||
+                           options.layout.missing != MissingValues::kError;
   const std::vector<DataSource::Shard> shards = source.shards(
       whole_files ? std::numeric_limits<std::size_t>::max() : options.control.shard_bytes);
   request.part.before = std::max<std::size_t>({max_lag, options.lags, 1});
@@ -804,6 +836,7 @@ DataMoments moments_from_data(const DataSource& source, const std::vector<std::s
   out.rows = result.state->rows;
   out.runs = result.state->runs;
   out.time_step = options.dt ? options.dt : first_step;
+  if (out.time_step) *out.time_step *= static_cast<double>(options.stride);
   out.estimates =
       estimates(accumulator, options.batches > 0
                                  ? options.batches

@@ -396,7 +396,10 @@ Estimate solve_rows(const MomentRows& system, const std::vector<std::string>& na
   const LongRunCovariance ls_errors = long_run_covariance(
       deviations * sensitivity(normal_pinv, pinv, residual, theta_scaled).transpose());
   out.dof = ls_errors.dof;
-  const double t975 = out.batches >= 2 ? student_t_quantile(0.975, out.dof) : kNaN;
+  // Below one degree of freedom the t law has no variance and its quantiles overflow: at least
+  // one is taken (with a warning that the errors are rough).
+  const double t975 =
+      out.batches >= 2 ? student_t_quantile(0.975, std::max(1.0, out.dof)) : kNaN;
   for (Eigen::Index p = 0; p < params; ++p) {
     ParameterEstimate& e = out.parameters[static_cast<std::size_t>(p)];
     e.estimate = theta(p);
@@ -476,7 +479,7 @@ Estimate solve_rows(const MomentRows& system, const std::vector<std::string>& na
       sensitivity(information_inverse, gmm_left, w * gmm_residual, theta_gmm_scaled).transpose());
   gmm_errors.covariance *= finite_sample;
   out.gmm_dof = gmm_errors.dof;
-  const double gmm_t975 = student_t_quantile(0.975, out.gmm_dof);
+  const double gmm_t975 = student_t_quantile(0.975, std::max(1.0, out.gmm_dof));
   for (Eigen::Index p = 0; p < params; ++p) {
     ParameterEstimate e{names[static_cast<std::size_t>(p)]};
     e.estimate = theta_gmm(p);
@@ -524,7 +527,8 @@ Estimate solve_rows(const MomentRows& system, const std::vector<std::string>& na
   const double k = trace * trace / trace_square;
   out.j_statistic = j * out.j_dof / trace;
   out.j_pvalue =
-      f_upper_tail(j / trace * (n - d + 1) / n, k, 1 / (1 / (n - d + 1) + 1 / (k * nu)));
+      f_upper_tail(j / trace * (n - d + 1) / n, k,
+                   std::max(1.0, 1 / (1 / (n - d + 1) + 1 / (k * nu))));
   return out;
 }
 
