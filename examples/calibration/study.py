@@ -51,8 +51,9 @@ def momentid(*args):
 
 
 def one_run(samples, noise, seed, tmp, linear):
-    """The estimates of one record: {method: {parameter: (estimate, error, low, high)}}, and
-    the J test's p-values of the right and the linear model."""
+    """The estimates of one record: {method: {parameter: (estimate, error, low, high)}}, the J
+    test's p-values of the right and the linear model, and the least-squares standard errors
+    with half and with twice the default batch count, over those with the default."""
     record = os.path.join(tmp, "record.bin")
     observe = "y,v,x" if noise == 0 else "y,x"
     command = ["simulate", MODEL, "--samples", samples, "--input", INPUT, "--seed", seed,
@@ -70,7 +71,14 @@ def one_run(samples, noise, seed, tmp, linear):
                        for name, p in result[key].items()}
     right_p = result["diagnostics"].get("j_pvalue")
     wrong = json.loads(momentid("identify", linear, record, *options))
-    return out, right_p, wrong["diagnostics"].get("j_pvalue")
+    batches = result["diagnostics"]["batches"]
+    ratios = []
+    for factor in (0.5, 2):
+        other = json.loads(momentid("identify", MODEL, record, *options, "--batches",
+                                    int(batches * factor)))
+        ratios.append({name: p["std_error"] / out["ls"][name][1]
+                       for name, p in other["least_squares"].items()})
+    return out, right_p, wrong["diagnostics"].get("j_pvalue"), ratios
 
 
 def cell(samples, noise, seeds):
@@ -93,7 +101,16 @@ def cell(samples, noise, seeds):
     wrong = [r[2] for r in runs if r[2] is not None]
     size = float(np.mean(np.array(right) < 0.05)) if right else float("nan")
     power = float(np.mean(np.array(wrong) < 0.05)) if wrong else float("nan")
-    return rows, size, power
+    # Per parameter: the mean least-squares error with half and twice the batches over the mean
+    # with the default, and the median change of one record's error.
+    batches = {}
+    for name in TRUTH:
+        default = np.mean([r[0]["ls"][name][1] for r in runs])
+        batches[name] = [(float(np.mean([r[0]["ls"][name][1] * r[3][k][name] for r in runs]) /
+                                default),
+                          float(np.median([abs(r[3][k][name] - 1) for r in runs])))
+                         for k in (0, 1)]
+    return rows, size, power, batches
 
 
 def main():
@@ -111,20 +128,28 @@ def main():
     lines = [f"{'samples':>9} {'seeds':>5} {'noise':>5} {'method':<6} {'param':<5} "
              f"{'coverage':>8} {'spread/SE':>9} {'bias/SE':>8}"]
     tests = [f"{'samples':>9} {'noise':>5} {'J size (5%)':>11} {'power vs linear':>15}"]
+    halved = [f"{'samples':>9} {'noise':>5} {'param':<5} {'SE(B/2)/SE(B)':>13} {'median change':>13} "
+              f"{'SE(2B)/SE(B)':>12} {'median change':>13}"]
     results = []
     for samples, seeds in sizes:
         for noise in noises:
-            rows, size, power = cell(samples, noise, seeds)
+            rows, size, power, batches = cell(samples, noise, seeds)
             results.append((samples, noise, rows))
             for r in rows:
                 lines.append(f"{samples:9.0e} {seeds:5d} {noise:5.0%} {r['method']:<6} "
                              f"{r['parameter']:<5} {r['coverage']:8.0%} {r['spread_se']:9.2f} "
                              f"{r['bias_se']:8.2f}")
             tests.append(f"{samples:9.0e} {noise:5.0%} {size:11.0%} {power:15.0%}")
+            for name, ((half, half_change), (double, double_change)) in batches.items():
+                halved.append(f"{samples:9.0e} {noise:5.0%} {name:<5} {half:13.2f} "
+                              f"{half_change:13.0%} {double:12.2f} {double_change:13.0%}")
             print("\n".join(lines[-len(rows):]), flush=True)
-    text = "\n".join(lines) + "\n\n" + "\n".join(tests) + "\n"
+    text = ("\n".join(lines) + "\n\n" + "\n".join(tests) + "\n\n" + "\n".join(halved) +
+            "\n")
     print()
     print("\n".join(tests))
+    print()
+    print("\n".join(halved))
     if args.summary:
         with open(args.summary, "w") as f:
             f.write(text)

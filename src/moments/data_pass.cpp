@@ -768,9 +768,9 @@ DataMoments moments_from_data(const DataSource& source, const std::vector<std::s
   // The merged state keeps the stretches of every shard, so that the batches are made the same
   // way whatever thread or process reads a shard: at least 8 per shard for few shards, one for
   // as many as four per batch (its memory grows by one stretch per shard: 16 MB of data).
-  const std::size_t batches =
-      options.batches > 0 ? options.batches
-                          : std::max(DataOptions::kMaxAutoBatches, options.min_batches);
+  const std::size_t batches = options.batches > 0
+                                  ? options.batches
+                                  : std::max(DataOptions::kMaxAutoBatches, options.min_batches);
   const bool collapse = shards.size() >= 4 * batches;
   const std::size_t shard_batches =
       std::max<std::size_t>(2, (batches + shards.size() - 1) / shards.size());
@@ -837,13 +837,13 @@ DataMoments moments_from_data(const DataSource& source, const std::vector<std::s
   out.runs = result.state->runs;
   out.time_step = options.dt ? options.dt : first_step;
   if (out.time_step) *out.time_step *= static_cast<double>(options.stride);
-  out.estimates =
-      estimates(accumulator, options.batches > 0
-                                 ? options.batches
-                                 : std::clamp(std::max(accumulator.intervals() /
-                                                           DataOptions::kAutoBatchIntervals,
-                                                       options.min_batches),
-                                              DataOptions::kMinAutoBatches, batches));
+  out.estimates = estimates(
+      accumulator,
+      options.batches > 0
+          ? options.batches
+          : std::clamp(std::max(accumulator.intervals() / DataOptions::kAutoBatchIntervals,
+                                options.min_batches),
+                       DataOptions::kMinAutoBatches, batches));
   for (std::size_t c = 0; c < channels; ++c) {
     ChannelStatistics s = result.state->lags.statistics(c);
     s.name = request.names[c];

@@ -398,8 +398,7 @@ Estimate solve_rows(const MomentRows& system, const std::vector<std::string>& na
   out.dof = ls_errors.dof;
   // Below one degree of freedom the t law has no variance and its quantiles overflow: at least
   // one is taken (with a warning that the errors are rough).
-  const double t975 =
-      out.batches >= 2 ? student_t_quantile(0.975, std::max(1.0, out.dof)) : kNaN;
+  const double t975 = out.batches >= 2 ? student_t_quantile(0.975, std::max(1.0, out.dof)) : kNaN;
   for (Eigen::Index p = 0; p < params; ++p) {
     ParameterEstimate& e = out.parameters[static_cast<std::size_t>(p)];
     e.estimate = theta(p);
@@ -512,12 +511,12 @@ Estimate solve_rows(const MomentRows& system, const std::vector<std::string>& na
   }
   const auto d = static_cast<double>(out.j_dof);
   const MatrixXd free_part = MatrixXd::Identity(rows, rows) - as * gmm_left;
-  const LongRunCovariance residual_errors = long_run_covariance(
-      deviations * equations_of(theta_gmm).transpose() * free_part.transpose());
+  const LongRunCovariance residual_errors =
+      long_run_covariance(deviations * equations_of(theta_gmm).transpose() * free_part.transpose());
   const MatrixXd wv = w * residual_errors.covariance;
   const double nu = residual_errors.dof, trace = wv.trace();
-  const double trace_square = std::max(((wv * wv).trace() - trace * trace / nu) / (1 + 1 / nu),
-                                       trace * trace / out.j_dof);
+  const double trace_square =
+      std::max(((wv * wv).trace() - trace * trace / nu) / (1 + 1 / nu), trace * trace / out.j_dof);
   if (!(trace > 0 && trace_square > 0)) {
     out.warnings.push_back("no J test: the residuals show no sampling error");
     out.j_dof = 0;
@@ -526,9 +525,8 @@ Estimate solve_rows(const MomentRows& system, const std::vector<std::string>& na
   const double j = gmm_residual.dot(w * gmm_residual);
   const double k = trace * trace / trace_square;
   out.j_statistic = j * out.j_dof / trace;
-  out.j_pvalue =
-      f_upper_tail(j / trace * (n - d + 1) / n, k,
-                   std::max(1.0, 1 / (1 / (n - d + 1) + 1 / (k * nu))));
+  out.j_pvalue = f_upper_tail(j / trace * (n - d + 1) / n, k,
+                              std::max(1.0, 1 / (1 / (n - d + 1) + 1 / (k * nu))));
   return out;
 }
 

@@ -109,7 +109,8 @@ LongRunCovariance long_run_covariance(const MatrixXd& batches) {
   const MatrixXd normal = best.design.transpose() * best.weight.asDiagonal() * best.design;
   const VectorXd kappa = best.weight.cwiseProduct(best.design * normal.ldlt().solve(target));
   const MatrixXd re = z.real(), im = z.imag();
-  MatrixXd v = (re.transpose() * kappa.asDiagonal() * re + im.transpose() * kappa.asDiagonal() * im) / bd;
+  MatrixXd v =
+      (re.transpose() * kappa.asDiagonal() * re + im.transpose() * kappa.asDiagonal() * im) / bd;
   v = (v + v.transpose()) / 2;
   Eigen::SelfAdjointEigenSolver<MatrixXd> eigen(v);
   v = eigen.eigenvectors() * eigen.eigenvalues().cwiseMax(0).asDiagonal() *
