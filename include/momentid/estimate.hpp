@@ -63,6 +63,10 @@ struct SolveOptions {
   // Each row divided by the length of its coefficients (at the estimated moments), so that
   // equations of different sizes count alike; the delta method takes these weights as fixed.
   bool normalise_rows = false;
+  // When set: receives the batch series of the main estimate's first-order errors (the optimally
+  // weighted one when computed, else least squares), batches x parameters, whose long-run
+  // covariance gives its standard errors.
+  std::vector<std::vector<double>>* error_batches = nullptr;
 };
 
 // The moments the solver needs estimates of, in the order `solve` expects them: the system's

@@ -54,6 +54,11 @@ struct IdentifyOptions {
   // Model variables whose mean is removed before the moments are formed (a sensor offset on a
   // symmetric system): the means come from a first pass over the data.
   std::vector<std::string> center;
+  // The sampling bias (`--extrapolate dt`): the zero-lag estimate again from every other sample
+  // of a record whose inputs are samples of a continuous signal (not held), both halves; their
+  // difference estimates the bias of the estimate at the data's dt, which is removed
+  // (Richardson's extrapolation to dt = 0) when it exceeds its standard error.
+  bool extrapolate = false;
   // Threads, shards and progress of each pass over the data.
   PassControl control;
 
@@ -92,6 +97,17 @@ struct IdentifyResult {
   bool gmm = false;  // the optimally weighted estimate is the main result
   std::map<std::string, double>
       centered;  // the means removed, by variable (IdentifyOptions::center)
+  // IdentifyOptions::extrapolate: per parameter of the main result, the estimate from every other
+  // sample, the bias of the estimate at dt, (fine - coarse) / (2^order - 1), and the standard
+  // error of fine - coarse. `applied`: the difference exceeds its standard error for some
+  // parameter, and the main result is the extrapolated estimate (its errors those of the
+  // extrapolation).
+  struct SamplingBias {
+    static constexpr int kOrder = 2;  // of the bias in dt (README, "Uncertainty")
+    std::vector<double> coarse, bias, difference_error;
+    bool applied = false;
+  };
+  std::optional<SamplingBias> sampling_bias;
 
   // The main result: the optimally weighted estimate when it was asked for and could be
   // computed, otherwise least squares.

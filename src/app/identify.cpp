@@ -9,6 +9,8 @@
 
 #include "app/variables.hpp"
 #include "common/json.hpp"
+#include "solve/distributions.hpp"
+#include "solve/long_run.hpp"
 
 namespace momentid {
 namespace {
@@ -175,6 +177,112 @@ std::vector<std::optional<double>> fixed_values(const Model& model,
   return out;
 }
 
+// IdentifyOptions::extrapolate, after the zero-lag estimate `result` whose first-order errors
+// over the batches are `fine_errors`: the same estimate from every other sample (both halves of
+// each run, in the same batches), the difference's error from the long-run covariance of the
+// difference of the two error series, and Richardson's extrapolation when a difference exceeds
+// its error.
+void estimate_sampling_bias(IdentifyResult& result, const DataSource& source,
+                            const std::vector<std::string>& states,
+                            const std::vector<std::string>& inputs, DataOptions data_options,
+                            const IdentifyOptions& options,
+                            const std::vector<std::vector<double>>& fine_errors) {
+  if (!inputs.empty() && result.data.hold == InputHold::kZeroOrderHold) {
+    throw UsageError(
+        "extrapolate: the input is held over each sample (input hold zoh): every other sample "
+        "of such a record is not the record sampled at 2 dt, whose input would be held over "
+        "2 dt");
+  }
+  Estimate& fine = result.estimate;
+  if (fine_errors.empty() || fine.status != Estimate::Status::kOk) return;
+  data_options.stride = 2;
+  data_options.hold = result.data.hold;
+  // The same batches: the accumulator keeps as many stretches, each of half as many intervals
+  // (every other sample), so that they cover the same times as the record's, and the same
+  // count of them make a batch.
+  if (data_options.batches == 0) {
+    data_options.min_batches = std::max(data_options.min_batches, fine.batches);
+  }
+  MomentEstimates coarse;
+  for (std::size_t phase = 0; phase < 2; ++phase) {
+    data_options.phase = phase;
+    const MomentEstimates half =
+        moments_from_data(source, states, inputs, result.moments, data_options).estimates;
+    if (half.batch_means.size() != fine.batches) {
+      throw Error(source.name() + ": every other sample gives " +
+                  std::to_string(half.batch_means.size()) + " batches, not " +
+                  std::to_string(fine.batches) +
+                  ": too short a record for the sampling bias (use --batches)");
+    }
+    if (phase == 0) {
+      coarse = half;
+      continue;
+    }
+    for (std::size_t k = 0; k < coarse.mean.size(); ++k) {
+      coarse.mean[k] = (coarse.mean[k] + half.mean[k]) / 2;
+      for (std::size_t b = 0; b < fine.batches; ++b) {
+        coarse.batch_means[b][k] = (coarse.batch_means[b][k] + half.batch_means[b][k]) / 2;
+      }
+    }
+    for (std::size_t b = 0; b < fine.batches; ++b) {
+      coarse.batch_intervals[b] += half.batch_intervals[b];
+    }
+    coarse.intervals += half.intervals;
+  }
+  std::vector<std::vector<double>> coarse_errors;
+  const Estimate c = solve(result.system, coarse,
+                           {.gmm = result.gmm,
+                            .fixed = fixed_values(*result.model, options.fixed),
+                            .error_batches = &coarse_errors});
+  const bool gmm = result.gmm && !fine.gmm_parameters.empty();
+  std::vector<ParameterEstimate>& list = gmm ? fine.gmm_parameters : fine.parameters;
+  const std::vector<ParameterEstimate>& coarse_list =
+      gmm && !c.gmm_parameters.empty() ? c.gmm_parameters : c.parameters;
+  if (c.status != Estimate::Status::kOk || coarse_errors.size() != fine_errors.size() ||
+      coarse_list.size() != list.size()) {
+    fine.warnings.push_back("no sampling bias: every other sample does not give an estimate");
+    return;
+  }
+  // theta(h) = theta(0) + C h^p: the bias at dt is (theta(2 dt) - theta(dt)) / (2^p - 1).
+  const double r = 1 / (std::pow(2.0, IdentifyResult::SamplingBias::kOrder) - 1);
+  const auto batches = static_cast<Eigen::Index>(fine_errors.size());
+  const auto params = static_cast<Eigen::Index>(list.size());
+  Eigen::MatrixXd difference(batches, params), extrapolated(batches, params);
+  for (Eigen::Index b = 0; b < batches; ++b) {
+    for (Eigen::Index p = 0; p < params; ++p) {
+      const double f = fine_errors[static_cast<std::size_t>(b)][static_cast<std::size_t>(p)];
+      const double g = coarse_errors[static_cast<std::size_t>(b)][static_cast<std::size_t>(p)];
+      difference(b, p) = f - g;
+      extrapolated(b, p) = f + r * (f - g);
+    }
+  }
+  const LongRunCovariance difference_errors = long_run_covariance(difference);
+  IdentifyResult::SamplingBias bias;
+  for (Eigen::Index p = 0; p < params; ++p) {
+    const auto i = static_cast<std::size_t>(p);
+    const double error = std::sqrt(difference_errors.covariance(p, p));
+    bias.coarse.push_back(coarse_list[i].estimate);
+    bias.bias.push_back(r * (coarse_list[i].estimate - list[i].estimate));
+    bias.difference_error.push_back(error);
+    bias.applied = bias.applied || (!list[i].fixed && list[i].identifiable &&
+                                    std::abs(list[i].estimate - coarse_list[i].estimate) > error);
+  }
+  if (bias.applied) {
+    const LongRunCovariance errors = long_run_covariance(extrapolated);
+    const double t975 = student_t_quantile(0.975, std::max(1.0, errors.dof));
+    for (Eigen::Index p = 0; p < params; ++p) {
+      ParameterEstimate& e = list[static_cast<std::size_t>(p)];
+      if (e.fixed) continue;
+      e.estimate -= bias.bias[static_cast<std::size_t>(p)];
+      e.std_error = std::sqrt(errors.covariance(p, p));
+      e.ci_low = e.estimate - t975 * e.std_error;
+      e.ci_high = e.estimate + t975 * e.std_error;
+    }
+    (gmm ? fine.gmm_dof : fine.dof) = errors.dof;
+  }
+  result.sampling_bias = std::move(bias);
+}
+
 }  // namespace
 
 IdentifyResult identify(const Model& model, const DataSource& source,
@@ -215,11 +323,22 @@ IdentifyResult identify(const Model& model, const DataSource& source,
     data_options.offsets =
         channel_offsets(source, states, inputs, data_options, options.center, result.centered);
     result.data = moments_from_data(source, states, inputs, result.moments, data_options);
+    std::vector<std::vector<double>> errors;
     result.estimate = solve(result.system, result.data.estimates,
-                            {.gmm = result.gmm, .fixed = fixed_values(model, options.fixed)});
+                            {.gmm = result.gmm,
+                             .fixed = fixed_values(model, options.fixed),
+                             .error_batches = options.extrapolate ? &errors : nullptr});
+    if (options.extrapolate) {
+      estimate_sampling_bias(result, source, states, inputs, data_options, options, errors);
+    }
     return result;
   }
 
+  if (options.extrapolate) {
+    throw UsageError(
+        "extrapolate: the sampling bias is estimated for the zero-lag equations, and these data "
+        "call for the lagged ones");
+  }
   if (options.multipliers || options.degree > 0) {
     std::string missing;
     for (std::size_t v = 0; v < measured.size(); ++v) {
@@ -655,6 +774,18 @@ std::string format_text(const IdentifyResult& r) {
         << " degrees of freedom, p = " << number(*e.j_pvalue, "%.3g")
         << (*e.j_pvalue < 0.01 ? " (the model does not fit the data)" : "") << "\n";
   }
+  if (const auto& s = r.sampling_bias) {
+    out << "  sampling bias at dt (the estimate from every other sample, bias of order dt^"
+        << IdentifyResult::SamplingBias::kOrder << "):\n";
+    const auto& list = r.parameters();
+    for (std::size_t p = 0; p < list.size(); ++p) {
+      out << "    " << list[p].name << ": " << number(s->bias[p], "%.3g") << " (every other sample "
+          << number(s->coarse[p], "%g") << ", difference error "
+          << number(s->difference_error[p], "%.3g") << ")\n";
+    }
+    out << (s->applied ? "    removed: the estimates above are extrapolated to dt = 0\n"
+                       : "    within the errors: not removed\n");
+  }
   if (!e.identities.empty()) {
     out << "  stationarity identities (sample violation, z-score):\n";
     for (const IdentityCheck& c : e.identities) {
@@ -725,8 +856,20 @@ std::string format_json(const IdentifyResult& r) {
       << ",\n    \"input_hold\": " << json_string(hold_name(d.hold))
       << ",\n    \"j_statistic\": " << (e.j_statistic ? json_number(*e.j_statistic) : "null")
       << ",\n    \"j_dof\": " << e.j_dof
-      << ",\n    \"j_pvalue\": " << (e.j_pvalue ? json_number(*e.j_pvalue) : "null")
-      << ",\n    \"identities\": [";
+      << ",\n    \"j_pvalue\": " << (e.j_pvalue ? json_number(*e.j_pvalue) : "null");
+  if (const auto& s = r.sampling_bias) {
+    out << ",\n    \"sampling_bias\": {\"order\": " << IdentifyResult::SamplingBias::kOrder
+        << ", \"applied\": " << (s->applied ? "true" : "false") << ", \"parameters\": {";
+    const auto& list = r.parameters();
+    for (std::size_t p = 0; p < list.size(); ++p) {
+      out << (p ? ", " : "") << json_string(list[p].name)
+          << ": {\"coarse\": " << json_number(s->coarse[p])
+          << ", \"bias\": " << json_number(s->bias[p])
+          << ", \"difference_error\": " << json_number(s->difference_error[p]) << "}";
+    }
+    out << "}}";
+  }
+  out << ",\n    \"identities\": [";
   for (std::size_t i = 0; i < e.identities.size(); ++i) {
     const IdentityCheck& c = e.identities[i];
     out << (i ? ", " : "") << "{\"identity\": " << json_string(c.identity)

@@ -24,6 +24,7 @@ struct IdentifyCommand {
   IdentifyOptions options;
   std::string hold;
   std::string weighting = "auto";
+  std::string extrapolate;
   std::string format = "text";
   std::vector<std::string> columns;
   std::optional<std::string> lags;
@@ -67,6 +68,7 @@ int run_identify(IdentifyCommand& command) {
   }
   options.hold = hold_option(command.hold);
   if (command.weighting != "auto") options.gmm = command.weighting == "gmm";
+  options.extrapolate = command.extrapolate == "dt";
   options.columns = column_map(command.columns);
   if (command.lags) options.lags = lag_range(*command.lags);
   options.noise = noise_option(model, command.noise);
@@ -151,6 +153,10 @@ Command add_identify(CLI::App& app) {
                   "remove the means of these channels (NAME,... or all) before forming the "
                   "moments: a sensor offset on a symmetric system")
       ->delimiter(',');
+  sub->add_option("--extrapolate", command->extrapolate,
+                  "dt: estimate the bias of sampling from every other sample, and remove it when "
+                  "it exceeds its error (zero-lag equations, inputs sampled, not held)")
+      ->check(CLI::IsMember({"dt"}));
   add_layout_options(sub, options.layout);
   add_pass_options(sub, options.control);
   sub->add_flag("-q,--quiet", command->quiet,

@@ -73,6 +73,17 @@ MatrixXd batch_deviations(const MomentEstimates& estimates) {
   return length.asDiagonal() * (means.rowwise() - mean);
 }
 
+// `series` as rows of `out`, when given.
+void store(const MatrixXd& series, std::vector<std::vector<double>>* out) {
+  if (out == nullptr) return;
+  out->assign(static_cast<std::size_t>(series.rows()), {});
+  for (Eigen::Index b = 0; b < series.rows(); ++b) {
+    for (Eigen::Index p = 0; p < series.cols(); ++p) {
+      (*out)[static_cast<std::size_t>(b)].push_back(series(b, p));
+    }
+  }
+}
+
 // The warnings that say the standard errors are rough.
 void warn_about_errors(Estimate& out, const LongRunCovariance& errors) {
   if (errors.order == 0 && out.batches >= 2) {
@@ -259,9 +270,20 @@ Estimate solve_rows(const MomentRows& system, const std::vector<std::string>& na
     }
     SolveOptions free_options = options;
     free_options.fixed.clear();
-    return with_fixed(
+    Estimate out = with_fixed(
         solve_rows(without_fixed(system, options.fixed), free_names, estimates, free_options),
         names, options.fixed);
+    // The fixed parameters have no error: zero columns.
+    if (options.error_batches) {
+      for (std::vector<double>& row : *options.error_batches) {
+        std::vector<double> all;
+        for (std::size_t p = 0, k = 0; p < names.size(); ++p) {
+          all.push_back(options.fixed[p] ? 0.0 : row[k++]);
+        }
+        row = std::move(all);
+      }
+    }
+    return out;
   }
   const auto rows = static_cast<Eigen::Index>(system.a.size());
   const auto params = static_cast<Eigen::Index>(names.size());
@@ -393,8 +415,10 @@ Estimate solve_rows(const MomentRows& system, const std::vector<std::string>& na
   };
   // The errors: the long-run covariance of the parameters' batch series (delta method).
   const MatrixXd deviations = batch_deviations(estimates);
-  const LongRunCovariance ls_errors = long_run_covariance(
-      deviations * sensitivity(normal_pinv, pinv, residual, theta_scaled).transpose());
+  const MatrixXd ls_series =
+      deviations * sensitivity(normal_pinv, pinv, residual, theta_scaled).transpose();
+  const LongRunCovariance ls_errors = long_run_covariance(ls_series);
+  store(ls_series, options.error_batches);
   out.dof = ls_errors.dof;
   // Below one degree of freedom the t law has no variance and its quantiles overflow: at least
   // one is taken (with a warning that the errors are rough).
@@ -473,10 +497,11 @@ Estimate solve_rows(const MomentRows& system, const std::vector<std::string>& na
   const auto m = static_cast<double>(s_rank);
   const auto q = static_cast<double>(params);
   const double finite_sample = n * (n - 1) / ((n - m + q) * (n - m + q - 1));
-  LongRunCovariance gmm_errors = long_run_covariance(
-      deviations *
-      sensitivity(information_inverse, gmm_left, w * gmm_residual, theta_gmm_scaled).transpose());
-  gmm_errors.covariance *= finite_sample;
+  const MatrixXd gmm_series =
+      std::sqrt(finite_sample) * deviations *
+      sensitivity(information_inverse, gmm_left, w * gmm_residual, theta_gmm_scaled).transpose();
+  const LongRunCovariance gmm_errors = long_run_covariance(gmm_series);
+  store(gmm_series, options.error_batches);
   out.gmm_dof = gmm_errors.dof;
   const double gmm_t975 = student_t_quantile(0.975, std::max(1.0, out.gmm_dof));
   for (Eigen::Index p = 0; p < params; ++p) {
