@@ -259,7 +259,8 @@ def identify(model: Union[Model, PathLike], data: Any, *, columns: Optional[Sequ
              input_shift: Optional[int] = None, rename: Optional[Mapping[str, str]] = None,
              missing: Optional[str] = None, skip_rows: Optional[int] = None,
              decimal: Optional[str] = None, names: Optional[Sequence[str]] = None,
-             dt_from: Optional[str] = None, threads: Optional[int] = None) -> IdentifyResult:
+             dt_from: Optional[str] = None, threads: Optional[int] = None,
+             extrapolate: Optional[str] = None) -> IdentifyResult:
     """Estimates the model's parameters from a record, as `momentid identify MODEL DATA`.
 
     model: a Model or a model file's path.
@@ -281,6 +282,8 @@ def identify(model: Union[Model, PathLike], data: Any, *, columns: Optional[Sequ
       missing ("error", "drop-row", "split-run"), skip_rows, decimal: as on the command line.
     threads: threads reading the data at once (default: one per core); the result is the same
       to the last bit with any number.
+    extrapolate="dt": the bias of sampling, estimated from every other sample and removed when
+      it exceeds its error (zero-lag equations, inputs sampled rather than held).
 
     Returns an IdentifyResult. Raises ModelError, DataError or UsageError with the command
     line's messages. The GIL is released during the pass over the data.
@@ -293,7 +296,8 @@ def identify(model: Union[Model, PathLike], data: Any, *, columns: Optional[Sequ
                        weighting=weighting, lags=lags, instruments=instruments, noise=noise,
                        fix=fix, center=center, input_hold=input_hold, input_shift=input_shift,
                        rename=rename, dt=dt, missing=missing, skip_rows=skip_rows,
-                       decimal=decimal, names=names, dt_from=dt_from, threads=threads)
+                       decimal=decimal, names=names, dt_from=dt_from, threads=threads,
+                       extrapolate=extrapolate)
     text, json_text = _momentid._identify(model._model, source, name, metadata, options)
     del keep
     return IdentifyResult(text, json_text)

@@ -226,6 +226,12 @@ IdentifyOptions identify_options(const Model& model, const py::dict& options) {
   if (auto degree = get<int>(options, "degree")) out.degree = *degree;
   out.hold = hold_of(options);
   out.batches = get<std::size_t>(options, "batches");
+  if (auto extrapolate = get<std::string>(options, "extrapolate")) {
+    if (*extrapolate != "dt") {
+      throw UsageError("extrapolate: expected 'dt', found '" + *extrapolate + "'");
+    }
+    out.extrapolate = true;
+  }
   if (auto weighting = get<std::string>(options, "weighting")) {
     if (*weighting == "gmm" || *weighting == "ls") {
       out.gmm = *weighting == "gmm";

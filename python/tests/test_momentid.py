@@ -533,3 +533,18 @@ def test_list_of_files_is_one_record_of_their_runs(duffing, tmp_path):
     # (Not the standard errors: the batches of two files are cut elsewhere than those of one.)
     for name, value in whole.estimates.items():
         assert split.estimates[name] == pytest.approx(value, rel=1e-12)
+
+
+def test_identify_extrapolate(duffing, cli_csv):
+    # The sampling bias from every other sample: reported for inputs read as samples, refused
+    # for a held input (the record's metadata), and only 'dt' is a valid value.
+    columns = read_csv(cli_csv)
+    result = momentid.identify(duffing, columns, input_hold="sample", degree=3, extrapolate="dt")
+    bias = result.diagnostics["sampling_bias"]
+    assert bias["order"] == 2
+    assert set(bias["parameters"]) == {"c", "k", "eps"}
+    assert all(p["difference_error"] > 0 for p in bias["parameters"].values())
+    with pytest.raises(momentid.UsageError, match=r"^extrapolate: the input is held"):
+        momentid.identify(duffing, str(cli_csv), degree=3, extrapolate="dt")
+    with pytest.raises(momentid.UsageError, match=r"^extrapolate: expected 'dt', found 't'"):
+        momentid.identify(duffing, str(cli_csv), extrapolate="t")
