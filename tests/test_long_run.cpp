@@ -4,7 +4,6 @@
 #include <functional>
 
 #include "momentid/random.hpp"
-#include "solve/distributions.hpp"
 #include "solve/long_run.hpp"
 
 namespace {
@@ -44,7 +43,7 @@ Calibration calibrate(Eigen::Index batches, double white, double boundary, int r
     const Eigen::MatrixXd x = series(random, batches, white, boundary);
     const Eigen::RowVector2d mean = x.colwise().mean();
     const momentid::LongRunCovariance c = momentid::long_run_covariance(x);
-    const double t = momentid::student_t_quantile(0.975, std::max(1.0, c.dof));
+    const double t = c.t975();
     for (int k = 0; k < 2; ++k) {
       reported[k] += c.covariance(k, k);
       squares[k] += mean(k) * mean(k);

@@ -9,7 +9,6 @@
 
 #include "app/variables.hpp"
 #include "common/json.hpp"
-#include "solve/distributions.hpp"
 #include "solve/long_run.hpp"
 
 namespace momentid {
@@ -269,7 +268,7 @@ void estimate_sampling_bias(IdentifyResult& result, const DataSource& source,
   }
   if (bias.applied) {
     const LongRunCovariance errors = long_run_covariance(extrapolated);
-    const double t975 = student_t_quantile(0.975, std::max(1.0, errors.dof));
+    const double t975 = errors.t975();
     for (Eigen::Index p = 0; p < params; ++p) {
       ParameterEstimate& e = list[static_cast<std::size_t>(p)];
       if (e.fixed) continue;

@@ -73,6 +73,11 @@ MatrixXd batch_deviations(const MomentEstimates& estimates) {
   return length.asDiagonal() * (means.rowwise() - mean);
 }
 
+// solve_rows with the moments' batch series (batch_deviations) at hand.
+Estimate solve_on(const MomentRows& system, const std::vector<std::string>& names,
+                  const MomentEstimates& estimates, const MatrixXd& deviations,
+                  const SolveOptions& options);
+
 // `series` as rows of `out`, when given.
 void store(const MatrixXd& series, std::vector<std::vector<double>>* out) {
   if (out == nullptr) return;
@@ -171,8 +176,9 @@ Estimate solve(const MomentSystem& system, const MomentEstimates& estimates,
   }
   std::vector<std::string> names;
   for (const Declaration& p : model.parameters()) names.push_back(p.name);
-  Estimate out = solve_rows(rows, names, estimates, options);
-  out.identities = identity_checks(system, moments, estimates, batch_deviations(estimates));
+  const MatrixXd deviations = batch_deviations(estimates);
+  Estimate out = solve_on(rows, names, estimates, deviations, options);
+  out.identities = identity_checks(system, moments, estimates, deviations);
   return out;
 }
 
@@ -260,6 +266,14 @@ Estimate with_fixed(Estimate free, const std::vector<std::string>& names,
 
 Estimate solve_rows(const MomentRows& system, const std::vector<std::string>& names,
                     const MomentEstimates& estimates, const SolveOptions& options) {
+  return solve_on(system, names, estimates, batch_deviations(estimates), options);
+}
+
+namespace {
+
+Estimate solve_on(const MomentRows& system, const std::vector<std::string>& names,
+                  const MomentEstimates& estimates, const MatrixXd& deviations,
+                  const SolveOptions& options) {
   if (std::any_of(options.fixed.begin(), options.fixed.end(), [](const auto& v) { return v; })) {
     if (options.fixed.size() != names.size()) {
       throw std::invalid_argument("solve_rows: one fixed value or nullopt per parameter needed");
@@ -270,9 +284,9 @@ Estimate solve_rows(const MomentRows& system, const std::vector<std::string>& na
     }
     SolveOptions free_options = options;
     free_options.fixed.clear();
-    Estimate out = with_fixed(
-        solve_rows(without_fixed(system, options.fixed), free_names, estimates, free_options),
-        names, options.fixed);
+    Estimate out = with_fixed(solve_on(without_fixed(system, options.fixed), free_names, estimates,
+                                       deviations, free_options),
+                              names, options.fixed);
     // The fixed parameters have no error: zero columns.
     if (options.error_batches) {
       for (std::vector<double>& row : *options.error_batches) {
@@ -414,15 +428,12 @@ Estimate solve_rows(const MomentRows& system, const std::vector<std::string>& na
     return jacobian;
   };
   // The errors: the long-run covariance of the parameters' batch series (delta method).
-  const MatrixXd deviations = batch_deviations(estimates);
   const MatrixXd ls_series =
       deviations * sensitivity(normal_pinv, pinv, residual, theta_scaled).transpose();
   const LongRunCovariance ls_errors = long_run_covariance(ls_series);
   store(ls_series, options.error_batches);
   out.dof = ls_errors.dof;
-  // Below one degree of freedom the t law has no variance and its quantiles overflow: at least
-  // one is taken (with a warning that the errors are rough).
-  const double t975 = out.batches >= 2 ? student_t_quantile(0.975, std::max(1.0, out.dof)) : kNaN;
+  const double t975 = out.batches >= 2 ? ls_errors.t975() : kNaN;
   for (Eigen::Index p = 0; p < params; ++p) {
     ParameterEstimate& e = out.parameters[static_cast<std::size_t>(p)];
     e.estimate = theta(p);
@@ -503,7 +514,7 @@ Estimate solve_rows(const MomentRows& system, const std::vector<std::string>& na
   const LongRunCovariance gmm_errors = long_run_covariance(gmm_series);
   store(gmm_series, options.error_batches);
   out.gmm_dof = gmm_errors.dof;
-  const double gmm_t975 = student_t_quantile(0.975, std::max(1.0, out.gmm_dof));
+  const double gmm_t975 = gmm_errors.t975();
   for (Eigen::Index p = 0; p < params; ++p) {
     ParameterEstimate e{names[static_cast<std::size_t>(p)]};
     e.estimate = theta_gmm(p);
@@ -554,5 +565,7 @@ Estimate solve_rows(const MomentRows& system, const std::vector<std::string>& na
                               std::max(1.0, 1 / (1 / (n - d + 1) + 1 / (k * nu))));
   return out;
 }
+
+}  // namespace
 
 }  // namespace momentid

@@ -7,6 +7,8 @@
 #include <unsupported/Eigen/FFT>
 #include <vector>
 
+#include "solve/distributions.hpp"
+
 namespace momentid {
 namespace {
 
@@ -47,6 +49,8 @@ Fit whittle(const VectorXd& s, const VectorXd& w, int q) {
 }
 
 }  // namespace
+
+double LongRunCovariance::t975() const { return student_t_quantile(0.975, std::max(1.0, dof)); }
 
 MatrixXd batch_covariance(const MatrixXd& batches) {
   const Index b = batches.rows();

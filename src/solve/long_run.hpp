@@ -31,6 +31,11 @@ struct LongRunCovariance {
   // neighbouring tapered ordinates): what the t quantiles and the J test use.
   double dof = 0;
   int order = 0;  // q of the fitted moving average; 0: too few batches, S / B
+
+  // The 97.5% quantile of Student's t at `dof`, for 95% intervals. Below one degree of freedom
+  // the t law has no variance and its quantiles overflow: at least one is taken (identify warns
+  // that such errors are rough).
+  double t975() const;
 };
 
 // Fewer batches than this leave too few frequencies for the fit: S / B with B - 1 degrees of

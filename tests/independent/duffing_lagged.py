@@ -16,33 +16,19 @@ import subprocess
 import sys
 
 import numpy as np
-from scipy.integrate import solve_ivp
 
-TRUTH = {"c": 0.5, "k": 4.0, "eps": 1.0}
+from scipy_duffing import TRUTH, duffing
 
 
 def main():
     momentid, model, workdir = sys.argv[1:4]
     rng = np.random.default_rng(20261123)
-    omega = rng.uniform(0.3, 6.0, 60)
-    phase = rng.uniform(0, 2 * np.pi, 60)
-    amplitude = 6.0 * np.sqrt(2 / 60)  # force RMS 6
-
-    def force(t):
-        return amplitude * np.cos(np.multiply.outer(t, omega) + phase).sum(axis=-1)
-
-    def rates(t, state):
-        y, v = state
-        return [v, -TRUTH["c"] * v - TRUTH["k"] * y - TRUTH["eps"] * y**3 + force(t)]
-
     dt, burn_in, samples = 0.01, 100.0, 200000
     t = burn_in + dt * np.arange(samples)
-    solution = solve_ivp(rates, (0.0, t[-1]), [0.0, 0.0], method="DOP853", t_eval=t,
-                         rtol=1e-10, atol=1e-10)
-    assert solution.success, solution.message
+    clean, _, force = duffing(rng, 0.3, 6.0, 60, 6.0, t, 1e-10)  # force RMS 6
     failed = False
     for noise in (0.0, 0.03):
-        y = solution.y[0] + noise * np.std(solution.y[0]) * rng.standard_normal(samples)
+        y = clean + noise * np.std(clean) * rng.standard_normal(samples)
         path = f"{workdir}/independent_duffing.csv"
         with open(path, "w") as out:
             out.write("# momentid: dt=0.01 input-hold=sample\nt,y,x\n")

@@ -18,37 +18,23 @@ import subprocess
 import sys
 
 import numpy as np
-from scipy.integrate import solve_ivp
 
-TRUTH = {"c": 0.5, "k": 4.0, "eps": 1.0}
+from scipy_duffing import TRUTH, duffing
 
 
 def main():
     momentid, model, workdir = sys.argv[1:4]
     rng = np.random.default_rng(20261124)
-    omega = 2 * np.pi * rng.uniform(0.02, 1.5, 200)
-    phase = rng.uniform(0, 2 * np.pi, 200)
-    amplitude = 15.0 * np.sqrt(2 / 200)  # force RMS 15
-
-    def force(t):
-        return amplitude * np.cos(np.multiply.outer(t, omega) + phase).sum(axis=-1)
-
-    def rates(t, state):
-        y, v = state
-        return [v, -TRUTH["c"] * v - TRUTH["k"] * y - TRUTH["eps"] * y**3 + force(t)]
-
     burn_in, duration = 100.0, 3000.0
     t = burn_in + 0.02 * np.arange(int(duration / 0.02))
-    solution = solve_ivp(rates, (0.0, t[-1]), [0.0, 0.0], method="DOP853", t_eval=t,
-                         rtol=1e-10, atol=1e-10)
-    assert solution.success, solution.message
+    y, v, force = duffing(rng, 2 * np.pi * 0.02, 2 * np.pi * 1.5, 200, 15.0, t, 1e-10)
     reports = {}
     for step in (1, 2, 4):
         dt = 0.02 * step
         path = f"{workdir}/independent_sampling_{step}.csv"
         with open(path, "w") as out:
             out.write(f"# momentid: dt={dt:g} input-hold=sample\nt,y,v,x\n")
-            np.savetxt(out, np.column_stack([t, solution.y[0], solution.y[1], force(t)])[::step],
+            np.savetxt(out, np.column_stack([t, y, v, force(t)])[::step],
                        delimiter=",", fmt="%.17g")
         result = subprocess.run([momentid, "identify", model, path, "--degree", "3",
                                  "--extrapolate", "dt", "--format", "json"],

@@ -22,9 +22,9 @@ import sys
 import xml.etree.ElementTree as ET
 
 import numpy as np
-from scipy.integrate import solve_ivp
 
-TRUTH = {"c": 0.5, "k": 4.0, "eps": 1.0}
+from scipy_duffing import TRUTH, duffing
+
 SVG = "{http://www.w3.org/2000/svg}"
 
 
@@ -38,23 +38,9 @@ def run(command):
 def main():
     momentid, model, workdir = sys.argv[1:4]
     rng = np.random.default_rng(20261124)
-    omega = rng.uniform(0.2, 6.0, 30)
-    phase = rng.uniform(0, 2 * np.pi, 30)
-    amplitude = 5.0 * np.sqrt(2 / 30)
-
-    def force(t):
-        return amplitude * np.cos(np.multiply.outer(t, omega) + phase).sum(axis=-1)
-
-    def rates(t, state):
-        y, v = state
-        return [v, -TRUTH["c"] * v - TRUTH["k"] * y - TRUTH["eps"] * y**3 + force(t)]
-
     dt, burn_in, samples = 0.1, 60.0, 20000
     t = burn_in + dt * np.arange(samples)
-    solution = solve_ivp(rates, (0.0, t[-1]), [0.0, 0.0], method="DOP853", t_eval=t,
-                         rtol=1e-11, atol=1e-11)
-    assert solution.success, solution.message
-    y = solution.y[0]
+    y, _, force = duffing(rng, 0.2, 6.0, 30, 5.0, t, 1e-11)
     path = f"{workdir}/independent_validate.csv"
     with open(path, "w") as out:
         out.write("# momentid: input-hold=sample\nt,y,x\n")
