@@ -427,7 +427,8 @@ TEST_SUITE("accumulator") {
     bytes = tiny_bytes();
     bytes[28] = 7;
     CHECK(deserialize_error(bytes) ==
-          "moment accumulator bytes: input hold 7, expected 0 (sample) or 1 (zero-order hold)");
+          "moment accumulator bytes: input hold 7, expected 0 (sample), 1 (zero-order hold) or 2 "
+          "(zero-order hold, trapezoidal)");
     bytes = tiny_bytes();
     bytes[73] = 3;  // the interval count
     CHECK(deserialize_error(bytes) ==

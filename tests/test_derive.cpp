@@ -360,4 +360,68 @@ multipliers 1, y2
     CHECK(std::find(r.notes.begin(), r.notes.end(),
                     "1 product reduces to 0 = 0 and gives no equation") != r.notes.end());
   }
+
+  // The polynomial whose expectation is E[g''], for comparison by subtraction.
+  ex second_derivative(const Model& model, const momentid::HeldInputCorrection& c) {
+    ex sum = 0;
+    for (const auto& [m, w] : c.second_derivative) {
+      ex product = w;
+      for (std::size_t i = 0; i < m.size(); ++i) {
+        product *= pow(sym(model, model.variables()[i]), m[i]);
+      }
+      sum += product;
+    }
+    return sum;
+  }
+
+  TEST_CASE(
+      "the held-input corrections of E[v^2] and E[v*x] are E[g''] along the model, input held") {
+    const Model model = model_file("duffing.mom");
+    const ex y = sym(model, "y"), v = sym(model, "v"), x = sym(model, "x");
+    const ex c = sym(model, "c"), k = sym(model, "k"), eps = sym(model, "eps");
+    // E[y^2] (its derivative 2 y v holds no input) and E[x^2] (no state) are not corrected;
+    // E[v^2], E[v*x] and E[y*v] (whose derivative v^2 + y v' holds x) are.
+    const auto h = momentid::held_input_corrections(
+        model, {{2, 0, 0}, {0, 2, 0}, {0, 1, 1}, {1, 1, 0}, {0, 0, 2}});
+    CHECK(h.unavailable.empty());
+    REQUIRE(h.moments.size() == 3);
+    CHECK(h.moments[0].moment == momentid::Monomial{0, 2, 0});
+    // (v^2)' = 2 v a, (v^2)'' = 2 a^2 + 2 v a' with a = x - c v - k y - eps y^3 and
+    // a' = -c a - k v - 3 eps y^2 v (x held).
+    const ex a = x - c * v - k * y - eps * pow(y, 3);
+    const ex want = 2 * a * a + 2 * v * (-c * a - k * v - 3 * eps * y * y * v);
+    const ex got = second_derivative(model, h.moments[0]);
+    const ex diff = (got - want).expand();
+    CHECK_MESSAGE(diff.is_zero(), got, " != ", want);
+    // (v x)'' = x a' with x held.
+    CHECK(h.moments[1].moment == momentid::Monomial{0, 1, 1});
+    const ex held = x * (-c * a - k * v - 3 * eps * y * y * v);
+    CHECK_MESSAGE((second_derivative(model, h.moments[1]) - held).expand().is_zero(),
+                  second_derivative(model, h.moments[1]));
+    CHECK(h.moments[2].moment == momentid::Monomial{1, 1, 0});
+  }
+
+  TEST_CASE("an unknown mass makes the held-input correction's weights rational in it") {
+    const Model model = momentid::parse_model(
+        "state y, v\ninput x\nparam m, c, k\ny' = v\nm*v' = -c*v - k*y + x\n", "mass.mom");
+    const auto h = momentid::held_input_corrections(model, {{0, 2, 0}});
+    REQUIRE(h.moments.size() == 1);
+    const ex m = sym(model, "m");
+    bool found = false;
+    for (const auto& [monomial, weight] : h.moments[0].second_derivative) {
+      if (monomial == momentid::Monomial{0, 0, 2}) {
+        found = true;
+        CHECK_MESSAGE((weight - 2 / (m * m)).normal().is_zero(), weight);
+      }
+    }
+    CHECK(found);
+  }
+
+  TEST_CASE("no held-input correction when the derivatives are not polynomials in the states") {
+    const Model model = momentid::parse_model(
+        "state y, v\ninput x\nparam c, k\ny' = v\n(1 + y^2)*v' = -c*v - k*y + x\n", "r.mom");
+    const auto h = momentid::held_input_corrections(model, {{0, 2, 0}});
+    CHECK(h.moments.empty());
+    CHECK(h.unavailable == "the derivatives of the states are not polynomials in the states");
+  }
 }

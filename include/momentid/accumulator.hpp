@@ -18,6 +18,12 @@ namespace momentid {
 //           an input is averaged as u[n] * (g(y_n) + g(y_{n+1})) / 2.
 enum class InputHold { kSample, kZeroOrderHold };
 
+// How a product with a held input integrates its state part over an interval.
+//  kCubic: by the cubic through the rows n - 1 .. n + 2, exact to O(dt^4) for smooth states;
+//  kTrapezoidal: by the trapezoidal rule, whose O(dt^2) error is then corrected from the model
+//           (derive.hpp, held_input_corrections), as for the moments without an input.
+enum class HeldRule { kCubic, kTrapezoidal };
+
 // Time averages of moments E[x^a ...] from a time series, in one streaming pass, kept per
 // contiguous stretch of the record so that their sampling covariance can be estimated from batch
 // means. Each moment is computed from precomputed powers of the channels and averaged over the
@@ -74,7 +80,7 @@ class MomentAccumulator {
   // `batches`: how many batches the estimates will be split into at most; the accumulator
   // keeps between 2 and 4 times as many stretches, so its memory does not grow with the record.
   MomentAccumulator(std::vector<Moment> moments, std::size_t states, std::size_t inputs,
-                    InputHold hold, std::size_t batches);
+                    InputHold hold, std::size_t batches, HeldRule rule = HeldRule::kCubic);
 
   // The next rows start a new run (a separate record).
   void start_run();
@@ -105,10 +111,10 @@ class MomentAccumulator {
 
   // The state of a finished accumulator as bytes, for deserialize() (throws Error in the middle
   // of a run). Layout version 1, integers and IEEE-754 doubles little-endian:
-  //   "MOMACCUM", u32 version, u64 states, u64 inputs, u8 hold (0 sample, 1 zero-order hold),
-  //   u64 batches, u64 moments, per moment {u64 factors, per factor {i32 channel, i32 power,
-  //   i32 lag}}, u64 stretch length, u64 intervals, u64 stretches, per stretch {u64 intervals,
-  //   f64 sum per moment}.
+  //   "MOMACCUM", u32 version, u64 states, u64 inputs, u8 hold (0 sample, 1 zero-order hold, 2
+  //   zero-order hold with the trapezoidal rule), u64 batches, u64 moments, per moment {u64
+  //   factors, per factor {i32 channel, i32 power, i32 lag}}, u64 stretch length, u64 intervals,
+  //   u64 stretches, per stretch {u64 intervals, f64 sum per moment}.
   std::vector<std::uint8_t> serialize() const;
   // The accumulator that serialize() wrote into `bytes`. Throws Error saying what was found and
   // what was expected for bytes that are not that: a wrong tag or version, truncated or trailing
@@ -143,6 +149,7 @@ class MomentAccumulator {
   std::vector<Moment> moments_;
   std::size_t states_, inputs_;
   InputHold hold_;
+  HeldRule rule_;
   std::size_t batches_;
   // Blocks of moments (in working order, positions begin .. begin + size) whose m-th member's
   // factor f reads the history at offset + step * m rows past the newest: each a product of

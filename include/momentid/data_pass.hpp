@@ -50,6 +50,8 @@ struct PassControl {
 struct DataOptions {
   // How inputs were sampled; nullopt: the file's `input-hold` metadata, else kSample.
   std::optional<InputHold> hold;
+  // How products with a held input are integrated over an interval.
+  HeldRule held_rule = HeldRule::kCubic;
   // Contiguous batches of the record for the moments' sampling covariance; 0: automatic, one per
   // kAutoBatchIntervals intervals, at least min_batches, and from kMinAutoBatches to
   // kMaxAutoBatches (long_run_covariance needs batches longer than the states' correlation time,

@@ -93,6 +93,38 @@ struct MomentSystem {
 // skipped and reported).
 MomentSystem derive(const Model& model, const DeriveOptions& options = {});
 
+// The second time derivative of a moment with the input held: what corrects its trapezoidal
+// average on data whose input is held over each sample.
+//
+// With the input held over [t_n, t_{n+1}), the states' derivatives jump at every sample, and
+// so does the derivative of g(y(t), u_n) for a monomial g. The trapezoidal rule's end
+// corrections, which telescope for a smooth g, then add up (Euler-Maclaurin, interval by
+// interval):
+//   E_dt[g] = E[g] + dt^2/12 * E[g''] + O(dt^4),
+// where g'' is the second derivative of g along the model with the input held on each
+// interval, averaged over the intervals as the accumulator averages moments (HeldRule::
+// kTrapezoidal). Where g' holds no input it is continuous and E[g''] = 0: those moments are left
+// out. Each HeldInputCorrection gives E[g''] for one g as a combination of moments whose weights
+// are functions of the parameters: rational when a parameter multiplies a derivative
+// (`m*v' = ...` with m unknown).
+//
+// Example, the Duffing model (y' = v, v' = -c*v - k*y - eps*y^3 + x):
+//   HeldInputCorrections h = held_input_corrections(model, {{0, 2, 0}});  // E[v^2]
+//   // h.moments[0].second_derivative: E[(v^2)''] = 2 E[x^2] - 4c E[v*x] + ... as
+//   // {monomial, weight} pairs, the weights in model.parameter_symbol(p).
+struct HeldInputCorrection {
+  Monomial moment;
+  std::vector<std::pair<Monomial, GiNaC::ex>> second_derivative;
+};
+struct HeldInputCorrections {
+  std::vector<HeldInputCorrection> moments;  // those of `moments` whose derivative jumps
+  std::string unavailable;  // why there are none although some might be needed, or empty
+};
+// Among `moments`, those whose derivative jumps; none, with `unavailable` saying why, when the
+// equations do not give the derivatives of the states as polynomials in the states and inputs.
+HeldInputCorrections held_input_corrections(const Model& model,
+                                            const std::vector<Monomial>& moments);
+
 // All monomials in `states` variables of total degree 1..degree, lowest degree first.
 std::vector<Monomial> monomials_up_to(int states, int degree);
 

@@ -108,6 +108,16 @@ struct IdentifyResult {
     bool applied = false;
   };
   std::optional<SamplingBias> sampling_bias;
+  // Data whose input is held over each sample (zero-lag equations): the moments without an
+  // input were corrected for the kinks the held input puts into the states at the samples
+  // (derive.hpp, held_input_corrections). `shift`: per parameter of the main result, the
+  // corrected estimate minus the uncorrected one; empty, with `unavailable` saying why, when
+  // no correction could be made.
+  struct HeldInput {
+    std::vector<double> shift;
+    std::string unavailable;
+  };
+  std::optional<HeldInput> held_input;
 
   // The main result: the optimally weighted estimate when it was asked for and could be
   // computed, otherwise least squares.

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <map>
+#include <set>
 #include <sstream>
 #include <tuple>
 
@@ -282,6 +283,76 @@ void estimate_sampling_bias(IdentifyResult& result, const DataSource& source,
   result.sampling_bias = std::move(bias);
 }
 
+// The first `count` moments of `all`, overall and per batch.
+MomentEstimates first_moments(const MomentEstimates& all, std::size_t count) {
+  MomentEstimates out = all;
+  out.mean.resize(count);
+  for (std::vector<double>& batch : out.batch_means) batch.resize(count);
+  return out;
+}
+
+// Data whose input is held over each sample: replaces the estimate of `result` by the one from
+// moments corrected for the kinks of the held input, E[g] = E_dt[g] - dt^2/12 E[g''] (derive.hpp,
+// held_input_corrections), with the weights of E[g''] at the parameters of the previous
+// estimate, twice (the second pass changes the estimates by O(dt^4)). `all` holds the moments
+// `moments` in that order, the system's first.
+void correct_for_held_input(IdentifyResult& result, const HeldInputCorrections& held,
+                            const std::vector<Monomial>& moments, const MomentEstimates& all,
+                            const SolveOptions& solve_options) {
+  if (held.moments.empty() && held.unavailable.empty()) return;  // no moment needs it
+  IdentifyResult::HeldInput& out = result.held_input.emplace();
+  if (held.moments.empty()) {
+    out.unavailable = held.unavailable;
+    return;
+  }
+  if (!result.data.time_step) {
+    out.unavailable = "the data give no sample interval (a 't' column or a dt in the metadata)";
+    return;
+  }
+  std::map<Monomial, std::size_t> index;
+  for (std::size_t k = 0; k < moments.size(); ++k) index.emplace(moments[k], k);
+  const Model& model = *result.model;
+  const double scale = *result.data.time_step * *result.data.time_step / 12;
+  std::vector<double> before;
+  for (const ParameterEstimate& p : result.parameters()) before.push_back(p.estimate);
+  std::vector<double> theta = before;
+  for (int round = 0; round < 2; ++round) {
+    if (result.estimate.status != Estimate::Status::kOk ||
+        std::any_of(theta.begin(), theta.end(), [](double t) { return !std::isfinite(t); })) {
+      out.unavailable = "the estimate without it does not determine every parameter";
+      out.shift.clear();
+      return;
+    }
+    GiNaC::exmap values;
+    for (std::size_t p = 0; p < theta.size(); ++p) {
+      values[model.parameter_symbol(static_cast<int>(p))] = theta[p];
+    }
+    MomentEstimates corrected = first_moments(all, result.moments.size());
+    for (const HeldInputCorrection& c : held.moments) {
+      const std::size_t target = index.at(c.moment);
+      for (const auto& [m, weight] : c.second_derivative) {
+        const double w =
+            scale * GiNaC::ex_to<GiNaC::numeric>(weight.subs(values).evalf()).to_double();
+        const auto source = index.find(m);
+        if (source == index.end()) {  // the constant 1
+          corrected.mean[target] -= w;
+          for (std::vector<double>& batch : corrected.batch_means) batch[target] -= w;
+          continue;
+        }
+        corrected.mean[target] -= w * all.mean[source->second];
+        for (std::size_t b = 0; b < corrected.batch_means.size(); ++b) {
+          corrected.batch_means[b][target] -= w * all.batch_means[b][source->second];
+        }
+      }
+    }
+    result.estimate = solve(result.system, corrected, solve_options);
+    result.data.estimates = std::move(corrected);
+    theta.clear();
+    for (const ParameterEstimate& p : result.parameters()) theta.push_back(p.estimate);
+  }
+  for (std::size_t p = 0; p < theta.size(); ++p) out.shift.push_back(theta[p] - before[p]);
+}
+
 }  // namespace
 
 IdentifyResult identify(const Model& model, const DataSource& source,
@@ -321,12 +392,43 @@ IdentifyResult identify(const Model& model, const DataSource& source,
     if (result.gmm) data_options.min_batches = kBatchesPerEquation * result.system.equations.size();
     data_options.offsets =
         channel_offsets(source, states, inputs, data_options, options.center, result.centered);
-    result.data = moments_from_data(source, states, inputs, result.moments, data_options);
+    // A held input puts kinks into the states at the samples: the moments without an input
+    // are then corrected, with E[g''] from moments the pass adds (unless the data are known to
+    // be sampled).
+    HeldInputCorrections held;
+    std::vector<Monomial> pass_moments = result.moments;
+    if (!inputs.empty() && options.hold != InputHold::kSample) {
+      held = held_input_corrections(model, result.moments);
+      std::set<Monomial> known(pass_moments.begin(), pass_moments.end());
+      for (const HeldInputCorrection& c : held.moments) {
+        for (const auto& [m, weight] : c.second_derivative) {
+          if (std::any_of(m.begin(), m.end(), [](int e) { return e != 0; }) &&
+              known.insert(m).second) {
+            pass_moments.push_back(m);
+          }
+        }
+      }
+    }
+    // The correction removes the trapezoidal rule's error on the held products too, which the
+    // cubic rule only makes smaller.
+    if (!held.moments.empty()) data_options.held_rule = HeldRule::kTrapezoidal;
+    result.data = moments_from_data(source, states, inputs, pass_moments, data_options);
+    if (result.data.hold == InputHold::kZeroOrderHold && !held.moments.empty() &&
+        !result.data.time_step) {
+      // No correction without the sample interval: the cubic rule then does better.
+      data_options.held_rule = HeldRule::kCubic;
+      result.data = moments_from_data(source, states, inputs, pass_moments, data_options);
+    }
+    const MomentEstimates all = std::move(result.data.estimates);
+    result.data.estimates = first_moments(all, result.moments.size());
     std::vector<std::vector<double>> errors;
-    result.estimate = solve(result.system, result.data.estimates,
-                            {.gmm = result.gmm,
-                             .fixed = fixed_values(model, options.fixed),
-                             .error_batches = options.extrapolate ? &errors : nullptr});
+    const SolveOptions solve_options{.gmm = result.gmm,
+                                     .fixed = fixed_values(model, options.fixed),
+                                     .error_batches = options.extrapolate ? &errors : nullptr};
+    result.estimate = solve(result.system, result.data.estimates, solve_options);
+    if (result.data.hold == InputHold::kZeroOrderHold && !inputs.empty()) {
+      correct_for_held_input(result, held, pass_moments, all, solve_options);
+    }
     if (options.extrapolate) {
       estimate_sampling_bias(result, source, states, inputs, data_options, options, errors);
     }
@@ -785,6 +887,20 @@ std::string format_text(const IdentifyResult& r) {
     out << (s->applied ? "    removed: the estimates above are extrapolated to dt = 0\n"
                        : "    within the errors: not removed\n");
   }
+  if (const auto& h = r.held_input) {
+    if (h->unavailable.empty()) {
+      out << "  held input: moments corrected by -dt^2/12 E[g''] for the kinks it puts at the "
+             "samples, which moved the estimates by";
+      const auto& list = r.parameters();
+      for (std::size_t p = 0; p < list.size(); ++p) {
+        out << (p ? ", " : " ") << list[p].name << " " << number(h->shift[p], "%+.3g");
+      }
+      out << "\n";
+    } else {
+      out << "  held input: moments not corrected for the kinks it puts at the samples: "
+          << h->unavailable << "\n";
+    }
+  }
   if (!e.identities.empty()) {
     out << "  stationarity identities (sample violation, z-score):\n";
     for (const IdentityCheck& c : e.identities) {
@@ -867,6 +983,21 @@ std::string format_json(const IdentifyResult& r) {
           << ", \"difference_error\": " << json_number(s->difference_error[p]) << "}";
     }
     out << "}}";
+  }
+  if (const auto& h = r.held_input) {
+    out << ",\n    \"held_input_correction\": {\"applied\": "
+        << (h->unavailable.empty() ? "true" : "false");
+    if (h->unavailable.empty()) {
+      out << ", \"shift\": {";
+      const auto& list = r.parameters();
+      for (std::size_t p = 0; p < list.size(); ++p) {
+        out << (p ? ", " : "") << json_string(list[p].name) << ": " << json_number(h->shift[p]);
+      }
+      out << "}";
+    } else {
+      out << ", \"reason\": " << json_string(h->unavailable);
+    }
+    out << "}";
   }
   out << ",\n    \"identities\": [";
   for (std::size_t i = 0; i < e.identities.size(); ++i) {

@@ -30,11 +30,13 @@ std::string count_of(std::size_t n, const std::string& noun) {
 }  // namespace
 
 MomentAccumulator::MomentAccumulator(std::vector<Moment> moments, std::size_t states,
-                                     std::size_t inputs, InputHold hold, std::size_t batches)
+                                     std::size_t inputs, InputHold hold, std::size_t batches,
+                                     HeldRule rule)
     : moments_(std::move(moments)),
       states_(states),
       inputs_(inputs),
       hold_(hold),
+      rule_(rule),
       batches_(batches),
       max_stretches_(4 * std::max<std::size_t>(batches, 2)) {
   const std::size_t variables = states_ + inputs_;
@@ -425,9 +427,11 @@ bool MomentAccumulator::owns(std::size_t n) const {
 // average out, so g is integrated by the cubic through the rows n - 1 .. n + 2 (one-sided at the
 // ends of a run). Where g has a kink at every row (a state whose derivative contains the held
 // input) an O(dt^2) remainder stays, smaller than the trapezoidal rule's: this is the bias of
-// coarse sampling that `identify` warns about. The other products are continuous across rows:
-// push_rows adds them by the trapezoidal rule, whose error then only accumulates at the ends of
-// a run.
+// coarse sampling that `identify` warns about, unless it corrects it from the model: then g is
+// integrated by the trapezoidal rule (HeldRule::kTrapezoidal), whose error the correction
+// removes. The other products are continuous across rows: push_rows adds them by the
+// trapezoidal rule, whose error accumulates only at the ends of a run where they are smooth, and
+// at every row where the held input makes their derivative jump (corrected the same way).
 MOMENTID_KERNEL void MomentAccumulator::close_interval(std::size_t n) {
   if (!owns(n)) return;
   const std::size_t rows = run_rows_;
@@ -437,16 +441,17 @@ MOMENTID_KERNEL void MomentAccumulator::close_interval(std::size_t n) {
   const double* h0 = input_ring_.data() + (n % 4) * held_count_;
   // Weights of g at rows n - 1, n, n + 1, n + 2 for the integral over [n, n + 1] / dt.
   double w[4] = {0, 0.5, 0.5, 0};
-  if (n >= 1 && n + 2 < rows) {
+  const bool cubic = rule_ == HeldRule::kCubic;
+  if (cubic && n >= 1 && n + 2 < rows) {
     w[0] = -1.0 / 24;
     w[1] = 13.0 / 24;
     w[2] = 13.0 / 24;
     w[3] = -1.0 / 24;
-  } else if (n + 2 < rows) {  // first interval of the run
+  } else if (cubic && n + 2 < rows) {  // first interval of the run
     w[1] = 5.0 / 12;
     w[2] = 8.0 / 12;
     w[3] = -1.0 / 12;
-  } else if (n >= 1) {  // last interval of the run
+  } else if (cubic && n >= 1) {  // last interval of the run
     w[0] = -1.0 / 12;
     w[1] = 8.0 / 12;
     w[2] = 5.0 / 12;
@@ -529,8 +534,9 @@ void MomentAccumulator::compact() {
 
 namespace {
 
-const char* hold_name(InputHold hold) {
-  return hold == InputHold::kSample ? "sample" : "zero-order hold";
+const char* hold_name(InputHold hold, HeldRule rule) {
+  if (hold == InputHold::kSample) return "sample";
+  return rule == HeldRule::kCubic ? "zero-order hold" : "zero-order hold (trapezoidal)";
 }
 
 std::string channel_counts(std::size_t states, std::size_t inputs) {
@@ -555,9 +561,10 @@ void MomentAccumulator::merge(const MomentAccumulator& other) {
                 channel_counts(states_, inputs_) + " here, " +
                 channel_counts(other.states_, other.inputs_) + " in the other");
   }
-  if (hold_ != other.hold_) {
+  if (hold_ != other.hold_ || rule_ != other.rule_) {
     throw Error(std::string("cannot merge moment accumulators with different input holds: ") +
-                hold_name(hold_) + " here, " + hold_name(other.hold_) + " in the other");
+                hold_name(hold_, rule_) + " here, " + hold_name(other.hold_, other.rule_) +
+                " in the other");
   }
   if (moments_.size() != other.moments_.size()) {
     throw Error("cannot merge moment accumulators of different moments: " +
@@ -612,7 +619,7 @@ std::vector<std::uint8_t> MomentAccumulator::serialize() const {
   out.u32(kLayoutVersion);
   out.u64(states_);
   out.u64(inputs_);
-  out.u8(hold_ == InputHold::kSample ? 0 : 1);
+  out.u8(hold_ == InputHold::kSample ? 0 : rule_ == HeldRule::kCubic ? 1 : 2);
   out.u64(batches_);
   out.u64(moments_.size());
   for (const Moment& m : moments_) {
@@ -653,9 +660,9 @@ MomentAccumulator MomentAccumulator::deserialize(std::span<const std::uint8_t> b
                 std::to_string(kMaxChannels) + " channels");
   }
   const std::uint8_t hold = in.u8("the input hold");
-  if (hold > 1) {
+  if (hold > 2) {
     throw Error("moment accumulator bytes: input hold " + std::to_string(hold) +
-                ", expected 0 (sample) or 1 (zero-order hold)");
+                ", expected 0 (sample), 1 (zero-order hold) or 2 (zero-order hold, trapezoidal)");
   }
   const std::uint64_t batches = in.u64("the number of batches");
   if (batches > std::numeric_limits<std::size_t>::max() / 4) {
@@ -688,7 +695,8 @@ MomentAccumulator MomentAccumulator::deserialize(std::span<const std::uint8_t> b
       }
     }
     out.emplace(std::move(moments), states, inputs,
-                hold == 0 ? InputHold::kSample : InputHold::kZeroOrderHold, batches);
+                hold == 0 ? InputHold::kSample : InputHold::kZeroOrderHold, batches,
+                hold == 2 ? HeldRule::kTrapezoidal : HeldRule::kCubic);
   } catch (const std::invalid_argument& e) {
     throw Error(std::string("moment accumulator bytes: ") + e.what());
   }

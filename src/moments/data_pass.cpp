@@ -373,9 +373,9 @@ ShardState read_shard(DataReader& reader, bool whole, const PassSetup& setup, bo
                       std::atomic<std::size_t>& rows_done, std::atomic<double>& fraction) {
   const DataOptions& options = *setup.options;
   const std::size_t channels = setup.states + setup.inputs;
-  ShardState out{
-      MomentAccumulator(setup.moments, setup.states, setup.inputs, setup.hold, setup.batches),
-      LagSums(channels, options.lags)};
+  ShardState out{MomentAccumulator(setup.moments, setup.states, setup.inputs, setup.hold,
+                                   setup.batches, setup.options->held_rule),
+                 LagSums(channels, options.lags)};
   InputShift shift(setup.states, setup.inputs, options.input_shift);
   Decimate decimate(channels, options.stride, options.phase);
   std::vector<double> history;  // of the current run, before the shard
@@ -476,10 +476,10 @@ RangeResult read_range(const Pass& pass, std::size_t begin, std::size_t end,
                        std::unique_ptr<DataReader> first_reader) {
   const DataOptions& options = *pass.setup.options;
   RangeResult out;
-  out.state.emplace(
-      ShardState{MomentAccumulator(pass.setup.moments, pass.setup.states, pass.setup.inputs,
-                                   pass.setup.hold, pass.merged_batches),
-                 LagSums(pass.setup.states + pass.setup.inputs, options.lags)});
+  out.state.emplace(ShardState{
+      MomentAccumulator(pass.setup.moments, pass.setup.states, pass.setup.inputs, pass.setup.hold,
+                        pass.merged_batches, pass.setup.options->held_rule),
+      LagSums(pass.setup.states + pass.setup.inputs, options.lags)});
   if (begin == end) return out;
   const std::size_t threads = options.control.threads > 0
                                   ? options.control.threads

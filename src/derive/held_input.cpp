@@ -1,0 +1,93 @@
+// The trapezoidal rule's bias on moments without an input when the input is held over each
+// sample: E_dt[g] = E[g] + dt^2/12 * E[g''] + O(dt^3) (derive.hpp, held_input_corrections).
+
+#include <map>
+
+#include "momentid/derive.hpp"
+
+namespace momentid {
+namespace {
+
+// The exponents of `term`, a product of numbers, parameters and variables, over `variables`.
+Monomial exponents_of(const GiNaC::ex& term, const std::vector<GiNaC::symbol>& variables) {
+  Monomial out;
+  for (const GiNaC::symbol& v : variables) out.push_back(term.degree(v));
+  return out;
+}
+
+}  // namespace
+
+HeldInputCorrections held_input_corrections(const Model& model,
+                                            const std::vector<Monomial>& moments) {
+  HeldInputCorrections out;
+  const std::size_t states = model.states().size();
+  std::vector<GiNaC::symbol> variables;
+  for (std::size_t i = 0; i < states; ++i) variables.push_back(model.state_symbol(int(i)));
+  for (std::size_t i = 0; i < model.inputs().size(); ++i) {
+    variables.push_back(model.input_symbol(int(i)));
+  }
+  // The derivatives as functions of the states and the (held) input.
+  GiNaC::lst equations, derivatives;
+  for (const Equation& eq : model.equations()) equations.append(eq.lhs == eq.rhs);
+  for (std::size_t i = 0; i < states; ++i) derivatives.append(model.derivative_symbol(int(i)));
+  GiNaC::ex solution;
+  try {
+    solution = GiNaC::lsolve(equations, derivatives);
+  } catch (const std::exception&) {
+    solution = GiNaC::lst{};
+  }
+  if (solution.nops() != states) {
+    out.unavailable = "the equations do not give the derivatives of the states explicitly";
+    return out;
+  }
+  std::vector<GiNaC::ex> rate(states);
+  for (std::size_t i = 0; i < states; ++i) rate[i] = solution.op(i).rhs();
+  const auto time_derivative = [&](const GiNaC::ex& g) {
+    GiNaC::ex sum = 0;
+    for (std::size_t i = 0; i < states; ++i) sum += g.diff(variables[i]) * rate[i];
+    return sum;
+  };
+  for (const Monomial& moment : moments) {
+    GiNaC::ex g = 1;
+    for (std::size_t i = 0; i < variables.size(); ++i) g *= GiNaC::pow(variables[i], moment[i]);
+    // The sum of g'(t_{n+1}-) - g'(t_n+) over the intervals telescopes, and E[g''] = 0, unless
+    // g' jumps at the samples: when it holds an input (held, or in the derivatives).
+    const GiNaC::ex rate_of_g = time_derivative(g);
+    bool jumps = false;
+    for (std::size_t i = states; i < variables.size(); ++i) {
+      jumps = jumps || rate_of_g.has(variables[i]);
+    }
+    if (!jumps) continue;
+    const GiNaC::ex fraction = time_derivative(rate_of_g).normal();
+    const GiNaC::ex denominator = fraction.denom();
+    for (const GiNaC::symbol& v : variables) {
+      if (denominator.has(v)) {
+        out.unavailable = "the derivatives of the states are not polynomials in the states";
+        out.moments.clear();
+        return out;
+      }
+    }
+    std::map<Monomial, GiNaC::ex, MomentOrder> terms;
+    const GiNaC::ex numerator = fraction.numer().expand();
+    const auto add = [&](const GiNaC::ex& term) {
+      const Monomial m = exponents_of(term, variables);
+      GiNaC::ex weight = term;
+      for (std::size_t i = 0; i < variables.size(); ++i) weight = weight.coeff(variables[i], m[i]);
+      terms[m] += weight / denominator;
+    };
+    if (GiNaC::is_a<GiNaC::add>(numerator)) {
+      for (const GiNaC::ex& term : numerator) add(term);
+    } else if (!numerator.is_zero()) {
+      add(numerator);
+    }
+    HeldInputCorrection c{moment, {}};
+    for (auto& [m, weight] : terms) {
+      const GiNaC::ex w = weight.normal();
+      if (!w.is_zero()) c.second_derivative.emplace_back(m, w);
+    }
+    if (!c.second_derivative.empty()) out.moments.push_back(std::move(c));
+  }
+  return out;
+}
+
+}  // namespace momentid
