@@ -546,5 +546,11 @@ def test_identify_extrapolate(duffing, cli_csv):
     assert all(p["difference_error"] > 0 for p in bias["parameters"].values())
     with pytest.raises(momentid.UsageError, match=r"^extrapolate: the input is held"):
         momentid.identify(duffing, str(cli_csv), degree=3, extrapolate="dt")
+    # A held input's kinks are corrected instead, and the shift is reported.
+    held = momentid.identify(duffing, str(cli_csv), degree=3)
+    correction = held.diagnostics["held_input_correction"]
+    assert correction["applied"] is True
+    assert set(correction["shift"]) == {"c", "k", "eps"}
+    assert "held_input_correction" not in result.diagnostics
     with pytest.raises(momentid.UsageError, match=r"^extrapolate: expected 'dt', found 't'"):
         momentid.identify(duffing, str(cli_csv), extrapolate="t")

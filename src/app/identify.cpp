@@ -191,7 +191,7 @@ void estimate_sampling_bias(IdentifyResult& result, const DataSource& source,
     throw UsageError(
         "extrapolate: the input is held over each sample (input hold zoh): every other sample "
         "of such a record is not the record sampled at 2 dt, whose input would be held over "
-        "2 dt");
+        "2 dt; the kinks of the held input are corrected from the model instead");
   }
   Estimate& fine = result.estimate;
   if (fine_errors.empty() || fine.status != Estimate::Status::kOk) return;
