@@ -247,6 +247,27 @@ TEST_SUITE("identify") {
               "give no sample interval") != std::string::npos);
   }
 
+  TEST_CASE("a held input's kinks are not corrected when the first estimate is rank-deficient") {
+    const Model model = momentid::parse_model(
+        "state y\ninput x\nparam a = 1, b = 1\ny' = -a*y - b*y + x\n", "ab.mom");
+    momentid::SimulationOptions options;
+    options.parameters = momentid::parameter_values(model, {});
+    options.inputs = {momentid::InputSpec::parse("ma:K=10,w=0.1", "test")};
+    options.samples = 20000;
+    Columns columns(2);
+    momentid::simulate(model, options, columns);
+    momentid::MemoryData data;
+    data.rows = options.samples;
+    data.columns = {{"y", columns.values[0].data()}, {"x", columns.values[1].data()}};
+    data.metadata.add_line({{"dt", "0.01"}, {"input-hold", "zoh"}});
+    const momentid::IdentifyResult r =
+        momentid::identify(model, momentid::DataSource::memory(std::move(data)));
+    CHECK(r.estimate.status == Estimate::Status::kRankDeficient);
+    REQUIRE(r.held_input.has_value());
+    CHECK(r.held_input->unavailable ==
+          "the estimate without it does not determine every parameter");
+  }
+
   TEST_CASE("reading zoh data as samples biases the first-order estimate downwards") {
     // With `sample`, the product x*y is averaged with the trapezoidal rule, which pairs half of
     // each held input with the state at the start of its interval (the report's program paired

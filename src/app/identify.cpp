@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <map>
 #include <set>
 #include <sstream>
@@ -315,13 +316,19 @@ void correct_for_held_input(IdentifyResult& result, const HeldInputCorrections& 
   const double scale = *result.data.time_step * *result.data.time_step / 12;
   std::vector<double> before;
   for (const ParameterEstimate& p : result.parameters()) before.push_back(p.estimate);
+  // Where a round cannot be made, the result is the uncorrected one.
+  const Estimate uncorrected = result.estimate;
+  const MomentEstimates uncorrected_moments = result.data.estimates;
+  const auto give_up = [&](const char* reason) {
+    out.unavailable = reason;
+    result.estimate = uncorrected;
+    result.data.estimates = uncorrected_moments;
+  };
   std::vector<double> theta = before;
   for (int round = 0; round < 2; ++round) {
     if (result.estimate.status != Estimate::Status::kOk ||
         std::any_of(theta.begin(), theta.end(), [](double t) { return !std::isfinite(t); })) {
-      out.unavailable = "the estimate without it does not determine every parameter";
-      out.shift.clear();
-      return;
+      return give_up("the estimate without it does not determine every parameter");
     }
     GiNaC::exmap values;
     for (std::size_t p = 0; p < theta.size(); ++p) {
@@ -331,8 +338,17 @@ void correct_for_held_input(IdentifyResult& result, const HeldInputCorrections& 
     for (const HeldInputCorrection& c : held.moments) {
       const std::size_t target = index.at(c.moment);
       for (const auto& [m, weight] : c.second_derivative) {
-        const double w =
-            scale * GiNaC::ex_to<GiNaC::numeric>(weight.subs(values).evalf()).to_double();
+        double w = std::numeric_limits<double>::quiet_NaN();
+        try {
+          const GiNaC::ex value = weight.subs(values).evalf();
+          if (GiNaC::is_a<GiNaC::numeric>(value)) {
+            w = scale * GiNaC::ex_to<GiNaC::numeric>(value).to_double();
+          }
+        } catch (const std::exception&) {  // e.g. a division by a parameter estimated as 0
+        }
+        if (!std::isfinite(w)) {
+          return give_up("its weights cannot be evaluated at the estimated parameters");
+        }
         const auto source = index.find(m);
         if (source == index.end()) {  // the constant 1
           corrected.mean[target] -= w;
@@ -392,9 +408,9 @@ IdentifyResult identify(const Model& model, const DataSource& source,
     if (result.gmm) data_options.min_batches = kBatchesPerEquation * result.system.equations.size();
     data_options.offsets =
         channel_offsets(source, states, inputs, data_options, options.center, result.centered);
-    // A held input puts kinks into the states at the samples: the moments without an input
-    // are then corrected, with E[g''] from moments the pass adds (unless the data are known to
-    // be sampled).
+    // A held input puts kinks into the states at the samples: the moments whose derivative
+    // holds it are then corrected, with E[g''] from moments the pass adds (unless the data are
+    // known to be sampled).
     HeldInputCorrections held;
     std::vector<Monomial> pass_moments = result.moments;
     if (!inputs.empty() && options.hold != InputHold::kSample) {
