@@ -219,6 +219,31 @@ TEST_SUITE("accumulator") {
     CHECK(copy.serialize() == acc.serialize());
   }
 
+  TEST_CASE("the trapezoidal rule for held products: u[n] (g[n] + g[n+1]) / 2, kept in its bytes") {
+    // y = 1, 2, 4, 7 under x = 1 held: the cubic rule gives (17/12 + 70/24 + 65/12) / 3 = 3.25
+    // (one-sided at the run's ends), the trapezoidal rule (1.5 + 3 + 5.5) / 3.
+    const double rows[] = {1, 1, 2, 1, 4, 1, 7, 1};
+    const auto mean = [&](momentid::HeldRule rule) {
+      MomentAccumulator acc({Moment::from_monomial({1, 1})}, 1, 1, InputHold::kZeroOrderHold, 1,
+                            rule);
+      acc.add(rows, 4);
+      acc.finish();
+      const MomentAccumulator copy = MomentAccumulator::deserialize(acc.serialize());
+      CHECK(copy.serialize() == acc.serialize());
+      CHECK(acc.serialize()[28] == (rule == momentid::HeldRule::kCubic ? 1 : 2));
+      return momentid::estimates(copy, 1).mean[0];
+    };
+    CHECK(mean(momentid::HeldRule::kCubic) == doctest::Approx(3.25).epsilon(1e-15));
+    CHECK(mean(momentid::HeldRule::kTrapezoidal) == doctest::Approx(10.0 / 3).epsilon(1e-15));
+    MomentAccumulator cubic({Moment::from_monomial({1, 1})}, 1, 1, InputHold::kZeroOrderHold, 1);
+    const MomentAccumulator trapezoidal({Moment::from_monomial({1, 1})}, 1, 1,
+                                        InputHold::kZeroOrderHold, 1,
+                                        momentid::HeldRule::kTrapezoidal);
+    CHECK(error_from<momentid::Error>([&] { cubic.merge(trapezoidal); }).what() ==
+          std::string("cannot merge moment accumulators with different input holds: zero-order "
+                      "hold here, zero-order hold (trapezoidal) in the other"));
+  }
+
   TEST_CASE("a moment is normalised: zero powers dropped, sorted by lag then channel, merged") {
     const Moment m({{2, 1, 4}, {0, 0, 1}, {1, 1, 3}, {2, 2, 4}, {0, 1, 4}});
     CHECK(m.factors() == std::vector<MomentFactor>{{1, 1, 0}, {0, 1, 1}, {2, 3, 1}});

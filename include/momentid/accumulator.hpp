@@ -79,6 +79,7 @@ class MomentAccumulator {
 
   // `batches`: how many batches the estimates will be split into at most; the accumulator
   // keeps between 2 and 4 times as many stretches, so its memory does not grow with the record.
+  // `rule` matters only with a held input (kSample takes it as kCubic).
   MomentAccumulator(std::vector<Moment> moments, std::size_t states, std::size_t inputs,
                     InputHold hold, std::size_t batches, HeldRule rule = HeldRule::kCubic);
 

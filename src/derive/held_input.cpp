@@ -1,5 +1,5 @@
-// The trapezoidal rule's bias on moments without an input when the input is held over each
-// sample: E_dt[g] = E[g] + dt^2/12 * E[g''] + O(dt^3) (derive.hpp, held_input_corrections).
+// The trapezoidal rule's bias on the moments of data whose input is held over each sample:
+// E_dt[g] = E[g] + dt^2/12 * E[g''] + O(dt^4) (derive.hpp, held_input_corrections).
 
 #include <map>
 
@@ -22,14 +22,18 @@ HeldInputCorrections held_input_corrections(const Model& model,
   HeldInputCorrections out;
   const std::size_t states = model.states().size();
   std::vector<GiNaC::symbol> variables;
-  for (std::size_t i = 0; i < states; ++i) variables.push_back(model.state_symbol(int(i)));
+  for (std::size_t i = 0; i < states; ++i) {
+    variables.push_back(model.state_symbol(static_cast<int>(i)));
+  }
   for (std::size_t i = 0; i < model.inputs().size(); ++i) {
-    variables.push_back(model.input_symbol(int(i)));
+    variables.push_back(model.input_symbol(static_cast<int>(i)));
   }
   // The derivatives as functions of the states and the (held) input.
   GiNaC::lst equations, derivatives;
   for (const Equation& eq : model.equations()) equations.append(eq.lhs == eq.rhs);
-  for (std::size_t i = 0; i < states; ++i) derivatives.append(model.derivative_symbol(int(i)));
+  for (std::size_t i = 0; i < states; ++i) {
+    derivatives.append(model.derivative_symbol(static_cast<int>(i)));
+  }
   GiNaC::ex solution;
   try {
     solution = GiNaC::lsolve(equations, derivatives);
@@ -40,8 +44,18 @@ HeldInputCorrections held_input_corrections(const Model& model,
     out.unavailable = "the equations do not give the derivatives of the states explicitly";
     return out;
   }
+  // Polynomials in the states and inputs, over a denominator in the parameters at most, so that
+  // g'' is a combination of moments.
   std::vector<GiNaC::ex> rate(states);
-  for (std::size_t i = 0; i < states; ++i) rate[i] = solution.op(i).rhs();
+  for (std::size_t i = 0; i < states; ++i) {
+    rate[i] = solution.op(i).rhs().normal();
+    for (const GiNaC::symbol& v : variables) {
+      if (rate[i].denom().has(v)) {
+        out.unavailable = "the derivatives of the states are not polynomials in the states";
+        return out;
+      }
+    }
+  }
   const auto time_derivative = [&](const GiNaC::ex& g) {
     GiNaC::ex sum = 0;
     for (std::size_t i = 0; i < states; ++i) sum += g.diff(variables[i]) * rate[i];
@@ -60,13 +74,6 @@ HeldInputCorrections held_input_corrections(const Model& model,
     if (!jumps) continue;
     const GiNaC::ex fraction = time_derivative(rate_of_g).normal();
     const GiNaC::ex denominator = fraction.denom();
-    for (const GiNaC::symbol& v : variables) {
-      if (denominator.has(v)) {
-        out.unavailable = "the derivatives of the states are not polynomials in the states";
-        out.moments.clear();
-        return out;
-      }
-    }
     std::map<Monomial, GiNaC::ex, MomentOrder> terms;
     const GiNaC::ex numerator = fraction.numer().expand();
     const auto add = [&](const GiNaC::ex& term) {

@@ -36,7 +36,7 @@ MomentAccumulator::MomentAccumulator(std::vector<Moment> moments, std::size_t st
       states_(states),
       inputs_(inputs),
       hold_(hold),
-      rule_(rule),
+      rule_(hold == InputHold::kZeroOrderHold ? rule : HeldRule::kCubic),
       batches_(batches),
       max_stretches_(4 * std::max<std::size_t>(batches, 2)) {
   const std::size_t variables = states_ + inputs_;
