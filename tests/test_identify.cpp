@@ -98,6 +98,31 @@ momentid::IdentifyResult identify_from_displacement(
   return momentid::identify(model, momentid::DataSource::memory(std::move(data)), o);
 }
 
+// Simulates `model` (its nominal values) under the held input `input` into memory, every state
+// and input recorded, and identifies it; with `dt`, the data's metadata give the sample interval
+// and the hold (otherwise they give neither).
+momentid::IdentifyResult identify_held(const Model& model, const std::string& input,
+                                       std::size_t samples, std::optional<double> dt,
+                                       std::uint64_t seed, const momentid::IdentifyOptions& o) {
+  momentid::SimulationOptions options;
+  options.parameters = momentid::parameter_values(model, {});
+  options.inputs = {momentid::InputSpec::parse(input, "test")};
+  options.samples = samples;
+  options.dt = dt.value_or(0.01);
+  options.seed = seed;
+  Columns columns(model.variables().size());
+  momentid::simulate(model, options, columns);
+  momentid::MemoryData data;
+  data.rows = samples;
+  for (std::size_t v = 0; v < columns.values.size(); ++v) {
+    data.columns.push_back({model.variables()[v], columns.values[v].data()});
+  }
+  if (dt) {
+    data.metadata.add_line({{"dt", momentid::shortest_decimal(*dt)}, {"input-hold", "zoh"}});
+  }
+  return momentid::identify(model, momentid::DataSource::memory(std::move(data)), o);
+}
+
 double truth_of(const Model& model, std::size_t p) {
   return model.parameters()[p].value->to_double();
 }
@@ -194,22 +219,8 @@ TEST_SUITE("identify") {
     // interval in the metadata: the trapezoidal averages of the moments are biased by
     // dt^2/12 E[g''], several standard errors of c and k at 2*10^5 samples.
     const Model model = model_file("duffing.mom");
-    momentid::SimulationOptions options;
-    options.parameters = momentid::parameter_values(model, {});
-    options.inputs = {momentid::InputSpec::parse("ma:K=10,w=0.1,sigma=20", "test")};
-    options.samples = 200000;
-    options.dt = 0.04;
-    options.seed = 2;
-    Columns columns(3);
-    momentid::simulate(model, options, columns);
-    momentid::MemoryData data;
-    data.rows = options.samples;
-    for (std::size_t v = 0; v < 3; ++v) {
-      data.columns.push_back({model.variables()[v], columns.values[v].data()});
-    }
-    data.metadata.add_line({{"dt", "0.04"}, {"input-hold", "zoh"}});
     const momentid::IdentifyResult r =
-        momentid::identify(model, momentid::DataSource::memory(std::move(data)), {.degree = 3});
+        identify_held(model, "ma:K=10,w=0.1,sigma=20", 200000, 0.04, 2, {.degree = 3});
     REQUIRE(r.held_input.has_value());
     CHECK(r.held_input->unavailable.empty());
     REQUIRE(r.held_input->shift.size() == 3);
@@ -223,21 +234,9 @@ TEST_SUITE("identify") {
   }
 
   TEST_CASE("without the sample interval a held input's kinks are not corrected, and it says so") {
-    const Model model = model_file("duffing.mom");
-    momentid::SimulationOptions options;
-    options.parameters = momentid::parameter_values(model, {});
-    options.inputs = {momentid::InputSpec::parse("ma:K=10,w=0.1,sigma=20", "test")};
-    options.samples = 20000;
-    Columns columns(3);
-    momentid::simulate(model, options, columns);
-    momentid::MemoryData data;
-    data.rows = options.samples;
-    for (std::size_t v = 0; v < 3; ++v) {
-      data.columns.push_back({model.variables()[v], columns.values[v].data()});
-    }
     const momentid::IdentifyResult r =
-        momentid::identify(model, momentid::DataSource::memory(std::move(data)),
-                           {.degree = 3, .hold = InputHold::kZeroOrderHold});
+        identify_held(model_file("duffing.mom"), "ma:K=10,w=0.1,sigma=20", 20000, std::nullopt, 1,
+                      {.degree = 3, .hold = InputHold::kZeroOrderHold});
     REQUIRE(r.held_input.has_value());
     CHECK(r.held_input->shift.empty());
     CHECK(r.held_input->unavailable ==
@@ -250,18 +249,7 @@ TEST_SUITE("identify") {
   TEST_CASE("a held input's kinks are not corrected when the first estimate is rank-deficient") {
     const Model model = momentid::parse_model(
         "state y\ninput x\nparam a = 1, b = 1\ny' = -a*y - b*y + x\n", "ab.mom");
-    momentid::SimulationOptions options;
-    options.parameters = momentid::parameter_values(model, {});
-    options.inputs = {momentid::InputSpec::parse("ma:K=10,w=0.1", "test")};
-    options.samples = 20000;
-    Columns columns(2);
-    momentid::simulate(model, options, columns);
-    momentid::MemoryData data;
-    data.rows = options.samples;
-    data.columns = {{"y", columns.values[0].data()}, {"x", columns.values[1].data()}};
-    data.metadata.add_line({{"dt", "0.01"}, {"input-hold", "zoh"}});
-    const momentid::IdentifyResult r =
-        momentid::identify(model, momentid::DataSource::memory(std::move(data)));
+    const momentid::IdentifyResult r = identify_held(model, "ma:K=10,w=0.1", 20000, 0.01, 1, {});
     CHECK(r.estimate.status == Estimate::Status::kRankDeficient);
     REQUIRE(r.held_input.has_value());
     CHECK(r.held_input->unavailable ==
