@@ -110,7 +110,7 @@ MomentSystem derive(const Model& model, const DeriveOptions& options = {});
 //
 // Example, the Duffing model (y' = v, v' = -c*v - k*y - eps*y^3 + x):
 //   HeldInputCorrections h = held_input_corrections(model, {{0, 2, 0}});  // E[v^2]
-//   // h.moments[0].second_derivative: E[(v^2)''] = 2 E[x^2] - 4c E[v*x] + ... as
+//   // h.moments[0].second_derivative: E[(v^2)''] = 2 E[x^2] - 6c E[v*x] + ... as
 //   // {monomial, weight} pairs, the weights in model.parameter_symbol(p).
 struct HeldInputCorrection {
   Monomial moment;

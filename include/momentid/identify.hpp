@@ -108,9 +108,9 @@ struct IdentifyResult {
     bool applied = false;
   };
   std::optional<SamplingBias> sampling_bias;
-  // Data whose input is held over each sample (zero-lag equations): the moments without an
-  // input were corrected for the kinks the held input puts into the states at the samples
-  // (derive.hpp, held_input_corrections). `shift`: per parameter of the main result, the
+  // Data whose input is held over each sample (zero-lag equations): the moments whose
+  // derivative holds the input were corrected for the kinks it puts into the states at the
+  // samples (derive.hpp, held_input_corrections). `shift`: per parameter of the main result, the
   // corrected estimate minus the uncorrected one; empty, with `unavailable` saying why, when
   // no correction could be made.
   struct HeldInput {

@@ -374,7 +374,7 @@ ShardState read_shard(DataReader& reader, bool whole, const PassSetup& setup, bo
   const DataOptions& options = *setup.options;
   const std::size_t channels = setup.states + setup.inputs;
   ShardState out{MomentAccumulator(setup.moments, setup.states, setup.inputs, setup.hold,
-                                   setup.batches, setup.options->held_rule),
+                                   setup.batches, options.held_rule),
                  LagSums(channels, options.lags)};
   InputShift shift(setup.states, setup.inputs, options.input_shift);
   Decimate decimate(channels, options.stride, options.phase);
@@ -476,10 +476,10 @@ RangeResult read_range(const Pass& pass, std::size_t begin, std::size_t end,
                        std::unique_ptr<DataReader> first_reader) {
   const DataOptions& options = *pass.setup.options;
   RangeResult out;
-  out.state.emplace(ShardState{
-      MomentAccumulator(pass.setup.moments, pass.setup.states, pass.setup.inputs, pass.setup.hold,
-                        pass.merged_batches, pass.setup.options->held_rule),
-      LagSums(pass.setup.states + pass.setup.inputs, options.lags)});
+  out.state.emplace(
+      ShardState{MomentAccumulator(pass.setup.moments, pass.setup.states, pass.setup.inputs,
+                                   pass.setup.hold, pass.merged_batches, options.held_rule),
+                 LagSums(pass.setup.states + pass.setup.inputs, options.lags)});
   if (begin == end) return out;
   const std::size_t threads = options.control.threads > 0
                                   ? options.control.threads
