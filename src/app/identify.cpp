@@ -292,6 +292,19 @@ MomentEstimates first_moments(const MomentEstimates& all, std::size_t count) {
   return out;
 }
 
+// `moments`, then the other moments that the E[g''] of `held` need (the constant 1 is none).
+std::vector<Monomial> with_second_derivatives(std::vector<Monomial> moments,
+                                              const HeldInputCorrections& held) {
+  std::set<Monomial> known(moments.begin(), moments.end());
+  for (const HeldInputCorrection& c : held.moments) {
+    for (const auto& [m, weight] : c.second_derivative) {
+      const bool constant = std::all_of(m.begin(), m.end(), [](int e) { return e == 0; });
+      if (!constant && known.insert(m).second) moments.push_back(m);
+    }
+  }
+  return moments;
+}
+
 // Data whose input is held over each sample: replaces the estimate of `result` by the one from
 // moments corrected for the kinks of the held input, E[g] = E_dt[g] - dt^2/12 E[g''] (derive.hpp,
 // held_input_corrections), with the weights of E[g''] at the parameters of the previous
@@ -411,20 +424,10 @@ IdentifyResult identify(const Model& model, const DataSource& source,
     // A held input puts kinks into the states at the samples: the moments whose derivative
     // holds it are then corrected, with E[g''] from moments the pass adds (unless the data are
     // known to be sampled).
-    HeldInputCorrections held;
-    std::vector<Monomial> pass_moments = result.moments;
-    if (!inputs.empty() && options.hold != InputHold::kSample) {
-      held = held_input_corrections(model, result.moments);
-      std::set<Monomial> known(pass_moments.begin(), pass_moments.end());
-      for (const HeldInputCorrection& c : held.moments) {
-        for (const auto& [m, weight] : c.second_derivative) {
-          if (std::any_of(m.begin(), m.end(), [](int e) { return e != 0; }) &&
-              known.insert(m).second) {
-            pass_moments.push_back(m);
-          }
-        }
-      }
-    }
+    const HeldInputCorrections held = !inputs.empty() && options.hold != InputHold::kSample
+                                          ? held_input_corrections(model, result.moments)
+                                          : HeldInputCorrections{};
+    const std::vector<Monomial> pass_moments = with_second_derivatives(result.moments, held);
     // The correction removes the trapezoidal rule's error on the held products too, which the
     // cubic rule only makes smaller.
     if (!held.moments.empty()) data_options.held_rule = HeldRule::kTrapezoidal;
@@ -442,7 +445,7 @@ IdentifyResult identify(const Model& model, const DataSource& source,
                                      .fixed = fixed_values(model, options.fixed),
                                      .error_batches = options.extrapolate ? &errors : nullptr};
     result.estimate = solve(result.system, result.data.estimates, solve_options);
-    if (result.data.hold == InputHold::kZeroOrderHold && !inputs.empty()) {
+    if (result.data.hold == InputHold::kZeroOrderHold) {
       correct_for_held_input(result, held, pass_moments, all, solve_options);
     }
     if (options.extrapolate) {
