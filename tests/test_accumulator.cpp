@@ -160,7 +160,7 @@ void check_same_moments(const MomentAccumulator& got, const MomentAccumulator& w
 }
 
 // A tiny accumulator with a fixed layout: one state, the moment c0, three rows (two intervals,
-// each closing a stretch of length 1), 137 bytes.
+// each closing a stretch of length 1), 138 bytes.
 std::vector<std::uint8_t> tiny_bytes() {
   MomentAccumulator acc({Moment::from_monomial({1})}, 1, 0, InputHold::kSample, 1);
   const double rows[] = {1, 2, 3};
@@ -356,6 +356,65 @@ TEST_SUITE("accumulator") {
     }
   }
 
+  TEST_CASE("an increment sums g(n + 1) - g(n) over the intervals of each stretch") {
+    // Increments of a state, of a product of states and of a product with the input (the whole
+    // product, not held), beside held moments; stretches cut runs anywhere, also for shards.
+    const Record record = make_record({301, 3, 6, 7, 180, 1, 95, 2, 40});
+    const std::vector<momentid::Monomial> changed{{2, 0, 0}, {1, 1, 1}, {0, 1, 0}};
+    std::vector<Moment> moments = all_moments();
+    for (const auto& g : changed) moments.push_back(Moment::increment_of(g));
+    CHECK(momentid::to_string(moments.back()) == "d(c1)");
+    std::vector<std::size_t> intervals;  // the first row of each interval, in record order
+    for (std::size_t begin : record.run_starts) {
+      for (std::size_t n = begin; n + 1 < record.run_end(begin); ++n) intervals.push_back(n);
+    }
+    const auto value = [&](const momentid::Monomial& g, std::size_t row) {
+      double product = 1;
+      for (std::size_t c = 0; c < kChannels; ++c) product *= std::pow(record.row(row)[c], g[c]);
+      return product;
+    };
+    momentid::PortableRandom random(/*seed=*/5, /*stream=*/0);
+    for (InputHold hold : {InputHold::kSample, InputHold::kZeroOrderHold}) {
+      for (const std::size_t shards : {1, 6}) {
+        const MomentAccumulator acc =
+            shards == 1 ? one_pass(record, hold, moments)
+                        : merged_shards(record, random_cuts(random, record.rows(), shards - 1),
+                                        hold, moments);
+        REQUIRE(acc.intervals() == intervals.size());
+        std::size_t next = 0;
+        for (const MomentAccumulator::Stretch& stretch : acc.stretches()) {
+          for (std::size_t i = 0; i < changed.size(); ++i) {
+            double want = 0;
+            for (std::size_t q = next; q < next + stretch.intervals; ++q) {
+              want += value(changed[i], intervals[q] + 1) - value(changed[i], intervals[q]);
+            }
+            INFO("hold ", static_cast<int>(hold), ", ", shards, " shards, stretch from interval ",
+                 next, ", ", to_string(moments[all_moments().size() + i]));
+            CHECK(std::abs(stretch.sums[all_moments().size() + i] - want) <= 1e-12);
+          }
+          next += stretch.intervals;
+        }
+        CHECK(next == intervals.size());
+        const MomentAccumulator copy = MomentAccumulator::deserialize(acc.serialize());
+        CHECK(copy.moments() == acc.moments());
+        CHECK(copy.serialize() == acc.serialize());
+      }
+    }
+    MomentAccumulator plain({Moment::from_monomial({1})}, 1, 0, InputHold::kSample, 1);
+    const MomentAccumulator increment({Moment::increment_of({1})}, 1, 0, InputHold::kSample, 1);
+    CHECK(error_from<momentid::Error>([&] { plain.merge(increment); }).what() ==
+          std::string("cannot merge moment accumulators of different moments: moment 0 is c0 "
+                      "here, d(c0) in the other"));
+  }
+
+  TEST_CASE("bytes of an increment with lagged factors, or of an unknown kind, are refused") {
+    std::vector<std::uint8_t> bytes = tiny_bytes();
+    bytes[45] = 2;  // the kind of the only moment
+    CHECK(deserialize_error(bytes) ==
+          "moment accumulator bytes: moment 0 of kind 2, expected 0 (a moment) or 1 (an "
+          "increment)");
+  }
+
   TEST_CASE("lagged moments of shards with their history merge to the one-pass moments") {
     // Runs shorter than the largest lag (they give no interval), cuts inside the first rows of
     // a run (the history is then the whole run so far), and both holds.
@@ -411,17 +470,17 @@ TEST_SUITE("accumulator") {
 
   TEST_CASE("the layout is pinned: tag, version, and the size of a tiny accumulator") {
     const std::vector<std::uint8_t> bytes = tiny_bytes();
-    CHECK(bytes.size() == 137);
+    CHECK(bytes.size() == 138);
     CHECK(std::string(bytes.begin(), bytes.begin() + 8) == "MOMACCUM");
-    CHECK(bytes[8] == 1);
+    CHECK(bytes[8] == 2);
   }
 
   TEST_CASE("truncated bytes are refused, naming the field and where it starts") {
     std::vector<std::uint8_t> bytes = tiny_bytes();
     bytes.pop_back();
     CHECK(deserialize_error(bytes) ==
-          "truncated moment accumulator bytes: 136 bytes, but 3 stretches need at least 16 bytes "
-          "each from byte 89");
+          "truncated moment accumulator bytes: 137 bytes, but 3 stretches need at least 16 bytes "
+          "each from byte 90");
     bytes.resize(40);
     CHECK(deserialize_error(bytes) ==
           "truncated moment accumulator bytes: 40 bytes, but the number of moments needs 8 bytes "
@@ -435,7 +494,7 @@ TEST_SUITE("accumulator") {
     std::vector<std::uint8_t> bytes = tiny_bytes();
     bytes[37 + 7] = 0x10;  // the number of moments, 2^60 + 1
     CHECK(deserialize_error(bytes) ==
-          "truncated moment accumulator bytes: 137 bytes, but 1152921504606846977 moments need at "
+          "truncated moment accumulator bytes: 138 bytes, but 1152921504606846977 moments need at "
           "least 4 bytes each from byte 45");
   }
 
@@ -446,27 +505,27 @@ TEST_SUITE("accumulator") {
           "not moment accumulator bytes: they start with 58 4f 4d 41 43 43 55 4d, expected the "
           "tag \"MOMACCUM\"");
     bytes = tiny_bytes();
-    bytes[8] = 2;
+    bytes[8] = 1;
     CHECK(deserialize_error(bytes) ==
-          "moment accumulator bytes of layout version 2, expected version 1");
+          "moment accumulator bytes of layout version 1, expected version 2");
     bytes = tiny_bytes();
     bytes[28] = 7;
     CHECK(deserialize_error(bytes) ==
           "moment accumulator bytes: input hold 7, expected 0 (sample), 1 (zero-order hold) or 2 "
           "(zero-order hold, trapezoidal)");
     bytes = tiny_bytes();
-    bytes[73] = 3;  // the interval count
+    bytes[74] = 3;  // the interval count
     CHECK(deserialize_error(bytes) ==
           "moment accumulator bytes: 3 intervals counted, but the stretches hold 2");
     bytes = tiny_bytes();
     bytes.push_back(0);
     CHECK(deserialize_error(bytes) ==
-          "moment accumulator bytes: 1 byte after the end of the layout at byte 137");
+          "moment accumulator bytes: 1 byte after the end of the layout at byte 138");
   }
 
   TEST_CASE("bytes naming a channel the accumulator does not have are refused") {
     std::vector<std::uint8_t> bytes = tiny_bytes();
-    bytes[53] = 1;  // the channel of the only factor
+    bytes[54] = 1;  // the channel of the only factor
     CHECK(deserialize_error(bytes) ==
           "moment accumulator bytes: moment c1: the factor c1 names channel 1, expected a "
           "channel below 1 (1 state, 0 inputs)");

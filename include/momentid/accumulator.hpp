@@ -28,7 +28,9 @@ enum class HeldRule { kCubic, kTrapezoidal };
 // contiguous stretch of the record so that their sampling covariance can be estimated from batch
 // means. Each moment is computed from precomputed powers of the channels and averaged over the
 // intervals between consecutive rows of one run, never across runs (see close_interval).
-// Interval n of a run is [row n, row n + 1].
+// Interval n of a run is [row n, row n + 1]. An increment (Moment::increment_of) adds
+// g(row n + 1) - g(row n) for interval n, so that its sum over a stretch is g at the stretch's
+// last row less g at its first, whatever the sampling.
 //
 // Lagged moments. A factor at lag l is taken l rows before the row of its interval: the moment
 // E[y(t - 3) y(t)] averages y[n - 3] y[n] over the intervals. Every moment is averaged over the
@@ -112,10 +114,11 @@ class MomentAccumulator {
 
   // The state of a finished accumulator as bytes, for deserialize() (throws Error in the middle
   // of a run). Layout version 1, integers and IEEE-754 doubles little-endian:
-  //   "MOMACCUM", u32 version, u64 states, u64 inputs, u8 hold (0 sample, 1 zero-order hold, 2
-  //   zero-order hold with the trapezoidal rule), u64 batches, u64 moments, per moment {u64
-  //   factors, per factor {i32 channel, i32 power, i32 lag}}, u64 stretch length, u64 intervals,
-  //   u64 stretches, per stretch {u64 intervals, f64 sum per moment}.
+  //   "MOMACCUM", u32 version (2), u64 states, u64 inputs, u8 hold (0 sample, 1 zero-order hold,
+  //   2 zero-order hold with the trapezoidal rule), u64 batches, u64 moments, per moment {u8 kind
+  //   (0 a moment, 1 an increment), u64 factors, per factor {i32 channel, i32 power, i32 lag}},
+  //   u64 stretch length, u64 intervals, u64 stretches, per stretch {u64 intervals, f64 sum per
+  //   moment}.
   std::vector<std::uint8_t> serialize() const;
   // The accumulator that serialize() wrote into `bytes`. Throws Error saying what was found and
   // what was expected for bytes that are not that: a wrong tag or version, truncated or trailing
@@ -180,7 +183,9 @@ class MomentAccumulator {
                       std::size_t last);
 
   std::vector<std::size_t> order_;  // working position -> moment; the held ones first
-  std::size_t held_count_ = 0;      // moments averaged with a held input
+  // Moments kept in the rings: those averaged with a held input, then from increments_begin_
+  // the increments (Moment::increment_of).
+  std::size_t ringed_count_ = 0, increments_begin_ = 0;
   std::size_t max_lag_ = 0;
   std::vector<int> max_power_;
   std::vector<std::size_t> power_offset_;

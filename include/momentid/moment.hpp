@@ -48,6 +48,10 @@ class Moment {
   explicit Moment(std::vector<MomentFactor> factors);
   // The moment of `monomial` with every factor at lag 0.
   static Moment from_monomial(const Monomial& monomial);
+  // Not an expectation but the change of `monomial` across a sample interval, every factor at
+  // lag 0: averaged over the intervals of a stretch of the record it is (g(end) - g(start)) /
+  // intervals exactly, which divided by dt is the record's E[d/dt g] (README, "End values").
+  static Moment increment_of(const Monomial& monomial);
 
   // In normal form (see above).
   const std::vector<MomentFactor>& factors() const { return factors_; }
@@ -56,6 +60,7 @@ class Moment {
   // The largest lag of a factor; 0 for a moment without lags.
   int max_lag() const;
   bool is_lagged() const { return max_lag() > 0; }
+  bool is_increment() const { return increment_; }
   // The exponents of the factors at `lag` over `variables` channels. Throws std::out_of_range
   // if a factor at that lag names a channel not below `variables`.
   Monomial at_lag(int lag, std::size_t variables) const;
@@ -65,11 +70,12 @@ class Moment {
 
  private:
   std::vector<MomentFactor> factors_;
+  bool increment_ = false;
 };
 
 // `c1^2`, `c0(t-3)`: channel index, power above 1, and the lag when it is not 0.
 std::string to_string(const MomentFactor& factor);
-// The factors joined by `*`, or `1`: `c0^2*c2(t-3)`.
+// The factors joined by `*`, or `1`: `c0^2*c2(t-3)`; an increment as `d(c0^2)`.
 std::string to_string(const Moment& moment);
 
 }  // namespace momentid

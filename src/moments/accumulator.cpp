@@ -74,8 +74,10 @@ MomentAccumulator::MomentAccumulator(std::vector<Moment> moments, std::size_t st
   // C[ψ;F](s) = E[ψ(t − s) F(t)] is exactly the stencil applied to F at each instrument time,
   // with no end effects; reading F at a fixed window instead would leave end terms that a
   // derivative in s multiplies by 1/dt^2.
+  // Kinds in working order: products with a held input, increments, the other products.
+  enum Kind { kHeld, kIncrement, kPlain };
   struct Layout {
-    bool held = false;
+    Kind kind = kPlain;
     std::size_t state_factors = 0;
     std::vector<std::size_t> indices, lags;
   };
@@ -93,21 +95,31 @@ MomentAccumulator::MomentAccumulator(std::vector<Moment> moments, std::size_t st
       }
       if (state_part) l.state_factors = l.indices.size();
     }
-    l.held = hold_ == InputHold::kZeroOrderHold && has_input;
+    if (moments_[i].is_increment()) {
+      l.kind = kIncrement;  // the whole product at each row, kept in the rings
+      l.state_factors = l.indices.size();
+    } else if (hold_ == InputHold::kZeroOrderHold && has_input) {
+      l.kind = kHeld;
+    }
   }
-  // The moments are worked on in an order that puts the held ones first and lines up the same
-  // factors at successive lags, so that blocks of them are products of contiguous rows.
+  // The moments are worked on in an order that puts the held ones first, then the increments,
+  // and lines up the same factors at successive lags, so that blocks of them are products of
+  // contiguous rows.
   order_.resize(moments_.size());
   for (std::size_t i = 0; i < order_.size(); ++i) order_[i] = i;
   std::stable_sort(order_.begin(), order_.end(), [&](std::size_t x, std::size_t y) {
     const Layout& a = layouts[x];
     const Layout& b = layouts[y];
-    if (a.held != b.held) return a.held;
+    if (a.kind != b.kind) return a.kind < b.kind;
     return std::tie(a.state_factors, a.indices, a.lags) <
            std::tie(b.state_factors, b.indices, b.lags);
   });
-  held_count_ = static_cast<std::size_t>(
-      std::count_if(layouts.begin(), layouts.end(), [](const Layout& l) { return l.held; }));
+  const auto count = [&](Kind kind) {
+    return static_cast<std::size_t>(std::count_if(
+        layouts.begin(), layouts.end(), [&](const Layout& l) { return l.kind == kind; }));
+  };
+  increments_begin_ = count(kHeld);
+  ringed_count_ = increments_begin_ + count(kIncrement);
   const std::size_t span = 2 * depth;
   for (std::size_t q = 0; q < order_.size();) {
     const Layout& first = layouts[order_[q]];
@@ -116,7 +128,7 @@ MomentAccumulator::MomentAccumulator(std::vector<Moment> moments, std::size_t st
     for (; end < order_.size(); ++end) {
       const Layout& prev = layouts[order_[end - 1]];
       const Layout& next = layouts[order_[end]];
-      if (next.held != first.held || next.state_factors != first.state_factors ||
+      if (next.kind != first.kind || next.state_factors != first.state_factors ||
           next.indices != first.indices) {
         break;
       }
@@ -139,9 +151,10 @@ MomentAccumulator::MomentAccumulator(std::vector<Moment> moments, std::size_t st
   }
   for (std::size_t i = 0; i < blocks_.size(); ++i) {
     const Block& b = blocks_[i];
-    const bool held = b.begin < held_count_;
+    const bool held = b.begin < ringed_count_;
     const std::size_t n = b.factors.size();
-    // A held moment needs both parts; one without an input factor is not held.
+    // A held moment needs both parts; one without an input factor is not held. An increment
+    // (all state part) is computed by blocks.
     const bool fits = std::all_of(b.factors.begin(), b.factors.end(), [](const BlockFactor& f) {
       return f.offset <= std::numeric_limits<std::uint32_t>::max();
     });
@@ -160,8 +173,8 @@ MomentAccumulator::MomentAccumulator(std::vector<Moment> moments, std::size_t st
     }
   }
   const std::size_t k = moments_.size();
-  state_ring_.assign(4 * held_count_, 0.0);
-  input_ring_.assign(4 * held_count_, 0.0);
+  state_ring_.assign(4 * ringed_count_, 0.0);
+  input_ring_.assign(4 * ringed_count_, 0.0);
   row_.assign(k, 0.0);
   previous_row_.assign(k, 0.0);
   open_sums_.assign(k, 0.0);
@@ -347,8 +360,8 @@ void MomentAccumulator::push_rows(const double* rows, std::size_t count) {
     const double* history = history_.data() + history_pos_;
     // A held moment keeps its state and input parts apart (the state part is integrated over
     // the interval, the input held), in the rings for close_interval.
-    double* state = state_ring_.data() + (m % 4) * held_count_;
-    double* input = input_ring_.data() + (m % 4) * held_count_;
+    double* state = state_ring_.data() + (m % 4) * ringed_count_;
+    double* input = input_ring_.data() + (m % 4) * ringed_count_;
     for (const Single& one : held_singles_) {
       state[one.position] = single_product(one, history, 0, one.state_factors);
       input[one.position] = single_product(one, history, one.state_factors, one.factors);
@@ -403,13 +416,13 @@ MOMENTID_KERNEL void MomentAccumulator::add_plain_products(const double* history
 
 void MomentAccumulator::plain_products(double* out, const double* history) const {
   for (const Block& b : blocks_) {
-    if (b.begin >= held_count_) product(out + b.begin, b, history, 0, b.factors.size());
+    if (b.begin >= ringed_count_) product(out + b.begin, b, history, 0, b.factors.size());
   }
 }
 
 void MomentAccumulator::add_plain(const std::vector<double>& row, double weight) {
   double* sums = open_sums_.data();
-  for (std::size_t i = held_count_; i < row.size(); ++i) sums[i] += weight * row[i];
+  for (std::size_t i = ringed_count_; i < row.size(); ++i) sums[i] += weight * row[i];
 }
 
 // Interval n starts at row j = n + max_lag_ of those this accumulator saw in the run. It
@@ -435,10 +448,10 @@ bool MomentAccumulator::owns(std::size_t n) const {
 MOMENTID_KERNEL void MomentAccumulator::close_interval(std::size_t n) {
   if (!owns(n)) return;
   const std::size_t rows = run_rows_;
-  auto state = [&](std::size_t row) { return state_ring_.data() + (row % 4) * held_count_; };
+  auto state = [&](std::size_t row) { return state_ring_.data() + (row % 4) * ringed_count_; };
   const double* g0 = state(n);
   const double* g1 = state(n + 1);
-  const double* h0 = input_ring_.data() + (n % 4) * held_count_;
+  const double* h0 = input_ring_.data() + (n % 4) * ringed_count_;
   // Weights of g at rows n - 1, n, n + 1, n + 2 for the integral over [n, n + 1] / dt.
   double w[4] = {0, 0.5, 0.5, 0};
   const bool cubic = rule_ == HeldRule::kCubic;
@@ -459,9 +472,10 @@ MOMENTID_KERNEL void MomentAccumulator::close_interval(std::size_t n) {
   const double* gm = n >= 1 ? state(n - 1) : g0;
   const double* g2 = n + 2 < rows ? state(n + 2) : g1;
   double* sums = open_sums_.data();
-  for (std::size_t i = 0; i < held_count_; ++i) {
+  for (std::size_t i = 0; i < increments_begin_; ++i) {
     sums[i] += h0[i] * (w[0] * gm[i] + w[1] * g0[i] + w[2] * g1[i] + w[3] * g2[i]);
   }
+  for (std::size_t i = increments_begin_; i < ringed_count_; ++i) sums[i] += g1[i] - g0[i];
   Stretch& stretch = stretches_.back();
   ++stretch.intervals;
   ++intervals_;
@@ -591,7 +605,7 @@ void MomentAccumulator::merge(const MomentAccumulator& other) {
 namespace {
 
 constexpr char kTag[8] = {'M', 'O', 'M', 'A', 'C', 'C', 'U', 'M'};
-constexpr std::uint32_t kLayoutVersion = 1;
+constexpr std::uint32_t kLayoutVersion = 2;
 // Bounds on what deserialize() accepts, so that corrupt counts cannot ask for huge tables.
 constexpr std::uint64_t kMaxChannels = 4096;
 constexpr int kMaxPower = 1024;
@@ -623,6 +637,7 @@ std::vector<std::uint8_t> MomentAccumulator::serialize() const {
   out.u64(batches_);
   out.u64(moments_.size());
   for (const Moment& m : moments_) {
+    out.u8(m.is_increment() ? 1 : 0);
     out.u64(m.factors().size());
     for (const MomentFactor& f : m.factors()) {
       out.i32(f.channel);
@@ -675,6 +690,11 @@ MomentAccumulator MomentAccumulator::deserialize(std::span<const std::uint8_t> b
     std::vector<Moment> moments(in.count(4, "moments"));
     for (std::size_t i = 0; i < moments.size(); ++i) {
       const std::string name = "moment " + std::to_string(i);
+      const std::uint8_t kind = in.u8("the kind of " + name);
+      if (kind > 1) {
+        throw Error("moment accumulator bytes: " + name + " of kind " + std::to_string(kind) +
+                    ", expected 0 (a moment) or 1 (an increment)");
+      }
       std::vector<MomentFactor> factors(in.count(12, "factors of " + name));
       for (MomentFactor& f : factors) {
         f.channel = in.i32("a factor of " + name);
@@ -689,6 +709,13 @@ MomentAccumulator MomentAccumulator::deserialize(std::span<const std::uint8_t> b
         }
       }
       moments[i] = Moment(factors);
+      if (kind == 1) {
+        if (moments[i].is_lagged()) {
+          throw Error("moment accumulator bytes: " + name +
+                      " is an increment with lagged factors, expected every factor at lag 0");
+        }
+        moments[i] = Moment::increment_of(moments[i].at_lag(0, states + inputs));
+      }
       if (moments[i].factors() != factors) {
         throw Error("moment accumulator bytes: the factors of " + name +
                     " are not in normal form (expected " + to_string(moments[i]) + ")");

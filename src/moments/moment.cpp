@@ -46,6 +46,12 @@ Moment Moment::from_monomial(const Monomial& monomial) {
   return Moment(std::move(factors));
 }
 
+Moment Moment::increment_of(const Monomial& monomial) {
+  Moment out = from_monomial(monomial);
+  out.increment_ = true;
+  return out;
+}
+
 int Moment::degree() const {
   int sum = 0;
   for (const MomentFactor& f : factors_) sum += f.power;
@@ -82,12 +88,13 @@ std::string to_string(const MomentFactor& factor) {
 }
 
 std::string to_string(const Moment& moment) {
-  if (moment.factors().empty()) return "1";
-  std::string out;
-  for (const MomentFactor& f : moment.factors()) {
-    if (!out.empty()) out += "*";
-    out += to_string(f);
+  std::string out = moment.is_increment() ? "d(" : "";
+  if (moment.factors().empty()) out += "1";
+  for (std::size_t i = 0; i < moment.factors().size(); ++i) {
+    if (i > 0) out += "*";
+    out += to_string(moment.factors()[i]);
   }
+  if (moment.is_increment()) out += ")";
   return out;
 }
 
