@@ -139,6 +139,41 @@ TEST_SUITE("derive") {
                    E(pow(v, 4)) / 3 + E(y * pow(v, 2) * x));
   }
 
+  TEST_CASE("with rates, the identities leave the record's rates of change in the equations") {
+    const Model model = model_file("duffing.mom");
+    const MomentSystem system = derive(model, {.multipliers = {}, .degree = 3, .rates = true});
+    const MomentSystem stationary = derive(model, {.multipliers = {}, .degree = 3});
+    REQUIRE(system.equations.size() == stationary.equations.size());
+    CHECK(system.generic_rank == 3);
+    const ex y = sym(model, "y"), v = sym(model, "v"), x = sym(model, "x");
+    const ex c = sym(model, "c"), k = sym(model, "k"), eps = sym(model, "eps");
+    // E[(g)'] over (y, v, x).
+    const auto R = [&](const momentid::Monomial& g) {
+      return momentid::moment_as_ex(model, momentid::rate_key(g));
+    };
+    // times y: E[y v'] = E[(y*v)'] - E[v^2] and E[y*v] = E[(y^2)']/2;
+    check_equation(system, 0, k * E(pow(y, 2)) + eps * E(pow(y, 4)) + c * R({2, 0, 0}) / 2,
+                   E(y * x) + E(pow(v, 2)) - R({1, 1, 0}));
+    // times v: E[v v'] = E[(v^2)']/2, E[y^3 v] = E[(y^4)']/4.
+    check_equation(system, 1, c * E(pow(v, 2)) + k * R({2, 0, 0}) / 2 + eps * R({4, 0, 0}) / 4,
+                   E(v * x) - R({0, 2, 0}) / 2);
+    // The identities are listed in their stationary form, as without rates.
+    REQUIRE(system.identities.size() == stationary.identities.size());
+    for (std::size_t i = 0; i < system.identities.size(); ++i) {
+      CHECK(system.identities[i].moment == stationary.identities[i].moment);
+      CHECK(system.identities[i].value == stationary.identities[i].value);
+    }
+    // Rates are moments the equations need, written as derivatives.
+    std::vector<std::string> rates;
+    for (const auto& m : system.moments) {
+      if (momentid::rate_of(m, 3)) rates.push_back(momentid::format_moment(model, m));
+    }
+    CHECK(std::find(rates.begin(), rates.end(), "E[(y^2)']") != rates.end());
+    CHECK(std::find(rates.begin(), rates.end(), "E[(y*v)']") != rates.end());
+    CHECK(momentid::format_moment(model, momentid::rate_key({1, 0, 0})) == "E[y']");
+    CHECK(!momentid::rate_of({1, 0, 0}, 3));
+  }
+
   TEST_CASE("derivative moments known only in sums are eliminated by adding equations") {
     // Two dynamic states: E[v2*v1'] + E[v1*v2'] = 0 fixes neither alone, so equation 3 times v2
     // and equation 4 times v1 are added.

@@ -39,8 +39,9 @@ struct MomentEquation {
 };
 
 // A pure-data identity that stationarity implies, E[moment] = value (e.g. E[y1*y2] = 0 when
-// y1' = y2). The moment equations use `value` in place of E[moment]; the identify stage reports
-// how far the data violate it.
+// y1' = y2). The moment equations use `value` in place of E[moment] (with DeriveOptions::rates,
+// plus the record's rates, which `value` leaves out); the identify stage reports how far the
+// data violate it.
 struct DataIdentity {
   Monomial moment;
   MomentCombination value;
@@ -57,10 +58,24 @@ struct SkippedMultiplier {
 // the states of total degree 1..degree), which wins over the model's own `multipliers`
 // statements; with none of these, the degree is raised from 1 until the equations determine
 // every parameter even for symmetric data (at most kMaxAutomaticDegree; see derive()).
+//
+// `rates`: keep the record's rates of change (rate_key) where the stationarity identities
+// would put 0, so that the equations hold exactly over a finite record, not only on average.
 struct DeriveOptions {
   std::optional<std::vector<Monomial>> multipliers;
   int degree = 0;
+  bool rates = false;
 };
+
+// The rate of change of a monomial g in the states over the record, E[d/dt g]. Stationarity
+// makes it 0, and the stationarity identities take it to be; over a record of length T it is
+// exactly (g(T) - g(0)) / T, so that a record that ends far from where it began leaves an
+// error of that size in every equation that used an identity. With DeriveOptions::rates the
+// equations keep these rates as terms of their MomentCombinations, under the key rate_key(g):
+// g's exponents followed by one more entry, 1. format_moment writes it E[(g)'].
+Monomial rate_key(const Monomial& g);
+// g for a rate key over `variables` variables (the states and inputs), else nullopt.
+std::optional<Monomial> rate_of(const Monomial& key, std::size_t variables);
 inline constexpr int kMaxAutomaticDegree = 3;
 // At most this many products of an equation and a multiplier; `--degree` beyond it is refused
 // (UsageError) and the automatic choice stops below it.

@@ -67,8 +67,9 @@ int degree(const Monomial& m) {
 
 class Deriver {
  public:
-  explicit Deriver(const Model& model)
+  Deriver(const Model& model, bool rates)
       : model_(model),
+        rates_(rates),
         states_(static_cast<int>(model.states().size())),
         variables_(static_cast<int>(model.variables().size())),
         parameters_(static_cast<int>(model.parameters().size())),
@@ -239,8 +240,9 @@ class Deriver {
           add_to(part.derivatives, d, c);
           continue;
         }
-        // beta_j * D_j = -(sum over the other states j' of beta_j' * D_j')
+        // beta_j * D_j = E[(y^beta)'] - (sum over the other states j' of beta_j' * D_j')
         const numeric scale = -c / beta[d.state];
+        if (rates_) add_to(part.moments, rate_key(beta), c / beta[d.state]);
         for (int j = 0; j < states_; ++j) {
           if (j == d.state || beta[j] == 0) continue;
           Monomial alpha = beta;
@@ -365,14 +367,20 @@ class Deriver {
     return out;
   }
 
+  // The relation `identity` = 0 of E[d/dt y^beta], less the record's rate with rates_.
+  MomentCombination with_rate(MomentCombination identity, const Monomial& beta) const {
+    if (rates_) add_to(identity, rate_key(beta), numeric(-1));
+    return identity;
+  }
+
   // Finds the identities that touch the equations' moments (and those they bring in), solves
-  // them for one moment each, and substitutes.
+  // them for one moment each, and substitutes. Rates are never solved for: they are data.
   void apply_identities(std::vector<Row>& rows, MomentSystem& system) const {
     std::set<Monomial, MomentOrder> seen, done;
     std::vector<Monomial> work;
     auto visit = [&](const MomentCombination& c) {
       for (const auto& [m, v] : c) {
-        if (seen.insert(m).second) work.push_back(m);
+        if (!rate_of(m, variables_) && seen.insert(m).second) work.push_back(m);
       }
     };
     for (const Row& row : rows) {
@@ -399,7 +407,7 @@ class Deriver {
         contradiction = contradiction && m == one;
         relevant = relevant || seen.count(m) != 0;
       }
-      if (contradiction || relevant) relations.push_back(std::move(*identity));
+      if (contradiction || relevant) relations.push_back(with_rate(std::move(*identity), beta));
     }
     while (!work.empty()) {
       const Monomial mu = work.back();
@@ -422,7 +430,7 @@ class Deriver {
           for (const auto& [m, w] : *identity) bounded = bounded && degree(m) <= top;
           if (!bounded) continue;
           visit(*identity);
-          relations.push_back(std::move(*identity));
+          relations.push_back(with_rate(std::move(*identity), beta));
         }
       }
     }
@@ -436,12 +444,13 @@ class Deriver {
       substitute(relation, solved);
       std::optional<Monomial> pivot;
       for (const auto& [m, v] : relation) {
-        if (m == one) continue;
+        if (m == one || rate_of(m, variables_)) continue;
         if (!pivot || degree(m) > degree(*pivot) || (degree(m) == degree(*pivot) && m < *pivot)) {
           pivot = m;
         }
       }
       if (!pivot) {
+        std::erase_if(relation, [&](const auto& term) { return rate_of(term.first, variables_); });
         if (relation.count(one) != 0) {
           system.notes.push_back(
               "the model cannot be stationary: a stationarity identity says "
@@ -468,6 +477,7 @@ class Deriver {
       for (Linear& part : row.parts) substitute(part.moments, solved);
     }
     for (auto& [m, value] : solved) {
+      std::erase_if(value, [&](const auto& term) { return rate_of(term.first, variables_); });
       const bool even = std::all_of(m.begin(), m.end(), [](int e) { return e % 2 == 0; });
       if (value.empty() && even) {
         system.notes.push_back("stationarity requires " + format_moment(model_, m) +
@@ -520,6 +530,7 @@ class Deriver {
   }
 
   const Model& model_;
+  bool rates_;  // DeriveOptions::rates
   int states_, variables_, parameters_;
   std::vector<std::optional<MomentCombination>> kinematic_;
   std::vector<int> kinematic_source_;  // the equation that gave each kinematic state
@@ -564,8 +575,19 @@ double count_monomials(int states, int degree) {
 
 }  // namespace
 
+Monomial rate_key(const Monomial& g) {
+  Monomial key = g;
+  key.push_back(1);
+  return key;
+}
+
+std::optional<Monomial> rate_of(const Monomial& key, std::size_t variables) {
+  if (key.size() != variables + 1 || key.back() != 1) return std::nullopt;
+  return Monomial(key.begin(), key.end() - 1);
+}
+
 MomentSystem derive(const Model& model, const DeriveOptions& options) {
-  Deriver deriver(model);
+  Deriver deriver(model, options.rates);
   const int states = static_cast<int>(model.states().size());
   const auto& equations = model.equations();
   const double dynamic = static_cast<double>(deriver.dynamic_equations().size());

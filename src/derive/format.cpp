@@ -1,6 +1,8 @@
 // Text, LaTeX and JSON forms of a MomentSystem, and its equations as GiNaC expressions.
 
 #include <algorithm>
+#include <numeric>
+#include <optional>
 #include <sstream>
 
 #include "common/json.hpp"
@@ -10,6 +12,9 @@ namespace momentid {
 
 DECLARE_FUNCTION_1P(expectation)
 REGISTER_FUNCTION(expectation, set_name("E", "\\operatorname{E}"))
+// rate(g): the record's rate of change of g, inside an expectation (rate_key).
+DECLARE_FUNCTION_1P(rate)
+REGISTER_FUNCTION(rate, set_name("rate"))
 
 namespace {
 
@@ -137,14 +142,20 @@ std::string latex_number(const numeric& q) {
 }
 
 const Notation& latex() {
-  static const Notation n{[](const Model& model, const Monomial& m) {
+  static const Notation n{[](const Model& model, const Monomial& key) {
+                            const std::optional<Monomial> g =
+                                rate_of(key, model.variables().size());
+                            const Monomial& m = g ? *g : key;
                             std::string inside;
+                            int factors = 0;
                             for (std::size_t i = 0; i < m.size(); ++i) {
                               if (m[i] == 0) continue;
                               if (!inside.empty()) inside += "\\,";
                               inside += latex_name(model.variables()[i]);
                               if (m[i] > 1) inside += "^{" + std::to_string(m[i]) + "}";
+                              factors += m[i];
                             }
+                            if (g) inside = factors > 1 ? "(" + inside + ")'" : inside + "'";
                             return "\\operatorname{E}[" + inside + "]";
                           },
                           latex_name, latex_number, "\\,"};
@@ -158,6 +169,11 @@ std::string json_equation_name(const Equation& eq) {
 }  // namespace
 
 std::string format_moment(const Model& model, const Monomial& moment) {
+  if (const std::optional<Monomial> g = rate_of(moment, model.variables().size())) {
+    const std::string inside = format_monomial(model, *g);
+    const bool single = std::accumulate(g->begin(), g->end(), 0) == 1;
+    return "E[" + (single ? inside : "(" + inside + ")") + "']";
+  }
   return "E[" + format_monomial(model, moment) + "]";
 }
 
@@ -291,14 +307,16 @@ std::string format_json(const MomentSystem& system) {
 }
 
 GiNaC::ex moment_as_ex(const Model& model, const Monomial& moment) {
+  const std::optional<Monomial> g = rate_of(moment, model.variables().size());
+  const Monomial& m = g ? *g : moment;
   GiNaC::ex product = 1;
   const std::size_t states = model.states().size();
-  for (std::size_t i = 0; i < moment.size(); ++i) {
+  for (std::size_t i = 0; i < m.size(); ++i) {
     const GiNaC::ex base = i < states ? GiNaC::ex(model.state_symbol(static_cast<int>(i)))
                                       : GiNaC::ex(model.input_symbol(static_cast<int>(i - states)));
-    product *= GiNaC::pow(base, moment[i]);
+    product *= GiNaC::pow(base, m[i]);
   }
-  return expectation_of(product);
+  return g ? expectation(rate(product)) : expectation_of(product);
 }
 
 GiNaC::ex expectation_of(const GiNaC::ex& monomial) {
