@@ -67,6 +67,10 @@ struct SolveOptions {
   // weighted one when computed, else least squares), batches x parameters, whose long-run
   // covariance gives its standard errors.
   std::vector<std::vector<double>>* error_batches = nullptr;
+  // The covariance of the record's rates of change (the system's rate moments, rate_key, in the
+  // order of moments_to_estimate), known from elsewhere: added to the errors (README,
+  // "Uncertainty"). See solve().
+  std::vector<std::vector<double>> rate_covariance;
 };
 
 // The moments the solver needs estimates of, in the order `solve` expects them: the system's
@@ -84,6 +88,13 @@ std::vector<IdentityCheck> check_identities(const MomentSystem& system,
 // method), with a long-run covariance that holds whether the moment conditions telescope (records
 // without noise) or not (README, "Uncertainty"). `estimates` are
 // for moments_to_estimate(system), in that order.
+//
+// The record's rates of change (a system derived with DeriveOptions::rates) enter the estimate
+// at 0, their stationary value, as the stationarity identities have it; their batch means enter
+// the errors, so that the batch series no longer holds the ends of the batches, and the error
+// that the record's own ends leave is added from options.rate_covariance. With no batch series
+// for them (all 0) and no rate_covariance, the estimate and its errors are those of the system
+// derived without rates.
 Estimate solve(const MomentSystem& system, const MomentEstimates& estimates,
                const SolveOptions& options = {});
 

@@ -118,6 +118,16 @@ struct IdentifyResult {
     std::string unavailable;
   };
   std::optional<HeldInput> held_input;
+  // The zero-lag equations take the stationarity identities E[(g)'] = 0, which a finite record
+  // meets only up to (g(end) - g(start)) / T. The errors that leave are estimated from the
+  // variances of the monomials g (SolveOptions::rate_covariance), and the batch series of the
+  // rates, from the first and last rows of each batch, take them out of the batches' errors.
+  // Set when the equations use such identities; `unavailable` says why the batches had to
+  // estimate them instead.
+  struct EndValues {
+    std::string unavailable;
+  };
+  std::optional<EndValues> end_values;
 
   // The main result: the optimally weighted estimate when it was asked for and could be
   // computed, otherwise least squares.

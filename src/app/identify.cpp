@@ -178,6 +178,79 @@ std::vector<std::optional<double>> fixed_values(const Model& model,
   return out;
 }
 
+// The moments the pass reads for `moments` (over the model's variables): a rate of change
+// (rate_key) as the increment of its monomial.
+std::vector<Moment> pass_moments_of(const Model& model, const std::vector<Monomial>& moments) {
+  std::vector<Moment> out;
+  for (const Monomial& m : moments) {
+    const std::optional<Monomial> g = rate_of(m, model.variables().size());
+    out.push_back(g ? Moment::increment_of(*g) : Moment::from_monomial(m));
+  }
+  return out;
+}
+
+// `moments` without the rates of change.
+std::vector<Monomial> without_rates(const Model& model, std::vector<Monomial> moments) {
+  std::erase_if(moments, [&](const Monomial& m) { return rate_of(m, model.variables().size()); });
+  return moments;
+}
+
+// Turns the averages of the increments among `moments` (pass_moments_of) into the record's rates
+// of change, dividing by the interval `interval` between the rows the pass read; without it, sets
+// them to 0 (their stationary value) in every batch.
+void increments_to_rates(const Model& model, const std::vector<Monomial>& moments,
+                         std::optional<double> interval, MomentEstimates& estimates) {
+  for (std::size_t k = 0; k < moments.size(); ++k) {
+    if (!rate_of(moments[k], model.variables().size())) continue;
+    const double scale = interval ? 1 / *interval : 0.0;
+    estimates.mean[k] *= scale;
+    for (std::vector<double>& batch : estimates.batch_means) batch[k] *= scale;
+  }
+}
+
+// The monomials g of the rates of change E[(g)'] among `moments`, in their order.
+std::vector<Monomial> rate_monomials(const Model& model, const std::vector<Monomial>& moments) {
+  std::vector<Monomial> out;
+  for (const Monomial& m : moments) {
+    if (const std::optional<Monomial> g = rate_of(m, model.variables().size())) out.push_back(*g);
+  }
+  return out;
+}
+
+// The products g_i * g_j of the monomials `g` (i <= j), with the g themselves.
+std::vector<Monomial> with_products(const std::vector<Monomial>& g) {
+  std::vector<Monomial> out = g;
+  for (std::size_t i = 0; i < g.size(); ++i) {
+    for (std::size_t j = i; j < g.size(); ++j) {
+      Monomial product = g[i];
+      for (std::size_t v = 0; v < product.size(); ++v) product[v] += g[j][v];
+      out.push_back(std::move(product));
+    }
+  }
+  return out;
+}
+
+// The covariance of the record's rates of change (g(end) - g(start)) / T summed over its runs,
+// for the monomials `g` whose moments and products (with_products) are among `moments` with
+// `estimates`: each run's ends, far apart, are independent draws of the stationary states, so
+// that the covariance is 2 runs Cov(g_i, g_j) / T^2 (README, "Uncertainty").
+std::vector<std::vector<double>> rate_covariance(const std::vector<Monomial>& g,
+                                                 const std::vector<Monomial>& moments,
+                                                 const MomentEstimates& estimates,
+                                                 std::size_t runs, double duration) {
+  std::map<Monomial, double> mean;
+  for (std::size_t k = 0; k < moments.size(); ++k) mean.emplace(moments[k], estimates.mean[k]);
+  const std::vector<Monomial> all = with_products(g);
+  std::vector<std::vector<double>> out(g.size(), std::vector<double>(g.size()));
+  for (std::size_t i = 0, next = g.size(); i < g.size(); ++i) {
+    for (std::size_t j = i; j < g.size(); ++j, ++next) {
+      const double c = mean.at(all[next]) - mean.at(g[i]) * mean.at(g[j]);
+      out[i][j] = out[j][i] = 2 * static_cast<double>(runs) * c / (duration * duration);
+    }
+  }
+  return out;
+}
+
 // IdentifyOptions::extrapolate, after the zero-lag estimate `result` whose first-order errors
 // over the batches are `fine_errors`: the same estimate from every other sample (both halves of
 // each run, in the same batches), the difference's error from the long-run covariance of the
@@ -207,8 +280,12 @@ void estimate_sampling_bias(IdentifyResult& result, const DataSource& source,
   MomentEstimates coarse;
   for (std::size_t phase = 0; phase < 2; ++phase) {
     data_options.phase = phase;
-    const MomentEstimates half =
-        moments_from_data(source, states, inputs, result.moments, data_options).estimates;
+    DataMoments pass = moments_from_data(source, states, inputs,
+                                         pass_moments_of(*result.model, result.moments),
+                                         data_options);
+    MomentEstimates& half = pass.estimates;
+    if (pass.time_step) *pass.time_step *= 2;
+    increments_to_rates(*result.model, result.moments, pass.time_step, half);
     if (half.batch_means.size() != fine.batches) {
       throw Error(source.name() + ": every other sample gives " +
                   std::to_string(half.batch_means.size()) + " batches, not " +
@@ -411,6 +488,7 @@ IdentifyResult identify(const Model& model, const DataSource& source,
     DeriveOptions derive_options;
     derive_options.multipliers = options.multipliers;
     derive_options.degree = options.degree;
+    derive_options.rates = true;
     result.system = derive(*result.model, derive_options);
     result.moments = moments_to_estimate(result.system);
     std::vector<std::string> states, inputs;
@@ -424,26 +502,47 @@ IdentifyResult identify(const Model& model, const DataSource& source,
     // A held input puts kinks into the states at the samples: the moments whose derivative
     // holds it are then corrected, with E[g''] from moments the pass adds (unless the data are
     // known to be sampled).
-    const HeldInputCorrections held = !inputs.empty() && options.hold != InputHold::kSample
-                                          ? held_input_corrections(model, result.moments)
-                                          : HeldInputCorrections{};
-    const std::vector<Monomial> pass_moments = with_second_derivatives(result.moments, held);
+    const HeldInputCorrections held =
+        !inputs.empty() && options.hold != InputHold::kSample
+            ? held_input_corrections(model, without_rates(model, result.moments))
+            : HeldInputCorrections{};
+    // The ends of the record: the rates of change, with what their covariance needs.
+    const std::vector<Monomial> rated = rate_monomials(model, result.moments);
+    std::vector<Monomial> pass_moments = with_second_derivatives(result.moments, held);
+    for (const Monomial& m : with_products(rated)) {
+      if (std::find(pass_moments.begin(), pass_moments.end(), m) == pass_moments.end()) {
+        pass_moments.push_back(m);
+      }
+    }
     // The correction removes the trapezoidal rule's error on the held products too, which the
     // cubic rule only makes smaller.
     if (!held.moments.empty()) data_options.held_rule = HeldRule::kTrapezoidal;
-    result.data = moments_from_data(source, states, inputs, pass_moments, data_options);
+    result.data = moments_from_data(source, states, inputs, pass_moments_of(model, pass_moments),
+                                    data_options);
     if (result.data.hold == InputHold::kZeroOrderHold && !held.moments.empty() &&
         !result.data.time_step) {
       // No correction without the sample interval: the cubic rule then does better.
       data_options.held_rule = HeldRule::kCubic;
-      result.data = moments_from_data(source, states, inputs, pass_moments, data_options);
+      result.data = moments_from_data(source, states, inputs, pass_moments_of(model, pass_moments),
+                                      data_options);
     }
+    increments_to_rates(model, pass_moments, result.data.time_step, result.data.estimates);
     const MomentEstimates all = std::move(result.data.estimates);
     result.data.estimates = first_moments(all, result.moments.size());
     std::vector<std::vector<double>> errors;
-    const SolveOptions solve_options{.gmm = result.gmm,
-                                     .fixed = fixed_values(model, options.fixed),
-                                     .error_batches = options.extrapolate ? &errors : nullptr};
+    SolveOptions solve_options{.gmm = result.gmm,
+                               .fixed = fixed_values(model, options.fixed),
+                               .error_batches = options.extrapolate ? &errors : nullptr};
+    if (!rated.empty()) {
+      IdentifyResult::EndValues& ends = result.end_values.emplace();
+      if (result.data.time_step && result.data.estimates.intervals > 0) {
+        solve_options.rate_covariance = rate_covariance(
+            rated, pass_moments, all, std::max<std::size_t>(result.data.runs, 1),
+            static_cast<double>(result.data.estimates.intervals) * *result.data.time_step);
+      } else {
+        ends.unavailable = "the data give no sample interval (a 't' column or a dt in the metadata)";
+      }
+    }
     result.estimate = solve(result.system, result.data.estimates, solve_options);
     if (result.data.hold == InputHold::kZeroOrderHold) {
       correct_for_held_input(result, held, pass_moments, all, solve_options);
@@ -882,8 +981,9 @@ std::string format_text(const IdentifyResult& r) {
       << ", condition number " << number(e.condition, "%.3g") << "\n";
   out << "  batches: " << e.batches;
   if (e.dof > 0) {
-    out << "; standard errors from their long-run covariance on " << number(e.dof, "%.0f")
-        << " degrees of freedom";
+    const bool ends = r.end_values && r.end_values->unavailable.empty();
+    out << "; standard errors from their long-run covariance" << (ends ? " and the record's ends" : "")
+        << " on " << number(e.dof, "%.0f") << " degrees of freedom";
     if (!e.gmm_parameters.empty()) {
       out << " (optimally weighted: " << number(e.gmm_dof, "%.0f") << ")";
     }
@@ -919,6 +1019,13 @@ std::string format_text(const IdentifyResult& r) {
       out << "  held input: moments not corrected for the kinks it puts at the samples: "
           << h->unavailable << "\n";
     }
+  }
+  if (const auto& v = r.end_values) {
+    out << (v->unavailable.empty()
+                ? "  record ends: the errors they leave come from the variances of the states "
+                  "there, the batches give the rest\n"
+                : "  record ends: the errors they leave come from the batches: " +
+                      v->unavailable + "\n");
   }
   if (!e.identities.empty()) {
     out << "  stationarity identities (sample violation, z-score):\n";
@@ -1016,6 +1123,11 @@ std::string format_json(const IdentifyResult& r) {
     } else {
       out << ", \"reason\": " << json_string(h->unavailable);
     }
+    out << "}";
+  }
+  if (const auto& v = r.end_values) {
+    out << ",\n    \"end_values\": {\"applied\": " << (v->unavailable.empty() ? "true" : "false");
+    if (!v->unavailable.empty()) out << ", \"reason\": " << json_string(v->unavailable);
     out << "}";
   }
   out << ",\n    \"identities\": [";

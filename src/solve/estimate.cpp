@@ -89,6 +89,23 @@ void store(const MatrixXd& series, std::vector<std::vector<double>>* out) {
   }
 }
 
+// `errors` of a series x = J mu plus the covariance J K J' that a known covariance K of the
+// moments adds, with the degrees of freedom of the sum (Satterthwaite, K taken as exact: the
+// fewest over the series' components).
+LongRunCovariance with_known(LongRunCovariance errors, const MatrixXd& jacobian,
+                             const MatrixXd& known) {
+  if (known.isZero(0)) return errors;
+  const MatrixXd added = jacobian * known * jacobian.transpose();
+  double dof = std::numeric_limits<double>::infinity();
+  for (Eigen::Index i = 0; i < added.rows(); ++i) {
+    const double series = errors.covariance(i, i), total = series + added(i, i);
+    if (series > 0) dof = std::min(dof, errors.dof * (total / series) * (total / series));
+  }
+  errors.covariance += added;
+  if (std::isfinite(dof)) errors.dof = dof;
+  return errors;
+}
+
 // The warnings that say the standard errors are rough.
 void warn_about_errors(Estimate& out, const LongRunCovariance& errors) {
   if (errors.order == 0 && out.batches >= 2) {
@@ -177,7 +194,27 @@ Estimate solve(const MomentSystem& system, const MomentEstimates& estimates,
   std::vector<std::string> names;
   for (const Declaration& p : model.parameters()) names.push_back(p.name);
   const MatrixXd deviations = batch_deviations(estimates);
-  Estimate out = solve_on(rows, names, estimates, deviations, options);
+  // The rates at their stationary value; their known covariance over all the moments.
+  MomentEstimates at_rest = estimates;
+  std::vector<std::size_t> rates;
+  for (std::size_t k = 0; k < moments.size(); ++k) {
+    if (!rate_of(moments[k], model.variables().size())) continue;
+    at_rest.mean[k] = 0;
+    rates.push_back(k);
+  }
+  SolveOptions over_moments = options;
+  if (!options.rate_covariance.empty()) {
+    if (options.rate_covariance.size() != rates.size()) {
+      throw std::invalid_argument("solve: rate_covariance must be square over the system's rates");
+    }
+    over_moments.rate_covariance.assign(moments.size(), std::vector<double>(moments.size(), 0.0));
+    for (std::size_t i = 0; i < rates.size(); ++i) {
+      for (std::size_t j = 0; j < rates.size(); ++j) {
+        over_moments.rate_covariance[rates[i]][rates[j]] = options.rate_covariance.at(i).at(j);
+      }
+    }
+  }
+  Estimate out = solve_on(rows, names, at_rest, deviations, over_moments);
   out.identities = identity_checks(system, moments, estimates, deviations);
   return out;
 }
@@ -318,6 +355,16 @@ Estimate solve_on(const MomentRows& system, const std::vector<std::string>& name
 
   VectorXd mu(k_count);
   for (Eigen::Index k = 0; k < k_count; ++k) mu(k) = estimates.mean[static_cast<std::size_t>(k)];
+  // The covariance of the moments' record means known from elsewhere (solve: the rates').
+  MatrixXd known = MatrixXd::Zero(k_count, k_count);
+  if (!options.rate_covariance.empty()) {
+    for (Eigen::Index i = 0; i < k_count; ++i) {
+      for (Eigen::Index j = 0; j < k_count; ++j) {
+        known(i, j) = options.rate_covariance.at(static_cast<std::size_t>(i))
+                          .at(static_cast<std::size_t>(j));
+      }
+    }
+  }
 
   MatrixXd a = MatrixXd::Zero(rows, params);
   VectorXd b = VectorXd::Zero(rows);
@@ -428,9 +475,9 @@ Estimate solve_on(const MomentRows& system, const std::vector<std::string>& name
     return jacobian;
   };
   // The errors: the long-run covariance of the parameters' batch series (delta method).
-  const MatrixXd ls_series =
-      deviations * sensitivity(normal_pinv, pinv, residual, theta_scaled).transpose();
-  const LongRunCovariance ls_errors = long_run_covariance(ls_series);
+  const MatrixXd ls_jacobian = sensitivity(normal_pinv, pinv, residual, theta_scaled);
+  const MatrixXd ls_series = deviations * ls_jacobian.transpose();
+  const LongRunCovariance ls_errors = with_known(long_run_covariance(ls_series), ls_jacobian, known);
   store(ls_series, options.error_batches);
   out.dof = ls_errors.dof;
   const double t975 = out.batches >= 2 ? ls_errors.t975() : kNaN;
@@ -480,7 +527,9 @@ Estimate solve_on(const MomentRows& system, const std::vector<std::string>& name
     }
     return g_mu;
   };
-  const MatrixXd s = batch_covariance(deviations * equations_of(theta).transpose());
+  const MatrixXd g_mu = equations_of(theta);
+  const MatrixXd s =
+      batch_covariance(deviations * g_mu.transpose()) + g_mu * known * g_mu.transpose();
   Eigen::SelfAdjointEigenSolver<MatrixXd> eigen(s);
   const VectorXd lambda = eigen.eigenvalues();
   const double lambda_max = lambda.maxCoeff();
@@ -508,10 +557,11 @@ Estimate solve_on(const MomentRows& system, const std::vector<std::string>& name
   const auto m = static_cast<double>(s_rank);
   const auto q = static_cast<double>(params);
   const double finite_sample = n * (n - 1) / ((n - m + q) * (n - m + q - 1));
-  const MatrixXd gmm_series =
-      std::sqrt(finite_sample) * deviations *
-      sensitivity(information_inverse, gmm_left, w * gmm_residual, theta_gmm_scaled).transpose();
-  const LongRunCovariance gmm_errors = long_run_covariance(gmm_series);
+  const MatrixXd gmm_jacobian =
+      sensitivity(information_inverse, gmm_left, w * gmm_residual, theta_gmm_scaled);
+  const MatrixXd gmm_series = std::sqrt(finite_sample) * deviations * gmm_jacobian.transpose();
+  const LongRunCovariance gmm_errors =
+      with_known(long_run_covariance(gmm_series), gmm_jacobian, known);
   store(gmm_series, options.error_batches);
   out.gmm_dof = gmm_errors.dof;
   const double gmm_t975 = gmm_errors.t975();
@@ -547,8 +597,9 @@ Estimate solve_on(const MomentRows& system, const std::vector<std::string>& name
   }
   const auto d = static_cast<double>(out.j_dof);
   const MatrixXd free_part = MatrixXd::Identity(rows, rows) - as * gmm_left;
+  const MatrixXd free_mu = free_part * equations_of(theta_gmm);
   const LongRunCovariance residual_errors =
-      long_run_covariance(deviations * equations_of(theta_gmm).transpose() * free_part.transpose());
+      with_known(long_run_covariance(deviations * free_mu.transpose()), free_mu, known);
   const MatrixXd wv = w * residual_errors.covariance;
   const double nu = residual_errors.dof, trace = wv.trace();
   const double trace_square =
