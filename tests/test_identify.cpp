@@ -256,6 +256,62 @@ TEST_SUITE("identify") {
           "the estimate without it does not determine every parameter");
   }
 
+  TEST_CASE("the record's ends count in the errors from the states' variances, not the batches") {
+    // Noise-free: the equations' error is almost all (g(end) - g(start)) / T for the monomials
+    // g of the identities, whose variance comes from the whole record. At 10^5 samples the batch
+    // count then moves the errors by less than 1% (estimated from the batches, it moved them by
+    // 15-30%); without the sample interval the batches estimate it all.
+    const Model model = model_file("duffing.mom");
+    const auto errors = [&](std::size_t batches, std::optional<double> dt) {
+      const momentid::IdentifyResult r =
+          identify_held(model, "ma:K=10,w=0.1,sigma=20", 100000, dt, 3,
+                        {.degree = 3, .hold = InputHold::kZeroOrderHold, .batches = batches});
+      REQUIRE(r.end_values.has_value());
+      std::vector<double> out;
+      for (const momentid::ParameterEstimate& e : r.parameters()) out.push_back(e.std_error);
+      return std::pair{out, *r.end_values};
+    };
+    const auto [standard, ends] = errors(100, 0.01);
+    CHECK(ends.unavailable.empty());
+    for (const std::size_t batches : {50, 200}) {
+      const auto [other, unused] = errors(batches, 0.01);
+      for (std::size_t p = 0; p < standard.size(); ++p) {
+        INFO(batches, " batches, parameter ", p, ": ", other[p], " vs ", standard[p]);
+        CHECK(std::abs(other[p] / standard[p] - 1) < 0.01);
+      }
+    }
+    const auto [unused, without] = errors(100, std::nullopt);
+    CHECK(without.unavailable ==
+          "the data give no sample interval (a 't' column or a dt in the metadata)");
+  }
+
+  TEST_CASE("the rates' known covariance adds to the errors linearly, the estimate unchanged") {
+    const momentid::IdentifyResult r = identify_held(
+        model_file("duffing.mom"), "ma:K=10,w=0.1,sigma=20", 20000, 0.01, 3, {.degree = 3});
+    std::size_t rates = 0;
+    for (const momentid::Monomial& m : r.moments) rates += momentid::rate_of(m, 3).has_value();
+    REQUIRE(rates > 0);
+    const auto solve = [&](double scale) {
+      momentid::SolveOptions options;
+      options.rate_covariance.assign(rates, std::vector<double>(rates, 0.0));
+      for (std::size_t i = 0; i < rates; ++i) options.rate_covariance[i][i] = scale * 1e-8;
+      return momentid::solve(r.system, r.data.estimates, options);
+    };
+    const Estimate none = solve(0), once = solve(1), four = solve(4);
+    for (std::size_t p = 0; p < 3; ++p) {
+      CHECK(once.parameters[p].estimate == none.parameters[p].estimate);
+      CHECK(four.parameters[p].estimate == none.parameters[p].estimate);
+      const double base = std::pow(none.parameters[p].std_error, 2);
+      const double added = std::pow(once.parameters[p].std_error, 2) - base;
+      CHECK(added > 0);
+      CHECK(std::pow(four.parameters[p].std_error, 2) - base ==
+            doctest::Approx(4 * added).epsilon(1e-9));
+    }
+    momentid::SolveOptions wrong;
+    wrong.rate_covariance.assign(rates + 1, std::vector<double>(rates + 1, 0.0));
+    CHECK_THROWS_AS(momentid::solve(r.system, r.data.estimates, wrong), std::invalid_argument);
+  }
+
   TEST_CASE("reading zoh data as samples biases the first-order estimate downwards") {
     // With `sample`, the product x*y is averaged with the trapezoidal rule, which pairs half of
     // each held input with the state at the start of its interval (the report's program paired
