@@ -239,7 +239,7 @@ def plot(bias_json, out_path):
     panels = [("kozin_4_1a", "a", "(4.1a) first order, a"), ("kozin_4_1b", "a", "(4.1b) oscillator, a"),
               ("kozin_4_1b", "b", "(4.1b) oscillator, b"), ("kozin_4_1c", "a", "(4.1c) oscillator, a"),
               ("kozin_4_1c", "b", "(4.1c) oscillator, b")]
-    floor = 1e-5
+    floor = 1e-6
     figure, axes = plt.subplots(2, 3, figsize=(9, 5.6), sharey=True)
     for ax, (model, name, title) in zip(axes.flat, panels):
         for pairing, (color, _) in pairings.items():

@@ -552,5 +552,7 @@ def test_identify_extrapolate(duffing, cli_csv):
     assert correction["applied"] is True
     assert set(correction["shift"]) == {"c", "k", "eps"}
     assert "held_input_correction" not in result.diagnostics
+    # The errors that the record's ends leave come from the states' variances there.
+    assert held.diagnostics["end_values"] == {"applied": True}
     with pytest.raises(momentid.UsageError, match=r"^extrapolate: expected 'dt', found 't'"):
         momentid.identify(duffing, str(cli_csv), extrapolate="t")
