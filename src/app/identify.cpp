@@ -284,8 +284,7 @@ void estimate_sampling_bias(IdentifyResult& result, const DataSource& source,
                                          pass_moments_of(*result.model, result.moments),
                                          data_options);
     MomentEstimates& half = pass.estimates;
-    if (pass.time_step) *pass.time_step *= 2;
-    increments_to_rates(*result.model, result.moments, pass.time_step, half);
+    increments_to_rates(*result.model, result.moments, pass.time_step, half);  // at 2 dt
     if (half.batch_means.size() != fine.batches) {
       throw Error(source.name() + ": every other sample gives " +
                   std::to_string(half.batch_means.size()) + " batches, not " +
