@@ -123,7 +123,8 @@ struct IdentifyResult {
   // variances of the monomials g (SolveOptions::rate_covariance), and the batch series of the
   // rates, from the first and last rows of each batch, take them out of the batches' errors.
   // Set when the equations use such identities; `unavailable` says why the batches had to
-  // estimate them instead.
+  // estimate them instead (no sample interval, or more products g_i*g_j than the pass reads
+  // otherwise).
   struct EndValues {
     std::string unavailable;
   };

@@ -505,13 +505,25 @@ IdentifyResult identify(const Model& model, const DataSource& source,
         !inputs.empty() && options.hold != InputHold::kSample
             ? held_input_corrections(model, without_rates(model, result.moments))
             : HeldInputCorrections{};
-    // The ends of the record: the rates of change, with what their covariance needs.
+    // The ends of the record: the rates of change, with the products their covariance needs,
+    // unless these would more than double the pass.
     const std::vector<Monomial> rated = rate_monomials(model, result.moments);
     std::vector<Monomial> pass_moments = with_second_derivatives(result.moments, held);
+    std::vector<Monomial> products;
     for (const Monomial& m : with_products(rated)) {
-      if (std::find(pass_moments.begin(), pass_moments.end(), m) == pass_moments.end()) {
-        pass_moments.push_back(m);
+      if (std::find(pass_moments.begin(), pass_moments.end(), m) == pass_moments.end() &&
+          std::find(products.begin(), products.end(), m) == products.end()) {
+        products.push_back(m);
       }
+    }
+    std::string ends_unavailable;
+    if (products.size() > pass_moments.size()) {
+      ends_unavailable = "their covariance would need " + std::to_string(products.size()) +
+                         " more moments than the " + std::to_string(pass_moments.size()) +
+                         " the pass reads (the products of " + std::to_string(rated.size()) +
+                         " rates of change)";
+    } else {
+      pass_moments.insert(pass_moments.end(), products.begin(), products.end());
     }
     // The correction removes the trapezoidal rule's error on the held products too, which the
     // cubic rule only makes smaller.
@@ -525,7 +537,14 @@ IdentifyResult identify(const Model& model, const DataSource& source,
       result.data = moments_from_data(source, states, inputs, pass_moments_of(model, pass_moments),
                                       data_options);
     }
-    increments_to_rates(model, pass_moments, result.data.time_step, result.data.estimates);
+    if (!result.data.time_step && ends_unavailable.empty()) {
+      ends_unavailable = "the data give no sample interval (a 't' column or a dt in the metadata)";
+    }
+    // Without their covariance the rates stay out of the batches, whose series then holds the
+    // ends.
+    increments_to_rates(model, pass_moments,
+                        ends_unavailable.empty() ? result.data.time_step : std::nullopt,
+                        result.data.estimates);
     const MomentEstimates all = std::move(result.data.estimates);
     result.data.estimates = first_moments(all, result.moments.size());
     std::vector<std::vector<double>> errors;
@@ -533,13 +552,11 @@ IdentifyResult identify(const Model& model, const DataSource& source,
                                .fixed = fixed_values(model, options.fixed),
                                .error_batches = options.extrapolate ? &errors : nullptr};
     if (!rated.empty()) {
-      IdentifyResult::EndValues& ends = result.end_values.emplace();
-      if (result.data.time_step && result.data.estimates.intervals > 0) {
+      result.end_values.emplace().unavailable = ends_unavailable;
+      if (ends_unavailable.empty() && result.data.estimates.intervals > 0) {
         solve_options.rate_covariance = rate_covariance(
             rated, pass_moments, all, std::max<std::size_t>(result.data.runs, 1),
             static_cast<double>(result.data.estimates.intervals) * *result.data.time_step);
-      } else {
-        ends.unavailable = "the data give no sample interval (a 't' column or a dt in the metadata)";
       }
     }
     result.estimate = solve(result.system, result.data.estimates, solve_options);
