@@ -67,9 +67,9 @@ struct SolveOptions {
   // weighted one when computed, else least squares), batches x parameters, whose long-run
   // covariance gives its standard errors.
   std::vector<std::vector<double>>* error_batches = nullptr;
-  // The covariance of the record's rates of change (the system's rate moments, rate_key, in the
-  // order of moments_to_estimate), known from elsewhere: added to the errors (README,
-  // "Uncertainty"). See solve().
+  // solve() only: the covariance of the record's rates of change (the system's rate moments,
+  // rate_key, in the order of moments_to_estimate), known from elsewhere, which is added to the
+  // errors (README, "Uncertainty").
   std::vector<std::vector<double>> rate_covariance;
 };
 

@@ -73,10 +73,12 @@ MatrixXd batch_deviations(const MomentEstimates& estimates) {
   return length.asDiagonal() * (means.rowwise() - mean);
 }
 
-// solve_rows with the moments' batch series (batch_deviations) at hand.
+// solve_rows with the moments' batch series (batch_deviations) at hand, and a covariance of the
+// moments' record means known from elsewhere (`known`, moments x moments; solve: the rates'),
+// which is added to the errors.
 Estimate solve_on(const MomentRows& system, const std::vector<std::string>& names,
                   const MomentEstimates& estimates, const MatrixXd& deviations,
-                  const SolveOptions& options);
+                  const SolveOptions& options, const MatrixXd& known);
 
 // `series` as rows of `out`, when given.
 void store(const MatrixXd& series, std::vector<std::vector<double>>* out) {
@@ -202,19 +204,20 @@ Estimate solve(const MomentSystem& system, const MomentEstimates& estimates,
     at_rest.mean[k] = 0;
     rates.push_back(k);
   }
-  SolveOptions over_moments = options;
+  const auto k = static_cast<Eigen::Index>(moments.size());
+  MatrixXd known = MatrixXd::Zero(k, k);
   if (!options.rate_covariance.empty()) {
     if (options.rate_covariance.size() != rates.size()) {
       throw std::invalid_argument("solve: rate_covariance must be square over the system's rates");
     }
-    over_moments.rate_covariance.assign(moments.size(), std::vector<double>(moments.size(), 0.0));
     for (std::size_t i = 0; i < rates.size(); ++i) {
       for (std::size_t j = 0; j < rates.size(); ++j) {
-        over_moments.rate_covariance[rates[i]][rates[j]] = options.rate_covariance.at(i).at(j);
+        known(static_cast<Eigen::Index>(rates[i]), static_cast<Eigen::Index>(rates[j])) =
+            options.rate_covariance[i].at(j);
       }
     }
   }
-  Estimate out = solve_on(rows, names, at_rest, deviations, over_moments);
+  Estimate out = solve_on(rows, names, at_rest, deviations, options, known);
   out.identities = identity_checks(system, moments, estimates, deviations);
   return out;
 }
@@ -303,14 +306,16 @@ Estimate with_fixed(Estimate free, const std::vector<std::string>& names,
 
 Estimate solve_rows(const MomentRows& system, const std::vector<std::string>& names,
                     const MomentEstimates& estimates, const SolveOptions& options) {
-  return solve_on(system, names, estimates, batch_deviations(estimates), options);
+  const auto k = static_cast<Eigen::Index>(estimates.mean.size());
+  return solve_on(system, names, estimates, batch_deviations(estimates), options,
+                  MatrixXd::Zero(k, k));
 }
 
 namespace {
 
 Estimate solve_on(const MomentRows& system, const std::vector<std::string>& names,
                   const MomentEstimates& estimates, const MatrixXd& deviations,
-                  const SolveOptions& options) {
+                  const SolveOptions& options, const MatrixXd& known) {
   if (std::any_of(options.fixed.begin(), options.fixed.end(), [](const auto& v) { return v; })) {
     if (options.fixed.size() != names.size()) {
       throw std::invalid_argument("solve_rows: one fixed value or nullopt per parameter needed");
@@ -322,7 +327,7 @@ Estimate solve_on(const MomentRows& system, const std::vector<std::string>& name
     SolveOptions free_options = options;
     free_options.fixed.clear();
     Estimate out = with_fixed(solve_on(without_fixed(system, options.fixed), free_names, estimates,
-                                       deviations, free_options),
+                                       deviations, free_options, known),
                               names, options.fixed);
     // The fixed parameters have no error: zero columns.
     if (options.error_batches) {
@@ -355,16 +360,6 @@ Estimate solve_on(const MomentRows& system, const std::vector<std::string>& name
 
   VectorXd mu(k_count);
   for (Eigen::Index k = 0; k < k_count; ++k) mu(k) = estimates.mean[static_cast<std::size_t>(k)];
-  // The covariance of the moments' record means known from elsewhere (solve: the rates').
-  MatrixXd known = MatrixXd::Zero(k_count, k_count);
-  if (!options.rate_covariance.empty()) {
-    for (Eigen::Index i = 0; i < k_count; ++i) {
-      for (Eigen::Index j = 0; j < k_count; ++j) {
-        known(i, j) = options.rate_covariance.at(static_cast<std::size_t>(i))
-                          .at(static_cast<std::size_t>(j));
-      }
-    }
-  }
 
   MatrixXd a = MatrixXd::Zero(rows, params);
   VectorXd b = VectorXd::Zero(rows);
