@@ -284,8 +284,8 @@ TEST_SUITE("identify") {
     CHECK(without.unavailable ==
           "the data give no sample interval (a 't' column or a dt in the metadata)");
     // Where the rates' products would more than double the pass, the batches estimate it all.
-    const momentid::IdentifyResult two = identify_held(model_file("duffing_2dof.mom"),
-                                                       "ma:K=10,w=0.1,sigma=20", 5000, 0.01, 1, {});
+    const momentid::IdentifyResult two =
+        identify_held(model_file("duffing_2dof.mom"), "ma:K=10,w=0.1,sigma=20", 5000, 0.01, 1, {});
     REQUIRE(two.end_values.has_value());
     CHECK(two.end_values->unavailable ==
           "their covariance would need 480 more moments than the 470 the pass reads (the "

@@ -236,8 +236,8 @@ std::vector<Monomial> with_products(const std::vector<Monomial>& g) {
 // that the covariance is 2 runs Cov(g_i, g_j) / T^2 (README, "Uncertainty").
 std::vector<std::vector<double>> rate_covariance(const std::vector<Monomial>& g,
                                                  const std::vector<Monomial>& moments,
-                                                 const MomentEstimates& estimates,
-                                                 std::size_t runs, double duration) {
+                                                 const MomentEstimates& estimates, std::size_t runs,
+                                                 double duration) {
   std::map<Monomial, double> mean;
   for (std::size_t k = 0; k < moments.size(); ++k) mean.emplace(moments[k], estimates.mean[k]);
   const std::vector<Monomial> all = with_products(g);
@@ -280,9 +280,8 @@ void estimate_sampling_bias(IdentifyResult& result, const DataSource& source,
   MomentEstimates coarse;
   for (std::size_t phase = 0; phase < 2; ++phase) {
     data_options.phase = phase;
-    DataMoments pass = moments_from_data(source, states, inputs,
-                                         pass_moments_of(*result.model, result.moments),
-                                         data_options);
+    DataMoments pass = moments_from_data(
+        source, states, inputs, pass_moments_of(*result.model, result.moments), data_options);
     MomentEstimates& half = pass.estimates;
     increments_to_rates(*result.model, result.moments, pass.time_step, half);  // at 2 dt
     if (half.batch_means.size() != fine.batches) {
@@ -998,8 +997,9 @@ std::string format_text(const IdentifyResult& r) {
   out << "  batches: " << e.batches;
   if (e.dof > 0) {
     const bool ends = r.end_values && r.end_values->unavailable.empty();
-    out << "; standard errors from their long-run covariance" << (ends ? " and the record's ends" : "")
-        << " on " << number(e.dof, "%.0f") << " degrees of freedom";
+    out << "; standard errors from their long-run covariance"
+        << (ends ? " and the record's ends" : "") << " on " << number(e.dof, "%.0f")
+        << " degrees of freedom";
     if (!e.gmm_parameters.empty()) {
       out << " (optimally weighted: " << number(e.gmm_dof, "%.0f") << ")";
     }
@@ -1040,8 +1040,8 @@ std::string format_text(const IdentifyResult& r) {
     out << (v->unavailable.empty()
                 ? "  record ends: the errors they leave come from the variances of the states "
                   "there, the batches give the rest\n"
-                : "  record ends: the errors they leave come from the batches: " +
-                      v->unavailable + "\n");
+                : "  record ends: the errors they leave come from the batches: " + v->unavailable +
+                      "\n");
   }
   if (!e.identities.empty()) {
     out << "  stationarity identities (sample violation, z-score):\n";

@@ -115,8 +115,8 @@ MomentAccumulator::MomentAccumulator(std::vector<Moment> moments, std::size_t st
            std::tie(b.state_factors, b.indices, b.lags);
   });
   const auto count = [&](Kind kind) {
-    return static_cast<std::size_t>(std::count_if(
-        layouts.begin(), layouts.end(), [&](const Layout& l) { return l.kind == kind; }));
+    return static_cast<std::size_t>(std::count_if(layouts.begin(), layouts.end(),
+                                                  [&](const Layout& l) { return l.kind == kind; }));
   };
   increments_begin_ = count(kHeld);
   ringed_count_ = increments_begin_ + count(kIncrement);

@@ -472,7 +472,8 @@ Estimate solve_on(const MomentRows& system, const std::vector<std::string>& name
   // The errors: the long-run covariance of the parameters' batch series (delta method).
   const MatrixXd ls_jacobian = sensitivity(normal_pinv, pinv, residual, theta_scaled);
   const MatrixXd ls_series = deviations * ls_jacobian.transpose();
-  const LongRunCovariance ls_errors = with_known(long_run_covariance(ls_series), ls_jacobian, known);
+  const LongRunCovariance ls_errors =
+      with_known(long_run_covariance(ls_series), ls_jacobian, known);
   store(ls_series, options.error_batches);
   out.dof = ls_errors.dof;
   const double t975 = out.batches >= 2 ? ls_errors.t975() : kNaN;
