@@ -43,6 +43,24 @@ struct Record {
     const auto next = std::upper_bound(run_starts.begin(), run_starts.end(), r);
     return next == run_starts.end() ? rows() : *next;
   }
+  // The first row of each interval, in order, from the largest lag `lag` of each run on.
+  std::vector<std::size_t> interval_rows(std::size_t lag) const {
+    std::vector<std::size_t> out;
+    for (std::size_t begin : run_starts) {
+      for (std::size_t n = begin + lag; n + 1 < run_end(begin); ++n) out.push_back(n);
+    }
+    return out;
+  }
+  // The product of `moment` at `row`, its most lagged factor read `lag` (the largest lag among
+  // the accumulator's moments) rows back, as the accumulator reads it.
+  double product(const Moment& moment, std::size_t row, std::size_t lag) const {
+    double out = 1;
+    const std::size_t shift = lag - static_cast<std::size_t>(moment.max_lag());
+    for (const MomentFactor& f : moment.factors()) {
+      out *= std::pow(this->row(row - shift - static_cast<std::size_t>(f.lag))[f.channel], f.power);
+    }
+    return out;
+  }
 };
 
 // Smooth channels, sums of sines with fixed phases, plus a little noise; offset from 0 so that
@@ -157,6 +175,30 @@ void check_same_moments(const MomentAccumulator& got, const MomentAccumulator& w
     INFO("moment ", momentid::to_string(got.moments()[i]), ": ", g[i], " vs ", w[i]);
     CHECK(std::abs(g[i] - w[i]) <= 1e-12 * std::abs(w[i]));
   }
+}
+
+// Walks the stretches of `acc` in record order, `first_rows[q]` being the first row of its q-th
+// interval, and checks the sum of each moment in `checked` (positions in acc.moments()) over a
+// stretch against the sum of interval_value(moment, n) over the stretch's intervals n, within
+// tolerance(that sum).
+template <class Value, class Tolerance>
+void check_stretch_sums(const MomentAccumulator& acc, const std::vector<std::size_t>& first_rows,
+                        const std::vector<std::size_t>& checked, Value interval_value,
+                        Tolerance tolerance) {
+  REQUIRE(acc.intervals() == first_rows.size());
+  std::size_t next = 0;
+  for (const MomentAccumulator::Stretch& stretch : acc.stretches()) {
+    for (const std::size_t i : checked) {
+      double want = 0;
+      for (std::size_t q = next; q < next + stretch.intervals; ++q) {
+        want += interval_value(acc.moments()[i], first_rows[q]);
+      }
+      INFO("stretch from interval ", next, ", ", to_string(acc.moments()[i]));
+      CHECK(std::abs(stretch.sums[i] - want) <= tolerance(want));
+    }
+    next += stretch.intervals;
+  }
+  CHECK(next == first_rows.size());
 }
 
 // A tiny accumulator with a fixed layout: one state, the moment c0, three rows (two intervals,
@@ -316,43 +358,23 @@ TEST_SUITE("accumulator") {
     const Record record = make_record({301, 3, 6, 7, 180, 1, 95, 2, 40});
     const std::vector<Moment> moments = lagged_moments();
     const std::size_t lag = 5;
-    // The intervals of the record in order: (run start, n), n from the largest lag on.
-    std::vector<std::pair<std::size_t, std::size_t>> intervals;
-    for (std::size_t begin : record.run_starts) {
-      for (std::size_t n = begin + lag; n + 1 < record.run_end(begin); ++n) {
-        intervals.emplace_back(begin, n);
-      }
-    }
-    const auto value = [&](const Moment& moment, std::size_t row) {
-      double product = 1;
-      const std::size_t shift = lag - static_cast<std::size_t>(moment.max_lag());
-      for (const MomentFactor& f : moment.factors()) {
-        product *=
-            std::pow(record.row(row - shift - static_cast<std::size_t>(f.lag))[f.channel], f.power);
-      }
-      return product;
+    const std::vector<std::size_t> intervals = record.interval_rows(lag);
+    const auto value = [&](const Moment& m, std::size_t row) {
+      return record.product(m, row, lag);
     };
+    std::vector<std::size_t> all(moments.size());
+    for (std::size_t i = 0; i < all.size(); ++i) all[i] = i;
     momentid::PortableRandom random(/*seed=*/3, /*stream=*/0);
     for (const std::size_t shards : {1, 5, 40}) {
       const MomentAccumulator acc =
           shards == 1 ? one_pass(record, InputHold::kSample, moments)
                       : merged_shards(record, random_cuts(random, record.rows(), shards - 1),
                                       InputHold::kSample, moments);
-      REQUIRE(acc.intervals() == intervals.size());
-      std::size_t next = 0;
-      for (const MomentAccumulator::Stretch& stretch : acc.stretches()) {
-        for (std::size_t i = 0; i < moments.size(); ++i) {
-          double want = 0;
-          for (std::size_t q = next; q < next + stretch.intervals; ++q) {
-            const std::size_t n = intervals[q].second;
-            want += 0.5 * (value(moments[i], n) + value(moments[i], n + 1));
-          }
-          INFO(shards, " shards, stretch from interval ", next, ", ", to_string(moments[i]));
-          CHECK(std::abs(stretch.sums[i] - want) <= 1e-12 * std::abs(want));
-        }
-        next += stretch.intervals;
-      }
-      CHECK(next == intervals.size());
+      INFO(shards, " shards");
+      check_stretch_sums(
+          acc, intervals, all,
+          [&](const Moment& m, std::size_t n) { return 0.5 * (value(m, n) + value(m, n + 1)); },
+          [](double want) { return 1e-12 * std::abs(want); });
     }
   }
 
@@ -364,15 +386,10 @@ TEST_SUITE("accumulator") {
     std::vector<Moment> moments = all_moments();
     for (const auto& g : changed) moments.push_back(Moment::increment_of(g));
     CHECK(momentid::to_string(moments.back()) == "d(c1)");
-    std::vector<std::size_t> intervals;  // the first row of each interval, in record order
-    for (std::size_t begin : record.run_starts) {
-      for (std::size_t n = begin; n + 1 < record.run_end(begin); ++n) intervals.push_back(n);
-    }
-    const auto value = [&](const momentid::Monomial& g, std::size_t row) {
-      double product = 1;
-      for (std::size_t c = 0; c < kChannels; ++c) product *= std::pow(record.row(row)[c], g[c]);
-      return product;
-    };
+    const std::vector<std::size_t> intervals = record.interval_rows(0);
+    const auto value = [&](const Moment& m, std::size_t row) { return record.product(m, row, 0); };
+    std::vector<std::size_t> increments;
+    for (std::size_t i = all_moments().size(); i < moments.size(); ++i) increments.push_back(i);
     momentid::PortableRandom random(/*seed=*/5, /*stream=*/0);
     for (InputHold hold : {InputHold::kSample, InputHold::kZeroOrderHold}) {
       for (const std::size_t shards : {1, 6}) {
@@ -380,21 +397,11 @@ TEST_SUITE("accumulator") {
             shards == 1 ? one_pass(record, hold, moments)
                         : merged_shards(record, random_cuts(random, record.rows(), shards - 1),
                                         hold, moments);
-        REQUIRE(acc.intervals() == intervals.size());
-        std::size_t next = 0;
-        for (const MomentAccumulator::Stretch& stretch : acc.stretches()) {
-          for (std::size_t i = 0; i < changed.size(); ++i) {
-            double want = 0;
-            for (std::size_t q = next; q < next + stretch.intervals; ++q) {
-              want += value(changed[i], intervals[q] + 1) - value(changed[i], intervals[q]);
-            }
-            INFO("hold ", static_cast<int>(hold), ", ", shards, " shards, stretch from interval ",
-                 next, ", ", to_string(moments[all_moments().size() + i]));
-            CHECK(std::abs(stretch.sums[all_moments().size() + i] - want) <= 1e-12);
-          }
-          next += stretch.intervals;
-        }
-        CHECK(next == intervals.size());
+        INFO("hold ", static_cast<int>(hold), ", ", shards, " shards");
+        check_stretch_sums(
+            acc, intervals, increments,
+            [&](const Moment& m, std::size_t n) { return value(m, n + 1) - value(m, n); },
+            [](double) { return 1e-12; });
         const MomentAccumulator copy = MomentAccumulator::deserialize(acc.serialize());
         CHECK(copy.moments() == acc.moments());
         CHECK(copy.serialize() == acc.serialize());

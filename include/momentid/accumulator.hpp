@@ -113,8 +113,8 @@ class MomentAccumulator {
   void merge(const MomentAccumulator& other);
 
   // The state of a finished accumulator as bytes, for deserialize() (throws Error in the middle
-  // of a run). Layout version 1, integers and IEEE-754 doubles little-endian:
-  //   "MOMACCUM", u32 version (2), u64 states, u64 inputs, u8 hold (0 sample, 1 zero-order hold,
+  // of a run). Layout version 2, integers and IEEE-754 doubles little-endian:
+  //   "MOMACCUM", u32 version, u64 states, u64 inputs, u8 hold (0 sample, 1 zero-order hold,
   //   2 zero-order hold with the trapezoidal rule), u64 batches, u64 moments, per moment {u8 kind
   //   (0 a moment, 1 an increment), u64 factors, per factor {i32 channel, i32 power, i32 lag}},
   //   u64 stretch length, u64 intervals, u64 stretches, per stretch {u64 intervals, f64 sum per
@@ -169,7 +169,8 @@ class MomentAccumulator {
   std::vector<Block> blocks_;
   // The blocks of one moment with one to four factors (every moment without lags), flat for the
   // per-row loops: the moment's working position, its state factors (held moments) and the
-  // history offsets of its factors. The other blocks, by index in blocks_.
+  // history offsets of its factors. The other blocks, by index in blocks_. The held ones are all
+  // those kept in the rings, increments included.
   struct Single {
     std::uint32_t position, state_factors, factors;
     std::array<std::uint32_t, 4> offsets;
@@ -182,7 +183,8 @@ class MomentAccumulator {
   static void product(double* out, const Block& b, const double* history, std::size_t first,
                       std::size_t last);
 
-  std::vector<std::size_t> order_;  // working position -> moment; the held ones first
+  // Working position -> moment: the held ones first, then the increments, then the others.
+  std::vector<std::size_t> order_;
   // Moments kept in the rings: those averaged with a held input, then from increments_begin_
   // the increments (Moment::increment_of).
   std::size_t ringed_count_ = 0, increments_begin_ = 0;

@@ -88,6 +88,11 @@ class Model {
   const GiNaC::symbol& derivative_symbol(int i) const { return derivative_symbols_[i]; }
   const GiNaC::symbol& input_symbol(int i) const { return input_symbols_[i]; }
   const GiNaC::symbol& parameter_symbol(int i) const { return parameter_symbols_[i]; }
+  // The symbol of variables()[v]: a state's, then an input's.
+  const GiNaC::symbol& variable_symbol(std::size_t v) const {
+    return v < state_symbols_.size() ? state_symbols_[v]
+                                     : input_symbols_[v - state_symbols_.size()];
+  }
 
   // Index of a parameter by name, or -1.
   int parameter_index(std::string_view name) const;

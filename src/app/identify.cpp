@@ -367,17 +367,25 @@ MomentEstimates first_moments(const MomentEstimates& all, std::size_t count) {
   return out;
 }
 
-// `moments`, then the other moments that the E[g''] of `held` need (the constant 1 is none).
-std::vector<Monomial> with_second_derivatives(std::vector<Monomial> moments,
-                                              const HeldInputCorrections& held) {
+// Those of `more` that are neither among `moments` nor the constant 1, each once, in their order.
+std::vector<Monomial> not_among(const std::vector<Monomial>& moments,
+                                const std::vector<Monomial>& more) {
   std::set<Monomial> known(moments.begin(), moments.end());
-  for (const HeldInputCorrection& c : held.moments) {
-    for (const auto& [m, weight] : c.second_derivative) {
-      const bool constant = std::all_of(m.begin(), m.end(), [](int e) { return e == 0; });
-      if (!constant && known.insert(m).second) moments.push_back(m);
-    }
+  std::vector<Monomial> out;
+  for (const Monomial& m : more) {
+    const bool constant = std::all_of(m.begin(), m.end(), [](int e) { return e == 0; });
+    if (!constant && known.insert(m).second) out.push_back(m);
   }
-  return moments;
+  return out;
+}
+
+// The moments the E[g''] of `held` are made of.
+std::vector<Monomial> second_derivative_moments(const HeldInputCorrections& held) {
+  std::vector<Monomial> out;
+  for (const HeldInputCorrection& c : held.moments) {
+    for (const auto& [m, weight] : c.second_derivative) out.push_back(m);
+  }
+  return out;
 }
 
 // Data whose input is held over each sample: replaces the estimate of `result` by the one from
@@ -507,14 +515,10 @@ IdentifyResult identify(const Model& model, const DataSource& source,
     // The ends of the record: the rates of change, with the products their covariance needs,
     // unless these would more than double the pass.
     const std::vector<Monomial> rated = rate_monomials(model, result.moments);
-    std::vector<Monomial> pass_moments = with_second_derivatives(result.moments, held);
-    std::vector<Monomial> products;
-    for (const Monomial& m : with_products(rated)) {
-      if (std::find(pass_moments.begin(), pass_moments.end(), m) == pass_moments.end() &&
-          std::find(products.begin(), products.end(), m) == products.end()) {
-        products.push_back(m);
-      }
-    }
+    std::vector<Monomial> pass_moments = result.moments;
+    const std::vector<Monomial> kinks = not_among(pass_moments, second_derivative_moments(held));
+    pass_moments.insert(pass_moments.end(), kinks.begin(), kinks.end());
+    const std::vector<Monomial> products = not_among(pass_moments, with_products(rated));
     std::string ends_unavailable;
     if (products.size() > pass_moments.size()) {
       ends_unavailable = "their covariance would need " + std::to_string(products.size()) +

@@ -310,12 +310,7 @@ GiNaC::ex moment_as_ex(const Model& model, const Monomial& moment) {
   const std::optional<Monomial> g = rate_of(moment, model.variables().size());
   const Monomial& m = g ? *g : moment;
   GiNaC::ex product = 1;
-  const std::size_t states = model.states().size();
-  for (std::size_t i = 0; i < m.size(); ++i) {
-    const GiNaC::ex base = i < states ? GiNaC::ex(model.state_symbol(static_cast<int>(i)))
-                                      : GiNaC::ex(model.input_symbol(static_cast<int>(i - states)));
-    product *= GiNaC::pow(base, m[i]);
-  }
+  for (std::size_t i = 0; i < m.size(); ++i) product *= GiNaC::pow(model.variable_symbol(i), m[i]);
   return g ? expectation(rate(product)) : expectation_of(product);
 }
 

@@ -22,11 +22,8 @@ HeldInputCorrections held_input_corrections(const Model& model,
   HeldInputCorrections out;
   const std::size_t states = model.states().size();
   std::vector<GiNaC::symbol> variables;
-  for (std::size_t i = 0; i < states; ++i) {
-    variables.push_back(model.state_symbol(static_cast<int>(i)));
-  }
-  for (std::size_t i = 0; i < model.inputs().size(); ++i) {
-    variables.push_back(model.input_symbol(static_cast<int>(i)));
+  for (std::size_t v = 0; v < model.variables().size(); ++v) {
+    variables.push_back(model.variable_symbol(v));
   }
   // The derivatives as functions of the states and the (held) input.
   GiNaC::lst equations, derivatives;

@@ -151,7 +151,7 @@ MomentAccumulator::MomentAccumulator(std::vector<Moment> moments, std::size_t st
   }
   for (std::size_t i = 0; i < blocks_.size(); ++i) {
     const Block& b = blocks_[i];
-    const bool held = b.begin < ringed_count_;
+    const bool ringed = b.begin < ringed_count_;
     const std::size_t n = b.factors.size();
     // A held moment needs both parts; one without an input factor is not held. An increment
     // (all state part) is computed by blocks.
@@ -159,7 +159,7 @@ MomentAccumulator::MomentAccumulator(std::vector<Moment> moments, std::size_t st
       return f.offset <= std::numeric_limits<std::uint32_t>::max();
     });
     if (b.size == 1 && n >= 1 && n <= 4 && fits &&
-        (!held || (b.state_factors > 0 && b.state_factors < n))) {
+        (!ringed || (b.state_factors > 0 && b.state_factors < n))) {
       Single single{static_cast<std::uint32_t>(b.begin),
                     static_cast<std::uint32_t>(b.state_factors),
                     static_cast<std::uint32_t>(n),
@@ -167,9 +167,9 @@ MomentAccumulator::MomentAccumulator(std::vector<Moment> moments, std::size_t st
       for (std::size_t f = 0; f < n; ++f) {
         single.offsets[f] = static_cast<std::uint32_t>(b.factors[f].offset);
       }
-      (held ? held_singles_ : plain_singles_).push_back(single);
+      (ringed ? held_singles_ : plain_singles_).push_back(single);
     } else {
-      (held ? held_blocks_ : plain_blocks_).push_back(i);
+      (ringed ? held_blocks_ : plain_blocks_).push_back(i);
     }
   }
   const std::size_t k = moments_.size();
