@@ -124,6 +124,9 @@ class DataReader {
   virtual const DataMetadata& metadata() const = 0;
   // The column names of the file's header, in file order.
   virtual const std::vector<std::string>& columns() const = 0;
+  // Arrays of the file that are not columns (text, integer or complex values, or values never
+  // written), each with the reason: requesting one by name fails with it.
+  virtual std::map<std::string, std::string> unusable_columns() const { return {}; }
   // The sample interval: ColumnRequest::dt when given; else the metadata's `dt` (the time
   // column's first step is checked against it); else the mean step of the time column over the
   // rows read so far, final once every row has been read; else none.

@@ -56,7 +56,12 @@ CheckResult check(const DataSource& source, const Model* model, const CheckOptio
       if (kept[v]) (v < state_count ? states : inputs).push_back(model->variables()[v]);
     }
   } else {
-    const std::vector<std::string> columns = data_columns(source, options.columns, options.layout);
+    const std::unique_ptr<DataReader> reader = source.open(
+        {.names = {}, .rename = options.columns, .min_rows = 0, .layout = options.layout});
+    const std::vector<std::string> columns = reader->columns();
+    for (const auto& [name, why] : reader->unusable_columns()) {
+      result.warnings.push_back("not checked: " + why);
+    }
     const auto time = options.columns.find("t");
     for (const std::string& c : columns) {
       const bool is_time =
@@ -93,7 +98,7 @@ CheckResult check(const DataSource& source, const Model* model, const CheckOptio
   data_options.control = options.control;
   result.data = moments_from_data(source, states, inputs, moments, data_options);
   if (system) result.identities = check_identities(*system, full_moments, result.data.estimates);
-  result.warnings = data_warnings(result.data);
+  for (std::string& w : data_warnings(result.data)) result.warnings.push_back(std::move(w));
   return result;
 }
 

@@ -13,7 +13,13 @@ std::vector<std::string> data_columns(const DataSource& source,
 std::vector<bool> variables_present(const Model& model, const DataSource& source,
                                     const std::map<std::string, std::string>& columns,
                                     const FileLayout& layout) {
-  const std::vector<std::string> header = data_columns(source, columns, layout);
+  // An array the file has under a variable's name but cannot give as a column counts as
+  // present: reading it then says why it is unusable, rather than the variable passing for
+  // unmeasured.
+  const std::unique_ptr<DataReader> reader =
+      source.open({.names = {}, .rename = columns, .min_rows = 0, .layout = layout});
+  std::vector<std::string> header = reader->columns();
+  for (const auto& [name, why] : reader->unusable_columns()) header.push_back(name);
   std::vector<bool> present;
   for (const std::string& v : model.variables()) {
     const auto renamed = columns.find(v);

@@ -21,6 +21,9 @@ class ChainReader final : public DataReader {
 
   const DataMetadata& metadata() const override { return first_metadata_; }
   const std::vector<std::string>& columns() const override { return first_columns_; }
+  std::map<std::string, std::string> unusable_columns() const override {
+    return current_->unusable_columns();
+  }
 
   std::optional<double> time_step() const override {
     // Files read to their end were checked to agree with the first.

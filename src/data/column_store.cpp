@@ -28,6 +28,11 @@ class ColumnStoreReader final : public StreamReader {
         header_.names.push_back(name.substr(prefixes.front().size()));
       }
     }
+    for (const auto& [name, why] : store_->unusable_names()) {
+      if (name.starts_with(prefixes.front())) {
+        unusable_[name.substr(prefixes.front().size())] = why;
+      }
+    }
     header_.listing = std::string("the file has the ") + store_->kind() + "s";
     header_.item = store_->kind();
     header_.line = 1;
@@ -113,6 +118,8 @@ class ColumnStoreReader final : public StreamReader {
     return {path_, clamp_to_int(static_cast<long long>(std::max<std::size_t>(row_, 1))), 1, ""};
   }
 
+  std::map<std::string, std::string> unusable_columns() const override { return unusable_; }
+
  private:
   // The channels, their map and their length in one run.
   struct RunPlan {
@@ -197,7 +204,8 @@ class ColumnStoreReader final : public StreamReader {
   }
 
   std::unique_ptr<ColumnStore> store_;
-  std::vector<std::string> names_;  // every channel of the store
+  std::map<std::string, std::string> unusable_;  // store_->unusable_names() of the first run
+  std::vector<std::string> names_;               // every channel of the store
   std::vector<RunPlan> runs_;
   std::size_t run_ = 0, row_ = 0, chunk_start_ = 0, chunk_end_ = 0;
   std::vector<std::vector<double>> chunk_;  // per needed field of the current run

@@ -4,6 +4,7 @@
 // checks of the other formats (time steps, runs, missing values, too few rows) apply alike.
 
 #include <cstddef>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -22,11 +23,15 @@ class ColumnStore {
   virtual const char* kind() const = 0;
   // The channels' names, in file order.
   virtual std::vector<std::string> names() const = 0;
-  // Why `name`, which is not a channel, cannot be one (a text, integer or complex variable), or
-  // nullopt when the file has nothing of that name.
-  virtual std::optional<std::string> unusable(const std::string& name) const {
-    return std::nullopt;
+  // Why `name`, which is not a channel, cannot be one (a text, integer or complex variable, one
+  // never written), or nullopt when the file has nothing of that name.
+  std::optional<std::string> unusable(const std::string& name) const {
+    const auto found = unusable_.find(name);
+    if (found == unusable_.end()) return std::nullopt;
+    return found->second;
   }
+  // Every name unusable() explains, with its reason.
+  const std::map<std::string, std::string>& unusable_names() const { return unusable_; }
   // A channel's name as a user may write it (`--columns y=/run1/disp`) in the form of names().
   virtual std::string column_name(const std::string& written) const { return written; }
   // Readies a channel that will be read; throws DataError when it cannot be read.
@@ -39,6 +44,9 @@ class ColumnStore {
   virtual std::optional<double> scalar(const std::string& name) { return std::nullopt; }
   // Metadata the file carries (`dt` among them), as a CSV file's `# momentid:` lines.
   virtual DataMetadata metadata() const { return {}; }
+
+ protected:
+  std::map<std::string, std::string> unusable_;  // name -> why it is no channel
 };
 
 // Reads a store as rows: the requested channels, `t` (or a time-like name, or the channel `t`

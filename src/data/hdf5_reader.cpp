@@ -66,12 +66,6 @@ class Hdf5Store final : public ColumnStore {
     return requested.starts_with('/') ? requested.substr(1) : requested;
   }
 
-  std::optional<std::string> unusable(const std::string& name) const override {
-    const auto found = unusable_.find(name);
-    if (found == unusable_.end()) return std::nullopt;
-    return found->second;
-  }
-
   void prepare(std::size_t channel) override {
     Channel& c = channels_[channel];
     if (c.dataset) return;
@@ -166,6 +160,13 @@ class Hdf5Store final : public ColumnStore {
                              " dimensions: expected 1 (a channel) or 2 (samples x channels)";
       return 0;
     }
+    // A dataset created but never (or only partly) written reads as its fill value: data
+    // acquisition that stopped before writing leaves such datasets.
+    if (const char* written = unwritten(object.get(), space.get(), rank, dims)) {
+      self.unusable_[path] = "dataset '" + path + "' was " + written +
+                             " written: its unwritten values would read as the fill value";
+      return 0;
+    }
     if (rank == 1 && dims[0] > 1) {
       self.add(path, path, 1, dims, 0, false);
     } else if (rank == 2 && dims[0] * dims[1] > 1) {
@@ -191,6 +192,28 @@ class Hdf5Store final : public ColumnStore {
     c.index = index;
     c.by_rows = by_rows;
     channels_.push_back(std::move(c));
+  }
+
+  // "never" or "only partly" when storage for some of a dataset's values was never written, else
+  // nullptr: a chunked dataset lacks chunks (edge chunks count whole), a contiguous one its
+  // storage.
+  static const char* unwritten(hid_t dataset, hid_t space, int rank, const hsize_t* dims) {
+    if (H5Sget_simple_extent_npoints(space) <= 1) return nullptr;
+    const Handle create(H5Dget_create_plist(dataset), H5Pclose);
+    if (H5Pget_layout(create.get()) == H5D_CHUNKED) {
+      hsize_t chunk[H5S_MAX_RANK];
+      if (H5Pget_chunk(create.get(), rank, chunk) != rank) return nullptr;
+      hsize_t expected = 1, present = 0;
+      for (int d = 0; d < rank; ++d) expected *= (dims[d] + chunk[d] - 1) / chunk[d];
+      if (H5Dget_num_chunks(dataset, space, &present) < 0) return nullptr;
+      return present == 0 ? "never" : present < expected ? "only partly" : nullptr;
+    }
+    H5D_space_status_t status = H5D_SPACE_STATUS_ERROR;
+    if (H5Pget_layout(create.get()) == H5D_CONTIGUOUS &&
+        H5Dget_space_status(dataset, &status) >= 0 && status == H5D_SPACE_STATUS_NOT_ALLOCATED) {
+      return "never";
+    }
+    return nullptr;
   }
 
   // Whether an attribute holds one value (an array of them is not metadata).
@@ -281,7 +304,6 @@ class Hdf5Store final : public ColumnStore {
   Handle file_;
   std::vector<std::string> names_;
   std::vector<Channel> channels_;
-  std::map<std::string, std::string> unusable_;  // dataset -> why it is no channel
   DataMetadata metadata_;
 };
 

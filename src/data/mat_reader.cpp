@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <filesystem>
 #include <map>
 #include <mutex>
 
@@ -108,6 +109,8 @@ class MatStore final : public ColumnStore {
     const MatioCall call;
     file_.reset(Mat_Open(path_.c_str(), MAT_ACC_RDONLY));
     if (!file_) fail({path_, 1, 1, ""}, "cannot read the MATLAB file" + detail());
+    std::error_code error;
+    const std::uintmax_t file_size = std::filesystem::file_size(path_, error);
     while (Variable info{Mat_VarReadNextInfo(file_.get())}) {
       if (info->name == nullptr) continue;
       const std::string name = info->name;
@@ -125,6 +128,17 @@ class MatStore final : public ColumnStore {
                                            : std::string(info->isComplex ? "complex " : "")) +
                           class_name(info->class_type) +
                           " values: expected a real double or single vector or matrix";
+        continue;
+      }
+      // matio reads what the header claims, whatever the file holds: a header claiming more
+      // values than the file can store (one byte each, or zlib's best ratio, 1032, compressed)
+      // would give values that were never written.
+      const double capacity = static_cast<double>(file_size) *
+                              (info->compression == MAT_COMPRESSION_NONE ? 1.0 : 1032.0);
+      if (static_cast<double>(rows) * static_cast<double>(columns) > capacity) {
+        unusable_[name] = "variable '" + name + "' claims " + std::to_string(rows) + " x " +
+                          std::to_string(columns) + " values, more than a file of " +
+                          std::to_string(file_size) + " bytes holds (a damaged header?)";
         continue;
       }
       if (rows * columns == 1) {
@@ -153,12 +167,6 @@ class MatStore final : public ColumnStore {
  public:
   const char* kind() const override { return "variable"; }
   std::vector<std::string> names() const override { return names_; }
-
-  std::optional<std::string> unusable(const std::string& name) const override {
-    const auto found = unusable_.find(name);
-    if (found == unusable_.end()) return std::nullopt;
-    return found->second;
-  }
 
   void prepare(std::size_t channel) override {
     const Channel& c = channels_[channel];
@@ -249,7 +257,6 @@ class MatStore final : public ColumnStore {
   MatFile file_;
   std::vector<std::string> names_, scalars_;
   std::vector<Channel> channels_;
-  std::map<std::string, std::string> unusable_;  // variable -> why it is no channel
   std::map<std::string, Variable> loaded_;
   bool metadata_text_ = false;
   DataMetadata metadata_;

@@ -14,6 +14,7 @@ import shutil
 import struct
 import subprocess
 import sys
+import zlib
 from pathlib import Path
 
 import h5py
@@ -670,6 +671,83 @@ def test_npy_shape_within_range_but_missing_data_is_an_error(tmp_path):
         "long.npy:26:1: the file ends inside the array: 800 bytes of data for an array of shape "
         "(1000000, 4) of 8-byte values"
     )
+
+
+def mat_claiming(path, values, compress):
+    """A level-5 .mat file of y, v, x and t, 100 values each, whose headers claim `values`."""
+    scipy.io.savemat(path, {name: np.arange(100.0) for name in NAMES},
+                     do_compression=compress)
+    whole = bytearray(path.read_bytes())
+    out, at = whole[:128], 128
+    dims = struct.pack("<iiii", 5, 8, 1, 100)  # the miINT32 dimensions element: 1 x 100
+    while at < len(whole):
+        kind, size = struct.unpack("<ii", whole[at:at + 8])
+        body = whole[at + 8:at + 8 + size]
+        plain = bytearray(zlib.decompress(bytes(body)) if compress else body)
+        where = plain.find(dims)
+        plain[where + 8:where + 16] = struct.pack("<ii", 1, values)
+        body = zlib.compress(bytes(plain)) if compress else plain
+        out += struct.pack("<ii", kind, len(body)) + body
+        at += 8 + size
+    path.write_bytes(bytes(out))
+
+
+@pytest.mark.parametrize("compress", [False, True], ids=["plain", "compressed"])
+def test_mat_header_claiming_more_than_the_file_holds_is_an_error(tmp_path, compress):
+    """matio reads what a header claims: values never written would be read as data."""
+    mat_claiming(tmp_path / "claims.mat", 2**28, compress)
+    size = (tmp_path / "claims.mat").stat().st_size
+    proc = run("identify", MODEL, "claims.mat", cwd=tmp_path)
+    not_a_crash(proc)
+    assert proc.returncode == 2
+    assert first_line(proc.stderr) == (
+        f"claims.mat:1:1: variable 'y' claims 1 x 268435456 values, more than a file of {size} "
+        "bytes holds (a damaged header?)")
+
+
+@pytest.mark.parametrize("written", ["never", "only partly"])
+def test_hdf5_dataset_not_written_is_an_error(tmp_path, written):
+    """Acquisition that stops early leaves datasets whose unwritten values read as the fill
+    value."""
+    with h5py.File(tmp_path / "early.h5", "w") as f:
+        for name in NAMES:
+            f.create_dataset(name, data=np.arange(2**16, dtype=float))
+        del f["v"]
+        v = f.create_dataset("v", shape=(2**16,), dtype="f8", chunks=(1024,))
+        if written == "only partly":
+            v[:5000] = 1.0
+    proc = run("identify", MODEL, "early.h5", cwd=tmp_path)
+    not_a_crash(proc)
+    assert proc.returncode == 2
+    assert first_line(proc.stderr) == (
+        f"early.h5:1:1: dataset 'v' was {written} written: its unwritten values would read as "
+        "the fill value")
+
+
+def test_unusable_state_is_an_error_not_an_unmeasured_state(tmp_path):
+    """A state the file holds in a form momentid cannot read is not taken as unmeasured (which
+    would choose the lagged equations): its reading fails and says why."""
+    with h5py.File(tmp_path / "ints.h5", "w") as f:
+        for name in NAMES:
+            f.create_dataset(name, data=np.arange(1000, dtype=np.int16 if name == "v" else float))
+    proc = run("identify", MODEL, "ints.h5", cwd=tmp_path)
+    not_a_crash(proc)
+    assert proc.returncode == 2
+    assert first_line(proc.stderr) == (
+        "ints.h5:1:1: dataset 'v' holds integer values: expected floating-point values")
+
+
+def test_check_without_a_model_names_the_arrays_it_cannot_read(tmp_path):
+    with h5py.File(tmp_path / "mixed.h5", "w") as f:
+        f.create_dataset("y", data=np.sin(np.arange(1000) / 10))
+        f.create_dataset("counts", data=np.arange(1000, dtype=np.int32))
+        f.create_dataset("v", shape=(1000,), dtype="f8", chunks=(100,))
+    proc = run("check", "mixed.h5", cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    assert ("warning: not checked: dataset 'counts' holds integer values: expected "
+            "floating-point values") in proc.stdout.splitlines()
+    assert ("warning: not checked: dataset 'v' was never written: its unwritten values would "
+            "read as the fill value") in proc.stdout.splitlines()
 
 
 def test_hdf5_variable_length_string_attribute_is_metadata(record, tmp_path):
