@@ -16,7 +16,8 @@ squares and GMM, degree 3) and, per parameter:
   3. draws pairs of ends from points of that record 5 s apart, many times N of them, and gives
      the 10%, 50% and 90% points of their spread over sqrt(2 Var(h)) / T: the range of
      spread/SE that N seeds give when the standard errors are exactly right, with the kurtosis
-     of h that makes it wide.
+     of h that makes it wide; and how often such an error lies within 1.96 of those standard
+     errors: the coverage of exact 95% intervals under the ends' own law.
 
   ends.py [--samples 1e6] [--seeds 120]
 
@@ -88,7 +89,7 @@ def main():
     print(f"{args.seeds} records of {samples:.0e} samples without noise\n")
     print(f"{'method':<6} {'param':<5} {'explained':>9} {'SE':>9} {'sqrt(2Var h)/T':>14} "
           f"{'spread':>9} {'kurtosis h':>10} {'spread/SE if right: 10%':>23} {'50%':>5} "
-          f"{'90%':>5}")
+          f"{'90%':>5} {'coverage if right':>17}")
     design = np.column_stack([rates, np.ones(len(rates))])
     for (method, p), e in errors.items():
         e = np.array(e)
@@ -101,9 +102,11 @@ def main():
         draws = rng.choice(points, (2000, 2, args.seeds))
         ratios = np.std(draws[:, 0] - draws[:, 1], axis=1, ddof=1) / model
         low, median, high = np.quantile(ratios, [0.1, 0.5, 0.9])
+        differences = rng.choice(points, 200000) - rng.choice(points, 200000)
+        coverage = np.mean(np.abs(differences) < 1.96 * model)
         print(f"{method:<6} {p:<5} {explained:9.1%} {np.mean(reported[(method, p)]):9.3g} "
               f"{model:14.3g} {np.std(e, ddof=1):9.3g} {kurtosis:10.0f} {low:23.2f} "
-              f"{median:5.2f} {high:5.2f}")
+              f"{median:5.2f} {high:5.2f} {coverage:17.1%}")
 
 
 if __name__ == "__main__":

@@ -22,7 +22,7 @@ at the 5% level (its size: 5% when right) and of the linear model (its power).
 
 Without noise the errors are the record's ends, (g(T) - g(0))/T for powers g of the states,
 whose distribution has a kurtosis of 17 to 110 (ends.py): with exact standard errors, the
-spread over 120 seeds would fall below 0.64-0.87 or above 1.19-1.46 times the error one time
+spread over 120 seeds would fall below 0.64-0.87 or above 1.18-1.46 times the error one time
 in ten each, so those cells take more seeds (--noise-free-sizes). Each cell's spread/SE comes with a 90% bootstrap interval over its seeds
 and each coverage with a 90% Wilson interval. --raw keeps every record's results (written
 after each cell); --from summarises such files (several: their cells are joined) without
