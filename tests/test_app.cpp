@@ -336,6 +336,46 @@ TEST_SUITE("app") {
     CHECK(r.identities.empty());
   }
 
+  TEST_CASE("the autocorrelation of short runs is their pairs' covariance about the mean") {
+    // Three runs of four rows: the pairs at lag l leave out each run's first l
+    // values as leads and its last l as lagged ones, so their means are not the record's.
+    const momentid::testing::Directory dir("momentid_test_short_runs");
+    const std::vector<std::vector<double>> runs = {{0, 1, 2, 6}, {2, 4, 7, 9}, {1, 2, 3, 9}};
+    {
+      std::ofstream out(dir / "runs.csv");
+      out << "t,x,run\n";
+      for (std::size_t r = 0; r < runs.size(); ++r) {
+        for (std::size_t n = 0; n < runs[r].size(); ++n) {
+          out << 0.1 * static_cast<double>(n) << "," << runs[r][n] << "," << r + 1 << "\n";
+        }
+      }
+    }
+    const momentid::CheckResult result =
+        momentid::check(momentid::DataSource::file(dir / "runs.csv"), nullptr, {.lags = 2});
+    double sum = 0, count = 0;
+    for (const auto& run : runs) {
+      for (double x : run) sum += x, ++count;
+    }
+    const double mean = sum / count;
+    double variance = 0;
+    for (const auto& run : runs) {
+      for (double x : run) variance += (x - mean) * (x - mean) / count;
+    }
+    const std::vector<double>& rho = result.data.channels[0].autocorrelation;
+    REQUIRE(rho.size() == 2);
+    for (std::size_t lag = 1; lag <= 2; ++lag) {
+      double products = 0, pairs = 0;
+      for (const auto& run : runs) {
+        for (std::size_t n = lag; n < run.size(); ++n) {
+          products += (run[n] - mean) * (run[n - lag] - mean);
+          ++pairs;
+        }
+      }
+      CHECK(rho[lag - 1] == doctest::Approx(products / pairs / variance).epsilon(1e-12));
+      CHECK(std::abs(rho[lag - 1]) <= 1);
+    }
+  }
+
   TEST_CASE("the lagged equations need the sample interval and take no multipliers") {
     const SineArrays arrays(1000);
     const momentid::Model model = model_file("duffing.mom");
