@@ -284,6 +284,16 @@ def test_unknown_fixed_parameter_is_a_usage_error(duffing, record):
     assert result.fixed == ["c"] and result.estimates["c"] == 0.5
 
 
+def test_messages_name_the_keywords_not_the_command_line_options(duffing, record):
+    with pytest.raises(momentid.UsageError, match=r"^fix: 'zz' is not a parameter"):
+        momentid.identify(duffing, record, fix={"zz": 1.0})
+    with pytest.raises(momentid.UsageError, match=r"^rename: 'zz' is not a state or input"):
+        momentid.identify(duffing, record, rename={"zz": "y"})
+    with pytest.raises(momentid.UsageError,
+                       match=r"^noise: channel 'v' is not observed \(observe y,x\)"):
+        momentid.simulate(duffing, samples=100, observe=["y", "x"], noise={"v": 0.1})
+
+
 def test_option_of_the_wrong_type_is_a_usage_error(duffing, record):
     with pytest.raises(momentid.UsageError, match=r"^seed: expected a whole number, 0 or more, "
                                                   r"found -1$"):
@@ -295,7 +305,7 @@ def test_option_of_the_wrong_type_is_a_usage_error(duffing, record):
 
 def test_bad_dt_is_the_same_error_for_arrays_and_files(duffing, record, cli_csv):
     for data in (record, cli_csv):
-        with pytest.raises(momentid.UsageError, match="^--dt: expected a positive number$"):
+        with pytest.raises(momentid.UsageError, match="^dt: expected a positive number$"):
             momentid.identify(duffing, data, dt=-1.0)
 
 
