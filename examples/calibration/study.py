@@ -17,7 +17,8 @@ right), the bias over the mean standard error, the J test's rejection rate of th
 at the 5% level (its size: 5% when right) and of the linear model (its power).
 
   study.py [--sizes 1e5:100,1e6:100,1e7:60] [--noise-free-sizes 1e5:100,1e6:500,1e7:100]
-           [--noise 0,0.01,0.05] [--raw OUT.json] [--from RAW.json ...] [--summary OUT.txt]
+           [--noise 0,0.01,0.05] [--first-seed 1] [--raw OUT.json] [--from RAW.json ...]
+           [--summary OUT.txt]
            [--markdown OUT.md] [--plot OUT.png] [--check]
 
 Without noise the errors are the record's ends, (g(T) - g(0))/T for powers g of the states,
@@ -26,7 +27,8 @@ spread over 120 seeds would fall below 0.64-0.87 or above 1.18-1.46 times the er
 in ten each, so those cells take more seeds (--noise-free-sizes). Each cell's spread/SE comes with a 90% bootstrap interval over its seeds
 and each coverage with a 90% Wilson interval. --raw keeps every record's results (written
 after each cell); --from summarises such files (several: their cells are joined) without
-running momentid.
+running momentid; a cell that several files hold has the seeds of all of them
+(--first-seed runs more seeds for a cell without repeating those run before).
 
 --check fails (exit 1) when the coverage of any interval collapses below 50%: the short
 version run by ctest. Uses build/momentid, or the MOMENTID environment variable.
@@ -90,13 +92,13 @@ def one_run(samples, noise, seed, tmp, linear):
     return out, right_p, wrong["diagnostics"].get("j_pvalue"), ratios
 
 
-def run_cell(samples, noise, seeds):
-    """One_run for seeds 1 to `seeds`."""
+def run_cell(samples, noise, seeds, first):
+    """One_run for `seeds` seeds from `first` on."""
     with tempfile.TemporaryDirectory() as tmp:
         linear = os.path.join(tmp, "linear.mom")
         with open(linear, "w") as f:
             f.write(LINEAR)
-        return [one_run(samples, noise, seed, tmp, linear) for seed in range(1, seeds + 1)]
+        return [one_run(samples, noise, seed, tmp, linear) for seed in range(first, first + seeds)]
 
 
 def wilson(hits, n, z=1.645):
@@ -187,6 +189,8 @@ def main():
     parser.add_argument("--noise-free-sizes", default="1e5:100,1e6:500,1e7:100",
                         help="record lengths and seeds without noise")
     parser.add_argument("--noise", default="0,0.01,0.05")
+    parser.add_argument("--first-seed", type=int, default=1,
+                        help="the first seed of every cell (to add seeds to a study)")
     parser.add_argument("--raw", default=None, help="write every record's results here")
     parser.add_argument("--from", dest="sources", nargs="+", default=None,
                         help="summarise these --raw files instead of running")
@@ -202,11 +206,11 @@ def main():
         for source in args.sources:
             with open(source) as f:
                 for c in json.load(f):
-                    cells[(c["samples"], c["noise"])] = c["runs"]
+                    cells.setdefault((c["samples"], c["noise"]), []).extend(c["runs"])
     else:
         for noise in (float(n) for n in args.noise.split(",")):
             for samples, seeds in sizes_of(args.noise_free_sizes if noise == 0 else args.sizes):
-                cells[(samples, noise)] = run_cell(samples, noise, seeds)
+                cells[(samples, noise)] = run_cell(samples, noise, seeds, args.first_seed)
                 print(f"{samples:.0e} samples, noise {noise:.0%}: {seeds} seeds", flush=True)
                 if args.raw:  # after every cell, so that an interrupted study keeps its cells
                     with open(args.raw, "w") as f:

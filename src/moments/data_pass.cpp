@@ -146,9 +146,9 @@ class LagSums {
     s.mean = offset_[c] + shifted_mean;
     s.variance = sum_squares_[c] / n - shifted_mean * shifted_mean;
     s.correlation_time = lags_ + 1;
-    // The lag-l covariance about the record's mean over the pairs that lag has: the values
+    // The lag-l covariance about the record's mean over the pairs that lag has. The values
     // paired are not all the values (a run's first l rows lead no pair, its last l are lagged by
-    // none), so their sums enter rather than the mean (which, on short runs, gave |rho| > 1).
+    // none), so the pairs' own sums enter: on short runs their means are not the record's.
     for (std::size_t l = 0; l < lags_; ++l) {
       const std::size_t i = l * channels_ + c;
       const auto p = static_cast<double>(pairs_[l]);
