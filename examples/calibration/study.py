@@ -16,7 +16,7 @@ estimates across seeds over their mean standard error (spread/SE; 1 when the err
 right), the bias over the mean standard error, the J test's rejection rate of the right model
 at the 5% level (its size: 5% when right) and of the linear model (its power).
 
-  study.py [--sizes 1e5:100,1e6:100,1e7:60] [--noise-free-sizes 1e5:100,1e6:500,1e7:100]
+  study.py [--sizes 1e5:100,1e6:100,1e7:160] [--noise-free-sizes 1e5:100,1e6:500,1e7:500]
            [--noise 0,0.01,0.05] [--first-seed 1] [--raw OUT.json] [--from RAW.json ...]
            [--summary OUT.txt]
            [--markdown OUT.md] [--plot OUT.png] [--check]
@@ -184,9 +184,9 @@ def sizes_of(text):
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--sizes", default="1e5:100,1e6:100,1e7:60",
+    parser.add_argument("--sizes", default="1e5:100,1e6:100,1e7:160",
                         help="record lengths and seeds with noise, SAMPLES:SEEDS,...")
-    parser.add_argument("--noise-free-sizes", default="1e5:100,1e6:500,1e7:100",
+    parser.add_argument("--noise-free-sizes", default="1e5:100,1e6:500,1e7:500",
                         help="record lengths and seeds without noise")
     parser.add_argument("--noise", default="0,0.01,0.05")
     parser.add_argument("--first-seed", type=int, default=1,
