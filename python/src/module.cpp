@@ -7,12 +7,9 @@
 #include <pybind11/stl.h>
 
 #include <algorithm>
-#include <cctype>
 #include <cmath>
-#include <functional>
 #include <map>
 #include <optional>
-#include <set>
 #include <string>
 #include <type_traits>
 #include <vector>
@@ -24,54 +21,11 @@ namespace py = pybind11;
 namespace momentid::python {
 namespace {
 
-// The library's messages name the command line's options (`--dt-from: ...`); a Python caller
-// gave keyword arguments. Each option that one of the functions takes as a keyword is named by
-// that keyword (`dt_from: ...`); the others are left as they are.
-std::string keyword_names(const std::string& message) {
-  static const std::set<std::string, std::less<>> same = {
-      "batches",       "burn_in",     "center",   "decimal",    "degree",      "dt",
-      "dt_from",       "extrapolate", "fix",      "input_hold", "input_shift", "instruments",
-      "interpolation", "lags",        "measured", "missing",    "multipliers", "names",
-      "noise",         "observe",     "runs",     "samples",    "seed",        "skip",
-      "skip_rows",     "substeps",    "threads",  "weighting"};
-  static const std::map<std::string, std::string, std::less<>> renamed = {
-      {"columns", "rename"}, {"input", "inputs"}, {"set", "params"}};
-  std::string out;
-  std::size_t at = 0;
-  while (true) {
-    const std::size_t dashes = message.find("--", at);
-    if (dashes == std::string::npos) break;
-    std::size_t end = dashes + 2;
-    while (end < message.size() &&
-           (std::islower(static_cast<unsigned char>(message[end])) ||
-            std::isdigit(static_cast<unsigned char>(message[end])) || message[end] == '-')) {
-      ++end;
-    }
-    const std::string option = message.substr(dashes + 2, end - dashes - 2);
-    std::string name = option;
-    std::replace(name.begin(), name.end(), '-', '_');
-    const auto other = renamed.find(option);
-    const bool starts_word =
-        dashes == 0 || !std::isalnum(static_cast<unsigned char>(message[dashes - 1]));
-    out += message.substr(at, dashes - at);
-    if (starts_word && other != renamed.end()) {
-      out += other->second;
-    } else if (starts_word && same.contains(name)) {
-      out += name;
-    } else {
-      out += "--" + option;
-    }
-    at = end;
-  }
-  return out + message.substr(at);
-}
-
 // Sets the module's exception for `kind` (a class of momentid/__init__.py) with the message
-// (options named as keywords) and, for a located error, its place, as an exception translator
-// must.
+// and, for a located error, its place, as an exception translator must.
 void raise(const char* kind, const std::string& message, const SourceLocation* where = nullptr) {
   py::object type = py::module_::import("momentid").attr(kind);
-  py::object error = type(keyword_names(message));
+  py::object error = type(message);
   if (where != nullptr) {
     error.attr("file") = where->file;
     error.attr("line") = where->line;
