@@ -1,0 +1,45 @@
+// The record's ends: the zero-lag equations take the stationarity identities E[(g)'] = 0, which
+// a finite record meets only up to (g(end) - g(start)) / T (README, "Uncertainty").
+
+#include <map>
+
+#include "app/identify/steps.hpp"
+
+namespace momentid {
+
+void increments_to_rates(const Model& model, const std::vector<Monomial>& moments,
+                         std::optional<double> interval, MomentEstimates& estimates) {
+  for (std::size_t k = 0; k < moments.size(); ++k) {
+    if (!rate_of(moments[k], model.variables().size())) continue;
+    const double scale = interval ? 1 / *interval : 0.0;
+    estimates.mean[k] *= scale;
+    for (std::vector<double>& batch : estimates.batch_means) batch[k] *= scale;
+  }
+}
+
+std::vector<Monomial> rate_monomials(const Model& model, const std::vector<Monomial>& moments) {
+  std::vector<Monomial> out;
+  for (const Monomial& m : moments) {
+    if (const std::optional<Monomial> g = rate_of(m, model.variables().size())) out.push_back(*g);
+  }
+  return out;
+}
+
+std::vector<std::vector<double>> rate_covariance(const std::vector<Monomial>& g,
+                                                 const std::vector<Monomial>& moments,
+                                                 const MomentEstimates& estimates, std::size_t runs,
+                                                 double duration) {
+  std::map<Monomial, double> mean;
+  for (std::size_t k = 0; k < moments.size(); ++k) mean.emplace(moments[k], estimates.mean[k]);
+  const std::vector<Monomial> all = with_products(g);
+  std::vector<std::vector<double>> out(g.size(), std::vector<double>(g.size()));
+  for (std::size_t i = 0, next = g.size(); i < g.size(); ++i) {
+    for (std::size_t j = i; j < g.size(); ++j, ++next) {
+      const double c = mean.at(all[next]) - mean.at(g[i]) * mean.at(g[j]);
+      out[i][j] = out[j][i] = 2 * static_cast<double>(runs) * c / (duration * duration);
+    }
+  }
+  return out;
+}
+
+}  // namespace momentid

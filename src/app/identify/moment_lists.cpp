@@ -1,0 +1,55 @@
+// The lists of moments a zero-lag pass reads: the increments for the rates of change, the
+// moments added for the refinements, and the system's own first.
+
+#include <algorithm>
+#include <set>
+
+#include "app/identify/steps.hpp"
+
+namespace momentid {
+
+std::vector<Moment> pass_moments_of(const Model& model, const std::vector<Monomial>& moments) {
+  std::vector<Moment> out;
+  for (const Monomial& m : moments) {
+    const std::optional<Monomial> g = rate_of(m, model.variables().size());
+    out.push_back(g ? Moment::increment_of(*g) : Moment::from_monomial(m));
+  }
+  return out;
+}
+
+std::vector<Monomial> without_rates(const Model& model, std::vector<Monomial> moments) {
+  std::erase_if(moments, [&](const Monomial& m) { return rate_of(m, model.variables().size()); });
+  return moments;
+}
+
+std::vector<Monomial> with_products(const std::vector<Monomial>& g) {
+  std::vector<Monomial> out = g;
+  for (std::size_t i = 0; i < g.size(); ++i) {
+    for (std::size_t j = i; j < g.size(); ++j) {
+      Monomial product = g[i];
+      for (std::size_t v = 0; v < product.size(); ++v) product[v] += g[j][v];
+      out.push_back(std::move(product));
+    }
+  }
+  return out;
+}
+
+MomentEstimates first_moments(const MomentEstimates& all, std::size_t count) {
+  MomentEstimates out = all;
+  out.mean.resize(count);
+  for (std::vector<double>& batch : out.batch_means) batch.resize(count);
+  return out;
+}
+
+std::vector<Monomial> not_among(const std::vector<Monomial>& moments,
+                                const std::vector<Monomial>& more) {
+  std::set<Monomial> known(moments.begin(), moments.end());
+  std::vector<Monomial> out;
+  for (const Monomial& m : more) {
+    const bool constant = std::all_of(m.begin(), m.end(), [](int e) { return e == 0; });
+    if (!constant && known.insert(m).second) out.push_back(m);
+  }
+  return out;
+}
+
+}  // namespace momentid

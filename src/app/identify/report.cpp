@@ -1,0 +1,304 @@
+// The identification's report, as text and as JSON (README, "momentid identify").
+
+#include <algorithm>
+#include <cstdio>
+#include <sstream>
+
+#include "common/json.hpp"
+#include "common/number.hpp"
+#include "momentid/identify.hpp"
+
+namespace momentid {
+namespace {
+
+const char* hold_name(InputHold hold) {
+  return hold == InputHold::kZeroOrderHold ? "zoh" : "sample";
+}
+
+void table(std::ostringstream& out, const std::vector<ParameterEstimate>& parameters) {
+  std::size_t width = 9;
+  for (const auto& p : parameters) width = std::max(width, p.name.size());
+  char line[256];
+  std::snprintf(line, sizeof line, "  %-*s  %14s  %12s  %s\n", static_cast<int>(width), "parameter",
+                "estimate", "std error", "95% interval");
+  out << line;
+  for (const auto& p : parameters) {
+    const std::string interval =
+        p.fixed          ? "fixed"
+        : p.identifiable ? std::string("[") + number(p.ci_low) + ", " + number(p.ci_high) + "]"
+                         : "not identifiable";
+    std::snprintf(line, sizeof line, "  %-*s  %14s  %12s  %s\n", static_cast<int>(width),
+                  p.name.c_str(), number(p.estimate).c_str(), number(p.std_error, "%.3g").c_str(),
+                  interval.c_str());
+    out << line;
+  }
+}
+
+// "lagged moment equations at lags 3..300 samples, instruments y, y^3; not measured: v = y';
+// 5-point lag stencils".
+std::string method_text(const IdentifyResult& r) {
+  std::string out = "lagged moment equations at lags " + std::to_string(r.lagged->first_lag) +
+                    ".." + std::to_string(r.lagged->last_lag) + " samples, instruments ";
+  for (std::size_t i = 0; i < r.lagged->instruments.size(); ++i) {
+    out += (i ? ", " : "") + format_monomial(*r.model, r.lagged->instruments[i]);
+  }
+  for (std::size_t i = 0; i < r.lagged->derivatives.size(); ++i) {
+    out += (i ? ", " : "; not measured: ") + r.lagged->derivatives[i];
+  }
+  out += "; " + std::to_string(2 * r.stencil_reach + 1) + "-point lag stencils";
+  std::string noise;
+  for (std::size_t c = 0; c < r.noise.size(); ++c) {
+    if (r.noise[c] == 0) continue;
+    char text[32];
+    std::snprintf(text, sizeof text, "%.3g", r.noise[c]);
+    noise += (noise.empty() ? "" : ", ") + r.channels[c] + " " + text;
+  }
+  if (!noise.empty()) out += "\nnoise variances, corrected for in powers of the channels: " + noise;
+  return out;
+}
+
+// "E[y(t-3)*y^3]": a lagged moment over the named channels.
+std::string lagged_moment_text(const std::vector<std::string>& channels, const Moment& m) {
+  std::string out;
+  for (const MomentFactor& f : m.factors()) {
+    out += (out.empty() ? "" : "*") + channels[static_cast<std::size_t>(f.channel)];
+    // Appended piece by piece: g++ 12 warns wrongly (-Wrestrict) about "^" + std::string.
+    if (f.power > 1) out.append("^").append(std::to_string(f.power));
+    if (f.lag > 0) out.append("(t-").append(std::to_string(f.lag)).append(")");
+  }
+  return "E[" + (out.empty() ? std::string("1") : out) + "]";
+}
+
+// The refinements of a zero-lag estimate: the sampling bias, the held-input correction and the
+// record's ends.
+void refinements_text(std::ostringstream& out, const IdentifyResult& r) {
+  if (const auto& s = r.sampling_bias) {
+    out << "  sampling bias at dt (the estimate from every other sample, bias of order dt^"
+        << IdentifyResult::SamplingBias::kOrder << "):\n";
+    const auto& list = r.parameters();
+    for (std::size_t p = 0; p < list.size(); ++p) {
+      out << "    " << list[p].name << ": " << number(s->bias[p], "%.3g") << " (every other sample "
+          << number(s->coarse[p], "%g") << ", difference error "
+          << number(s->difference_error[p], "%.3g") << ")\n";
+    }
+    out << (s->applied ? "    removed: the estimates above are extrapolated to dt = 0\n"
+                       : "    within the errors: not removed\n");
+  }
+  if (const auto& h = r.held_input) {
+    if (h->unavailable.empty()) {
+      out << "  held input: moments corrected by -dt^2/12 E[g''] for the kinks it puts at the "
+             "samples, which moved the estimates by";
+      const auto& list = r.parameters();
+      for (std::size_t p = 0; p < list.size(); ++p) {
+        out << (p ? ", " : " ") << list[p].name << " " << number(h->shift[p], "%+.3g");
+      }
+      out << "\n";
+    } else {
+      out << "  held input: moments not corrected for the kinks it puts at the samples: "
+          << h->unavailable << "\n";
+    }
+  }
+  if (const auto& v = r.end_values) {
+    out << (v->unavailable.empty()
+                ? "  record ends: the errors they leave come from the variances of the states "
+                  "there, the batches give the rest\n"
+                : "  record ends: the errors they leave come from the batches: " + v->unavailable +
+                      "\n");
+  }
+}
+
+// The status, the warnings, the system's and the errors' figures, the J test, the refinements and
+// the stationarity identities.
+void diagnostics_text(std::ostringstream& out, const IdentifyResult& r) {
+  const Estimate& e = r.estimate;
+  out << "\ndiagnostics\n";
+  out << "  status: " << status_name(r) << "\n";
+  const std::vector<std::string> all = warnings(r);
+  if (all.empty()) out << "  warnings: none\n";
+  for (const std::string& w : all) out << "  warning: " << w << "\n";
+  out << "  equations: " << e.rows << ", rank " << e.rank << " of " << e.parameters.size()
+      << ", condition number " << number(e.condition, "%.3g") << "\n";
+  out << "  batches: " << e.batches;
+  if (e.dof > 0) {
+    const bool ends = r.end_values && r.end_values->unavailable.empty();
+    out << "; standard errors from their long-run covariance"
+        << (ends ? " and the record's ends" : "") << " on " << number(e.dof, "%.0f")
+        << " degrees of freedom";
+    if (!e.gmm_parameters.empty()) {
+      out << " (optimally weighted: " << number(e.gmm_dof, "%.0f") << ")";
+    }
+  }
+  out << "\n";
+  if (e.j_statistic) {
+    out << "  J test: J = " << number(*e.j_statistic, "%.4g") << " on " << e.j_dof
+        << " degrees of freedom, p = " << number(*e.j_pvalue, "%.3g")
+        << (*e.j_pvalue < 0.01 ? " (the model does not fit the data)" : "") << "\n";
+  }
+  refinements_text(out, r);
+  if (!e.identities.empty()) {
+    out << "  stationarity identities (sample violation, z-score):\n";
+    for (const IdentityCheck& c : e.identities) {
+      out << "    " << c.identity << ": " << number(c.violation, "%.3g")
+          << " (z = " << number(c.z, "%.2f") << ")\n";
+    }
+  }
+}
+
+void refinements_json(std::ostringstream& out, const IdentifyResult& r) {
+  if (const auto& s = r.sampling_bias) {
+    out << ",\n    \"sampling_bias\": {\"order\": " << IdentifyResult::SamplingBias::kOrder
+        << ", \"applied\": " << (s->applied ? "true" : "false") << ", \"parameters\": {";
+    const auto& list = r.parameters();
+    for (std::size_t p = 0; p < list.size(); ++p) {
+      out << (p ? ", " : "") << json_string(list[p].name)
+          << ": {\"coarse\": " << json_number(s->coarse[p])
+          << ", \"bias\": " << json_number(s->bias[p])
+          << ", \"difference_error\": " << json_number(s->difference_error[p]) << "}";
+    }
+    out << "}}";
+  }
+  if (const auto& h = r.held_input) {
+    out << ",\n    \"held_input_correction\": {\"applied\": "
+        << (h->unavailable.empty() ? "true" : "false");
+    if (h->unavailable.empty()) {
+      out << ", \"shift\": {";
+      const auto& list = r.parameters();
+      for (std::size_t p = 0; p < list.size(); ++p) {
+        out << (p ? ", " : "") << json_string(list[p].name) << ": " << json_number(h->shift[p]);
+      }
+      out << "}";
+    } else {
+      out << ", \"reason\": " << json_string(h->unavailable);
+    }
+    out << "}";
+  }
+  if (const auto& v = r.end_values) {
+    out << ",\n    \"end_values\": {\"applied\": " << (v->unavailable.empty() ? "true" : "false");
+    if (!v->unavailable.empty()) out << ", \"reason\": " << json_string(v->unavailable);
+    out << "}";
+  }
+}
+
+void diagnostics_json(std::ostringstream& out, const IdentifyResult& r, bool gmm) {
+  const Estimate& e = r.estimate;
+  const DataMoments& d = r.data;
+  out << ",\n  \"diagnostics\": {\n    \"status\": " << json_string(status_name(r))
+      << ",\n    \"rows\": " << e.rows << ",\n    \"rank\": " << e.rank
+      << ",\n    \"condition\": " << json_number(e.condition) << ",\n    \"batches\": " << e.batches
+      << ",\n    \"error_dof\": " << json_number(gmm ? e.gmm_dof : e.dof)
+      << ",\n    \"samples\": " << d.rows << ",\n    \"runs\": " << d.runs
+      << ",\n    \"input_hold\": " << json_string(hold_name(d.hold))
+      << ",\n    \"j_statistic\": " << (e.j_statistic ? json_number(*e.j_statistic) : "null")
+      << ",\n    \"j_dof\": " << e.j_dof
+      << ",\n    \"j_pvalue\": " << (e.j_pvalue ? json_number(*e.j_pvalue) : "null");
+  refinements_json(out, r);
+  out << ",\n    \"identities\": [";
+  for (std::size_t i = 0; i < e.identities.size(); ++i) {
+    const IdentityCheck& c = e.identities[i];
+    out << (i ? ", " : "") << "{\"identity\": " << json_string(c.identity)
+        << ", \"violation\": " << json_number(c.violation) << ", \"z\": " << json_number(c.z)
+        << "}";
+  }
+  out << "],\n    \"correlation\": [";
+  const auto& correlation = gmm ? e.gmm_correlation : e.correlation;
+  for (std::size_t i = 0; i < correlation.size(); ++i) {
+    out << (i ? ", " : "") << "[";
+    for (std::size_t j = 0; j < correlation[i].size(); ++j) {
+      out << (j ? ", " : "") << json_number(correlation[i][j]);
+    }
+    out << "]";
+  }
+  out << "],\n    \"warnings\": " << json_strings(warnings(r)) << "\n  }\n}\n";
+}
+
+}  // namespace
+
+std::string format_text(const IdentifyResult& r) {
+  const Estimate& e = r.estimate;
+  const DataMoments& d = r.data;
+  std::ostringstream out;
+  out << "model " << r.model->name() << ", data " << r.data_name << ": " << d.rows << " rows in "
+      << d.runs << (d.runs == 1 ? " run" : " runs");
+  if (d.time_step) out << ", dt = " << number(*d.time_step);
+  out << ", input hold " << hold_name(d.hold) << "\n";
+  if (r.lagged) out << method_text(r) << "\n";
+  if (!r.centered.empty()) {
+    out << "means removed (--center):";
+    for (const auto& [name, mean] : r.centered) out << " " << name << " " << number(mean, "%.4g");
+    out << "\n";
+  }
+  out << "\n";
+  if (r.gmm && !e.gmm_parameters.empty()) {
+    out << "optimally weighted estimate (two-step GMM)\n";
+    table(out, e.gmm_parameters);
+    out << "\nleast-squares estimate (first step)\n";
+  } else {
+    out << "least-squares estimate\n";
+  }
+  table(out, e.parameters);
+  const std::vector<std::string> equations = identified_equations(r);
+  if (!equations.empty()) {
+    out << "\nidentified model\n";
+    for (const std::string& line : equations) out << "  " << line << "\n";
+  }
+  diagnostics_text(out, r);
+  return out.str();
+}
+
+std::string format_json(const IdentifyResult& r) {
+  const Estimate& e = r.estimate;
+  const DataMoments& d = r.data;
+  auto parameters = [](const std::vector<ParameterEstimate>& list) {
+    std::string out = "{";
+    for (std::size_t i = 0; i < list.size(); ++i) {
+      const ParameterEstimate& p = list[i];
+      out += (i ? ",\n    " : "\n    ") + json_string(p.name) +
+             ": {\"estimate\": " + json_number(p.estimate) +
+             ", \"std_error\": " + json_number(p.std_error) + ", \"ci95\": [" +
+             json_number(p.ci_low) + ", " + json_number(p.ci_high) +
+             "], \"identifiable\": " + (p.identifiable ? "true" : "false") +
+             ", \"fixed\": " + (p.fixed ? "true" : "false") + "}";
+    }
+    return out + "\n  }";
+  };
+  const bool gmm = r.gmm && !e.gmm_parameters.empty();
+  std::ostringstream out;
+  out << "{\n  \"model\": " << json_string(r.model->name())
+      << ",\n  \"data\": " << json_string(r.data_name)
+      << ",\n  \"parameters\": " << parameters(gmm ? e.gmm_parameters : e.parameters);
+  if (gmm) out << ",\n  \"least_squares\": " << parameters(e.parameters);
+  if (r.lagged) {
+    out << ",\n  \"method\": {\"name\": \"lagged\", \"lags\": [" << r.lagged->first_lag << ", "
+        << r.lagged->last_lag << "], \"stencil_points\": " << 2 * r.stencil_reach + 1
+        << ", \"instruments\": [";
+    for (std::size_t i = 0; i < r.lagged->instruments.size(); ++i) {
+      out << (i ? ", " : "") << json_string(format_monomial(*r.model, r.lagged->instruments[i]));
+    }
+    out << "], \"not_measured\": " << json_strings(r.lagged->derivatives)
+        << ", \"noise_variance\": {";
+    for (std::size_t c = 0; c < r.noise.size(); ++c) {
+      out << (c ? ", " : "") << json_string(r.channels[c]) << ": " << json_number(r.noise[c]);
+    }
+    out << "}}";
+  }
+  if (!r.centered.empty()) {
+    out << ",\n  \"centered\": {";
+    std::size_t k = 0;
+    for (const auto& [name, mean] : r.centered) {
+      out << (k++ ? ", " : "") << json_string(name) << ": " << json_number(mean);
+    }
+    out << "}";
+  }
+  out << ",\n  \"equations\": " << json_strings(identified_equations(r));
+  out << ",\n  \"moments\": {";
+  for (std::size_t k = 0; k < d.estimates.mean.size(); ++k) {
+    const std::string name = r.lagged ? lagged_moment_text(r.channels, r.lagged_moments[k])
+                                      : format_moment(*r.model, r.moments[k]);
+    out << (k ? ", " : "") << json_string(name) << ": " << json_number(d.estimates.mean[k]);
+  }
+  out << "}";
+  diagnostics_json(out, r, gmm);
+  return out.str();
+}
+
+}  // namespace momentid

@@ -1,0 +1,147 @@
+#pragma once
+
+// The steps of identify(), each a unit that another command (term selection, validation) can
+// call: choose the equations for the data, plan the moments of the pass, read them, solve, refine.
+
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "momentid/identify.hpp"
+
+namespace momentid {
+
+// Four batches per equation keep the optimal weighting's batch covariance well conditioned.
+inline constexpr std::size_t kBatchesPerEquation = 4;
+
+// ---- the plan ---------------------------------------------------------------------------------
+
+enum class EquationKind { kZeroLag, kLagged };
+
+// The zero-lag equations serve data with a column for every variable, and data that cannot show
+// a missing state even as a derivative (their pass then names the missing column); the lagged
+// ones serve the rest, and any data when lags are asked for. `measured`: per model variable,
+// whether the data have its column (variables_present).
+EquationKind choose_equations(const Model& model, const std::vector<bool>& measured,
+                              const IdentifyOptions& options);
+
+// The state and input names of `model`, in declaration order: the channels of a zero-lag pass.
+std::vector<std::string> state_names(const Model& model);
+std::vector<std::string> input_names(const Model& model);
+
+// The options of a pass over the record as `options` ask for it (columns, sample interval,
+// layout, input hold, batches, threads), with the autocorrelations the noise estimates need.
+DataOptions pass_options(const IdentifyOptions& options);
+
+// The offsets of DataOptions for the channels `states` then `inputs`: the mean of each channel
+// that `center` names, from a pass of its own, and 0 for the others; none when `center` names
+// none of them. Records the means removed in `centered`.
+std::vector<double> channel_offsets(const DataSource& source,
+                                    const std::vector<std::string>& states,
+                                    const std::vector<std::string>& inputs,
+                                    const DataOptions& options,
+                                    const std::vector<std::string>& center,
+                                    std::map<std::string, double>& centered);
+
+// The parameters fixed by IdentifyOptions::fixed or in the model file (the option's value wins),
+// as SolveOptions::fixed wants them: per parameter, in declaration order.
+std::vector<std::optional<double>> fixed_values(const Model& model,
+                                                const std::map<std::string, double>& fixed);
+
+// ---- the zero-lag equations ---------------------------------------------------------------------
+
+// The zero-lag moment equations of a model and what one pass over a record must read for them.
+struct ZeroLagPlan {
+  MomentSystem system;
+  std::vector<Monomial> moments;  // the system's, as moments_to_estimate lists them
+  // `moments`, then those the held-input correction adds, then the products the record's ends
+  // need (unless `ends_unavailable` says why not).
+  std::vector<Monomial> pass_moments;
+  HeldInputCorrections held;
+  std::vector<Monomial> rated;  // the monomials g of the rates of change E[(g)'] in `moments`
+  std::string ends_unavailable;
+};
+
+// Derives the equations with the record's rates of change kept (DeriveOptions::rates) and plans
+// the pass: the held-input correction's moments unless the inputs are known to be sampled, and
+// the products of the rated monomials unless these would more than double the pass.
+ZeroLagPlan plan_zero_lag(const Model& model, const IdentifyOptions& options);
+
+// The zero-lag identification into `result` (whose model is set): the plan, one pass, the
+// solution, and the refinements (held input, sampling bias).
+void identify_zero_lag(IdentifyResult& result, const DataSource& source,
+                       const IdentifyOptions& options);
+
+// ---- the record's ends (end_values.cpp) -------------------------------------------------------
+
+// The moments the pass reads for `moments` (over the model's variables): a rate of change
+// (rate_key) as the increment of its monomial.
+std::vector<Moment> pass_moments_of(const Model& model, const std::vector<Monomial>& moments);
+
+// `moments` without the rates of change.
+std::vector<Monomial> without_rates(const Model& model, std::vector<Monomial> moments);
+
+// The monomials g of the rates of change E[(g)'] among `moments`, in their order.
+std::vector<Monomial> rate_monomials(const Model& model, const std::vector<Monomial>& moments);
+
+// The products g_i * g_j of the monomials `g` (i <= j), with the g themselves.
+std::vector<Monomial> with_products(const std::vector<Monomial>& g);
+
+// Turns the averages of the increments among `moments` (pass_moments_of) into the record's rates
+// of change, dividing by the interval `interval` between the rows the pass read; without it, sets
+// them to 0 (their stationary value) in every batch.
+void increments_to_rates(const Model& model, const std::vector<Monomial>& moments,
+                         std::optional<double> interval, MomentEstimates& estimates);
+
+// The covariance of the record's rates of change (g(end) - g(start)) / T summed over its runs,
+// for the monomials `g` whose moments and products (with_products) are among `moments` with
+// `estimates`: each run's ends, far apart, are independent draws of the stationary states, so
+// that the covariance is 2 runs Cov(g_i, g_j) / T^2 (README, "Uncertainty").
+std::vector<std::vector<double>> rate_covariance(const std::vector<Monomial>& g,
+                                                 const std::vector<Monomial>& moments,
+                                                 const MomentEstimates& estimates, std::size_t runs,
+                                                 double duration);
+
+// ---- moment lists -----------------------------------------------------------------------------
+
+// The first `count` moments of `all`, overall and per batch.
+MomentEstimates first_moments(const MomentEstimates& all, std::size_t count);
+
+// Those of `more` that are neither among `moments` nor the constant 1, each once, in their order.
+std::vector<Monomial> not_among(const std::vector<Monomial>& moments,
+                                const std::vector<Monomial>& more);
+
+// ---- refinements of the zero-lag estimate ------------------------------------------------------
+
+// The moments the E[g''] of `held` are made of.
+std::vector<Monomial> second_derivative_moments(const HeldInputCorrections& held);
+
+// Data whose input is held over each sample: replaces the estimate of `result` by the one from
+// moments corrected for the kinks of the held input, E[g] = E_dt[g] - dt^2/12 E[g''] (derive.hpp,
+// held_input_corrections), with the weights of E[g''] at the parameters of the previous
+// estimate, twice (the second pass changes the estimates by O(dt^4)). `all` holds the moments
+// `moments` in that order, the system's first.
+void correct_for_held_input(IdentifyResult& result, const HeldInputCorrections& held,
+                            const std::vector<Monomial>& moments, const MomentEstimates& all,
+                            const SolveOptions& solve_options);
+
+// IdentifyOptions::extrapolate, after the zero-lag estimate `result` whose first-order errors
+// over the batches are `fine_errors`: the same estimate from every other sample (both halves of
+// each run, in the same batches), the difference's error from the long-run covariance of the
+// difference of the two error series, and Richardson's extrapolation when a difference exceeds
+// its error.
+void estimate_sampling_bias(IdentifyResult& result, const DataSource& source,
+                            DataOptions data_options, const IdentifyOptions& options,
+                            const std::vector<std::vector<double>>& fine_errors);
+
+// ---- the lagged equations ----------------------------------------------------------------------
+
+// The lagged identification into `result` (whose model is set): the equations for the lags
+// asked for, or for a window the data's correlation times call for, one pass (two when the
+// first shows the window far from that), the noise on each state channel, the solution.
+// `measured`: per model variable, whether the data have its column.
+void identify_lagged(IdentifyResult& result, const DataSource& source,
+                     const IdentifyOptions& options, const std::vector<bool>& measured);
+
+}  // namespace momentid

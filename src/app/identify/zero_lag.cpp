@@ -1,0 +1,112 @@
+// The zero-lag moment equations: derived once, their moments read in one pass, solved, refined.
+
+#include <algorithm>
+
+#include "app/identify/steps.hpp"
+
+namespace momentid {
+
+ZeroLagPlan plan_zero_lag(const Model& model, const IdentifyOptions& options) {
+  ZeroLagPlan plan;
+  DeriveOptions derive_options;
+  derive_options.multipliers = options.multipliers;
+  derive_options.degree = options.degree;
+  derive_options.rates = true;
+  plan.system = derive(model, derive_options);
+  plan.moments = moments_to_estimate(plan.system);
+  // A held input puts kinks into the states at the samples: the moments whose derivative
+  // holds it are then corrected, with E[g''] from moments the pass adds (unless the data are
+  // known to be sampled).
+  if (!model.inputs().empty() && options.hold != InputHold::kSample) {
+    plan.held = held_input_corrections(model, without_rates(model, plan.moments));
+  }
+  // The ends of the record: the rates of change, with the products their covariance needs,
+  // unless these would more than double the pass.
+  plan.rated = rate_monomials(model, plan.moments);
+  plan.pass_moments = plan.moments;
+  const std::vector<Monomial> kinks =
+      not_among(plan.pass_moments, second_derivative_moments(plan.held));
+  plan.pass_moments.insert(plan.pass_moments.end(), kinks.begin(), kinks.end());
+  const std::vector<Monomial> products = not_among(plan.pass_moments, with_products(plan.rated));
+  if (products.size() > plan.pass_moments.size()) {
+    plan.ends_unavailable = "their covariance would need " + std::to_string(products.size()) +
+                            " more moments than the " + std::to_string(plan.pass_moments.size()) +
+                            " the pass reads (the products of " +
+                            std::to_string(plan.rated.size()) + " rates of change)";
+  } else {
+    plan.pass_moments.insert(plan.pass_moments.end(), products.begin(), products.end());
+  }
+  return plan;
+}
+
+namespace {
+
+// The pass over the record for `plan` into result.data, whose estimates are the system's
+// moments; returns the estimates of all the pass moments, the rates of change among them
+// divided by the sample interval (or 0 when the ends cannot be used). Updates
+// plan.ends_unavailable when the data give no sample interval.
+MomentEstimates read_zero_lag(IdentifyResult& result, ZeroLagPlan& plan, const DataSource& source,
+                              DataOptions& data_options) {
+  const Model& model = *result.model;
+  const std::vector<std::string> states = state_names(model), inputs = input_names(model);
+  // The correction removes the trapezoidal rule's error on the held products too, which the
+  // cubic rule only makes smaller.
+  if (!plan.held.moments.empty()) data_options.held_rule = HeldRule::kTrapezoidal;
+  const std::vector<Moment> moments = pass_moments_of(model, plan.pass_moments);
+  result.data = moments_from_data(source, states, inputs, moments, data_options);
+  if (result.data.hold == InputHold::kZeroOrderHold && !plan.held.moments.empty() &&
+      !result.data.time_step) {
+    // No correction without the sample interval: the cubic rule then does better.
+    data_options.held_rule = HeldRule::kCubic;
+    result.data = moments_from_data(source, states, inputs, moments, data_options);
+  }
+  if (!result.data.time_step && plan.ends_unavailable.empty()) {
+    plan.ends_unavailable =
+        "the data give no sample interval (a 't' column or a dt in the metadata)";
+  }
+  // Without their covariance the rates stay out of the batches, whose series then holds the
+  // ends.
+  increments_to_rates(model, plan.pass_moments,
+                      plan.ends_unavailable.empty() ? result.data.time_step : std::nullopt,
+                      result.data.estimates);
+  MomentEstimates all = std::move(result.data.estimates);
+  result.data.estimates = first_moments(all, plan.moments.size());
+  return all;
+}
+
+}  // namespace
+
+void identify_zero_lag(IdentifyResult& result, const DataSource& source,
+                       const IdentifyOptions& options) {
+  const Model& model = *result.model;
+  ZeroLagPlan plan = plan_zero_lag(model, options);
+  result.system = plan.system;
+  result.moments = plan.moments;
+  result.gmm = options.gmm.value_or(false);
+  DataOptions data_options = pass_options(options);
+  // The optimal weighting estimates the equations' covariance from the batches.
+  if (result.gmm) data_options.min_batches = kBatchesPerEquation * result.system.equations.size();
+  data_options.offsets = channel_offsets(source, state_names(model), input_names(model),
+                                         data_options, options.center, result.centered);
+  const MomentEstimates all = read_zero_lag(result, plan, source, data_options);
+
+  std::vector<std::vector<double>> errors;
+  SolveOptions solve_options{.gmm = result.gmm,
+                             .fixed = fixed_values(model, options.fixed),
+                             .error_batches = options.extrapolate ? &errors : nullptr};
+  if (!plan.rated.empty()) {
+    result.end_values.emplace().unavailable = plan.ends_unavailable;
+    if (plan.ends_unavailable.empty() && result.data.estimates.intervals > 0) {
+      solve_options.rate_covariance = rate_covariance(
+          plan.rated, plan.pass_moments, all, std::max<std::size_t>(result.data.runs, 1),
+          static_cast<double>(result.data.estimates.intervals) * *result.data.time_step);
+    }
+  }
+  result.estimate = solve(result.system, result.data.estimates, solve_options);
+  if (result.data.hold == InputHold::kZeroOrderHold) {
+    correct_for_held_input(result, plan.held, plan.pass_moments, all, solve_options);
+  }
+  if (options.extrapolate) estimate_sampling_bias(result, source, data_options, options, errors);
+}
+
+}  // namespace momentid
