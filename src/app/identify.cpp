@@ -23,7 +23,7 @@ constexpr double kNoiseWarning = 0.02;
 // Four batches per equation keep the optimal weighting's batch covariance well conditioned.
 constexpr std::size_t kBatchesPerEquation = 4;
 
-// What makes a result doubtful, and what draws a warning (README, "Warnings").
+// What makes a result doubtful, and what draws a warning (docs/cli/identify.md, "Warnings").
 constexpr double kIdentityZ = 4;      // |z| of a stationarity identity's violation
 constexpr double kJRejection = 0.01;  // p-value of the J test
 constexpr double kOffset = 0.2;       // |mean| / standard deviation of a channel
@@ -233,7 +233,7 @@ std::vector<Monomial> with_products(const std::vector<Monomial>& g) {
 // The covariance of the record's rates of change (g(end) - g(start)) / T summed over its runs,
 // for the monomials `g` whose moments and products (with_products) are among `moments` with
 // `estimates`: each run's ends, far apart, are independent draws of the stationary states, so
-// that the covariance is 2 runs Cov(g_i, g_j) / T^2 (README, "Uncertainty").
+// that the covariance is 2 runs Cov(g_i, g_j) / T^2 (docs/uncertainty.md, "End values").
 std::vector<std::vector<double>> rate_covariance(const std::vector<Monomial>& g,
                                                  const std::vector<Monomial>& moments,
                                                  const MomentEstimates& estimates, std::size_t runs,
