@@ -152,7 +152,7 @@ def summarise(runs):
 
 
 def markdown(summaries):
-    """The summaries as the README's three tables: one row per cell and method, the parameters
+    """The summaries as tables (docs/uncertainty.md): one row per cell and method, the parameters
     side by side."""
     out = ["| samples | seeds | noise | method | coverage c, k, eps | spread/SE (90% interval) | "
            "bias/SE |", "| --- | --- | --- | --- | --- | --- | --- |"]
@@ -195,7 +195,7 @@ def main():
     parser.add_argument("--from", dest="sources", nargs="+", default=None,
                         help="summarise these --raw files instead of running")
     parser.add_argument("--summary", default=None)
-    parser.add_argument("--markdown", default=None, help="the summary's tables for the README")
+    parser.add_argument("--markdown", default=None, help="the tables of docs/uncertainty.md")
     parser.add_argument("--plot", default=None)
     parser.add_argument("--check", action="store_true")
     args = parser.parse_args()

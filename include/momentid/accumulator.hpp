@@ -11,7 +11,7 @@
 
 namespace momentid {
 
-// How the input channels were sampled (README, "Estimating moments").
+// How the input channels were sampled (docs/moments.md, "Sampled and held inputs").
 //  kSample: every channel holds samples of a continuous signal at the same instants; a moment is
 //           the trapezoidal time average of its product.
 //  kZeroOrderHold: input row n is held over [t_n, t_{n+1}) (what simulators do); a product with

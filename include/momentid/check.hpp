@@ -15,7 +15,7 @@
 
 namespace momentid {
 
-// How to check data (README, "momentid check").
+// How to check data (docs/cli/check.md, "momentid check").
 struct CheckOptions {
   std::size_t lags = 9;                        // autocorrelations per channel, 1..kMaxLags
   std::optional<InputHold> hold;               // as IdentifyOptions::hold

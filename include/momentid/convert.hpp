@@ -8,7 +8,7 @@
 
 namespace momentid {
 
-// The formats `momentid convert` writes (README, "Data files").
+// The formats `momentid convert` writes (docs/cli/convert.md, "momentid convert").
 enum class FileFormat { kCsv, kBinary, kNpy, kMat5, kMat73, kHdf5 };
 
 // By the name's extension: .csv and .txt, .bin, .npy, .mat (level 5), .h5 and .hdf5; nullopt for

@@ -143,7 +143,7 @@ HeldInputCorrections held_input_corrections(const Model& model,
 // All monomials in `states` variables of total degree 1..degree, lowest degree first.
 std::vector<Monomial> monomials_up_to(int states, int degree);
 
-// Output formats (README, "momentid derive").
+// Output formats (docs/cli/derive.md, "momentid derive").
 std::string format_moment(const Model& model, const Monomial& moment);
 std::string format_combination(const Model& model, const MomentCombination& combination);
 std::string format_text(const MomentSystem& system);

@@ -17,7 +17,7 @@ struct SourceLocation {
 };
 
 // The root of every error momentid reports. `exit_code()` is the process exit status the
-// command-line tool returns for it (see README, "Exit status").
+// command-line tool returns for it (docs/cli/index.md, "Exit status").
 class Error : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;

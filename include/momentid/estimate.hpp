@@ -69,7 +69,7 @@ struct SolveOptions {
   std::vector<std::vector<double>>* error_batches = nullptr;
   // solve() only: the covariance of the record's rates of change (the system's rate moments,
   // rate_key, in the order of moments_to_estimate), known from elsewhere, which is added to the
-  // errors (README, "Uncertainty").
+  // errors (docs/uncertainty.md, "End values").
   std::vector<std::vector<double>> rate_covariance;
 };
 
@@ -86,7 +86,7 @@ std::vector<IdentityCheck> check_identities(const MomentSystem& system,
 // Solves A(mu) theta = b(mu) by least squares with scaled columns and a rank-revealing SVD, and
 // estimates the parameters' covariance from the batch series of their first-order errors (delta
 // method), with a long-run covariance that holds whether the moment conditions telescope (records
-// without noise) or not (README, "Uncertainty"). `estimates` are
+// without noise) or not (docs/uncertainty.md, "Batches"). `estimates` are
 // for moments_to_estimate(system), in that order.
 //
 // The record's rates of change (a system derived with DeriveOptions::rates) enter the estimate

@@ -18,7 +18,7 @@
 
 namespace momentid {
 
-// How to identify (README, "momentid identify"). The defaults are the command line's.
+// How to identify (docs/cli/identify.md, "momentid identify"). The defaults are the command line's.
 struct IdentifyOptions {
   // Multipliers for every equation; else all monomials up to `degree` (when > 0); else the
   // model's own or the automatic choice (see DeriveOptions).
@@ -39,7 +39,7 @@ struct IdentifyOptions {
   FileLayout layout;  // units rows, decimal comma
   // Pair input row n with state row n + input_shift, within kMaxInputShift either way.
   long input_shift = 0;
-  // Lagged moment equations (README, "Measured data") at lags first..last samples, with these
+  // Lagged moment equations (docs/measured-data.md) at lags first..last samples, with these
   // instruments (nullopt: derive_lagged's choice). They are used when lags are given, and when
   // the data lack a state's column (then with the default lags).
   std::optional<std::pair<int, int>> lags;
@@ -103,7 +103,7 @@ struct IdentifyResult {
   // parameter, and the main result is the extrapolated estimate (its errors those of the
   // extrapolation).
   struct SamplingBias {
-    static constexpr int kOrder = 2;  // of the bias in dt (README, "Uncertainty")
+    static constexpr int kOrder = 2;  // of the bias in dt (docs/uncertainty.md, "Sampling bias")
     std::vector<double> coarse, bias, difference_error;
     bool applied = false;
   };
@@ -155,9 +155,9 @@ std::vector<std::string> identified_equations(const IdentifyResult& result);
 // A table (parameter, estimate, standard error, 95% interval), the identified model, then the
 // diagnostics.
 std::string format_text(const IdentifyResult& result);
-// The JSON layout documented in the README ("momentid identify").
+// The JSON layout (docs/json.md, "identify").
 std::string format_json(const IdentifyResult& result);
-// The warnings that make a result doubtful (README, "Warnings"): a J test that rejects the model
+// What makes a result doubtful (docs/cli/identify.md, "Warnings"): a J test that rejects the model
 // (p < 0.01), a stationarity identity violated (|z| > 4), a state with a mean of more than 0.2
 // of its standard deviation when the model is symmetric and its inputs have none.
 std::vector<std::string> doubts(const IdentifyResult& result);

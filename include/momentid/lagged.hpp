@@ -132,7 +132,7 @@ std::vector<LagTestFunction> lag_test_functions(int first_lag, int last_lag);
 // model's variables.
 Moment lagged_moment(const Monomial& instrument, const Monomial& function, int lag);
 
-// Text (README, "momentid derive --lags"), LaTeX and JSON forms.
+// Text (docs/cli/derive.md, "Lagged equations"), LaTeX and JSON forms.
 std::string format_lag_function(const Model& model, const LagFunction& f);
 std::string format_text(const LaggedSystem& system);
 std::string format_latex(const LaggedSystem& system);

@@ -50,7 +50,7 @@ class Moment {
   static Moment from_monomial(const Monomial& monomial);
   // Not an expectation but the change of `monomial` across a sample interval, every factor at
   // lag 0: averaged over the intervals of a stretch of the record it is (g(end) - g(start)) /
-  // intervals exactly, which divided by dt is the record's E[d/dt g] (README, "End values").
+  // intervals exactly; divided by dt, the record's E[d/dt g] (docs/uncertainty.md, "End values").
   static Moment increment_of(const Monomial& monomial);
 
   // In normal form (see above).

@@ -20,7 +20,7 @@ enum class MissingValues {
   kSplitRun,  // drops the row and ends the run: the next complete row starts a new one
 };
 
-// How a file departs from the usual layout (README, "Data from the lab").
+// How a file departs from the usual layout (docs/data-files.md, "Data from the lab").
 struct FileLayout {
   // Lines after the header row that are not data (units, descriptions), skipped.
   std::size_t skip_rows = 0;
@@ -102,7 +102,7 @@ struct DataBlock {
 // separates records; other columns not requested are ignored. A UTF-8 byte order mark and CR LF
 // line ends are accepted.
 //
-// Binary (see README, "Data files"): the 8 bytes `MOMNTID1`, a little-endian uint32 H, H bytes
+// Binary (docs/data-files.md, "Binary"): the 8 bytes `MOMNTID1`, a little-endian uint32 H, H bytes
 // of text holding the metadata lines and the header row exactly as in CSV, then the rows as
 // little-endian IEEE-754 float64 values, one per column.
 //

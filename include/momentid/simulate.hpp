@@ -160,7 +160,7 @@ struct ChannelNoise {
   double relative = 0;
 };
 
-// How to simulate (README, "momentid simulate").
+// How to simulate (docs/cli/simulate.md, "momentid simulate").
 struct SimulationOptions {
   std::vector<GiNaC::numeric> parameters;  // one per model parameter
   std::vector<InputSpec> inputs;           // one per model input
@@ -274,8 +274,8 @@ std::vector<std::size_t> observed_channels(const Model& model, const SimulationO
 std::vector<std::string> simulate_to_file(const Model& model, const SimulationOptions& options,
                                           const std::string& path, DataWriter::Format format);
 
-// How a recorded input is taken between its samples, where the integrator needs it (README,
-// "momentid validate"):
+// How a recorded input is taken between its samples, where the integrator needs it
+// (docs/cli/validate.md, "Inputs between samples"):
 //   kHold    the sample held over the interval that follows it (zero-order hold), which is how
 //            `simulate` applies its random processes;
 //   kLinear  a straight line between neighbouring samples (first-order hold);

@@ -39,7 +39,7 @@ struct Record {
   int column_of(std::size_t v) const;
 };
 
-// How to drive a model with a record's inputs (README, "momentid validate").
+// How to drive a model with a record's inputs (docs/cli/validate.md, "momentid validate").
 struct ReplayOptions {
   std::vector<GiNaC::numeric> parameters;  // one per model parameter
   // Model variable -> data column, for data whose columns have other names.
@@ -95,7 +95,7 @@ void write_replay(const Model& model, const Replay& replay, const std::string& p
 // of another model, or a parameter missing or without a numeric estimate.
 std::vector<GiNaC::numeric> read_estimates(const Model& model, const std::string& path);
 
-// How to validate (README, "momentid validate").
+// How to validate (docs/cli/validate.md, "momentid validate").
 struct ValidateOptions {
   ReplayOptions replay;
   // Rows left out at the start of each run; nullopt: until the model has forgotten its initial
@@ -157,10 +157,10 @@ ValidateResult validate(const Model& model, const DataSource& source,
                         const ValidateOptions& options);
 
 std::string format_text(const ValidateResult& result);
-// The JSON layout documented in the README ("momentid validate").
+// The JSON layout (docs/json.md, "validate").
 std::string format_json(const ValidateResult& result);
 
-// Draws the comparison as SVG (README, "momentid validate --plot"): per output, the measured and
+// Draws the comparison as SVG (docs/cli/validate.md, "Plot"): per output, the measured and
 // simulated series over the window [from, to] (times; nullopt: the first 2000 compared rows of the
 // first run) and their difference below; then the correlation checks with their bands. Written
 // whole or not at all. Throws UsageError for a window that holds no compared row.

@@ -15,7 +15,7 @@ Example::
     print(result)                      # the table, the identified model, the diagnostics
     result.estimates["k"], result.std_errors["k"], result.ci95["k"]
 
-The functions mirror the commands of the `momentid` program (see its README): the same
+The functions mirror the commands of the `momentid` program (docs/cli/index.md): the same
 options, spelled as keyword arguments, give the same numbers.
 """
 

@@ -1,4 +1,4 @@
-// The binary layout (README, "Data files"): errors in the header text are located by the line
+// Binary layout (docs/data-files.md, "Binary"): errors in the header text are located by the line
 // and byte column of that text, errors in the rows by the row number (from 1) and the column
 // number (from 1).
 

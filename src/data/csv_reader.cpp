@@ -1,4 +1,4 @@
-// The CSV layout (README, "Data files").
+// The CSV layout (docs/data-files.md, "CSV").
 //
 // Choices the header leaves open, made here:
 // - Blank lines (empty, or only blanks and tabs) are ignored wherever they are: before the

@@ -1,5 +1,5 @@
 #pragma once
-// The fixed parts of momentid's own data layouts (README, "Data files"), in one place for the
+// The fixed parts of momentid's own data layouts (docs/data-files.md), in one place for the
 // readers and the writer: the binary magic, the metadata tag, and the header text.
 
 #include <string>

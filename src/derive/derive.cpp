@@ -648,7 +648,7 @@ MomentSystem derive(const Model& model, const DeriveOptions& options) {
     // up to kMaxAutomaticDegree), that determines every parameter even when odd moments vanish
     // (as they do for symmetric systems under symmetric input); failing that, the lowest that
     // does for generic moments. Below the model's degree the system is square or nearly so,
-    // and its estimates are far poorer (README, "momentid derive").
+    // and its estimates are far poorer (docs/cli/derive.md, "momentid derive").
     int model_degree = 1;
     for (const Equation& eq : equations) {
       for (const Term& t : eq.terms) model_degree = std::max(model_degree, degree(t.monomial));

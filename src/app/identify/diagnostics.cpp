@@ -1,4 +1,4 @@
-// What makes an identification doubtful, and every warning about it (README, "Warnings").
+// What makes an identification doubtful, and every warning about it (docs/cli/identify.md, "Warnings").
 
 #include <algorithm>
 #include <cmath>
@@ -13,7 +13,7 @@ namespace {
 // estimate cannot tell noise from the roughness of a state whose derivative holds a held input.
 constexpr double kNoiseWarning = 0.02;
 
-// What makes a result doubtful, and what draws a warning (README, "Warnings").
+// What makes a result doubtful, and what draws a warning (docs/cli/identify.md, "Warnings").
 constexpr double kIdentityZ = 4;      // |z| of a stationarity identity's violation
 constexpr double kJRejection = 0.01;  // p-value of the J test
 constexpr double kOffset = 0.2;       // |mean| / standard deviation of a channel

@@ -1,5 +1,5 @@
 // The record's ends: the zero-lag equations take the stationarity identities E[(g)'] = 0, which
-// a finite record meets only up to (g(end) - g(start)) / T (README, "Uncertainty").
+// a finite record meets only up to (g(end) - g(start)) / T (docs/uncertainty.md, "End values").
 
 #include <map>
 

@@ -1,4 +1,4 @@
-// The lagged moment equations (README, "Measured data"): an instrument at t - s times an
+// The lagged moment equations (docs/measured-data.md): an instrument at t - s times an
 // equation at t, for records that lack a state's column or carry sensor noise.
 
 #include <algorithm>

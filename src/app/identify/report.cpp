@@ -1,4 +1,4 @@
-// The identification's report, as text and as JSON (README, "momentid identify").
+// The identification's report, as text and as JSON (docs/cli/identify.md, "momentid identify").
 
 #include <algorithm>
 #include <cstdio>

@@ -97,7 +97,7 @@ void increments_to_rates(const Model& model, const std::vector<Monomial>& moment
 // The covariance of the record's rates of change (g(end) - g(start)) / T summed over its runs,
 // for the monomials `g` whose moments and products (with_products) are among `moments` with
 // `estimates`: each run's ends, far apart, are independent draws of the stationary states, so
-// that the covariance is 2 runs Cov(g_i, g_j) / T^2 (README, "Uncertainty").
+// that the covariance is 2 runs Cov(g_i, g_j) / T^2 (docs/uncertainty.md, "End values").
 std::vector<std::vector<double>> rate_covariance(const std::vector<Monomial>& g,
                                                  const std::vector<Monomial>& moments,
                                                  const MomentEstimates& estimates, std::size_t runs,
