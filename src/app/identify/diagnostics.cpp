@@ -1,4 +1,5 @@
-// What makes an identification doubtful, and every warning about it (docs/cli/identify.md, "Warnings").
+// What makes an identification doubtful, and every warning about it (docs/cli/identify.md,
+// "Warnings").
 
 #include <algorithm>
 #include <cmath>
