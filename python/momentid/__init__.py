@@ -148,7 +148,6 @@ def _older_keywords(function):
     return wrapper
 
 
-
 class Model:
     """A model in the momentid language: states, inputs, parameters and polynomial equations.
 

@@ -28,10 +28,14 @@ def _read_only(values) -> _np.ndarray:
     return array
 
 
-def _t_quantile(q: float, dof: float) -> float:
+def _t_dof(dof: float) -> float:
     # The library's rule (long_run.hpp, t975): below one degree of freedom the t law has no
-    # variance and its quantiles overflow, so at least one is taken.
-    return _momentid._t_quantile(q, max(1.0, dof))
+    # variance and its quantiles overflow, so at least one is taken. Unknown stays unknown.
+    return dof if _np.isnan(dof) else max(1.0, dof)
+
+
+def _t_quantile(q: float, dof: float) -> float:
+    return _np.nan if _np.isnan(dof) else _momentid._t_quantile(q, _t_dof(dof))
 
 
 def _pandas():
@@ -89,9 +93,10 @@ class Fit:
 
     @property
     def pvalues(self) -> _np.ndarray:
-        dof = max(1.0, self.df_resid)
-        return _np.array([2 * _momentid._t_upper_tail(abs(t), dof) if _np.isfinite(t)
-                          else _np.nan for t in self.tvalues])
+        dof = _t_dof(self.df_resid)
+        return _np.array([2 * _momentid._t_upper_tail(abs(t), dof)
+                          if _np.isfinite(t) and not _np.isnan(dof) else _np.nan
+                          for t in self.tvalues])
 
     def cov_params(self) -> _np.ndarray:
         """The covariance matrix of the estimates, from their standard errors and correlation:
@@ -146,6 +151,10 @@ class IdentifyResult(Fit):
       the identified model; diagnostics: the whole diagnostics section of the JSON.
     summary() and str(): the text report of `momentid identify`; to_dict(): the JSON of
       `momentid identify --format json`.
+
+    IdentifyResult(text, json_text) reads a saved result of the program as well (text may be
+    ""); beside an optimally weighted estimate, that JSON lacks the least-squares errors'
+    degrees of freedom and correlation, so .ls has NaN intervals and off-diagonal covariances.
     """
 
     def __init__(self, text: str, json_text: str,
@@ -159,8 +168,13 @@ class IdentifyResult(Fit):
                 "correlation": self.diagnostics["correlation"]}
         super().__init__(main)
         self.weighting = "gmm" if "least_squares" in self._dict else "ls"
-        self.ls = (Fit({"parameters": self._dict["least_squares"], **least_squares_errors})
-                   if self.weighting == "gmm" else Fit(main))
+        if self.weighting == "gmm":
+            # Without the binding's numbers the least-squares errors have no known degrees of
+            # freedom and correlation: their intervals and covariances are NaN, not guessed.
+            errors = least_squares_errors or {"error_dof": None, "correlation": []}
+            self.ls = Fit({"parameters": self._dict["least_squares"], **errors})
+        else:
+            self.ls = Fit(main)
         self.status = self.diagnostics["status"]
         self.warnings = list(self.diagnostics["warnings"])
         self.equations = list(self._dict.get("equations", []))

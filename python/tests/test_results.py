@@ -301,3 +301,14 @@ def test_validate_series_are_the_record_and_the_replay(duffing, two_runs):
     one_run = momentid.validate(duffing, {n: v[:6000] for n, v in recorded.items()
                                           if n != "run"}, TRUE)
     assert one_run.run is None and one_run.t.shape == (6000,)
+
+
+def test_result_from_the_programs_json_alone(cli, cli_csv, gmm_json, gmm_result):
+    """A saved `momentid identify --format json` is a result too; the least-squares errors'
+    degrees of freedom and correlation, which that JSON lacks, are NaN rather than guessed."""
+    text = cli("identify", DUFFING, cli_csv, "--weighting", "gmm")
+    saved = momentid.IdentifyResult(text, json.dumps(gmm_json))
+    np.testing.assert_array_equal(saved.conf_int(), gmm_result.conf_int())
+    np.testing.assert_array_equal(saved.cov_params(), gmm_result.cov_params())
+    np.testing.assert_array_equal(saved.ls.params, gmm_result.ls.params)
+    assert np.isnan(saved.ls.conf_int()).all() and np.isnan(saved.ls.df_resid)
