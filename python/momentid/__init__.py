@@ -12,8 +12,11 @@ Example::
     record = momentid.simulate(model, {"c": 0.5, "k": 4, "eps": 1}, samples=200_000,
                                inputs={"x": "ma:K=10,w=0.1,sigma=20"})
     result = momentid.identify(model, record)
-    print(result)                      # the table, the identified model, the diagnostics
-    result.estimates["k"], result.std_errors["k"], result.ci95["k"]
+    print(result.summary())            # the table, the identified model, the diagnostics
+    result.param_names                 # ['c', 'k', 'eps']: the order of the arrays
+    result.params, result.bse          # numpy arrays
+    result.cov_params(), result.conf_int(alpha=0.01)
+    result.estimates["k"], result.std_errors["k"], result.ci95["k"]    # by name
 
 The functions mirror the commands of the `momentid` program (docs/cli/index.md): the same
 options, spelled as keyword arguments, give the same numbers.
@@ -32,7 +35,7 @@ from typing import Any, Mapping, Optional, Sequence, Union
 import numpy as _np
 
 __all__ = [
-    "Model", "Equations", "Record", "IdentifyResult", "CheckResult", "ValidateResult",
+    "Model", "Equations", "Record", "Fit", "IdentifyResult", "CheckResult", "ValidateResult",
     "identify", "check", "simulate", "validate",
     "Error", "ModelError", "DataError", "UsageError", "MomentidWarning", "__version__",
 ]
@@ -68,7 +71,7 @@ class MomentidWarning(UserWarning):
 
 # The program's options that this module spells differently; the others are the option with
 # `_` for `-` (--dt-from: dt_from).
-_KEYWORD_OF_OPTION = {"columns": "rename", "input": "inputs", "set": "params"}
+_KEYWORD_OF_OPTION = {"input": "inputs", "set": "params"}
 _OPTION = _re.compile(r"(?<![A-Za-z0-9-])--([a-z0-9][a-z0-9-]*)")
 
 
@@ -98,7 +101,51 @@ from . import _momentid  # noqa: E402  (the exceptions above must exist before i
 
 __version__: str = _momentid.__version__
 
+from ._results import CheckResult, Fit, IdentifyResult, ValidateResult  # noqa: E402
+
 PathLike = Union[str, "_os.PathLike[str]"]
+# Monomials: a list (["y", "y*v^2"]) or the command line's list in one string ("y, y*v^2").
+Monomials = Union[None, str, Sequence[str]]
+
+
+def _monomials(values: Monomials) -> Optional[str]:
+    # The library reads the command line's list: monomials separated by commas.
+    if values is None or isinstance(values, str):
+        return values
+    return ", ".join(str(v) for v in values)
+
+
+def _older_keywords(function):
+    """Accepts for one more release the keywords as the last release spelled them, each with a
+    DeprecationWarning: rename= (now columns=, in the same direction, model variable to data
+    column), columns= with a list of a 2-D array's column names (now names=) and
+    extrapolate="dt" (now True)."""
+
+    def deprecated(old, new):
+        # Pointing at the caller: past this wrapper and _keywords_in_errors'.
+        _warnings.warn(f"{function.__name__}(): {old} is deprecated and will be removed in the "
+                       f"next release; use {new}", DeprecationWarning, stacklevel=4)
+
+    def move(kwargs, old, new):
+        if kwargs.get(new) is not None:
+            raise UsageError(f"{old} and {new} say the same: give {new} only")
+        kwargs[new] = kwargs.pop(old)
+
+    @_functools.wraps(function)
+    def wrapper(*args, **kwargs):
+        columns = kwargs.get("columns")
+        if columns is not None and not hasattr(columns, "keys"):
+            deprecated("columns= with a list of column names", "names=")
+            move(kwargs, "columns", "names")
+        if "rename" in kwargs:
+            deprecated("rename=", "columns= (model variable: data column, as --columns)")
+            move(kwargs, "rename", "columns")
+        if kwargs.get("extrapolate") == "dt":
+            deprecated('extrapolate="dt"', "extrapolate=True")
+            kwargs["extrapolate"] = True
+        return function(*args, **kwargs)
+
+    return wrapper
 
 
 class Model:
@@ -140,19 +187,20 @@ class Model:
                      doc="Parameters declared `fixed` in the model (known, not estimated).")
 
     @_keywords_in_errors
-    def derive(self, multipliers: Optional[str] = None, degree: Optional[int] = None,
-               lags: Optional[tuple[int, int]] = None, instruments: Optional[str] = None,
+    def derive(self, multipliers: Monomials = None, degree: Optional[int] = None,
+               lags: Optional[tuple[int, int]] = None, instruments: Monomials = None,
                measured: Optional[Sequence[str]] = None) -> "Equations":
         """The moment equations, as `momentid derive` prints them.
 
-        multipliers: monomials in the states to multiply every equation by ("y, v, y^3");
+        multipliers: monomials in the states to multiply every equation by (["y", "v", "y^3"],
+        or as the command line spells them, "y, v, y^3");
         degree: every monomial in the states of degree 1..degree; neither: the model's own or
         the automatic choice. lags=(first, last): the lagged equations for records that lack
         some states, with `instruments` and the `measured` channels.
         """
         text, latex, json_text, count = _momentid._derive(
-            self._model, _options(multipliers=multipliers, degree=degree, lags=lags,
-                                  instruments=instruments, measured=measured))
+            self._model, _options(multipliers=_monomials(multipliers), degree=degree, lags=lags,
+                                  instruments=_monomials(instruments), measured=measured))
         return Equations(text, latex, json_text, count)
 
     def __repr__(self) -> str:
@@ -198,158 +246,81 @@ class Record(dict):
         self.metadata = metadata
 
 
-class IdentifyResult:
-    """What identify() found.
-
-    estimates, std_errors: {parameter: float}; ci95: {parameter: (low, high)}; fixed: the
-    parameters taken as known; status: "ok", "doubtful", "rank-deficient" or
-    "nothing-identifiable"; warnings: what to distrust, the most serious first; equations: the
-    identified model; diagnostics: the whole diagnostics section of the JSON; to_dict(): the
-    JSON of `momentid identify --format json`; str(): its text report.
-    """
-
-    def __init__(self, text: str, json_text: str) -> None:
-        self.text = text
-        self.json = json_text
-        self._dict = _json.loads(json_text)
-        parameters = self._dict["parameters"]
-        self.estimates = {name: p["estimate"] for name, p in parameters.items()}
-        self.std_errors = {name: p["std_error"] for name, p in parameters.items()}
-        self.ci95 = {name: tuple(p["ci95"]) if p["ci95"] is not None else None
-                     for name, p in parameters.items()}
-        self.fixed = [name for name, p in parameters.items() if p["fixed"]]
-        self.diagnostics = self._dict["diagnostics"]
-        self.status = self.diagnostics["status"]
-        self.warnings = list(self.diagnostics["warnings"])
-        self.equations = list(self._dict.get("equations", []))
-
-    def to_dict(self) -> dict:
-        return _json.loads(self.json)
-
-    def __str__(self) -> str:
-        return self.text
-
-    def __repr__(self) -> str:
-        values = ", ".join(f"{name}={value:.6g}±{self.std_errors[name]:.2g}"
-                           for name, value in self.estimates.items())
-        return f"<momentid.IdentifyResult {self.status}: {values}>"
-
-
-class CheckResult:
-    """What check() found: `channels` {name: statistics}, `identities` (with a model),
-    `warnings`, `to_dict()`, and str() the report of `momentid check`."""
-
-    def __init__(self, text: str, values: dict) -> None:
-        self.text = text
-        self._dict = values
-        self.channels = values["channels"]
-        self.identities = values["identities"]
-        self.warnings = values["warnings"]
-
-    def to_dict(self) -> dict:
-        return dict(self._dict)
-
-    def __str__(self) -> str:
-        return self.text
-
-    def __repr__(self) -> str:
-        return (f"<momentid.CheckResult {self._dict['rows']} rows, "
-                f"{len(self.warnings)} warnings>")
-
-
-class ValidateResult:
-    """What validate() found: `fit` {output: percent}, `rms` {output: error}, `warnings`,
-    `to_dict()` (the JSON of `momentid validate --format json`) and str() its report."""
-
-    def __init__(self, text: str, json_text: str) -> None:
-        self.text = text
-        self.json = json_text
-        self._dict = _json.loads(json_text)
-        outputs = self._dict["outputs"]
-        self.fit = {name: o["fit_percent"] for name, o in outputs.items()}
-        self.rms = {name: o["rms"] for name, o in outputs.items()}
-        self.warnings = list(self._dict["warnings"])
-
-    def to_dict(self) -> dict:
-        return _json.loads(self.json)
-
-    def __str__(self) -> str:
-        return self.text
-
-    def __repr__(self) -> str:
-        fits = ", ".join(f"{name} {value:.2f}%" for name, value in self.fit.items())
-        return f"<momentid.ValidateResult fit {fits}>"
-
-
 @_keywords_in_errors
-def identify(model: Union[Model, PathLike], data: Any, *, columns: Optional[Sequence[str]] = None,
-             dt: Optional[float] = None, multipliers: Optional[str] = None,
+@_older_keywords
+def identify(model: Union[Model, PathLike], data: Any, *,
+             columns: Optional[Mapping[str, str]] = None, names: Optional[Sequence[str]] = None,
+             dt: Optional[float] = None, multipliers: Monomials = None,
              degree: Optional[int] = None, batches: Optional[int] = None,
              weighting: Optional[str] = None, lags: Optional[tuple[int, int]] = None,
-             instruments: Optional[str] = None, noise: Optional[Mapping[str, float]] = None,
+             instruments: Monomials = None, noise: Optional[Mapping[str, float]] = None,
              fix: Optional[Mapping[str, float]] = None,
              center: Union[None, str, Sequence[str]] = None, input_hold: Optional[str] = None,
-             input_shift: Optional[int] = None, rename: Optional[Mapping[str, str]] = None,
-             missing: Optional[str] = None, skip_rows: Optional[int] = None,
-             decimal: Optional[str] = None, names: Optional[Sequence[str]] = None,
+             input_shift: Optional[int] = None, missing: Optional[str] = None,
+             skip_rows: Optional[int] = None, decimal: Optional[str] = None,
              dt_from: Optional[str] = None, threads: Optional[int] = None,
-             extrapolate: Optional[str] = None) -> IdentifyResult:
+             extrapolate: bool = False) -> IdentifyResult:
     """Estimates the model's parameters from a record, as `momentid identify MODEL DATA`.
 
     model: a Model or a model file's path.
     data: a mapping of column name to 1-D array (a dict of numpy arrays, a pandas DataFrame),
-      a 2-D array with `columns` naming its columns, a data file's path, or a list of paths
+      a 2-D array with `names` naming its columns, a data file's path, or a list of paths
       (read one after the other as one record whose files are never joined).
       Columns are named as in a file: the model's variables, `t` for the sample times and `run`
       to separate records. float64 arrays are read in place, strided ones too; other real
       dtypes are converted. Without a `t` column give `dt`. A path may name a CSV, binary,
-      .npy, .mat or HDF5 file (`names` for a 2-D .npy array's columns, `dt_from` for the
+      .npy, .mat or HDF5 file (`names` for a 2-D .npy array's columns too, `dt_from` for the
       interval stored in a .mat or HDF5 file: "Ts", or "1/fs" for a rate).
+    columns: {model variable: data column} for data whose columns have other names, as
+      `--columns NAME=COLUMN` ({"y": "disp"} reads state y from column disp).
     dt: the sample interval (overrides the `t` column).
     multipliers, degree: the zero-lag equations (as `derive`); lags=(first, last),
-      instruments, noise ({state: variance}; None estimates it): the lagged equations, used
-      by default when the data lack a state.
+      instruments (monomials, as multipliers), noise ({state: variance}; None estimates it):
+      the lagged equations, used by default when the data lack a state.
     batches, weighting ("auto", "ls", "gmm"): the standard errors and the optimal weighting.
     fix: {parameter: value} taken as known. center: variables (or "all") whose mean is removed.
-    input_hold ("zoh" or "sample"), input_shift, rename ({model name: column}), and for files
-      missing ("error", "drop-row", "split-run"), skip_rows, decimal: as on the command line.
+    input_hold ("zoh" or "sample"), input_shift, and for files missing ("error", "drop-row", "split-run"), skip_rows, decimal: as on the command line.
     threads: threads reading the data at once (default: one per core); the result is the same
       to the last bit with any number.
-    extrapolate="dt": the bias of sampling, estimated from every other sample and removed when
-      it exceeds its error (zero-lag equations, inputs sampled rather than held).
+    extrapolate: the bias of sampling (`--extrapolate dt`), estimated from every other sample
+      and removed when it exceeds its error (zero-lag equations, inputs sampled, not held).
 
-    Returns an IdentifyResult. Raises ModelError, DataError or UsageError with the command
+    Returns an IdentifyResult: params, bse, cov_params(), conf_int(alpha), summary(), the
+    least-squares fit as .ls beside an optimally weighted one, and to_frame() for pandas. Raises ModelError, DataError or UsageError with the command
     line's messages. The GIL is released during the pass over the data.
     """
     model = _model_of(model)
-    source, name, metadata, keep = _data_of(data, columns)
+    source, name, metadata, keep, names = _data_of(data, names)
     if isinstance(center, str):
         center = model.states + model.inputs if center == "all" else [center]
-    options = _options(multipliers=multipliers, degree=degree, batches=batches,
-                       weighting=weighting, lags=lags, instruments=instruments, noise=noise,
-                       fix=fix, center=center, input_hold=input_hold, input_shift=input_shift,
-                       rename=rename, dt=dt, missing=missing, skip_rows=skip_rows,
-                       decimal=decimal, names=names, dt_from=dt_from, threads=threads,
-                       extrapolate=extrapolate)
-    text, json_text = _momentid._identify(model._model, source, name, metadata, options)
+    if not isinstance(extrapolate, bool):
+        raise UsageError(f"extrapolate: expected True or False, found {extrapolate!r}")
+    options = _options(multipliers=_monomials(multipliers), degree=degree, batches=batches,
+                       weighting=weighting, lags=lags, instruments=_monomials(instruments),
+                       noise=noise, fix=fix, center=center, input_hold=input_hold,
+                       input_shift=input_shift, columns=columns, dt=dt, missing=missing,
+                       skip_rows=skip_rows, decimal=decimal, names=names, dt_from=dt_from,
+                       threads=threads, extrapolate="dt" if extrapolate else None)
+    text, json_text, least_squares = _momentid._identify(model._model, source, name, metadata,
+                                                         options)
     del keep
-    return IdentifyResult(text, json_text)
+    return IdentifyResult(text, json_text, least_squares)
 
 
 @_keywords_in_errors
+@_older_keywords
 def check(data: Any, model: Union[None, Model, PathLike] = None, *,
-          columns: Optional[Sequence[str]] = None, dt: Optional[float] = None,
-          lags: Optional[int] = None, input_hold: Optional[str] = None,
-          rename: Optional[Mapping[str, str]] = None, missing: Optional[str] = None,
+          columns: Optional[Mapping[str, str]] = None, names: Optional[Sequence[str]] = None,
+          dt: Optional[float] = None, lags: Optional[int] = None,
+          input_hold: Optional[str] = None, missing: Optional[str] = None,
           skip_rows: Optional[int] = None, decimal: Optional[str] = None,
-          names: Optional[Sequence[str]] = None, dt_from: Optional[str] = None,
-          threads: Optional[int] = None) -> CheckResult:
+          dt_from: Optional[str] = None, threads: Optional[int] = None) -> CheckResult:
     """Whether a record suits the method, as `momentid check DATA [MODEL]`: each channel's
     mean, variance and autocorrelations (`lags` of them), warnings, and with a model the sample
     violations of its stationarity identities. `data` and the options as for identify()."""
     model = None if model is None else _model_of(model)
-    source, name, metadata, keep = _data_of(data, columns)
-    options = _options(lags=lags, input_hold=input_hold, rename=rename,
+    source, name, metadata, keep, names = _data_of(data, names)
+    options = _options(lags=lags, input_hold=input_hold, columns=columns,
                        dt=dt, missing=missing, skip_rows=skip_rows, decimal=decimal,
                        names=names, dt_from=dt_from, threads=threads)
     text, values = _momentid._check(None if model is None else model._model, source, name,
@@ -365,7 +336,8 @@ def simulate(model: Union[Model, PathLike], params: Optional[Mapping[str, float]
              noise: Optional[Mapping[str, float]] = None,
              observe: Optional[Sequence[str]] = None, path: Optional[PathLike] = None,
              format: str = "csv", interpolation: Optional[str] = None,
-             substeps: Optional[int] = None) -> Optional[Record]:
+             substeps: Optional[int] = None,
+             columns: Optional[Mapping[str, str]] = None) -> Optional[Record]:
     """Simulates the model with known parameters, as `momentid simulate`.
 
     params: {parameter: value}, the rest at the model's nominal values.
@@ -373,7 +345,8 @@ def simulate(model: Union[Model, PathLike], params: Optional[Mapping[str, float]
       "multisine:f1=0.5,f2=5,lines=10" (default "ma:K=10,w=0.1"); or a record (a mapping of
       arrays with the model's inputs and `t`, or a data file's path) whose inputs drive the
       model, as `simulate --input-file` does: each run starts from the record's initial state,
-      `interpolation` ("zoh", "foh", "cubic", "sinc") and `substeps` as for validate().
+      `interpolation` ("zoh", "foh", "cubic", "sinc"), `substeps` and `columns` ({model
+      variable: the record's column}) as for validate().
     dt: the step (default 0.01; for a record, its own sample interval).
     noise: {channel: relative level} of white measurement noise. observe: the channels to
       return (default: states, then inputs).
@@ -386,9 +359,9 @@ def simulate(model: Union[Model, PathLike], params: Optional[Mapping[str, float]
     model = _model_of(model)
     if inputs is not None and (isinstance(inputs, (str, _os.PathLike)) or
                                any(not isinstance(v, str) for v in inputs.values())):
-        source, name, metadata, keep = _data_of(inputs, None)
+        source, name, metadata, keep, _ = _data_of(inputs, None)
         options = _options(params=_numbers(params), interpolation=interpolation,
-                           substeps=substeps, dt=dt)
+                           substeps=substeps, dt=dt, columns=columns)
         columns, metadata, warnings = _momentid._replay(model._model, source, name, metadata,
                                                         options)
         del keep
@@ -404,14 +377,14 @@ def simulate(model: Union[Model, PathLike], params: Optional[Mapping[str, float]
 
 
 @_keywords_in_errors
+@_older_keywords
 def validate(model: Union[Model, PathLike], data: Any,
              params: Union[None, Mapping[str, float], IdentifyResult] = None, *,
-             columns: Optional[Sequence[str]] = None, dt: Optional[float] = None,
-             skip: Optional[int] = None, lags: Optional[int] = None,
+             columns: Optional[Mapping[str, str]] = None, names: Optional[Sequence[str]] = None,
+             dt: Optional[float] = None, skip: Optional[int] = None, lags: Optional[int] = None,
              interpolation: Optional[str] = None, substeps: Optional[int] = None,
-             rename: Optional[Mapping[str, str]] = None, plot: Optional[PathLike] = None,
-             missing: Optional[str] = None, skip_rows: Optional[int] = None,
-             decimal: Optional[str] = None, names: Optional[Sequence[str]] = None,
+             plot: Optional[PathLike] = None, missing: Optional[str] = None,
+             skip_rows: Optional[int] = None, decimal: Optional[str] = None,
              dt_from: Optional[str] = None) -> ValidateResult:
     """Simulates the model through the record's inputs and compares its outputs, as
     `momentid validate`: per measured state the RMS error, the fit (100 (1 - |y - ŷ| / |y - ȳ|)
@@ -421,6 +394,9 @@ def validate(model: Union[Model, PathLike], data: Any,
     values. skip: rows left out at the start of each run (default: until the initial state is
     forgotten). interpolation: "zoh", "foh", "cubic" or "sinc". plot: an SVG file to draw.
     `data` and the other options as for identify().
+
+    Returns a ValidateResult: the fit and errors per output, and the series compared (t, the
+    simulated and measured outputs, the inputs, and which rows were compared).
     """
     model = _model_of(model)
     origin = "the model's nominal values"
@@ -428,15 +404,15 @@ def validate(model: Union[Model, PathLike], data: Any,
         params, origin = params.estimates, "the estimates of identify()"
     elif params:
         origin += " and params"
-    source, name, metadata, keep = _data_of(data, columns)
+    source, name, metadata, keep, names = _data_of(data, names)
     options = _options(params=_numbers(params), parameters_from=origin, skip=skip, lags=lags,
-                       interpolation=interpolation, substeps=substeps, rename=rename,
+                       interpolation=interpolation, substeps=substeps, columns=columns,
                        dt=dt,
                        plot=None if plot is None else _os.fspath(plot), missing=missing,
                        skip_rows=skip_rows, decimal=decimal, names=names, dt_from=dt_from)
-    text, json_text = _momentid._validate(model._model, source, name, metadata, options)
+    text, json_text, series = _momentid._validate(model._model, source, name, metadata, options)
     del keep
-    return ValidateResult(text, json_text)
+    return ValidateResult(text, json_text, series)
 
 
 # --- helpers ----------------------------------------------------------------------------------
@@ -471,28 +447,27 @@ def _column(name: str, values: Any) -> _np.ndarray:
     return array
 
 
-def _data_of(data: Any, columns: Optional[Sequence[str]]):
+def _data_of(data: Any, names: Optional[Sequence[str]]):
     """The record as the compiled part takes it: a path, or [(name, float64 array)] with a name
-    for messages and metadata; the last item keeps converted arrays alive."""
+    for messages and metadata; the last but one item keeps converted arrays alive, the last is
+    `names` when they are for the file to read (a 2-D .npy array's columns)."""
     if isinstance(data, (str, _os.PathLike)):
-        if columns is not None:
-            raise UsageError("columns: only for a 2-D array; a file names its own columns")
-        return _os.fspath(data), "", {}, None
+        return _os.fspath(data), "", {}, None, names
     if (isinstance(data, (list, tuple)) and data
             and all(isinstance(d, (str, _os.PathLike)) for d in data)):
         # Several files: one record whose files are never joined.
-        return [_os.fspath(d) for d in data], "", {}, None
+        return [_os.fspath(d) for d in data], "", {}, None, names
     metadata = dict(getattr(data, "metadata", None) or {})
     if isinstance(data, _np.ndarray) and data.ndim == 2:
-        if columns is None or len(columns) != data.shape[1]:
-            raise UsageError(f"columns: a 2-D array of {data.shape[1]} columns needs as many "
-                             f"names, found {0 if columns is None else len(columns)}")
-        pairs = [(str(n), _column(str(n), data[:, k])) for k, n in enumerate(columns)]
-        return pairs, "<array>", metadata, pairs
-    if columns is not None:
-        raise UsageError("columns: only for a 2-D array; a mapping names its own columns")
+        if names is None or len(names) != data.shape[1]:
+            raise UsageError(f"names: a 2-D array of {data.shape[1]} columns needs as many "
+                             f"names, found {0 if names is None else len(names)}")
+        pairs = [(str(n), _column(str(n), data[:, k])) for k, n in enumerate(names)]
+        return pairs, "<array>", metadata, pairs, None
+    if names is not None:
+        raise UsageError("names: only for a 2-D array or file; a mapping names its own columns")
     if not hasattr(data, "keys") or not hasattr(data, "__getitem__"):
         raise TypeError("data: expected a mapping of column names to arrays, a 2-D array with "
-                        f"columns=, or a path, found {type(data).__name__}")
+                        f"names=, or a path, found {type(data).__name__}")
     pairs = [(str(n), _column(str(n), data[n])) for n in data.keys()]
-    return pairs, "<arrays>", metadata, pairs
+    return pairs, "<arrays>", metadata, pairs, None

@@ -7,6 +7,7 @@
 #include <pybind11/stl.h>
 
 #include <algorithm>
+#include <boost/math/distributions/students_t.hpp>
 #include <cmath>
 #include <map>
 #include <optional>
@@ -239,8 +240,8 @@ IdentifyOptions identify_options(const Model& model, const py::dict& options) {
       throw UsageError("weighting: expected 'auto', 'ls' or 'gmm', found '" + *weighting + "'");
     }
   }
-  if (auto rename = get<std::map<std::string, std::string>>(options, "rename")) {
-    out.columns = *rename;
+  if (auto columns = get<std::map<std::string, std::string>>(options, "columns")) {
+    out.columns = *columns;
   }
   out.dt = get<double>(options, "dt");
   out.layout = layout_of(options);
@@ -420,8 +421,8 @@ py::tuple simulate_record(const Model& model, const py::dict& options) {
 ValidateOptions validate_options(const Model& model, const py::dict& options) {
   ValidateOptions out;
   out.replay.parameters = parameters_of(model, options, "params");
-  if (auto rename = get<std::map<std::string, std::string>>(options, "rename")) {
-    out.replay.columns = *rename;
+  if (auto columns = get<std::map<std::string, std::string>>(options, "columns")) {
+    out.replay.columns = *columns;
   }
   out.replay.dt = get<double>(options, "dt");
   out.replay.layout = layout_of(options);
@@ -434,8 +435,61 @@ ValidateOptions validate_options(const Model& model, const py::dict& options) {
   return out;
 }
 
-// The model's response to a record's inputs, as `simulate --input-file` writes it: t, every
-// state (simulated) and the inputs (recorded), run when there are several; and the metadata.
+// One array of every run's rows, one run after the other, from value_at(run, row).
+template <class ValueAt>
+py::array_t<double> concatenated(const Record& record, ValueAt value_at) {
+  std::size_t rows = 0;
+  for (const RecordRun& run : record.runs) rows += run.rows();
+  py::array_t<double> out(static_cast<py::ssize_t>(rows));
+  double* into = out.mutable_data();
+  for (std::size_t r = 0; r < record.runs.size(); ++r) {
+    for (std::size_t n = 0; n < record.runs[r].rows(); ++n) *into++ = value_at(r, n);
+  }
+  return out;
+}
+
+// The recorded column of model variable v, every run's rows.
+py::array_t<double> recorded(const Record& record, std::size_t v) {
+  const auto c = static_cast<std::size_t>(record.column_of(v));
+  return concatenated(record,
+                      [&](std::size_t r, std::size_t n) { return record.runs[r].columns[c][n]; });
+}
+
+// The record's sample times, and its runs' numbers (1, 2, ... for runs without a `run` column).
+py::array_t<double> times(const Record& record) {
+  return concatenated(record, [&](std::size_t r, std::size_t n) {
+    const RecordRun& run = record.runs[r];
+    return run.time.empty() ? static_cast<double>(n) * record.dt : run.time[n];
+  });
+}
+py::array_t<double> run_numbers(const Record& record) {
+  return concatenated(record, [&](std::size_t r, std::size_t) {
+    return static_cast<double>(record.has_run ? record.runs[r].number : static_cast<long>(r) + 1);
+  });
+}
+
+// State j as the replay simulated it, every run's rows.
+py::array_t<double> simulated(const Replay& done, std::size_t j) {
+  return concatenated(done.record,
+                      [&](std::size_t r, std::size_t n) { return done.simulated[r][j][n]; });
+}
+
+// The replay as `simulate --input-file` writes it: t, every state (simulated) and the inputs
+// (recorded), run when there are several.
+py::dict replay_columns(const Model& model, const Replay& done) {
+  py::dict out;
+  out["t"] = times(done.record);
+  const std::size_t states = model.states().size();
+  for (std::size_t j = 0; j < states; ++j)
+    out[py::str(model.states()[j].name)] = simulated(done, j);
+  for (std::size_t v = states; v < model.variables().size(); ++v) {
+    out[py::str(model.variables()[v])] = recorded(done.record, v);
+  }
+  if (done.record.runs.size() > 1) out["run"] = run_numbers(done.record);
+  return out;
+}
+
+// The model's response to a record's inputs (replay_columns) and the metadata.
 py::tuple replay_record(const Model& model, const DataSource& source, const py::dict& options) {
   const ValidateOptions with = validate_options(model, options);
   std::optional<Replay> done;
@@ -443,42 +497,58 @@ py::tuple replay_record(const Model& model, const DataSource& source, const py::
     py::gil_scoped_release release;
     done = replay(model, source, with.replay);
   }
-  const Record& record = done->record;
-  std::size_t rows = 0;
-  for (const RecordRun& run : record.runs) rows += run.rows();
-  const auto column = [&](auto value_at) {
-    py::array_t<double> out(static_cast<py::ssize_t>(rows));
-    double* into = out.mutable_data();
-    for (std::size_t r = 0; r < record.runs.size(); ++r) {
-      for (std::size_t n = 0; n < record.runs[r].rows(); ++n) *into++ = value_at(r, n);
-    }
-    return out;
-  };
-  py::dict out;
-  out["t"] = column([&](std::size_t r, std::size_t n) {
-    const RecordRun& run = record.runs[r];
-    return run.time.empty() ? static_cast<double>(n) * record.dt : run.time[n];
-  });
-  const std::size_t states = model.states().size();
-  for (std::size_t j = 0; j < states; ++j) {
-    out[py::str(model.states()[j].name)] =
-        column([&](std::size_t r, std::size_t n) { return done->simulated[r][j][n]; });
-  }
-  for (std::size_t v = states; v < model.variables().size(); ++v) {
-    const auto c = static_cast<std::size_t>(record.column_of(v));
-    out[py::str(model.variables()[v])] =
-        column([&](std::size_t r, std::size_t n) { return record.runs[r].columns[c][n]; });
-  }
-  if (record.runs.size() > 1) {
-    out["run"] = column([&](std::size_t r, std::size_t) {
-      return static_cast<double>(record.has_run ? record.runs[r].number : static_cast<long>(r) + 1);
-    });
-  }
   // What the record says of its sampling holds for the response too; its parameters do not.
   py::dict metadata;
-  metadata["dt"] = py::str(py::repr(py::float_(record.dt)));
-  if (auto hold = record.metadata.get("input-hold")) metadata["input-hold"] = *hold;
-  return py::make_tuple(out, metadata, std::vector<std::string>{});
+  metadata["dt"] = py::str(py::repr(py::float_(done->record.dt)));
+  if (auto hold = done->record.metadata.get("input-hold")) metadata["input-hold"] = *hold;
+  return py::make_tuple(replay_columns(model, *done), metadata, std::vector<std::string>{});
+}
+
+// The series validate compared, every run's rows one run after the other: t, run (None for one
+// run), every state as simulated, the measured states and the inputs as recorded, and whether a
+// row is past its run's skip, so among those the fit and the errors are over.
+py::dict validate_series(const ValidateResult& result) {
+  const Model& model = *result.model;
+  const Record& record = result.replay.record;
+  py::dict states, measured, inputs;
+  for (std::size_t j = 0; j < model.states().size(); ++j) {
+    states[py::str(model.states()[j].name)] = simulated(result.replay, j);
+  }
+  for (const OutputFit& output : result.outputs) {
+    measured[py::str(output.name)] = recorded(record, output.state);
+  }
+  for (std::size_t v = model.states().size(); v < model.variables().size(); ++v) {
+    inputs[py::str(model.variables()[v])] = recorded(record, v);
+  }
+  std::size_t rows = 0;
+  for (const RecordRun& run : record.runs) rows += run.rows();
+  py::array_t<bool> compared(static_cast<py::ssize_t>(rows));
+  bool* into = compared.mutable_data();
+  for (std::size_t r = 0; r < record.runs.size(); ++r) {
+    for (std::size_t n = 0; n < record.runs[r].rows(); ++n) *into++ = n >= result.skip[r];
+  }
+  py::dict out;
+  out["t"] = times(record);
+  out["run"] = record.runs.size() > 1 ? py::object(run_numbers(record)) : py::none();
+  out["simulated"] = states;
+  out["measured"] = measured;
+  out["inputs"] = inputs;
+  out["compared"] = compared;
+  return out;
+}
+
+// --- the results of identify ----------------------------------------------------------------
+
+// What the JSON of an optimally weighted result leaves out of its least-squares section: the
+// degrees of freedom and correlation of its errors (the main result's are in "diagnostics").
+// None when the least-squares estimate is the main result.
+py::object least_squares_errors(const IdentifyResult& result) {
+  const Estimate& e = result.estimate;
+  if (!result.gmm || e.gmm_parameters.empty()) return py::none();
+  py::dict out;
+  out["error_dof"] = e.dof;
+  out["correlation"] = e.correlation;
+  return out;
 }
 
 }  // namespace
@@ -539,23 +609,23 @@ PYBIND11_MODULE(_momentid, m) {
     return py::make_tuple(d.text, d.latex, d.json, d.equations);
   });
 
-  m.def("_identify",
-        [](const Model& model, const py::object& data, const std::string& name,
-           const std::map<std::string, std::string>& metadata, const py::dict& options) {
-          const IdentifyOptions identify_with = identify_options(model, options);
-          const DataSource source = data_source(data, name, metadata);
-          const IdentifyResult result =
-              without_gil([&] { return identify(model, source, identify_with); });
-          return py::make_tuple(format_text(result), format_json(result));
-        });
+  m.def("_identify", [](const Model& model, const py::object& data, const std::string& name,
+                        const std::map<std::string, std::string>& metadata,
+                        const py::dict& options) {
+    const IdentifyOptions identify_with = identify_options(model, options);
+    const DataSource source = data_source(data, name, metadata);
+    const IdentifyResult result =
+        without_gil([&] { return identify(model, source, identify_with); });
+    return py::make_tuple(format_text(result), format_json(result), least_squares_errors(result));
+  });
 
   m.def("_check", [](const py::object& model, const py::object& data, const std::string& name,
                      const std::map<std::string, std::string>& metadata, const py::dict& options) {
     CheckOptions check_with;
     if (auto lags = get<std::size_t>(options, "lags")) check_with.lags = *lags;
     check_with.hold = hold_of(options);
-    if (auto rename = get<std::map<std::string, std::string>>(options, "rename")) {
-      check_with.columns = *rename;
+    if (auto columns = get<std::map<std::string, std::string>>(options, "columns")) {
+      check_with.columns = *columns;
     }
     check_with.dt = get<double>(options, "dt");
     check_with.layout = layout_of(options);
@@ -582,6 +652,14 @@ PYBIND11_MODULE(_momentid, m) {
         result.parameters_from =
             get<std::string>(options, "parameters_from").value_or("the model's nominal values");
         if (auto plot = get<std::string>(options, "plot")) write_plot(result, *plot);
-        return py::make_tuple(format_text(result), format_json(result));
+        return py::make_tuple(format_text(result), format_json(result), validate_series(result));
       });
+
+  // Student's t law, as the library's intervals take it: the q-quantile and P(T > x).
+  m.def("_t_quantile", [](double q, double dof) {
+    return boost::math::quantile(boost::math::students_t(dof), q);
+  });
+  m.def("_t_upper_tail", [](double x, double dof) {
+    return boost::math::cdf(boost::math::complement(boost::math::students_t(dof), x));
+  });
 }

@@ -3,7 +3,7 @@
 What they cover:
 - identify, simulate, derive and validate give the same numbers (JSON, text, files byte for
   byte) as the command line with the same options;
-- records given as arrays in any layout (2-D with columns=, strided, reversed, float32, int,
+- records given as arrays in any layout (2-D with names=, strided, reversed, float32, int,
   a pandas DataFrame) give the estimates of contiguous float64 copies, and bad ones (complex,
   2-D without names, unequal lengths) raise UsageError naming what is wrong;
 - errors are the module's exceptions with the command line's messages and places;
@@ -32,74 +32,7 @@ import pytest
 
 import momentid
 
-ROOT = Path(__file__).resolve().parents[2]
-DUFFING = ROOT / "models" / "duffing.mom"
-TRUE = {"c": 0.5, "k": 4.0, "eps": 1.0}  # duffing.mom's nominal values, used by simulate
-INPUT = "ma:K=10,w=0.1,sigma=20"
-
-
-# --- helpers and fixtures ----------------------------------------------------------------------
-
-@pytest.fixture(scope="session")
-def cli():
-    """Runs the program (path from $MOMENTID) and returns its standard output."""
-    program = os.environ.get("MOMENTID")
-    if not program:
-        pytest.skip("MOMENTID (the path of the momentid program) is not set")
-    program = str(Path(program).resolve())
-
-    def run(*args, cwd=None):
-        done = subprocess.run([program, *map(str, args)], capture_output=True, text=True,
-                              cwd=cwd)
-        assert done.returncode == 0, f"momentid {' '.join(map(str, args))}: {done.stderr}"
-        return done.stdout
-
-    return run
-
-
-@pytest.fixture(scope="session")
-def duffing():
-    return momentid.Model.from_file(DUFFING)
-
-
-@pytest.fixture(scope="session")
-def cli_csv(cli, tmp_path_factory):
-    """The Duffing record the program simulates: 100000 samples, seed 3."""
-    path = tmp_path_factory.mktemp("cli") / "duffing.csv"
-    cli("simulate", DUFFING, "--samples", 100000, "--seed", 3, "--input", INPUT, "-o", path)
-    return path
-
-
-@pytest.fixture(scope="session")
-def cli_json(cli, cli_csv):
-    return json.loads(cli("identify", DUFFING, cli_csv, "--format", "json"))
-
-
-@pytest.fixture(scope="session")
-def record(duffing):
-    """A smaller in-memory Duffing record (20000 samples), with metadata."""
-    return momentid.simulate(duffing, samples=20000, seed=3, inputs={"x": INPUT})
-
-
-def read_csv(path):
-    """The columns of a CSV file written by the program: {name: float64 array}, `#` lines
-    (the metadata) skipped."""
-    lines = Path(path).read_text().splitlines()
-    header = next(i for i, line in enumerate(lines) if not line.startswith("#"))
-    names = lines[header].split(",")
-    values = np.loadtxt(path, delimiter=",", skiprows=header + 1, ndmin=2)
-    return {name: values[:, k] for k, name in enumerate(names)}
-
-
-def read_metadata(path):
-    """The `# momentid:` key=value pairs of a CSV file, as one dict."""
-    out = {}
-    for line in Path(path).read_text().splitlines():
-        if not line.startswith("#"):
-            break
-        if line.startswith("# momentid:"):
-            out.update(item.split("=", 1) for item in line[len("# momentid:"):].split())
-    return out
+from conftest import DUFFING, INPUT, TRUE, read_csv, read_metadata, without
 
 
 def assert_same_estimates(result, expected, rel=1e-12):
@@ -112,10 +45,6 @@ def assert_same_estimates(result, expected, rel=1e-12):
         estimates, errors = expected.estimates, expected.std_errors
     assert result.estimates == pytest.approx(estimates, rel=rel, abs=0)
     assert result.std_errors == pytest.approx(errors, rel=rel, abs=0)
-
-
-def without(values, *keys):
-    return {k: v for k, v in values.items() if k not in keys}
 
 
 def rss_bytes():
@@ -168,7 +97,7 @@ def test_2d_array_columns_are_views(duffing, record):
     assert table.flags.c_contiguous and table[:, 1].strides == (32,)
     copies = {n: np.ascontiguousarray(table[:, k]) for k, n in enumerate(names)}
     expected = momentid.identify(duffing, copies, input_hold="zoh")
-    result = momentid.identify(duffing, table, columns=names, input_hold="zoh")
+    result = momentid.identify(duffing, table, names=names, input_hold="zoh")
     assert_same_estimates(result, expected, rel=0)
 
 
@@ -214,10 +143,10 @@ def test_complex_array_is_a_usage_error(duffing, record):
 
 def test_2d_array_needs_column_names(duffing, record):
     table = np.column_stack([record[n] for n in ("y", "v", "x")])
-    with pytest.raises(momentid.UsageError, match="columns"):
+    with pytest.raises(momentid.UsageError, match="^names: a 2-D array of 3 columns needs"):
         momentid.identify(duffing, table, dt=0.01)
-    with pytest.raises(momentid.UsageError, match="columns"):
-        momentid.identify(duffing, table, columns=["y", "v"], dt=0.01)
+    with pytest.raises(momentid.UsageError, match="^names: .* found 2$"):
+        momentid.identify(duffing, table, names=["y", "v"], dt=0.01)
 
 
 def test_columns_of_different_lengths(duffing, record):
@@ -287,8 +216,8 @@ def test_unknown_fixed_parameter_is_a_usage_error(duffing, record):
 def test_messages_name_the_keywords_not_the_command_line_options(duffing, record):
     with pytest.raises(momentid.UsageError, match=r"^fix: 'zz' is not a parameter"):
         momentid.identify(duffing, record, fix={"zz": 1.0})
-    with pytest.raises(momentid.UsageError, match=r"^rename: 'zz' is not a state or input"):
-        momentid.identify(duffing, record, rename={"zz": "y"})
+    with pytest.raises(momentid.UsageError, match=r"^columns: 'zz' is not a state or input"):
+        momentid.identify(duffing, record, columns={"zz": "y"})
     with pytest.raises(momentid.UsageError,
                        match=r"^noise: channel 'v' is not observed \(observe y,x\)"):
         momentid.simulate(duffing, samples=100, observe=["y", "x"], noise={"v": 0.1})
@@ -344,7 +273,7 @@ def test_bad_calls_do_not_crash_the_interpreter():
             lambda: momentid.identify(m, rec, degree=-1),
             lambda: momentid.identify(m, rec, batches=-1),
             lambda: momentid.identify(m, rec, lags=(50, 3)),
-            lambda: momentid.identify(m, rec, rename={{"y": "zz"}}),
+            lambda: momentid.identify(m, rec, columns={{"y": "zz"}}),
             lambda: momentid.identify(m, rec, input_shift=10**12),
             lambda: momentid.identify(42, rec),
             lambda: momentid.identify(m, 42),
@@ -559,13 +488,13 @@ def test_identify_extrapolate(duffing, cli_csv):
     # The sampling bias from every other sample: reported for inputs read as samples, refused
     # for a held input (the record's metadata), and only 'dt' is a valid value.
     columns = read_csv(cli_csv)
-    result = momentid.identify(duffing, columns, input_hold="sample", degree=3, extrapolate="dt")
+    result = momentid.identify(duffing, columns, input_hold="sample", degree=3, extrapolate=True)
     bias = result.diagnostics["sampling_bias"]
     assert bias["order"] == 2
     assert set(bias["parameters"]) == {"c", "k", "eps"}
     assert all(p["difference_error"] > 0 for p in bias["parameters"].values())
     with pytest.raises(momentid.UsageError, match=r"^extrapolate: the input is held"):
-        momentid.identify(duffing, str(cli_csv), degree=3, extrapolate="dt")
+        momentid.identify(duffing, str(cli_csv), degree=3, extrapolate=True)
     # A held input's kinks are corrected instead, and the shift is reported.
     held = momentid.identify(duffing, str(cli_csv), degree=3)
     correction = held.diagnostics["held_input_correction"]
@@ -574,5 +503,5 @@ def test_identify_extrapolate(duffing, cli_csv):
     assert "held_input_correction" not in result.diagnostics
     # The errors that the record's ends leave come from the states' variances there.
     assert held.diagnostics["end_values"] == {"applied": True}
-    with pytest.raises(momentid.UsageError, match=r"^extrapolate: expected 'dt', found 't'"):
+    with pytest.raises(momentid.UsageError, match=r"^extrapolate: expected True or False, found 't'"):
         momentid.identify(duffing, str(cli_csv), extrapolate="t")

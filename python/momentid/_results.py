@@ -1,0 +1,268 @@
+"""The results of identify(), check() and validate(), as values to compute with.
+
+An identification is read from its JSON (the text of `momentid identify --format json`), never
+from the text report, so that the numbers are the program's to the last bit. The arrays follow
+statsmodels' results (params, bse, cov_params(), conf_int(), tvalues, pvalues, summary()) and
+are numpy arrays in the order of `param_names`: the module needs numpy only, and the same code
+gives the same types wherever it runs. pandas, when installed, gives the tables of to_frame().
+"""
+
+from __future__ import annotations
+
+import json as _json
+from typing import Optional
+
+import numpy as _np
+
+from . import _momentid
+
+
+def _number(value) -> float:
+    # The JSON writes what is not a finite number as null.
+    return _np.nan if value is None else float(value)
+
+
+def _read_only(values) -> _np.ndarray:
+    array = _np.array(values, dtype=float)
+    array.flags.writeable = False
+    return array
+
+
+def _t_dof(dof: float) -> float:
+    # The library's rule (long_run.hpp, t975): below one degree of freedom the t law has no
+    # variance and its quantiles overflow, so at least one is taken. Unknown stays unknown.
+    return dof if _np.isnan(dof) else max(1.0, dof)
+
+
+def _t_quantile(q: float, dof: float) -> float:
+    return _np.nan if _np.isnan(dof) else _momentid._t_quantile(q, _t_dof(dof))
+
+
+def _pandas():
+    try:
+        import pandas
+    except ImportError as error:
+        raise ImportError("to_frame() needs pandas (pip install pandas, or Debian's "
+                          "python3-pandas); the arrays need only numpy") from error
+    return pandas
+
+
+class Fit:
+    """One estimate of the model's parameters with its errors: the least-squares one or the
+    optimally weighted (two-step GMM) one. Every array is in the order of `param_names` (the
+    model's parameters in declaration order) and read-only.
+
+    params, bse: the estimates and their standard errors. A parameter taken as known (`fix=`, or
+      `fixed` in the model) has its value and error 0; one the data do not identify (only
+      combinations of it with others) has the minimum-norm estimate and error NaN.
+    df_resid: the degrees of freedom of the standard errors: the effective degrees of freedom of
+      their long-run covariance over the batches, not samples minus parameters. Student's t at
+      df_resid (at least 1) gives the intervals and p-values, as the program's 95% intervals.
+    tvalues, pvalues: params / bse and the two-sided p-value of the t test of "the parameter is
+      0"; NaN for a parameter that is fixed or not identifiable.
+    identifiable: a boolean array; fixed: the names of the fixed parameters.
+    cov_params(), conf_int(alpha), to_frame(alpha): below.
+    estimates, std_errors: {parameter: float}; ci95: {parameter: (low, high)}.
+    """
+
+    def __init__(self, section: dict) -> None:
+        """section: {"parameters": the JSON's parameter entries, "error_dof": their degrees of
+        freedom, "correlation": their correlation matrix (rows of numbers or null; empty when
+        there are no errors)}."""
+        parameters = section["parameters"]
+        self.param_names = list(parameters)
+        self.params = _read_only([_number(p["estimate"]) for p in parameters.values()])
+        self.bse = _read_only([_number(p["std_error"]) for p in parameters.values()])
+        self.identifiable = _np.array([p["identifiable"] for p in parameters.values()], bool)
+        self.identifiable.flags.writeable = False
+        self._fixed = _np.array([p["fixed"] for p in parameters.values()], bool)
+        self.df_resid = _number(section["error_dof"])
+        self._correlation = section["correlation"]
+        self.estimates = {name: p["estimate"] for name, p in parameters.items()}
+        self.std_errors = {name: p["std_error"] for name, p in parameters.items()}
+        self.ci95 = {name: tuple(p["ci95"]) if p["ci95"] is not None else None
+                     for name, p in parameters.items()}
+        self.fixed = [name for name, p in parameters.items() if p["fixed"]]
+
+    @property
+    def tvalues(self) -> _np.ndarray:
+        with _np.errstate(divide="ignore", invalid="ignore"):
+            t = self.params / self.bse
+        t[self._fixed] = _np.nan
+        return t
+
+    @property
+    def pvalues(self) -> _np.ndarray:
+        dof = _t_dof(self.df_resid)
+        return _np.array([2 * _momentid._t_upper_tail(abs(t), dof)
+                          if _np.isfinite(t) and not _np.isnan(dof) else _np.nan
+                          for t in self.tvalues])
+
+    def cov_params(self) -> _np.ndarray:
+        """The covariance matrix of the estimates, from their standard errors and correlation:
+        rows and columns of a fixed parameter 0, of one not identifiable NaN."""
+        count = len(self.param_names)
+        correlation = (_np.array([[_number(c) for c in row] for row in self._correlation])
+                       if self._correlation else _np.full((count, count), _np.nan))
+        covariance = correlation * _np.outer(self.bse, self.bse)
+        # The variances are the squared errors themselves (a correlation of 1 could differ in
+        # the last bit).
+        _np.fill_diagonal(covariance, self.bse ** 2)
+        covariance[self._fixed, :] = 0
+        covariance[:, self._fixed] = 0
+        return covariance
+
+    def conf_int(self, alpha: float = 0.05) -> _np.ndarray:
+        """The (1 - alpha) confidence intervals, one row (low, high) per parameter: Student's t
+        at df_resid times the standard error either side. At alpha=0.05 these are `ci95`."""
+        if not 0 < alpha < 1:
+            from . import UsageError
+            raise UsageError(f"alpha: expected a number between 0 and 1, found {alpha!r}")
+        t = _t_quantile(1 - alpha / 2, self.df_resid)
+        return _np.column_stack([self.params - t * self.bse, self.params + t * self.bse])
+
+    def to_frame(self, alpha: float = 0.05):
+        """A pandas DataFrame, one row per parameter (the index): estimate, std_error, t,
+        p_value, ci_low and ci_high (the (1 - alpha) interval), identifiable, fixed."""
+        pandas = _pandas()
+        interval = self.conf_int(alpha)
+        return pandas.DataFrame(
+            {"estimate": self.params, "std_error": self.bse, "t": self.tvalues,
+             "p_value": self.pvalues, "ci_low": interval[:, 0], "ci_high": interval[:, 1],
+             "identifiable": self.identifiable, "fixed": self._fixed},
+            index=pandas.Index(self.param_names, name="parameter"))
+
+    def __repr__(self) -> str:
+        values = ", ".join(f"{name}={value:.6g}±{error:.2g}" for name, value, error in
+                           zip(self.param_names, self.params, self.bse))
+        return f"<momentid.Fit {values}>"
+
+
+class IdentifyResult(Fit):
+    """What identify() found: the main estimate (a Fit: params, bse, cov_params(), conf_int(),
+    ...; the optimally weighted one when it was computed, otherwise least squares), and:
+
+    weighting: "gmm" or "ls", which estimate is the main one; ls: the least-squares Fit (the
+      first step of the optimally weighted one, or the main estimate itself).
+    jval, jtest(): Hansen's J statistic of the optimally weighted estimate, and (J, p-value,
+      degrees of freedom); None without it.
+    nobs: the samples the moments are averaged over; status: "ok", "doubtful", "rank-deficient"
+      or "nothing-identifiable"; warnings: what to distrust, the most serious first; equations:
+      the identified model; diagnostics: the whole diagnostics section of the JSON.
+    summary() and str(): the text report of `momentid identify`; to_dict(): the JSON of
+      `momentid identify --format json`.
+
+    IdentifyResult(text, json_text) reads a saved result of the program as well (text may be
+    ""); beside an optimally weighted estimate, that JSON lacks the least-squares errors'
+    degrees of freedom and correlation, so .ls has NaN intervals and off-diagonal covariances.
+    """
+
+    def __init__(self, text: str, json_text: str,
+                 least_squares_errors: Optional[dict] = None) -> None:
+        self.text = text
+        self.json = json_text
+        self._dict = _json.loads(json_text)
+        self.diagnostics = self._dict["diagnostics"]
+        main = {"parameters": self._dict["parameters"],
+                "error_dof": self.diagnostics["error_dof"],
+                "correlation": self.diagnostics["correlation"]}
+        super().__init__(main)
+        self.weighting = "gmm" if "least_squares" in self._dict else "ls"
+        if self.weighting == "gmm":
+            # Without the binding's numbers the least-squares errors have no known degrees of
+            # freedom and correlation: their intervals and covariances are NaN, not guessed.
+            errors = least_squares_errors or {"error_dof": None, "correlation": []}
+            self.ls = Fit({"parameters": self._dict["least_squares"], **errors})
+        else:
+            self.ls = Fit(main)
+        self.status = self.diagnostics["status"]
+        self.warnings = list(self.diagnostics["warnings"])
+        self.equations = list(self._dict.get("equations", []))
+        self.nobs = self.diagnostics["samples"]
+        self.jval = self.diagnostics["j_statistic"]
+
+    def jtest(self) -> Optional[tuple]:
+        """(J, p-value, degrees of freedom) of Hansen's test that the moment equations hold at
+        the estimate; None when it was not computed (least squares, or no more equations than
+        parameters)."""
+        if self.jval is None:
+            return None
+        return self.jval, self.diagnostics["j_pvalue"], self.diagnostics["j_dof"]
+
+    def summary(self) -> str:
+        """The text report: the estimates (both, when optimally weighted), the identified
+        model and the diagnostics."""
+        return self.text
+
+    def to_dict(self) -> dict:
+        return _json.loads(self.json)
+
+    def __str__(self) -> str:
+        return self.text
+
+    def __repr__(self) -> str:
+        values = ", ".join(f"{name}={value:.6g}±{self.std_errors[name]:.2g}"
+                           for name, value in self.estimates.items())
+        return f"<momentid.IdentifyResult {self.status}: {values}>"
+
+
+class CheckResult:
+    """What check() found: `channels` {name: statistics}, `identities` (with a model),
+    `warnings`, `to_dict()`, and str() the report of `momentid check`."""
+
+    def __init__(self, text: str, values: dict) -> None:
+        self.text = text
+        self._dict = values
+        self.channels = values["channels"]
+        self.identities = values["identities"]
+        self.warnings = values["warnings"]
+
+    def to_dict(self) -> dict:
+        return dict(self._dict)
+
+    def __str__(self) -> str:
+        return self.text
+
+    def __repr__(self) -> str:
+        return (f"<momentid.CheckResult {self._dict['rows']} rows, "
+                f"{len(self.warnings)} warnings>")
+
+
+class ValidateResult:
+    """What validate() found: `fit` {output: percent}, `rms` {output: error}, `warnings`,
+    `to_dict()` (the JSON of `momentid validate --format json`) and str() its report; and the
+    series compared, every run's rows one run after the other (numpy arrays):
+
+    t: the sample times; run: each row's run (None for a record of one run);
+    simulated: {state: the model's response}, every state; measured: {output: the record's
+      values}, the states the record has; inputs: {input: the record's values that drove it};
+    compared: True for the rows the fit and the errors are over (those past each run's skip).
+
+    The fit of output y is 100 (1 - |e| / |m - mean(m)|) over the compared rows, with
+    m = measured[y][compared] and e = m - simulated[y][compared].
+    """
+
+    def __init__(self, text: str, json_text: str, series: dict) -> None:
+        self.text = text
+        self.json = json_text
+        self._dict = _json.loads(json_text)
+        outputs = self._dict["outputs"]
+        self.fit = {name: o["fit_percent"] for name, o in outputs.items()}
+        self.rms = {name: o["rms"] for name, o in outputs.items()}
+        self.warnings = list(self._dict["warnings"])
+        self.t = series["t"]
+        self.run = series["run"]
+        self.simulated = dict(series["simulated"])
+        self.measured = dict(series["measured"])
+        self.inputs = dict(series["inputs"])
+        self.compared = series["compared"]
+
+    def to_dict(self) -> dict:
+        return _json.loads(self.json)
+
+    def __str__(self) -> str:
+        return self.text
+
+    def __repr__(self) -> str:
+        fits = ", ".join(f"{name} {value:.2f}%" for name, value in self.fit.items())
+        return f"<momentid.ValidateResult fit {fits}>"

@@ -1,0 +1,314 @@
+"""Tests of the results as values to compute with, against the `momentid` program.
+
+What they cover:
+- IdentifyResult's params, bse, cov_params(), conf_int(), tvalues, pvalues, summary(),
+  to_frame(), nobs, df_resid and J test equal the JSON (and text) of `momentid identify` on the
+  same file, for the least-squares and the optimally weighted estimate and its `.ls` beside it;
+- the keywords renamed in this release (rename=, columns= as a list, extrapolate="dt") still
+  work and warn; monomial lists are lists or strings alike;
+- validate's series: their lengths, the rows compared, and the fit and errors recomputed from
+  them equal those of `momentid validate`.
+"""
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+import momentid
+
+from conftest import DUFFING, INPUT, TRUE, read_csv
+
+# The arrays are the JSON's numbers, or computed from them by a few operations.
+REL = 1e-12
+
+
+def entry(value, error):
+    """A parameter's entry in the JSON."""
+    return {"estimate": value, "std_error": error, "ci95": None, "identifiable": True,
+            "fixed": False}
+
+
+def parameters_of(section):
+    """(names, estimates, errors, intervals) of a JSON parameters section."""
+    names = list(section)
+    values = np.array([section[n]["estimate"] for n in names])
+    errors = np.array([section[n]["std_error"] for n in names])
+    intervals = np.array([section[n]["ci95"] for n in names])
+    return names, values, errors, intervals
+
+
+def covariance_of(section, correlation):
+    """The covariance as the program's JSON gives it: errors and correlation."""
+    _, _, errors, _ = parameters_of(section)
+    return np.array(correlation, dtype=float) * np.outer(errors, errors)
+
+
+@pytest.fixture(scope="session")
+def gmm_json(cli, cli_csv):
+    return json.loads(cli("identify", DUFFING, cli_csv, "--weighting", "gmm", "--format", "json"))
+
+
+@pytest.fixture(scope="session")
+def gmm_result(duffing, cli_csv):
+    return momentid.identify(duffing, cli_csv, weighting="gmm")
+
+
+@pytest.fixture(scope="session")
+def ls_result(duffing, cli_csv):
+    return momentid.identify(duffing, cli_csv)
+
+
+# --- 1. the main estimate against the program's JSON ---------------------------------------------
+
+@pytest.mark.parametrize("weighting", ["ls", "gmm"])
+def test_params_bse_cov_and_intervals_equal_cli_json(request, weighting, cli_json, gmm_json):
+    result = request.getfixturevalue(f"{weighting}_result")
+    expected = cli_json if weighting == "ls" else gmm_json
+    names, values, errors, intervals = parameters_of(expected["parameters"])
+    assert result.weighting == weighting
+    assert result.param_names == names == ["c", "k", "eps"]
+    np.testing.assert_allclose(result.params, values, rtol=REL, atol=0)
+    np.testing.assert_allclose(result.bse, errors, rtol=REL, atol=0)
+    covariance = covariance_of(expected["parameters"], expected["diagnostics"]["correlation"])
+    np.testing.assert_allclose(result.cov_params(), covariance, rtol=REL, atol=0)
+    np.testing.assert_array_equal(result.cov_params(), result.cov_params().T)
+    # At alpha = 0.05, Student's t at the result's degrees of freedom: the program's interval.
+    np.testing.assert_allclose(result.conf_int(), intervals, rtol=REL, atol=0)
+    assert result.df_resid == expected["diagnostics"]["error_dof"]
+    assert result.nobs == expected["diagnostics"]["samples"] == 100000
+
+
+def test_arrays_are_read_only(ls_result):
+    with pytest.raises(ValueError):
+        ls_result.params[0] = 1.0
+    with pytest.raises(ValueError):
+        ls_result.bse[0] = 1.0
+
+
+def test_summary_is_the_cli_report(cli, cli_csv, gmm_result):
+    assert gmm_result.summary() == cli("identify", DUFFING, cli_csv, "--weighting", "gmm")
+    assert str(gmm_result) == gmm_result.summary()
+
+
+def test_least_squares_beside_the_optimally_weighted_estimate(gmm_result, gmm_json):
+    names, values, errors, intervals = parameters_of(gmm_json["least_squares"])
+    ls = gmm_result.ls
+    assert isinstance(ls, momentid.Fit) and ls.param_names == names
+    np.testing.assert_allclose(ls.params, values, rtol=REL, atol=0)
+    np.testing.assert_allclose(ls.bse, errors, rtol=REL, atol=0)
+    # The degrees of freedom the binding hands over are those of the program's intervals.
+    np.testing.assert_allclose(ls.conf_int(), intervals, rtol=REL, atol=0)
+    assert ls.df_resid != gmm_result.df_resid
+    # Its covariance: the squared errors on the diagonal, a correlation within [-1, 1].
+    covariance = ls.cov_params()
+    np.testing.assert_allclose(np.diag(covariance), errors ** 2, rtol=REL, atol=0)
+    correlation = covariance / np.outer(errors, errors)
+    assert np.all(np.abs(correlation) <= 1 + 1e-12)
+    assert np.all(np.linalg.eigvalsh(covariance) > 0)
+
+
+def test_least_squares_result_is_its_own_ls(ls_result):
+    np.testing.assert_array_equal(ls_result.ls.params, ls_result.params)
+    np.testing.assert_array_equal(ls_result.ls.cov_params(), ls_result.cov_params())
+    assert ls_result.jval is None and ls_result.jtest() is None
+
+
+def test_j_test_equals_cli_json(gmm_result, gmm_json):
+    diagnostics = gmm_json["diagnostics"]
+    assert gmm_result.jval == diagnostics["j_statistic"]
+    assert gmm_result.jtest() == (diagnostics["j_statistic"], diagnostics["j_pvalue"],
+                                  diagnostics["j_dof"])
+
+
+# --- 2. other levels, t values and p-values -----------------------------------------------------
+
+def test_conf_int_at_other_levels_is_student_t(gmm_result):
+    stats = pytest.importorskip("scipy.stats")
+    for alpha in (0.01, 0.1, 0.5):
+        t = stats.t.ppf(1 - alpha / 2, gmm_result.df_resid)
+        expected = np.column_stack([gmm_result.params - t * gmm_result.bse,
+                                    gmm_result.params + t * gmm_result.bse])
+        np.testing.assert_allclose(gmm_result.conf_int(alpha), expected, rtol=1e-10)
+    narrow, wide = gmm_result.conf_int(0.5), gmm_result.conf_int(0.01)
+    assert np.all(wide[:, 0] < narrow[:, 0]) and np.all(narrow[:, 1] < wide[:, 1])
+    with pytest.raises(momentid.UsageError, match="^alpha: expected a number between 0 and 1"):
+        gmm_result.conf_int(1.5)
+
+
+def test_tvalues_and_pvalues(ls_result):
+    stats = pytest.importorskip("scipy.stats")
+    t = ls_result.params / ls_result.bse
+    np.testing.assert_allclose(ls_result.tvalues, t, rtol=REL)
+    # Hundreds of errors from 0: p-values that underflow. A fit of few degrees of freedom with
+    # estimates near 0 shows the t law's tails.
+    assert np.all(ls_result.pvalues < 1e-100)
+    for dof in (12.5, 0.4):
+        fit = momentid.Fit({"parameters": {"a": entry(1.0, 0.8), "b": entry(-0.1, 0.05)},
+                            "error_dof": dof, "correlation": [[1, 0.3], [0.3, 1]]})
+        law = stats.t(max(1.0, dof))  # at least one degree of freedom, as the program's
+        np.testing.assert_allclose(fit.pvalues, 2 * law.sf([1.25, 2.0]), rtol=1e-10)
+        np.testing.assert_allclose(fit.conf_int(0.1)[:, 1] - fit.params,
+                                   law.ppf(0.95) * fit.bse, rtol=1e-10)
+        assert fit.cov_params()[0, 1] == pytest.approx(0.3 * 0.8 * 0.05, rel=REL)
+
+
+def test_fixed_parameter(duffing, cli, cli_csv):
+    result = momentid.identify(duffing, cli_csv, fix={"c": 0.5})
+    expected = json.loads(cli("identify", DUFFING, cli_csv, "--fix", "c=0.5", "--format", "json"))
+    np.testing.assert_allclose(result.params, parameters_of(expected["parameters"])[1], rtol=REL)
+    assert result.fixed == ["c"] and result.bse[0] == 0
+    covariance = result.cov_params()
+    assert np.all(covariance[0, :] == 0) and np.all(covariance[:, 0] == 0)
+    np.testing.assert_allclose(covariance[1:, 1:], covariance_of(
+        expected["parameters"], expected["diagnostics"]["correlation"])[1:, 1:], rtol=REL)
+    assert np.isnan(result.tvalues[0]) and np.isnan(result.pvalues[0])
+    np.testing.assert_array_equal(result.conf_int()[0], [0.5, 0.5])
+
+
+# --- 3. the table --------------------------------------------------------------------------------
+
+def test_to_frame(gmm_result, gmm_json):
+    pytest.importorskip("pandas")
+    frame = gmm_result.to_frame()
+    names, values, errors, intervals = parameters_of(gmm_json["parameters"])
+    assert list(frame.index) == names and frame.index.name == "parameter"
+    assert list(frame.columns) == ["estimate", "std_error", "t", "p_value", "ci_low", "ci_high",
+                                   "identifiable", "fixed"]
+    np.testing.assert_allclose(frame["estimate"], values, rtol=REL, atol=0)
+    np.testing.assert_allclose(frame["std_error"], errors, rtol=REL, atol=0)
+    np.testing.assert_allclose(frame[["ci_low", "ci_high"]], intervals, rtol=REL, atol=0)
+    assert frame["identifiable"].all() and not frame["fixed"].any()
+    np.testing.assert_array_equal(gmm_result.to_frame(alpha=0.01)[["ci_low", "ci_high"]],
+                                  gmm_result.conf_int(0.01))
+    assert list(gmm_result.ls.to_frame()["estimate"]) == list(gmm_result.ls.params)
+
+
+def test_old_attributes_still_work(ls_result, cli_json):
+    names, values, errors, intervals = parameters_of(cli_json["parameters"])
+    assert ls_result.estimates == dict(zip(names, values))
+    assert ls_result.std_errors == dict(zip(names, errors))
+    assert ls_result.ci95 == {n: tuple(i) for n, i in zip(names, intervals)}
+    assert ls_result.to_dict() == cli_json
+    assert ls_result.status == cli_json["diagnostics"]["status"]
+
+
+# --- 4. keywords: one name and direction, the old ones for one release --------------------------
+
+def test_columns_map_model_variables_to_data_columns(duffing, record):
+    renamed = {"disp": record["y"], "vel": record["v"], "x": record["x"], "t": record["t"]}
+    expected = momentid.identify(duffing, record, input_hold="zoh")
+    result = momentid.identify(duffing, renamed, columns={"y": "disp", "v": "vel"},
+                               input_hold="zoh")
+    np.testing.assert_array_equal(result.params, expected.params)
+    with pytest.warns(DeprecationWarning, match=r"identify\(\): rename= is deprecated.*columns="):
+        old = momentid.identify(duffing, renamed, rename={"y": "disp", "v": "vel"},
+                                input_hold="zoh")
+    np.testing.assert_array_equal(old.params, expected.params)
+    with pytest.warns(DeprecationWarning, match=r"check\(\): rename="):
+        momentid.check(renamed, rename={"y": "disp", "v": "vel"})
+    with pytest.warns(DeprecationWarning, match=r"validate\(\): rename="):
+        momentid.validate(duffing, renamed, TRUE, rename={"y": "disp", "v": "vel"})
+    with pytest.warns(DeprecationWarning), pytest.raises(momentid.UsageError,
+                                                         match="^rename and columns"):
+        momentid.identify(duffing, renamed, rename={"y": "disp"}, columns={"v": "vel"})
+
+
+def test_deprecation_points_at_the_caller(duffing, record):
+    with pytest.warns(DeprecationWarning) as caught:
+        momentid.check(record, rename={"y": "y"})
+    assert caught[0].filename == __file__
+
+
+def test_list_of_column_names_is_names(duffing, record):
+    names = ["t", "y", "v", "x"]
+    table = np.column_stack([record[n] for n in names])
+    expected = momentid.identify(duffing, table, names=names, input_hold="zoh")
+    with pytest.warns(DeprecationWarning, match=r"columns= with a list of column names.*names="):
+        old = momentid.identify(duffing, table, columns=names, input_hold="zoh")
+    np.testing.assert_array_equal(old.params, expected.params)
+
+
+def test_extrapolate_is_a_flag(duffing, cli_csv):
+    columns = read_csv(cli_csv)
+    expected = momentid.identify(duffing, columns, input_hold="sample", degree=3,
+                                 extrapolate=True)
+    assert "sampling_bias" in expected.diagnostics
+    with pytest.warns(DeprecationWarning, match=r'extrapolate="dt" is deprecated.*True'):
+        old = momentid.identify(duffing, columns, input_hold="sample", degree=3,
+                                extrapolate="dt")
+    np.testing.assert_array_equal(old.params, expected.params)
+    off = momentid.identify(duffing, columns, input_hold="sample", degree=3, extrapolate=False)
+    assert "sampling_bias" not in off.diagnostics
+
+
+def test_monomials_as_a_list_or_a_string(duffing, record, cli):
+    as_text = momentid.identify(duffing, record, multipliers="y, v, y^3, y*v^2")
+    as_list = momentid.identify(duffing, record, multipliers=["y", "v", "y^3", "y*v^2"])
+    np.testing.assert_array_equal(as_list.params, as_text.params)
+    assert duffing.derive(multipliers=["y", "y*v^2"]).text == \
+        cli("derive", DUFFING, "--multipliers", "y,y*v^2")
+    lagged = dict(lags=(3, 50), measured=["y", "x"])
+    assert duffing.derive(instruments=["y", "y^3"], **lagged).text == \
+        duffing.derive(instruments="y, y^3", **lagged).text
+
+
+# --- 5. validate's series -----------------------------------------------------------------------
+
+@pytest.fixture(scope="session")
+def two_runs(cli, tmp_path_factory):
+    """A record of two runs of 6000 samples, simulated by the program."""
+    path = tmp_path_factory.mktemp("validate") / "runs.csv"
+    cli("simulate", DUFFING, "--samples", 6000, "--runs", 2, "--seed", 7, "--input", INPUT,
+        "-o", path)
+    return path
+
+
+def test_validate_series_match_the_cli_report(duffing, cli, two_runs):
+    params = {"c": 0.55, "k": 3.9, "eps": 1.1}  # off, so that the errors are not only noise
+    expected = json.loads(cli("validate", DUFFING, two_runs, "--set", "c=0.55,k=3.9,eps=1.1",
+                              "--format", "json"))
+    result = momentid.validate(duffing, two_runs, params)
+    assert list(result.simulated) == ["y", "v"] and list(result.inputs) == ["x"]
+    assert list(result.measured) == list(expected["outputs"]) == ["y", "v"]
+    rows = 12000
+    for series in (result.t, result.run, result.compared, *result.simulated.values(),
+                   *result.measured.values(), *result.inputs.values()):
+        assert series.shape == (rows,)
+    np.testing.assert_array_equal(result.run, np.repeat([1.0, 2.0], 6000))
+    skip = expected["skip"]
+    within = np.concatenate([np.arange(6000)] * 2)
+    np.testing.assert_array_equal(result.compared, within >= np.repeat(skip, 6000))
+    for name, output in expected["outputs"].items():
+        measured = result.measured[name][result.compared]
+        error = measured - result.simulated[name][result.compared]
+        assert len(error) == output["samples"]
+        rms = math.sqrt(np.mean(error ** 2))
+        fit = 100 * (1 - np.linalg.norm(error) / np.linalg.norm(measured - measured.mean()))
+        assert rms == pytest.approx(output["rms"], rel=REL)
+        assert fit == pytest.approx(output["fit_percent"], rel=REL)
+
+
+def test_validate_series_are_the_record_and_the_replay(duffing, two_runs):
+    result = momentid.validate(duffing, two_runs, TRUE)
+    recorded = read_csv(two_runs)
+    np.testing.assert_array_equal(result.t, recorded["t"])
+    np.testing.assert_array_equal(result.measured["y"], recorded["y"])
+    np.testing.assert_array_equal(result.inputs["x"], recorded["x"])
+    replayed = momentid.simulate(duffing, TRUE, inputs=str(two_runs))
+    np.testing.assert_array_equal(result.simulated["y"], replayed["y"])
+    one_run = momentid.validate(duffing, {n: v[:6000] for n, v in recorded.items()
+                                          if n != "run"}, TRUE)
+    assert one_run.run is None and one_run.t.shape == (6000,)
+
+
+def test_result_from_the_programs_json_alone(cli, cli_csv, gmm_json, gmm_result):
+    """A saved `momentid identify --format json` is a result too; the least-squares errors'
+    degrees of freedom and correlation, which that JSON lacks, are NaN rather than guessed."""
+    text = cli("identify", DUFFING, cli_csv, "--weighting", "gmm")
+    saved = momentid.IdentifyResult(text, json.dumps(gmm_json))
+    np.testing.assert_array_equal(saved.conf_int(), gmm_result.conf_int())
+    np.testing.assert_array_equal(saved.cov_params(), gmm_result.cov_params())
+    np.testing.assert_array_equal(saved.ls.params, gmm_result.ls.params)
+    assert np.isnan(saved.ls.conf_int()).all() and np.isnan(saved.ls.df_resid)
