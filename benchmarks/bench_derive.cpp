@@ -3,8 +3,6 @@
 //
 // Usage: bench_derive [N=10] [repetitions=5]
 
-#include <algorithm>
-#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <string>
@@ -12,6 +10,7 @@
 
 #include "momentid/derive.hpp"
 #include "momentid/model.hpp"
+#include "timing.hpp"
 #include "usage.hpp"
 
 namespace {
@@ -51,18 +50,12 @@ struct Timing {
 };
 
 Timing time_derive(const std::string& text, int repetitions) {
-  std::vector<double> times;
   Timing out;
-  for (int r = 0; r < repetitions; ++r) {
-    const auto start = std::chrono::steady_clock::now();
+  out.seconds = median_seconds(repetitions, [&] {
     const momentid::Model model = momentid::parse_model(text, "chain.mom");
     out.system = momentid::derive(model, {.multipliers = {}, .degree = 2});
     out.system.model = nullptr;
-    times.push_back(
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
-  }
-  std::sort(times.begin(), times.end());
-  out.seconds = times[times.size() / 2];
+  });
   return out;
 }
 

@@ -7,7 +7,6 @@
 
 #include <sys/resource.h>
 
-#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -19,6 +18,7 @@
 #include "momentid/model.hpp"
 #include "momentid/simulate.hpp"
 #include "momentid/writer.hpp"
+#include "timing.hpp"
 #include "usage.hpp"
 
 namespace {
@@ -59,11 +59,10 @@ int one_pass(const std::string& path, bool lagged) {
   } else {
     options.degree = 3;
   }
-  const auto start = std::chrono::steady_clock::now();
+  const Stopwatch clock;
   const momentid::IdentifyResult result =
       momentid::identify(model, momentid::DataSource::file(path), options);
-  const double seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double seconds = clock.seconds();
   rusage usage{};
   getrusage(RUSAGE_SELF, &usage);
   std::printf("%.6f %ld %zu %zu\n", seconds, usage.ru_maxrss, result.data.rows,

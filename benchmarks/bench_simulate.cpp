@@ -3,8 +3,6 @@
 //
 // Usage: bench_simulate [steps=2000000] [repetitions=5]
 
-#include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -13,6 +11,7 @@
 
 #include "momentid/model.hpp"
 #include "momentid/simulate.hpp"
+#include "timing.hpp"
 #include "usage.hpp"
 
 namespace {
@@ -45,19 +44,6 @@ double hand_written(std::size_t steps, double dt, std::uint64_t seed) {
     v += dt / 6 * (k1v + 2 * k2v + 2 * k3v + k4v);
   }
   return checksum;
-}
-
-template <typename F>
-double median_seconds(int repetitions, F&& f) {
-  std::vector<double> times;
-  for (int r = 0; r < repetitions; ++r) {
-    const auto start = std::chrono::steady_clock::now();
-    f();
-    times.push_back(
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
-  }
-  std::sort(times.begin(), times.end());
-  return times[times.size() / 2];
 }
 
 }  // namespace

@@ -4,8 +4,6 @@
 //
 // Usage: bench_validate [rows=1000000] [directory=/tmp] [repetitions=3]
 
-#include <algorithm>
-#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <string>
@@ -14,24 +12,8 @@
 #include "momentid/model.hpp"
 #include "momentid/simulate.hpp"
 #include "momentid/validate.hpp"
+#include "timing.hpp"
 #include "usage.hpp"
-
-namespace {
-
-template <typename F>
-double median_seconds(int repetitions, F&& f) {
-  std::vector<double> times;
-  for (int r = 0; r < repetitions; ++r) {
-    const auto start = std::chrono::steady_clock::now();
-    f();
-    times.push_back(
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
-  }
-  std::sort(times.begin(), times.end());
-  return times[times.size() / 2];
-}
-
-}  // namespace
 
 int main(int argc, char** argv) {
   if (asked_for_help(argc, argv,

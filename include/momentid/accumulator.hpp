@@ -140,13 +140,24 @@ class MomentAccumulator {
   const std::vector<Stretch>& stretches() const { return stretches_; }
 
  private:
+  // Laying out the work, before the first row (accumulator_layout.cpp).
+  struct Layout;
+  void size_history();
+  std::vector<Layout> layouts() const;
+  void lay_out();
+  void group_blocks(const std::vector<Layout>& layouts);
+  void choose_singles();
+  // The per-row work (accumulator_rows.cpp).
+  void store_powers(const double* row);
   void push_rows(const double* rows, std::size_t count);
-  void finish_run();
   bool owns(std::size_t n) const;
   void close_interval(std::size_t n);
+  void close_stretch();
   void add_plain_products(const double* history);
   void plain_products(double* out, const double* history) const;
   void add_plain(const std::vector<double>& row, double weight);
+  // Runs and stretches (accumulator.cpp).
+  void finish_run();
   void compact();
   void flush();
 

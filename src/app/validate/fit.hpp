@@ -1,0 +1,30 @@
+#pragma once
+// How well the simulation reproduces one measured state: its error over the compared rows and
+// the statistics of the fit.
+
+#include <cstddef>
+#include <vector>
+
+#include "momentid/validate.hpp"
+
+namespace momentid {
+
+// A measured state and its simulation over the compared rows (after each run's skip), run by
+// run.
+struct ComparedRows {
+  std::vector<std::vector<double>> error;     // measured - simulated
+  std::vector<std::vector<double>> measured;  // the state's column
+};
+
+// The compared rows of state `state` (which the record has) in every run after `skip` rows.
+ComparedRows compared_rows(const Replay& replay, std::size_t state,
+                           const std::vector<std::size_t>& skip);
+
+// The fit of state `state` over `rows`: its samples, rms errors and fit %, without the
+// correlation checks (residuals.hpp).
+OutputFit output_fit(const Model& model, std::size_t state, const ComparedRows& rows);
+
+// The warnings about a fit: worse than the data's mean, or an error that grows along the record.
+void add_fit_warnings(const OutputFit& fit, std::vector<std::string>& warnings);
+
+}  // namespace momentid

@@ -1,0 +1,123 @@
+#include "app/validate/record.hpp"
+
+#include <algorithm>
+
+#include "app/variables.hpp"
+#include "common/decimal.hpp"
+
+namespace momentid {
+
+int Record::column_of(std::size_t v) const {
+  const auto it = std::find(variables.begin(), variables.end(), v);
+  return it == variables.end() ? -1 : static_cast<int>(it - variables.begin());
+}
+
+SourceLocation file_start(const std::string& name) { return {name, 1, 1, ""}; }
+
+Record read_record(const Model& model, const DataSource& source, const ReplayOptions& options) {
+  const std::vector<bool> present =
+      variables_present(model, source, options.columns, options.layout);
+  const std::size_t states = model.states().size();
+  Record record;
+  record.name = source.name();
+  const std::vector<std::string> header = data_columns(source, options.columns, options.layout);
+  record.has_time = std::find(header.begin(), header.end(), "t") != header.end();
+  record.has_run = std::find(header.begin(), header.end(), "run") != header.end();
+  // Every input is requested, so that one the data lack is reported as a missing column.
+  std::vector<std::string> names;
+  if (record.has_time) names.push_back("t");
+  for (std::size_t v = 0; v < present.size(); ++v) {
+    if (v >= states || present[v]) {
+      record.variables.push_back(v);
+      const std::string& name = model.variables()[v];
+      names.push_back(name);
+      const auto renamed = options.columns.find(name);
+      record.columns.push_back(renamed == options.columns.end() ? name : renamed->second);
+    }
+  }
+  const auto reader = source.open(
+      {.names = names, .rename = options.columns, .min_rows = 2, .layout = options.layout});
+  const std::size_t first = record.has_time ? 1 : 0;
+  const std::size_t width = names.size();
+  DataBlock block;
+  while (reader->next(block, 65536)) {
+    if (block.run_starts || record.runs.empty()) {
+      record.runs.emplace_back();
+      record.runs.back().number = block.run;
+      record.runs.back().columns.resize(record.variables.size());
+    }
+    RecordRun& run = record.runs.back();
+    for (std::size_t r = 0; r < block.rows; ++r) {
+      const double* row = block.values.data() + r * width;
+      if (record.has_time) run.time.push_back(row[0]);
+      for (std::size_t c = 0; c < record.variables.size(); ++c) {
+        run.columns[c].push_back(row[first + c]);
+      }
+    }
+  }
+  record.metadata = reader->metadata();
+  record.missing = reader->missing();
+  const std::optional<double> dt = options.dt ? options.dt : reader->time_step();
+  if (!dt) {
+    throw DataError(file_start(record.name),
+                    "the data give no sample interval: add a t column or a '# momentid: dt=...' "
+                    "line, or give --dt");
+  }
+  record.dt = *dt;
+  return record;
+}
+
+std::vector<std::vector<double>> run_inputs(const Model& model, const Record& record,
+                                            const RecordRun& run) {
+  std::vector<std::vector<double>> out;
+  const std::size_t states = model.states().size();
+  for (std::size_t i = 0; i < model.inputs().size(); ++i) {
+    out.push_back(run.columns[static_cast<std::size_t>(record.column_of(states + i))]);
+  }
+  return out;
+}
+
+double run_start(const RecordRun& run) { return run.time.empty() ? 0.0 : run.time.front(); }
+
+std::size_t run_label(const Record& record, std::size_t r) {
+  return record.has_run ? static_cast<std::size_t>(record.runs[r].number) : r + 1;
+}
+
+void write_replay(const Model& model, const Replay& replay, const std::string& path,
+                  DataWriter::Format format) {
+  const Record& record = replay.record;
+  std::vector<std::string> columns;
+  if (record.has_time) columns.push_back("t");
+  columns.insert(columns.end(), record.columns.begin(), record.columns.end());
+  if (record.has_run) columns.push_back("run");
+  DataMetadata metadata;
+  DataMetadata::Line line{{"model", model.name()},
+                          {"dt", shortest_decimal(record.dt)},
+                          {"input-hold", record.metadata.get("input-hold").value_or("sample")},
+                          {"input-file", record.name}};
+  for (std::size_t i = 0; i < model.inputs().size(); ++i) {
+    line.emplace_back("interpolation." + model.inputs()[i].name,
+                      interpolation_name(replay.interpolation[i]));
+  }
+  line.emplace_back("substeps", std::to_string(replay.substeps));
+  metadata.add_line(std::move(line));
+  DataWriter out(path, format, metadata, columns);
+  const std::size_t states = model.states().size();
+  std::vector<double> row(columns.size());
+  for (std::size_t r = 0; r < record.runs.size(); ++r) {
+    const RecordRun& run = record.runs[r];
+    for (std::size_t n = 0; n < run.rows(); ++n) {
+      std::size_t k = 0;
+      if (record.has_time) row[k++] = run.time[n];
+      for (std::size_t c = 0; c < record.variables.size(); ++c) {
+        const std::size_t v = record.variables[c];
+        row[k++] = v < states ? replay.simulated[r][v][n] : run.columns[c][n];
+      }
+      if (record.has_run) row[k] = static_cast<double>(run.number);
+      out.row(row.data());
+    }
+  }
+  out.commit();
+}
+
+}  // namespace momentid

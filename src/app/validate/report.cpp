@@ -1,0 +1,199 @@
+// The text and JSON reports of validate.
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+
+#include "app/validate/record.hpp"
+#include "common/decimal.hpp"
+#include "common/json.hpp"
+#include "momentid/validate.hpp"
+
+namespace momentid {
+namespace {
+
+std::string number(double x, const char* format = "%.6g") {
+  if (std::isnan(x)) return "n/a";
+  char text[64];
+  std::snprintf(text, sizeof text, format, x);
+  return text;
+}
+
+std::string parameters_text(const ValidateResult& r) {
+  std::string out;
+  for (std::size_t p = 0; p < r.parameters.size(); ++p) {
+    out += (p ? ", " : "") + r.model->parameters()[p].name + "=" +
+           shortest_decimal(r.parameters[p].to_double());
+  }
+  return out;
+}
+
+std::string skip_text(const ValidateResult& r, bool autonomous) {
+  const auto [low, high] = std::minmax_element(r.skip.begin(), r.skip.end());
+  std::string rows =
+      *low == *high ? std::to_string(*low) : std::to_string(*low) + " to " + std::to_string(*high);
+  std::string out = "the first " + rows + " rows of each run";
+  if (r.skip_chosen && autonomous) {
+    out +=
+        " (the model has no input: its response is that to the initial state, which is "
+        "compared whole)";
+  } else if (r.skip_chosen) {
+    out +=
+        " (until a perturbation of the initial state by 10% of each state's spread fell "
+        "below 1% of its size)";
+  }
+  return out;
+}
+
+std::string check_text(const CorrelationCheck& c) {
+  const int last = c.first_lag + static_cast<int>(c.values.size()) - 1;
+  std::string out = c.with.empty() ? "autocorrelation of the error"
+                                   : "cross-correlation of the error with " + c.with;
+  out += ", lags " + std::to_string(c.first_lag) + ".." + std::to_string(last) + ": " +
+         std::to_string(c.outside()) + " of " + std::to_string(c.values.size()) + " outside +-" +
+         number(c.band, "%.3g");
+  if (c.outside() == 0) return out;
+  std::size_t worst = 0;
+  for (std::size_t k = 0; k < c.values.size(); ++k) {
+    if (std::abs(c.values[k]) > std::abs(c.values[worst])) worst = k;
+  }
+  out += " (largest " + number(c.values[worst], "%.3g") + " at lag " +
+         std::to_string(c.first_lag + static_cast<int>(worst)) + ")  <- " +
+         (c.with.empty() ? "not white: the model leaves structure in the error"
+                         : "the error depends on the input: the model misses part of its effect");
+  return out;
+}
+
+}  // namespace
+
+std::string format_text(const ValidateResult& r) {
+  const Replay& replay = r.replay;
+  const Record& record = replay.record;
+  const Model& model = *r.model;
+  std::size_t rows = 0;
+  for (const RecordRun& run : record.runs) rows += run.rows();
+  std::string out = "validate " + model.name() + " on " + record.name + ": " +
+                    std::to_string(rows) + " rows in " + std::to_string(record.runs.size()) +
+                    (record.runs.size() == 1 ? " run" : " runs") +
+                    ", dt = " + number(record.dt, "%g") + "\n";
+  out += "parameters (" + r.parameters_from + "): " + parameters_text(r) + "\n";
+  for (std::size_t i = 0; i < model.inputs().size(); ++i) {
+    out += "input " + model.inputs()[i].name + ": " + interpolation_name(replay.interpolation[i]) +
+           " between samples\n";
+  }
+  const bool converged =
+      replay.substeps_chosen && replay.substep_change < ReplayOptions::kSubstepTolerance;
+  out += "integration: " + std::to_string(replay.substeps) + " Runge-Kutta step" +
+         (replay.substeps == 1 ? "" : "s") + " per sample" +
+         (converged ? " (halving the step changes the simulation by less than 1e-6 of each "
+                      "state's spread)"
+                    : "") +
+         "\n";
+  out += "initial state (run " + std::to_string(run_label(record, 0)) + "): ";
+  for (std::size_t j = 0; j < model.states().size(); ++j) {
+    out += (j ? ", " : "") + model.states()[j].name + " = " + number(replay.initial[0][j], "%.6g") +
+           " from " + replay.initial_how[j];
+  }
+  out += "\nskipped: " + skip_text(r, model.inputs().empty()) + "\n\n";
+  char line[256];
+  std::snprintf(line, sizeof line, "%-10s %10s %12s %9s %14s %12s\n", "output", "samples",
+                "rms error", "fit %", "rms first 10%", "rms rest");
+  out += line;
+  for (const OutputFit& f : r.outputs) {
+    std::snprintf(line, sizeof line, "%-10s %10zu %12.5g %9s %14.5g %12s\n", f.name.c_str(),
+                  f.samples, f.rms, number(f.fit, "%.3f").c_str(), f.rms_start,
+                  number(f.rms_rest, "%.5g").c_str());
+    out += line;
+  }
+  out += "\ncorrelation checks (99% bands):\n";
+  for (const OutputFit& f : r.outputs) {
+    if (!f.autocorrelation) {
+      out += "  " + f.name + ": the error is zero throughout: nothing to check\n";
+      continue;
+    }
+    out += "  " + f.name + ": " + check_text(*f.autocorrelation) + "\n";
+    for (const CorrelationCheck& c : f.cross) out += "  " + f.name + ": " + check_text(c) + "\n";
+  }
+  out += "\n";
+  if (r.warnings.empty()) out += "warnings: none\n";
+  for (const std::string& w : r.warnings) out += "warning: " + w + "\n";
+  return out;
+}
+
+namespace {
+
+std::string json_array(const std::vector<double>& values) {
+  std::string out = "[";
+  for (std::size_t k = 0; k < values.size(); ++k) out += (k ? ", " : "") + json_number(values[k]);
+  return out + "]";
+}
+
+std::string json_check(const CorrelationCheck& c) {
+  std::vector<double> lags;
+  for (std::size_t k = 0; k < c.values.size(); ++k) {
+    lags.push_back(c.first_lag + static_cast<int>(k));
+  }
+  return "{\"lags\": " + json_array(lags) + ", \"values\": " + json_array(c.values) +
+         ", \"band99\": " + json_number(c.band) + ", \"outside\": " + std::to_string(c.outside()) +
+         "}";
+}
+
+}  // namespace
+
+std::string format_json(const ValidateResult& r) {
+  const Replay& replay = r.replay;
+  const Record& record = replay.record;
+  const Model& model = *r.model;
+  std::ostringstream out;
+  std::size_t rows = 0;
+  for (const RecordRun& run : record.runs) rows += run.rows();
+  out << "{\n  \"model\": " << json_string(model.name())
+      << ",\n  \"data\": " << json_string(record.name) << ",\n  \"rows\": " << rows
+      << ",\n  \"runs\": " << record.runs.size() << ",\n  \"dt\": " << json_number(record.dt)
+      << ",\n  \"parameters\": {";
+  for (std::size_t p = 0; p < r.parameters.size(); ++p) {
+    out << (p ? ", " : "") << json_string(model.parameters()[p].name) << ": "
+        << json_number(r.parameters[p].to_double());
+  }
+  out << "},\n  \"parameters_from\": " << json_string(r.parameters_from)
+      << ",\n  \"interpolation\": {";
+  for (std::size_t i = 0; i < model.inputs().size(); ++i) {
+    out << (i ? ", " : "") << json_string(model.inputs()[i].name) << ": "
+        << json_string(interpolation_name(replay.interpolation[i]));
+  }
+  out << "},\n  \"substeps\": " << replay.substeps << ",\n  \"initial_state\": [";
+  for (std::size_t r0 = 0; r0 < record.runs.size(); ++r0) {
+    out << (r0 ? ", " : "") << "{";
+    for (std::size_t j = 0; j < model.states().size(); ++j) {
+      out << (j ? ", " : "") << json_string(model.states()[j].name) << ": "
+          << json_number(replay.initial[r0][j]);
+    }
+    out << "}";
+  }
+  out << "],\n  \"initial_how\": {";
+  for (std::size_t j = 0; j < model.states().size(); ++j) {
+    out << (j ? ", " : "") << json_string(model.states()[j].name) << ": "
+        << json_string(replay.initial_how[j]);
+  }
+  out << "},\n  \"skip\": [";
+  for (std::size_t k = 0; k < r.skip.size(); ++k) out << (k ? ", " : "") << r.skip[k];
+  out << "],\n  \"skip_chosen\": " << (r.skip_chosen ? "true" : "false") << ",\n  \"outputs\": {";
+  for (std::size_t k = 0; k < r.outputs.size(); ++k) {
+    const OutputFit& f = r.outputs[k];
+    out << (k ? "," : "") << "\n    " << json_string(f.name) << ": {\"samples\": " << f.samples
+        << ", \"rms\": " << json_number(f.rms) << ", \"fit_percent\": " << json_number(f.fit)
+        << ", \"rms_first_10pct\": " << json_number(f.rms_start)
+        << ", \"rms_rest\": " << json_number(f.rms_rest) << ",\n      \"autocorrelation\": "
+        << (f.autocorrelation ? json_check(*f.autocorrelation) : "null")
+        << ",\n      \"cross_correlation\": {";
+    for (std::size_t c = 0; c < f.cross.size(); ++c) {
+      out << (c ? ", " : "") << json_string(f.cross[c].with) << ": " << json_check(f.cross[c]);
+    }
+    out << "}}";
+  }
+  out << "\n  },\n  \"warnings\": " << json_strings(r.warnings) << "\n}\n";
+  return out.str();
+}
+
+}  // namespace momentid

@@ -1,0 +1,144 @@
+#include "moments/lag_sums.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+
+namespace momentid {
+
+std::optional<double> ChannelStatistics::noise_fraction() const {
+  if (!noise_variance || !(variance > 0)) return std::nullopt;
+  return std::sqrt(std::max(0.0, *noise_variance) / variance);
+}
+
+LagSums::LagSums(std::size_t channels, std::size_t lags)
+    : channels_(channels),
+      lags_(lags),
+      history_(lags * channels, 0.0),
+      sum_(channels, 0.0),
+      sum_squares_(channels, 0.0),
+      products_(lags * channels, 0.0),
+      lead_(lags * channels, 0.0),
+      lagged_(lags * channels, 0.0),
+      pairs_(lags, 0) {}
+
+void LagSums::add_history(const double* rows, std::size_t count) {
+  for (std::size_t r = 0; r < count; ++r) remember(rows + r * channels_);
+}
+
+void LagSums::add(const double* rows, std::size_t count) {
+  for (std::size_t r = 0; r < count; ++r) {
+    const double* const row = rows + r * channels_;
+    if (count_ == 0) offset_.assign(row, row + channels_);
+    for (std::size_t c = 0; c < channels_; ++c) {
+      const double x = row[c] - offset_[c];
+      sum_[c] += x;
+      sum_squares_[c] += x * x;
+    }
+    // history_ holds the previous `lags_` rows, newest first at `head_`.
+    for (std::size_t l = 0, slot = head_; l < std::min(filled_, lags_); ++l) {
+      const double* past = &history_[slot * channels_];
+      if (++slot == lags_) slot = 0;
+      for (std::size_t c = 0; c < channels_; ++c) {
+        const double x = row[c] - offset_[c], y = past[c] - offset_[c];
+        products_[l * channels_ + c] += x * y;
+        lead_[l * channels_ + c] += x;
+        lagged_[l * channels_ + c] += y;
+      }
+      ++pairs_[l];
+    }
+    remember(row);
+    ++count_;
+  }
+}
+
+void LagSums::save(ByteWriter& out) const {
+  out.u64(count_);
+  for (const auto* v : {&offset_, &sum_, &sum_squares_, &products_, &lead_, &lagged_}) {
+    out.u64(v->size());
+    for (double x : *v) out.f64(x);
+  }
+  for (std::size_t p : pairs_) out.u64(p);
+}
+
+LagSums LagSums::load(ByteReader& in, std::size_t channels, std::size_t lags) {
+  LagSums out(channels, lags);
+  out.count_ = in.u64("the row count of the channel sums");
+  for (auto* v :
+       {&out.offset_, &out.sum_, &out.sum_squares_, &out.products_, &out.lead_, &out.lagged_}) {
+    const std::uint64_t n = in.u64("a count of channel sums");
+    if (n != v->size() && !(v == &out.offset_ && n == channels)) {
+      throw Error("the result of another process does not match this one's channels");
+    }
+    v->resize(n);
+    for (double& x : *v) x = in.f64("a channel sum");
+  }
+  for (std::size_t& p : out.pairs_) p = in.u64("a count of pairs");
+  return out;
+}
+
+void LagSums::merge(const LagSums& other) {
+  if (other.count_ == 0) return;
+  if (count_ == 0) {
+    *this = other;
+    return;
+  }
+  for (std::size_t c = 0; c < channels_; ++c) {
+    // other's values less this offset: x - o = (x - o_other) - d.
+    const double d = offset_[c] - other.offset_[c];
+    const auto n = static_cast<double>(other.count_);
+    sum_[c] += other.sum_[c] - n * d;
+    sum_squares_[c] += other.sum_squares_[c] - 2 * d * other.sum_[c] + n * d * d;
+    for (std::size_t l = 0; l < lags_; ++l) {
+      const std::size_t i = l * channels_ + c;
+      const auto p = static_cast<double>(other.pairs_[l]);
+      products_[i] += other.products_[i] - d * (other.lead_[i] + other.lagged_[i]) + p * d * d;
+      lead_[i] += other.lead_[i] - p * d;
+      lagged_[i] += other.lagged_[i] - p * d;
+    }
+  }
+  for (std::size_t l = 0; l < lags_; ++l) pairs_[l] += other.pairs_[l];
+  count_ += other.count_;
+}
+
+ChannelStatistics LagSums::statistics(std::size_t c) const {
+  ChannelStatistics s;
+  const double n = static_cast<double>(count_);
+  const double shifted_mean = sum_[c] / n;
+  s.mean = offset_[c] + shifted_mean;
+  s.variance = sum_squares_[c] / n - shifted_mean * shifted_mean;
+  s.correlation_time = lags_ + 1;
+  // The lag-l covariance about the record's mean over the pairs that lag has. The values
+  // paired are not all the values (a run's first l rows lead no pair, its last l are lagged by
+  // none), so the pairs' own sums enter: on short runs their means are not the record's.
+  for (std::size_t l = 0; l < lags_; ++l) {
+    const std::size_t i = l * channels_ + c;
+    const auto p = static_cast<double>(pairs_[l]);
+    const double rho = pairs_[l] > 0 && s.variance > 0
+                           ? ((products_[i] - shifted_mean * (lead_[i] + lagged_[i])) / p +
+                              shifted_mean * shifted_mean) /
+                                 s.variance
+                           : std::nan("");
+    s.autocorrelation.push_back(rho);
+    if (s.correlation_time == lags_ + 1 && rho < std::exp(-1.0)) s.correlation_time = l + 1;
+  }
+  // White noise adds to the autocovariance at lag 0 only: the excess of R(0) over the
+  // extrapolation a + b s^2 + c |s|^3 + d s^4 through R(1) .. R(4) estimates its variance.
+  // (The |s|^3 term is that of a state whose derivative jumps with a held input.)
+  if (lags_ >= 4 && s.variance > 0) {
+    const auto& rho = s.autocorrelation;
+    const double smooth = 1.92 * rho[0] - 1.44 * rho[1] + 0.64 * rho[2] - 0.12 * rho[3];
+    s.noise_variance = s.variance * (1 - smooth);
+  }
+  return s;
+}
+
+void LagSums::remember(const double* row) {
+  if (lags_ > 0) {
+    head_ = head_ == 0 ? lags_ - 1 : head_ - 1;
+    std::copy(row, row + channels_, &history_[head_ * channels_]);
+  }
+  ++filled_;
+}
+
+}  // namespace momentid

@@ -1,0 +1,192 @@
+#include "moments/shard.hpp"
+
+#include <cstddef>
+#include <deque>
+
+#include "moments/blocks.hpp"
+
+namespace momentid {
+namespace {
+
+// Pairs input row n with state row n + shift within a run (`--input-shift`), for data whose
+// input and state channels are not aligned in time. Rows without a partner are dropped.
+class InputShift {
+ public:
+  InputShift(std::size_t states, std::size_t inputs, long shift)
+      : states_(states), inputs_(inputs), shift_(shift) {}
+
+  void start_run() { past_.clear(); }
+
+  // The shifted rows for `count` new rows (states, then inputs).
+  const std::vector<double>& apply(const double* rows, std::size_t count) {
+    const std::size_t width = states_ + inputs_;
+    const std::size_t lag = static_cast<std::size_t>(shift_ < 0 ? -shift_ : shift_);
+    out_.clear();
+    for (std::size_t r = 0; r < count; ++r) {
+      const double* row = rows + r * width;
+      if (past_.size() == lag) {
+        // shift > 0: the states of this row with the inputs of `lag` rows ago; shift < 0: the
+        // states of `lag` rows ago with the inputs of this row.
+        const double* early = lag == 0 ? row : past_.front().data();
+        const double* states = shift_ >= 0 ? row : early;
+        const double* inputs = shift_ >= 0 ? early : row;
+        out_.insert(out_.end(), states, states + states_);
+        out_.insert(out_.end(), inputs + states_, inputs + width);
+      }
+      if (lag > 0) {
+        if (past_.size() == lag) past_.pop_front();
+        past_.emplace_back(row, row + width);
+      }
+    }
+    return out_;
+  }
+
+ private:
+  std::size_t states_, inputs_;
+  long shift_;
+  std::deque<std::vector<double>> past_;
+  std::vector<double> out_;
+};
+
+// Every `stride`-th row of each run from row `phase` on (DataOptions::stride).
+class Decimate {
+ public:
+  Decimate(std::size_t width, std::size_t stride, std::size_t phase)
+      : width_(width), stride_(stride), phase_(phase) {}
+
+  void start_run() { row_ = 0; }
+
+  const std::vector<double>& apply(const double* rows, std::size_t count) {
+    out_.clear();
+    for (std::size_t r = 0; r < count; ++r, ++row_) {
+      if (row_ >= phase_ && (row_ - phase_) % stride_ == 0) {
+        out_.insert(out_.end(), rows + r * width_, rows + (r + 1) * width_);
+      }
+    }
+    return out_;
+  }
+
+ private:
+  std::size_t width_, stride_, phase_, row_ = 0;
+  std::vector<double> out_;
+};
+
+// One shard's pass over its blocks.
+class ShardPass {
+ public:
+  explicit ShardPass(const PassSetup& setup)
+      : options_(*setup.options),
+        channels_(setup.states + setup.inputs),
+        out_{MomentAccumulator(setup.moments, setup.states, setup.inputs, setup.hold, setup.batches,
+                               options_.held_rule),
+             LagSums(channels_, options_.lags)},
+        shift_(setup.states, setup.inputs, options_.input_shift),
+        decimate_(channels_, options_.stride, options_.phase),
+        history_values_(out_.moments.max_lag() * channels_) {}
+
+  // Takes the next block; true if it holds rows of the shard's own.
+  bool take(DataBlock& block) {
+    subtract_offsets(block);
+    switch (block.zone) {
+      case RowZone::kBefore:
+        before(block);
+        return false;
+      case RowZone::kAfter:
+        if (owned_) out_.moments.add_lookahead(block.values.data(), block.rows);
+        return false;
+      case RowZone::kOwned:
+        break;
+    }
+    own(block);
+    return true;
+  }
+
+  ShardState finish(bool collapse) {
+    out_.moments.finish();
+    if (collapse) out_.moments.collapse();
+    return std::move(out_);
+  }
+
+ private:
+  void subtract_offsets(DataBlock& block) const {
+    if (options_.offsets.empty()) return;
+    double* values = block.values.data();
+    for (std::size_t r = 0; r < block.rows; ++r) {
+      for (std::size_t c = 0; c < channels_; ++c) values[r * channels_ + c] -= options_.offsets[c];
+    }
+  }
+
+  // Rows of the run before the shard: history for the lagged factors and the lagged pairs.
+  void before(const DataBlock& block) {
+    const double* const values = block.values.data();
+    if (block.run_starts) {
+      history_.clear();
+      out_.lags.start_run();
+    }
+    history_.insert(history_.end(), values, values + block.rows * channels_);
+    if (history_.size() > history_values_) {
+      history_.erase(history_.begin(),
+                     history_.end() - static_cast<std::ptrdiff_t>(history_values_));
+    }
+    out_.lags.add_history(values, block.rows);
+  }
+
+  void own(const DataBlock& block) {
+    const double* const values = block.values.data();
+    if (block.run_starts) {
+      shift_.start_run();
+      decimate_.start_run();
+      out_.moments.start_run();
+      out_.lags.start_run();
+      ++out_.runs;
+    } else if (!owned_) {
+      out_.moments.continue_run();
+      if (!history_.empty()) out_.moments.add_history(history_.data(), history_.size() / channels_);
+    }
+    owned_ = true;
+    const double* rows = values;
+    std::size_t count = block.rows;
+    if (options_.input_shift != 0) {
+      const std::vector<double>& shifted = shift_.apply(rows, count);
+      rows = shifted.data();
+      count = shifted.size() / channels_;
+    }
+    if (options_.stride > 1) {
+      const std::vector<double>& kept = decimate_.apply(rows, count);
+      rows = kept.data();
+      count = kept.size() / channels_;
+    }
+    out_.moments.add(rows, count);
+    out_.lags.add(values, block.rows);
+    out_.rows += block.rows;
+  }
+
+  const DataOptions& options_;
+  std::size_t channels_;
+  ShardState out_;
+  InputShift shift_;
+  Decimate decimate_;
+  std::vector<double> history_;  // of the current run, before the shard
+  std::size_t history_values_;
+  bool owned_ = false;
+};
+
+}  // namespace
+
+ShardState read_shard(DataReader& reader, bool whole, const PassSetup& setup, bool pipelined,
+                      std::atomic<std::size_t>& rows_done, std::atomic<double>& fraction) {
+  ShardPass pass(setup);
+  for_each_block(reader, pipelined, [&](DataBlock& block) {
+    if (!pass.take(block)) return;
+    rows_done += block.rows;
+    // A part of a file cannot tell how far it is; a whole file can.
+    if (setup.options->control.progress && whole) {
+      fraction = reader.fraction_read().value_or(0);
+    }
+  });
+  ShardState out = pass.finish(setup.collapse);
+  out.summary = {reader.steps(), reader.time_step(), reader.missing()};
+  return out;
+}
+
+}  // namespace momentid
