@@ -21,11 +21,8 @@ options, spelled as keyword arguments, give the same numbers.
 
 from __future__ import annotations
 
-import functools as _functools
-import inspect as _inspect
 import json as _json
 import os as _os
-import re as _re
 import warnings as _warnings
 from typing import Any, Mapping, Optional, Sequence, Union
 
@@ -59,39 +56,12 @@ class DataError(Error, ValueError):
 
 
 class UsageError(Error, ValueError):
-    """An option out of range, or naming something the model or data do not have."""
+    """An option out of range, or naming something the model or data do not have. The message
+    starts with the keyword argument it concerns: `fix: 'k2' is not a parameter of model ...`."""
 
 
 class MomentidWarning(UserWarning):
     """A warning of the library's, such as a simulation step too coarse for the dynamics."""
-
-
-# The program's options that this module spells differently; the others are the option with
-# `_` for `-` (--dt-from: dt_from).
-_KEYWORD_OF_OPTION = {"columns": "rename", "input": "inputs", "set": "params"}
-_OPTION = _re.compile(r"(?<![A-Za-z0-9-])--([a-z0-9][a-z0-9-]*)")
-
-
-def _keywords_in_errors(function):
-    """The library's messages name the program's options (`--dt-from: ...`); an error raised
-    through `function` names `function`'s keyword arguments instead (`dt_from: ...`). Options
-    it has no keyword for are left as they are."""
-    keywords = set(_inspect.signature(function).parameters)
-
-    def keyword(match):
-        option = match.group(1)
-        name = _KEYWORD_OF_OPTION.get(option, option.replace("-", "_"))
-        return name if name in keywords else match.group(0)
-
-    @_functools.wraps(function)
-    def wrapper(*args, **kwargs):
-        try:
-            return function(*args, **kwargs)
-        except Error as error:
-            error.args = (_OPTION.sub(keyword, str(error)), *error.args[1:])
-            raise
-
-    return wrapper
 
 
 from . import _momentid  # noqa: E402  (the exceptions above must exist before it is used)
@@ -139,7 +109,6 @@ class Model:
     fixed = property(lambda self: list(self._model.fixed),
                      doc="Parameters declared `fixed` in the model (known, not estimated).")
 
-    @_keywords_in_errors
     def derive(self, multipliers: Optional[str] = None, degree: Optional[int] = None,
                lags: Optional[tuple[int, int]] = None, instruments: Optional[str] = None,
                measured: Optional[Sequence[str]] = None) -> "Equations":
@@ -281,7 +250,6 @@ class ValidateResult:
         return f"<momentid.ValidateResult fit {fits}>"
 
 
-@_keywords_in_errors
 def identify(model: Union[Model, PathLike], data: Any, *, columns: Optional[Sequence[str]] = None,
              dt: Optional[float] = None, multipliers: Optional[str] = None,
              degree: Optional[int] = None, batches: Optional[int] = None,
@@ -336,7 +304,6 @@ def identify(model: Union[Model, PathLike], data: Any, *, columns: Optional[Sequ
     return IdentifyResult(text, json_text)
 
 
-@_keywords_in_errors
 def check(data: Any, model: Union[None, Model, PathLike] = None, *,
           columns: Optional[Sequence[str]] = None, dt: Optional[float] = None,
           lags: Optional[int] = None, input_hold: Optional[str] = None,
@@ -358,7 +325,6 @@ def check(data: Any, model: Union[None, Model, PathLike] = None, *,
     return CheckResult(text, values)
 
 
-@_keywords_in_errors
 def simulate(model: Union[Model, PathLike], params: Optional[Mapping[str, float]] = None, *,
              samples: int = 10000, dt: Optional[float] = None, inputs: Any = None,
              seed: int = 1, runs: int = 1, burn_in: int = 10000,
@@ -403,7 +369,6 @@ def simulate(model: Union[Model, PathLike], params: Optional[Mapping[str, float]
     return None if columns is None else Record(columns, metadata)
 
 
-@_keywords_in_errors
 def validate(model: Union[Model, PathLike], data: Any,
              params: Union[None, Mapping[str, float], IdentifyResult] = None, *,
              columns: Optional[Sequence[str]] = None, dt: Optional[float] = None,

@@ -294,16 +294,6 @@ def test_messages_name_the_keywords_not_the_command_line_options(duffing, record
         momentid.simulate(duffing, samples=100, observe=["y", "x"], noise={"v": 0.1})
 
 
-def test_options_the_function_has_no_keyword_for_are_left_as_they_are():
-    @momentid._keywords_in_errors
-    def plot(*, window=None, dt_from=None):
-        raise momentid.UsageError("--window and --dt-from (not --dt, see 'momentid x --format')")
-
-    with pytest.raises(momentid.UsageError,
-                       match=r"^window and dt_from \(not --dt, see 'momentid x --format'\)$"):
-        plot()
-
-
 def test_option_of_the_wrong_type_is_a_usage_error(duffing, record):
     with pytest.raises(momentid.UsageError, match=r"^seed: expected a whole number, 0 or more, "
                                                   r"found -1$"):

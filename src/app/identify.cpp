@@ -34,46 +34,49 @@ constexpr double kStrongCorrelation = 0.95;
 
 void IdentifyOptions::validate(const Model& model) const {
   if (batches && (*batches < kMinBatches || *batches > kMaxBatches)) {
-    throw UsageError("batches: expected a number from " + std::to_string(kMinBatches) + " to " +
-                     std::to_string(kMaxBatches) + ", found " + std::to_string(*batches));
+    throw UsageError("batches", "expected a number from " + std::to_string(kMinBatches) + " to " +
+                                    std::to_string(kMaxBatches) + ", found " +
+                                    std::to_string(*batches));
   }
   if (degree < 0 || degree > kMaxDegree) {
-    throw UsageError("degree: expected 0 (automatic) or a number from 1 to " +
-                     std::to_string(kMaxDegree) + ", found " + std::to_string(degree));
+    throw UsageError("degree", "expected 0 (automatic) or a number from 1 to " +
+                                   std::to_string(kMaxDegree) + ", found " +
+                                   std::to_string(degree));
   }
   if (input_shift < -kMaxInputShift || input_shift > kMaxInputShift) {
-    throw UsageError("input shift: expected a number from -" + std::to_string(kMaxInputShift) +
-                     " to " + std::to_string(kMaxInputShift) + ", found " +
-                     std::to_string(input_shift));
+    throw UsageError("input_shift", "expected a number from -" + std::to_string(kMaxInputShift) +
+                                        " to " + std::to_string(kMaxInputShift) + ", found " +
+                                        std::to_string(input_shift));
   }
   const auto& variables = model.variables();
   for (const auto& [name, value] : fixed) {
     if (model.parameter_index(name) < 0) {
-      throw UsageError("--fix: '" + name + "' is not a parameter of model " + model.name());
+      throw UsageError("fixed", "'" + name + "' is not a parameter of model " + model.name());
     }
     if (!std::isfinite(value)) {
-      throw UsageError("--fix: the value of '" + name + "' must be a finite number");
+      throw UsageError("fixed", "the value of '" + name + "' must be a finite number");
     }
   }
   const auto declared_fixed = [&](const Declaration& p) { return p.fixed || fixed.count(p.name); };
   if (!model.parameters().empty() &&
       std::all_of(model.parameters().begin(), model.parameters().end(), declared_fixed)) {
-    throw UsageError("--fix: every parameter of model " + model.name() +
-                     " is fixed (by --fix or in the model file): there is nothing to estimate");
+    throw UsageError("fixed", "every parameter of model " + model.name() + " is fixed (by " +
+                                  UsageError::mention("fixed") +
+                                  " or in the model file): there is nothing to estimate");
   }
   for (const std::string& name : center) {
     if (std::find(variables.begin(), variables.end(), name) == variables.end()) {
-      throw UsageError("--center: '" + name + "' is not a state or input of model " + model.name());
+      throw UsageError("center", "'" + name + "' is not a state or input of model " + model.name());
     }
   }
   if (dt && !(std::isfinite(*dt) && *dt > 0)) {
-    throw UsageError("--dt: expected a positive number");
+    throw UsageError("dt", "expected a positive number");
   }
   for (const auto& column : columns) {
     if (column.first == "t") continue;
     if (std::find(variables.begin(), variables.end(), column.first) == variables.end()) {
-      throw UsageError("--columns: '" + column.first + "' is not a state or input of model " +
-                       model.name());
+      throw UsageError("columns",
+                       "'" + column.first + "' is not a state or input of model " + model.name());
     }
   }
 }
@@ -263,7 +266,8 @@ void estimate_sampling_bias(IdentifyResult& result, const DataSource& source,
                             const std::vector<std::vector<double>>& fine_errors) {
   if (!inputs.empty() && result.data.hold == InputHold::kZeroOrderHold) {
     throw UsageError(
-        "extrapolate: the input is held over each sample (input hold zoh): every other sample "
+        "extrapolate",
+        "the input is held over each sample (input hold zoh): every other sample "
         "of such a record is not the record sampled at 2 dt, whose input would be held over "
         "2 dt; the kinks of the held input are corrected from the model instead");
   }
@@ -573,9 +577,9 @@ IdentifyResult identify(const Model& model, const DataSource& source,
   }
 
   if (options.extrapolate) {
-    throw UsageError(
-        "extrapolate: the sampling bias is estimated for the zero-lag equations, and these data "
-        "call for the lagged ones");
+    throw UsageError("extrapolate",
+                     "the sampling bias is estimated for the zero-lag equations, and these data "
+                     "call for the lagged ones");
   }
   if (options.multipliers || options.degree > 0) {
     std::string missing;
@@ -904,10 +908,6 @@ std::string number(double x, const char* format = "%.6g") {
   return text;
 }
 
-const char* hold_name(InputHold hold) {
-  return hold == InputHold::kZeroOrderHold ? "zoh" : "sample";
-}
-
 void table(std::ostringstream& out, const std::vector<ParameterEstimate>& parameters) {
   std::size_t width = 9;
   for (const auto& p : parameters) width = std::max(width, p.name.size());
@@ -970,7 +970,7 @@ std::string format_text(const IdentifyResult& r) {
   out << "model " << r.model->name() << ", data " << r.data_name << ": " << d.rows << " rows in "
       << d.runs << (d.runs == 1 ? " run" : " runs");
   if (d.time_step) out << ", dt = " << number(*d.time_step);
-  out << ", input hold " << hold_name(d.hold) << "\n";
+  out << ", input hold " << to_string(d.hold) << "\n";
   if (r.lagged) out << method_text(r) << "\n";
   if (!r.centered.empty()) {
     out << "means removed (--center):";
@@ -1114,7 +1114,7 @@ std::string format_json(const IdentifyResult& r) {
       << ",\n    \"condition\": " << json_number(e.condition) << ",\n    \"batches\": " << e.batches
       << ",\n    \"error_dof\": " << json_number(gmm ? e.gmm_dof : e.dof)
       << ",\n    \"samples\": " << d.rows << ",\n    \"runs\": " << d.runs
-      << ",\n    \"input_hold\": " << json_string(hold_name(d.hold))
+      << ",\n    \"input_hold\": " << json_string(to_string(d.hold))
       << ",\n    \"j_statistic\": " << (e.j_statistic ? json_number(*e.j_statistic) : "null")
       << ",\n    \"j_dof\": " << e.j_dof
       << ",\n    \"j_pvalue\": " << (e.j_pvalue ? json_number(*e.j_pvalue) : "null");

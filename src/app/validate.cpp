@@ -130,15 +130,13 @@ std::vector<double> initial_state(const Model& model, const Record& record, cons
 std::vector<Interpolation> interpolation_methods(const Model& model, const Record& record,
                                                  const ReplayOptions& options) {
   std::vector<Interpolation> out;
-  const std::string hold = record.metadata.get("input-hold").value_or("sample");
   for (const Declaration& input : model.inputs()) {
     if (options.interpolation) {
       out.push_back(*options.interpolation);
       continue;
     }
-    const std::string own =
-        hold == "mixed" ? record.metadata.get("input-hold." + input.name).value_or("sample") : hold;
-    out.push_back(own == "zoh" ? Interpolation::kHold : Interpolation::kSinc);
+    const InputHold hold = record.metadata.input_hold(input.name);
+    out.push_back(hold == InputHold::kZeroOrderHold ? Interpolation::kHold : Interpolation::kSinc);
   }
   return out;
 }
@@ -216,7 +214,7 @@ std::pair<int, double> chosen_substeps(const Model& model,
 
 Replay replay(const Model& model, const DataSource& source, const ReplayOptions& options) {
   if (options.dt && !(std::isfinite(*options.dt) && *options.dt > 0)) {
-    throw UsageError("--dt: expected a positive number, found " + shortest_decimal(*options.dt));
+    throw UsageError("dt", "expected a positive number, found " + shortest_decimal(*options.dt));
   }
   Replay out;
   out.record = read_record(model, source, options);
@@ -231,9 +229,9 @@ Replay replay(const Model& model, const DataSource& source, const ReplayOptions&
   }
   if (options.substeps) {
     if (*options.substeps < 1 || *options.substeps > RecordSimulator::kMaxSubsteps) {
-      throw UsageError("--substeps: expected a number from 1 to " +
-                       std::to_string(RecordSimulator::kMaxSubsteps) + ", found " +
-                       std::to_string(*options.substeps));
+      throw UsageError("substeps", "expected a number from 1 to " +
+                                       std::to_string(RecordSimulator::kMaxSubsteps) + ", found " +
+                                       std::to_string(*options.substeps));
     }
     out.substeps = *options.substeps;
   } else {
@@ -258,13 +256,14 @@ void write_replay(const Model& model, const Replay& replay, const std::string& p
   columns.insert(columns.end(), record.columns.begin(), record.columns.end());
   if (record.has_run) columns.push_back("run");
   DataMetadata metadata;
-  DataMetadata::Line line{{"model", model.name()},
-                          {"dt", shortest_decimal(record.dt)},
-                          {"input-hold", record.metadata.get("input-hold").value_or("sample")},
-                          {"input-file", record.name}};
+  DataMetadata::Line line{
+      {"model", model.name()},
+      {"dt", shortest_decimal(record.dt)},
+      {"input-hold", record.metadata.get("input-hold").value_or(to_string(InputHold::kSample))},
+      {"input-file", record.name}};
   for (std::size_t i = 0; i < model.inputs().size(); ++i) {
     line.emplace_back("interpolation." + model.inputs()[i].name,
-                      interpolation_name(replay.interpolation[i]));
+                      to_string(replay.interpolation[i]));
   }
   line.emplace_back("substeps", std::to_string(replay.substeps));
   metadata.add_line(std::move(line));
@@ -358,8 +357,8 @@ std::vector<GiNaC::numeric> read_estimates(const Model& model, const std::string
 
 void ValidateOptions::validate() const {
   if (lags < 1 || lags > kMaxLags) {
-    throw UsageError("--lags: expected a number from 1 to " + std::to_string(kMaxLags) +
-                     ", found " + std::to_string(lags));
+    throw UsageError("lags", "expected a number from 1 to " + std::to_string(kMaxLags) +
+                                 ", found " + std::to_string(lags));
   }
 }
 
@@ -689,7 +688,7 @@ std::string format_text(const ValidateResult& r) {
                     ", dt = " + number(record.dt, "%g") + "\n";
   out += "parameters (" + r.parameters_from + "): " + parameters_text(r) + "\n";
   for (std::size_t i = 0; i < model.inputs().size(); ++i) {
-    out += "input " + model.inputs()[i].name + ": " + interpolation_name(replay.interpolation[i]) +
+    out += "input " + model.inputs()[i].name + ": " + to_string(replay.interpolation[i]) +
            " between samples\n";
   }
   const bool converged =
@@ -770,7 +769,7 @@ std::string format_json(const ValidateResult& r) {
       << ",\n  \"interpolation\": {";
   for (std::size_t i = 0; i < model.inputs().size(); ++i) {
     out << (i ? ", " : "") << json_string(model.inputs()[i].name) << ": "
-        << json_string(interpolation_name(replay.interpolation[i]));
+        << json_string(to_string(replay.interpolation[i]));
   }
   out << "},\n  \"substeps\": " << replay.substeps << ",\n  \"initial_state\": [";
   for (std::size_t r0 = 0; r0 < record.runs.size(); ++r0) {

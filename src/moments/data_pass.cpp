@@ -767,8 +767,7 @@ DataMoments moments_from_data(const DataSource& source, const std::vector<std::s
   if (options.hold) {
     out.hold = *options.hold;
   } else {
-    const auto hold = out.metadata.get("input-hold");
-    out.hold = hold && *hold == "zoh" ? InputHold::kZeroOrderHold : InputHold::kSample;
+    out.hold = out.metadata.input_hold();
   }
   // The merged state keeps the stretches of every shard, so that the batches are made the same
   // way whatever thread or process reads a shard: at least 8 per shard for few shards, one for
