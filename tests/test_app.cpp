@@ -176,7 +176,7 @@ TEST_SUITE("app") {
       momentid::identify(declared, source, {.fixed = {{"c", 1.0}, {"eps", 1.0}}});
     });
     CHECK(std::string(e.what()) ==
-          "--fix: every parameter of model duffing is fixed (by --fix or in the model file): "
+          "fixed: every parameter of model duffing is fixed (by fixed or in the model file): "
           "there is nothing to estimate");
   }
 
@@ -287,10 +287,10 @@ TEST_SUITE("app") {
     CHECK(std::string(error_from<momentid::UsageError>([&] {
                         momentid::identify(model, source, {.input_shift = 1001});
                       }).what()) ==
-          "input shift: expected a number from -1000 to 1000, found 1001");
+          "input_shift: expected a number from -1000 to 1000, found 1001");
     CHECK(std::string(error_from<momentid::UsageError>([&] {
                         momentid::identify(model, source, {.columns = {{"w", "y"}}});
-                      }).what()) == "--columns: 'w' is not a state or input of model duffing");
+                      }).what()) == "columns: 'w' is not a state or input of model duffing");
     CHECK(std::string(error_from<momentid::UsageError>([&] {
                         momentid::check(source, &model, {.lags = 0});
                       }).what()) == "lags: expected a number from 1 to 1000, found 0");
@@ -302,14 +302,14 @@ TEST_SUITE("app") {
     CHECK(std::string(error_from<momentid::UsageError>([&] {
                         momentid::simulate_to_file(model, simulation, "unused.csv",
                                                    momentid::DataWriter::Format::kCsv);
-                      }).what()) == "simulate: dt must be a number from 1e-9 to 1e6, found 0");
+                      }).what()) == "dt: expected a number from 1e-9 to 1e6, found 0");
     CHECK_FALSE(std::filesystem::exists("unused.csv"));
     simulation.dt = 0.01;
     simulation.inputs.clear();
     CHECK(std::string(error_from<momentid::UsageError>([&] {
                         momentid::simulate_to_file(model, simulation, "unused.csv",
                                                    momentid::DataWriter::Format::kCsv);
-                      }).what()) == "simulate: model duffing needs 1 input processes, found 0");
+                      }).what()) == "inputs: model duffing needs 1 input processes, found 0");
   }
 
   TEST_CASE("a result stays valid after the model it was computed from is gone") {

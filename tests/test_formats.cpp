@@ -81,8 +81,10 @@ TEST_SUITE("formats") {
     CHECK(momentid::format_for_path("b.mat") == FileFormat::kMat5);
     CHECK(momentid::format_for_path("b.hdf5") == FileFormat::kHdf5);
     CHECK_FALSE(momentid::format_for_path("b.xlsx"));
-    CHECK(momentid::format_named("mat73") == FileFormat::kMat73);
-    CHECK_FALSE(momentid::format_named("xls"));
+    CHECK(momentid::parse_file_format("mat73", "format") == FileFormat::kMat73);
+    CHECK_THROWS_WITH_AS(momentid::parse_file_format("xls", "format"),
+                         "format: expected csv, bin, npy, mat, mat73 or h5, found 'xls'",
+                         momentid::UsageError);
   }
 
   TEST_CASE("MATLAB names are letters, digits and underscores, from a letter") {

@@ -175,7 +175,7 @@ TEST_SUITE("measured simulation") {
     SimulationOptions options = options_for(model, 10, 1);
     options.inputs = {fast};
     CHECK_THROWS_WITH_AS(options.validate(model),
-                         "--input x: f2=50 must be below the Nyquist frequency 1/(2 dt) = 50",
+                         "inputs x: f2=50 must be below the Nyquist frequency 1/(2 dt) = 50",
                          momentid::UsageError);
   }
 
@@ -420,31 +420,31 @@ TEST_SUITE("measured simulation") {
       CHECK_THROWS_WITH_AS(options.validate(model), message.c_str(), momentid::UsageError);
     };
     options.noise = {{"z", 0.1}};
-    refused("--noise: 'z' is not a channel of model duffing (channels: y, v, x)");
+    refused("noise: 'z' is not a channel of model duffing (channels: y, v, x)");
     options.noise = {{"y", 0.1}, {"y", 0.2}};
-    refused("--noise: channel 'y' is given twice");
+    refused("noise: channel 'y' is given twice");
     options.noise = {{"y", -0.1}};
-    refused("--noise: the level of 'y' must be a finite number of at least 0, found -0.1");
+    refused("noise: the level of 'y' must be a finite number of at least 0, found -0.1");
     options.noise = {{"y", std::nan("")}};
-    refused("--noise: the level of 'y' must be a finite number of at least 0, found nan");
+    refused("noise: the level of 'y' must be a finite number of at least 0, found nan");
     options.noise = {{"v", 0.1}};
     options.observe = {"y", "x"};
-    refused("--noise: channel 'v' is not observed (--observe y,x)");
+    refused("noise: channel 'v' is not observed (observe y,x)");
     options.noise.clear();
     options.observe = {"y", "q"};
-    refused("--observe: 'q' is not a channel of model duffing (channels: y, v, x)");
+    refused("observe: 'q' is not a channel of model duffing (channels: y, v, x)");
     options.observe = {"x", "x"};
-    refused("--observe: channel 'x' is given twice");
+    refused("observe: channel 'x' is given twice");
 
     const auto levels = momentid::parse_noise({"y=0.05", "x=1e-2"});
     REQUIRE(levels.size() == 2);
     CHECK(levels[0].channel == "y");
     CHECK(levels[0].relative == 0.05);
     CHECK(levels[1].relative == 0.01);
-    CHECK_THROWS_WITH_AS(momentid::parse_noise({"y"}), "--noise: expected CHANNEL=LEVEL, found 'y'",
+    CHECK_THROWS_WITH_AS(momentid::parse_noise({"y"}), "noise: expected CHANNEL=LEVEL, found 'y'",
                          momentid::UsageError);
     CHECK_THROWS_WITH_AS(momentid::parse_noise({"y=5%"}),
-                         "--noise: the level of 'y' must be a number, found '5%'",
+                         "noise: the level of 'y' must be a number, found '5%'",
                          momentid::UsageError);
   }
 }

@@ -241,13 +241,13 @@ TEST_SUITE("simulate") {
             "b=VALUE");
     }
     CHECK_THROWS_WITH_AS(momentid::parameter_values(model, {"c=1"}),
-                         "--set: 'c' is not a parameter of model m (parameters: a, b)",
+                         "parameters: 'c' is not a parameter of model m (parameters: a, b)",
                          momentid::UsageError);
     CHECK_THROWS_WITH_AS(momentid::parameter_values(model, {"a=1x"}),
-                         "--set: the value of 'a' must be a number, found '1x'",
+                         "parameters: the value of 'a' must be a number, found '1x'",
                          momentid::UsageError);
     CHECK_THROWS_WITH_AS(momentid::parameter_values(model, {"a"}),
-                         "--set: expected NAME=VALUE, found 'a'", momentid::UsageError);
+                         "parameters: expected NAME=VALUE, found 'a'", momentid::UsageError);
   }
 
   TEST_CASE("input specifications are parsed, checked and written back") {

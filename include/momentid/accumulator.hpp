@@ -8,15 +8,9 @@
 
 #include "momentid/error.hpp"
 #include "momentid/moment.hpp"
+#include "momentid/types.hpp"
 
 namespace momentid {
-
-// How the input channels were sampled (docs/moments.md, "Sampled and held inputs").
-//  kSample: every channel holds samples of a continuous signal at the same instants; a moment is
-//           the trapezoidal time average of its product.
-//  kZeroOrderHold: input row n is held over [t_n, t_{n+1}) (what simulators do); a product with
-//           an input is averaged as u[n] * (g(y_n) + g(y_{n+1})) / 2.
-enum class InputHold { kSample, kZeroOrderHold };
 
 // How a product with a held input integrates its state part over an interval.
 //  kCubic: by the cubic through the rows n - 1 .. n + 2, exact to O(dt^4) for smooth states;

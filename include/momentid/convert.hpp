@@ -5,17 +5,13 @@
 #include <vector>
 
 #include "momentid/reader.hpp"
+#include "momentid/types.hpp"
 
 namespace momentid {
-
-// The formats `momentid convert` writes (docs/cli/convert.md, "momentid convert").
-enum class FileFormat { kCsv, kBinary, kNpy, kMat5, kMat73, kHdf5 };
 
 // By the name's extension: .csv and .txt, .bin, .npy, .mat (level 5), .h5 and .hdf5; nullopt for
 // another. Level 7.3 .mat files are asked for by name: "mat73".
 std::optional<FileFormat> format_for_path(const std::string& path);
-// "csv", "bin", "npy", "mat", "mat73", "h5"; nullopt for another name.
-std::optional<FileFormat> format_named(const std::string& name);
 
 // Copies every column of `source` (`t` and `run` included), read with `layout` and the sample
 // interval `dt` when given, into `path` in `format`, whole or not at all, with the metadata

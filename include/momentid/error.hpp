@@ -1,5 +1,6 @@
 #pragma once
 
+#include <functional>
 #include <stdexcept>
 #include <string>
 #include <string_view>
@@ -24,11 +25,33 @@ class Error : public std::runtime_error {
   virtual int exit_code() const { return 2; }
 };
 
-// A wrong command line: unknown option, bad option value. Exit status 1.
+// A wrong command line or options struct: an unknown option, a value out of range, a name the
+// model or the data do not have. Exit status 1.
+//
+// `option()` is the field of the options struct the error concerns ("fixed" for
+// IdentifyOptions::fixed), empty when it concerns no one option; `what()` is "fixed: message".
+// A message may name other fields too, each written as mention("observe"). Front ends spell the
+// fields their own way with text(): the command line `--fix`, Python its keyword `fix`.
+//
+// Example:
+//   throw UsageError("noise", "channel 'v' is not observed (" + UsageError::mention("observe") +
+//                                 " y,x)");
+//   error.text(flag_of);  // "--noise: channel 'v' is not observed (--observe y,x)"
 class UsageError : public Error {
  public:
-  using Error::Error;
+  explicit UsageError(const std::string& message) : UsageError("", message) {}
+  UsageError(std::string option, std::string message);
   int exit_code() const override { return 1; }
+
+  const std::string& option() const { return option_; }
+  // The message with the option in front and every mention spelled by `spell`, which takes a
+  // field's name.
+  std::string text(const std::function<std::string(const std::string&)>& spell) const;
+  // A field named inside a message.
+  static std::string mention(std::string_view field);
+
+ private:
+  std::string option_, message_;
 };
 
 // An error located in a source text. `what()` is "file:line:col: message"; `message()` is the

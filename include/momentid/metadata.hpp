@@ -6,6 +6,8 @@
 #include <utility>
 #include <vector>
 
+#include "momentid/types.hpp"
+
 namespace momentid {
 
 // The key-value pairs a data file carries in `# momentid: key=value key=value ...` lines before
@@ -31,6 +33,10 @@ class DataMetadata {
 
   // The last value given for `key`, if any.
   std::optional<std::string> get(const std::string& key) const;
+  // How input `input` was sampled: `input-hold`, or under `mixed` its `input-hold.NAME`; kSample
+  // when the metadata do not say (or name a hold this version does not know). Without a name,
+  // how every input was: kSample for `mixed`.
+  InputHold input_hold(const std::string& input = "") const;
   void add_line(Line line);
   const std::vector<Line>& lines() const { return lines_; }
   // The number of distinct keys.

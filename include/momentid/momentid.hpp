@@ -18,6 +18,7 @@
 #include "momentid/random.hpp"
 #include "momentid/reader.hpp"
 #include "momentid/simulate.hpp"
+#include "momentid/types.hpp"
 #include "momentid/validate.hpp"
 #include "momentid/version.hpp"
 #include "momentid/writer.hpp"

@@ -9,16 +9,9 @@
 
 #include "momentid/error.hpp"
 #include "momentid/metadata.hpp"
+#include "momentid/types.hpp"
 
 namespace momentid {
-
-// What a missing value (an empty CSV field, `nan`, `NA`, `N/A`; NaN in a binary file) in a
-// requested column does.
-enum class MissingValues {
-  kError,     // stops the reading with the value's location (the default)
-  kDropRow,   // drops the row; its neighbours are joined as if consecutive
-  kSplitRun,  // drops the row and ends the run: the next complete row starts a new one
-};
 
 // How a file departs from the usual layout (docs/data-files.md, "Data from the lab").
 struct FileLayout {

@@ -274,24 +274,6 @@ std::vector<std::size_t> observed_channels(const Model& model, const SimulationO
 std::vector<std::string> simulate_to_file(const Model& model, const SimulationOptions& options,
                                           const std::string& path, DataWriter::Format format);
 
-// How a recorded input is taken between its samples, where the integrator needs it
-// (docs/cli/validate.md, "Inputs between samples"):
-//   kHold    the sample held over the interval that follows it (zero-order hold), which is how
-//            `simulate` applies its random processes;
-//   kLinear  a straight line between neighbouring samples (first-order hold);
-//   kCubic   the cubic through the four nearest samples: at the midpoint, a sinusoid with
-//            omega*dt = w comes out with the gain (9 cos(w/2) - cos(3w/2))/8, about
-//            1 - 3 w^4/128 (0.35% low at ten samples per period, 5% at five);
-//   kSinc    band-limited: a Kaiser-windowed sinc (beta 14) over the 48 nearest samples, whose
-//            gain is within 3e-7 of 1 up to 0.8 times the Nyquist frequency.
-// Intervals too near an end of the record for the stencil take the widest one that fits
-// (cubic, then the quadratic through three samples, then linear).
-enum class Interpolation { kHold, kLinear, kCubic, kSinc };
-// `zoh`, `foh`, `cubic`, `sinc`.
-std::string interpolation_name(Interpolation method);
-// Parses those names; throws UsageError naming `option` otherwise.
-Interpolation parse_interpolation(const std::string& text, const std::string& option);
-
 // Evaluates a sampled signal between its samples at fixed fractions of the sample interval.
 //
 // Example:
@@ -353,6 +335,6 @@ std::vector<GiNaC::numeric> parameter_values(const Model& model,
 std::vector<GiNaC::numeric> parameter_values(const Model& model,
                                              const std::vector<std::string>& assignments,
                                              const std::vector<GiNaC::numeric>& base,
-                                             const std::string& option = "--set");
+                                             const std::string& option = "parameters");
 
 }  // namespace momentid

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "momentid/metadata.hpp"
+#include "momentid/types.hpp"
 
 namespace momentid {
 
@@ -48,7 +49,7 @@ void write_whole_file(const std::string& path, const std::string& contents);
 //   out.commit();
 class DataWriter {
  public:
-  enum class Format { kCsv, kBinary };
+  using Format = WriterFormat;
 
   DataWriter(const std::string& path, Format format, const DataMetadata& metadata,
              const std::vector<std::string>& columns);

@@ -25,10 +25,8 @@ options, spelled as keyword arguments, give the same numbers.
 from __future__ import annotations
 
 import functools as _functools
-import inspect as _inspect
 import json as _json
 import os as _os
-import re as _re
 import warnings as _warnings
 from typing import Any, Mapping, Optional, Sequence, Union
 
@@ -62,39 +60,12 @@ class DataError(Error, ValueError):
 
 
 class UsageError(Error, ValueError):
-    """An option out of range, or naming something the model or data do not have."""
+    """An option out of range, or naming something the model or data do not have. The message
+    starts with the keyword argument it concerns: `fix: 'k2' is not a parameter of model ...`."""
 
 
 class MomentidWarning(UserWarning):
     """A warning of the library's, such as a simulation step too coarse for the dynamics."""
-
-
-# The program's options that this module spells differently; the others are the option with
-# `_` for `-` (--dt-from: dt_from).
-_KEYWORD_OF_OPTION = {"input": "inputs", "set": "params"}
-_OPTION = _re.compile(r"(?<![A-Za-z0-9-])--([a-z0-9][a-z0-9-]*)")
-
-
-def _keywords_in_errors(function):
-    """The library's messages name the program's options (`--dt-from: ...`); an error raised
-    through `function` names `function`'s keyword arguments instead (`dt_from: ...`). Options
-    it has no keyword for are left as they are."""
-    keywords = set(_inspect.signature(function).parameters)
-
-    def keyword(match):
-        option = match.group(1)
-        name = _KEYWORD_OF_OPTION.get(option, option.replace("-", "_"))
-        return name if name in keywords else match.group(0)
-
-    @_functools.wraps(function)
-    def wrapper(*args, **kwargs):
-        try:
-            return function(*args, **kwargs)
-        except Error as error:
-            error.args = (_OPTION.sub(keyword, str(error)), *error.args[1:])
-            raise
-
-    return wrapper
 
 
 from . import _momentid  # noqa: E402  (the exceptions above must exist before it is used)
@@ -122,9 +93,9 @@ def _older_keywords(function):
     extrapolate="dt" (now True)."""
 
     def deprecated(old, new):
-        # Pointing at the caller: past this wrapper and _keywords_in_errors'.
+        # Pointing at the caller, past this function and the wrapper.
         _warnings.warn(f"{function.__name__}(): {old} is deprecated and will be removed in the "
-                       f"next release; use {new}", DeprecationWarning, stacklevel=4)
+                       f"next release; use {new}", DeprecationWarning, stacklevel=3)
 
     def move(kwargs, old, new):
         if kwargs.get(new) is not None:
@@ -186,7 +157,6 @@ class Model:
     fixed = property(lambda self: list(self._model.fixed),
                      doc="Parameters declared `fixed` in the model (known, not estimated).")
 
-    @_keywords_in_errors
     def derive(self, multipliers: Monomials = None, degree: Optional[int] = None,
                lags: Optional[tuple[int, int]] = None, instruments: Monomials = None,
                measured: Optional[Sequence[str]] = None) -> "Equations":
@@ -246,7 +216,6 @@ class Record(dict):
         self.metadata = metadata
 
 
-@_keywords_in_errors
 @_older_keywords
 def identify(model: Union[Model, PathLike], data: Any, *,
              columns: Optional[Mapping[str, str]] = None, names: Optional[Sequence[str]] = None,
@@ -307,7 +276,6 @@ def identify(model: Union[Model, PathLike], data: Any, *,
     return IdentifyResult(text, json_text, least_squares)
 
 
-@_keywords_in_errors
 @_older_keywords
 def check(data: Any, model: Union[None, Model, PathLike] = None, *,
           columns: Optional[Mapping[str, str]] = None, names: Optional[Sequence[str]] = None,
@@ -329,7 +297,6 @@ def check(data: Any, model: Union[None, Model, PathLike] = None, *,
     return CheckResult(text, values)
 
 
-@_keywords_in_errors
 def simulate(model: Union[Model, PathLike], params: Optional[Mapping[str, float]] = None, *,
              samples: int = 10000, dt: Optional[float] = None, inputs: Any = None,
              seed: int = 1, runs: int = 1, burn_in: int = 10000,
@@ -376,7 +343,6 @@ def simulate(model: Union[Model, PathLike], params: Optional[Mapping[str, float]
     return None if columns is None else Record(columns, metadata)
 
 
-@_keywords_in_errors
 @_older_keywords
 def validate(model: Union[Model, PathLike], data: Any,
              params: Union[None, Mapping[str, float], IdentifyResult] = None, *,

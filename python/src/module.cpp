@@ -36,6 +36,15 @@ void raise(const char* kind, const std::string& message, const SourceLocation* w
   PyErr_SetObject(type.ptr(), error.ptr());
 }
 
+// The keyword argument that sets the options field `field` (UsageError::option()): "fixed" is
+// `fix`; a field without its own entry is its own keyword ("dt").
+std::string keyword_of(const std::string& field) {
+  static const std::map<std::string, std::string> kKeywords = {
+      {"fixed", "fix"}, {"parameters", "params"}, {"hold", "input_hold"}};
+  const auto found = kKeywords.find(field);
+  return found != kKeywords.end() ? found->second : field;
+}
+
 void translate(std::exception_ptr thrown) {
   try {
     if (thrown) std::rethrow_exception(thrown);
@@ -44,7 +53,7 @@ void translate(std::exception_ptr thrown) {
   } catch (const LocatedError& e) {  // ParseError, ModelError
     raise("ModelError", e.what(), &e.location());
   } catch (const UsageError& e) {
-    raise("UsageError", e.what());
+    raise("UsageError", e.text(keyword_of));
   } catch (const Error& e) {
     raise("Error", e.what());
   }
@@ -133,16 +142,7 @@ FileLayout layout_of(const py::dict& options) {
   if (auto names = get<std::vector<std::string>>(options, "names")) layout.column_names = *names;
   layout.dt_from = get<std::string>(options, "dt_from");
   if (auto missing = get<std::string>(options, "missing")) {
-    if (*missing == "error") {
-      layout.missing = MissingValues::kError;
-    } else if (*missing == "drop-row") {
-      layout.missing = MissingValues::kDropRow;
-    } else if (*missing == "split-run") {
-      layout.missing = MissingValues::kSplitRun;
-    } else {
-      throw UsageError("missing: expected 'error', 'drop-row' or 'split-run', found '" + *missing +
-                       "'");
-    }
+    layout.missing = parse_missing_values(*missing, "missing");
   }
   return layout;
 }
@@ -150,9 +150,7 @@ FileLayout layout_of(const py::dict& options) {
 std::optional<InputHold> hold_of(const py::dict& options) {
   const auto hold = get<std::string>(options, "input_hold");
   if (!hold) return std::nullopt;
-  if (*hold == "zoh") return InputHold::kZeroOrderHold;
-  if (*hold == "sample") return InputHold::kSample;
-  throw UsageError("input_hold: expected 'zoh' or 'sample', found '" + *hold + "'");
+  return parse_input_hold(*hold, "hold");
 }
 
 // `NAME=VALUE` items, as --set and --fix take them, from a mapping of names to numbers.
@@ -233,12 +231,9 @@ IdentifyOptions identify_options(const Model& model, const py::dict& options) {
     }
     out.extrapolate = true;
   }
-  if (auto weighting = get<std::string>(options, "weighting")) {
-    if (*weighting == "gmm" || *weighting == "ls") {
-      out.gmm = *weighting == "gmm";
-    } else if (*weighting != "auto") {
-      throw UsageError("weighting: expected 'auto', 'ls' or 'gmm', found '" + *weighting + "'");
-    }
+  if (auto text = get<std::string>(options, "weighting")) {
+    const Weighting weighting = parse_weighting(*text, "weighting");
+    if (weighting != Weighting::kAuto) out.gmm = weighting == Weighting::kGmm;
   }
   if (auto columns = get<std::map<std::string, std::string>>(options, "columns")) {
     out.columns = *columns;
@@ -364,16 +359,12 @@ SimulationOptions simulation_options(const Model& model, const py::dict& options
 py::tuple simulate_record(const Model& model, const py::dict& options) {
   const SimulationOptions simulation = simulation_options(model, options);
   if (auto path = get<std::string>(options, "path")) {
-    const std::string format = get<std::string>(options, "format").value_or("csv");
-    if (format != "csv" && format != "bin") {
-      throw UsageError("format: expected 'csv' or 'bin', found '" + format + "'");
-    }
+    const WriterFormat format = parse_writer_format(
+        get<std::string>(options, "format").value_or(to_string(WriterFormat::kCsv)), "format");
     std::vector<std::string> warnings;
     {
       py::gil_scoped_release release;
-      warnings = simulate_to_file(
-          model, simulation, *path,
-          format == "bin" ? DataWriter::Format::kBinary : DataWriter::Format::kCsv);
+      warnings = simulate_to_file(model, simulation, *path, format);
     }
     return py::make_tuple(py::none(), py::none(), warnings);
   }

@@ -223,14 +223,16 @@ def test_messages_name_the_keywords_not_the_command_line_options(duffing, record
         momentid.simulate(duffing, samples=100, observe=["y", "x"], noise={"v": 0.1})
 
 
-def test_options_the_function_has_no_keyword_for_are_left_as_they_are():
-    @momentid._keywords_in_errors
-    def plot(*, window=None, dt_from=None):
-        raise momentid.UsageError("--window and --dt-from (not --dt, see 'momentid x --format')")
-
+def test_a_bad_name_lists_the_accepted_names_under_the_keyword(duffing, record):
     with pytest.raises(momentid.UsageError,
-                       match=r"^window and dt_from \(not --dt, see 'momentid x --format'\)$"):
-        plot()
+                       match=r"^input_hold: expected sample or zoh, found 'held'$"):
+        momentid.identify(duffing, record, input_hold="held")
+    with pytest.raises(momentid.UsageError,
+                       match=r"^weighting: expected auto, ls or gmm, found 'GMM'$"):
+        momentid.identify(duffing, record, weighting="GMM")
+    with pytest.raises(momentid.UsageError,
+                       match=r"^params: 'zz' is not a parameter of model duffing"):
+        momentid.simulate(duffing, {"zz": 1.0}, samples=100)
 
 
 def test_option_of_the_wrong_type_is_a_usage_error(duffing, record):

@@ -54,16 +54,6 @@ std::optional<FileFormat> format_for_path(const std::string& path) {
   return std::nullopt;
 }
 
-std::optional<FileFormat> format_named(const std::string& name) {
-  if (name == "csv") return FileFormat::kCsv;
-  if (name == "bin") return FileFormat::kBinary;
-  if (name == "npy") return FileFormat::kNpy;
-  if (name == "mat") return FileFormat::kMat5;
-  if (name == "mat73") return FileFormat::kMat73;
-  if (name == "h5") return FileFormat::kHdf5;
-  return std::nullopt;
-}
-
 std::vector<std::string> convert(const DataSource& source, const std::string& path,
                                  FileFormat format, const FileLayout& layout,
                                  std::optional<double> dt) {
@@ -74,8 +64,8 @@ std::vector<std::string> convert(const DataSource& source, const std::string& pa
     return c == "t" || data::is_time_name(c);
   });
   if (dt && has_time) {
-    throw UsageError("--dt: " + source.name() +
-                     " has a time column, which is copied and gives the interval");
+    throw UsageError("dt",
+                     source.name() + " has a time column, which is copied and gives the interval");
   }
   // The array formats are given their length first: one pass counts the rows.
   std::size_t rows = 0;

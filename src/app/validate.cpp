@@ -18,8 +18,8 @@ namespace momentid {
 
 void ValidateOptions::validate() const {
   if (lags < 1 || lags > kMaxLags) {
-    throw UsageError("--lags: expected a number from 1 to " + std::to_string(kMaxLags) +
-                     ", found " + std::to_string(lags));
+    throw UsageError("lags", "expected a number from 1 to " + std::to_string(kMaxLags) +
+                                 ", found " + std::to_string(lags));
   }
 }
 

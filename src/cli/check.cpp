@@ -58,7 +58,7 @@ Command add_check(CLI::App& app) {
   sub->add_option("--lags", command->options.lags, "autocorrelation lags")
       ->check(CLI::Range(std::size_t{1}, CheckOptions::kMaxLags));
   sub->add_option("--input-hold", command->hold, "how the inputs were sampled")
-      ->check(CLI::IsMember({"sample", "zoh"}));
+      ->check(CLI::IsMember(names_of<InputHold>()));
   sub->add_option("--dt", command->options.dt,
                   "sample interval, overriding the data's: the time column is then not read")
       ->check(CLI::PositiveNumber);

@@ -31,6 +31,11 @@ Command add_check(CLI::App& app);
 Command add_validate(CLI::App& app);
 Command add_convert(CLI::App& app);
 
+// The command-line option that sets the options field `field` (UsageError::option()):
+// "fixed" is `--fix`, "hold" `--input-hold`; a field without its own entry is its name with
+// `-` for `_`, "dt_from" `--dt-from`.
+std::string flag_of(const std::string& field);
+
 // Whether `path` is a readable model file (small enough to be one: at most 1 MB).
 bool is_model_file(const std::string& path);
 // The model at `model`; when that is not a model but `data` is, a UsageError saying that the
@@ -54,7 +59,7 @@ std::map<std::string, std::string> column_map(const std::vector<std::string>& en
 // `NAME=VALUE,NAME=VALUE` for `option`, whose entries are described as `expected`.
 std::map<std::string, std::string> column_map_of(const std::string& text, const std::string& option,
                                                  const std::string& expected);
-// `--input-hold`: nullopt when not given.
+// `--input-hold`: nullopt when not given (empty).
 std::optional<InputHold> hold_option(const std::string& text);
 // `--lags 3..40`: the first and last lag.
 std::pair<int, int> lag_range(const std::string& text);

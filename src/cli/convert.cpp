@@ -18,8 +18,9 @@ struct ConvertCommand {
 };
 
 int run_convert(const ConvertCommand& command) {
-  const std::optional<FileFormat> format =
-      command.format.empty() ? format_for_path(command.output) : format_named(command.format);
+  const std::optional<FileFormat> format = command.format.empty()
+                                               ? format_for_path(command.output)
+                                               : parse_file_format(command.format, "format");
   if (!format) {
     throw UsageError("cannot tell the format of '" + command.output +
                      "' from its name (.csv, .bin, .npy, .mat, .h5): give --format");
@@ -46,7 +47,7 @@ Command add_convert(CLI::App& app) {
   sub->add_option("OUT", command->output, "the file to write")->required();
   sub->add_option("--format", command->format,
                   "csv, bin, npy, mat (level 5), mat73 (level 7.3) or h5; default: by OUT's name")
-      ->check(CLI::IsMember({"csv", "bin", "npy", "mat", "mat73", "h5"}));
+      ->check(CLI::IsMember(names_of<FileFormat>()));
   sub->add_option("--dt", command->dt, "the sample interval, stored in OUT's metadata");
   add_layout_options(sub, command->layout);
   return {sub, [command] { return run_convert(*command); }};

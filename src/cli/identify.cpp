@@ -23,7 +23,7 @@ struct IdentifyCommand {
   std::optional<std::string> multipliers;
   IdentifyOptions options;
   std::string hold;
-  std::string weighting = "auto";
+  std::string weighting = to_string(Weighting::kAuto);
   std::string extrapolate;
   std::string format = "text";
   std::vector<std::string> columns;
@@ -67,7 +67,8 @@ int run_identify(IdentifyCommand& command) {
     options.multipliers = parse_multiplier_list(model, *command.multipliers, "--multipliers");
   }
   options.hold = hold_option(command.hold);
-  if (command.weighting != "auto") options.gmm = command.weighting == "gmm";
+  const Weighting weighting = parse_weighting(command.weighting, "weighting");
+  if (weighting != Weighting::kAuto) options.gmm = weighting == Weighting::kGmm;
   options.extrapolate = command.extrapolate == "dt";
   options.columns = column_map(command.columns);
   if (command.lags) options.lags = lag_range(*command.lags);
@@ -77,7 +78,7 @@ int run_identify(IdentifyCommand& command) {
   }
   // --fix k=9,...: the values read as --set reads them.
   const std::vector<GiNaC::numeric> values = parameter_values(
-      model, command.fix, std::vector<GiNaC::numeric>(model.parameters().size(), 0), "--fix");
+      model, command.fix, std::vector<GiNaC::numeric>(model.parameters().size(), 0), "fixed");
   for (const std::string& item : command.fix) {
     const std::string name = item.substr(0, item.find('='));
     options.fixed[name] = values[static_cast<std::size_t>(model.parameter_index(name))].to_double();
@@ -118,7 +119,7 @@ Command add_identify(CLI::App& app) {
       ->excludes(multipliers);
   sub->add_option("--input-hold", command->hold,
                   "how the inputs were sampled (default: the file's metadata, else sample)")
-      ->check(CLI::IsMember({"sample", "zoh"}));
+      ->check(CLI::IsMember(names_of<InputHold>()));
   sub->add_option("--batches", options.batches,
                   "batches for the standard errors (default one per 200 samples, 100 to 1000, and "
                   "at least 4 per equation for the optimal weighting)")
@@ -126,7 +127,7 @@ Command add_identify(CLI::App& app) {
   sub->add_option("--weighting", command->weighting,
                   "ls (least squares), gmm (two-step optimal), or auto: gmm for the lagged "
                   "equations, ls for the zero-lag ones")
-      ->check(CLI::IsMember({"auto", "ls", "gmm"}));
+      ->check(CLI::IsMember(names_of<Weighting>()));
   sub->add_option("--format", command->format, "output format")
       ->check(CLI::IsMember({"text", "json"}));
   sub->add_option("--columns", command->columns, "NAME=COLUMN: where a model variable is");

@@ -29,6 +29,9 @@ std::string message_of(const std::exception& e) {
   if (const auto* located = dynamic_cast<const momentid::LocatedError*>(&e)) {
     return momentid::render_with_caret(*located);
   }
+  if (const auto* usage = dynamic_cast<const momentid::UsageError*>(&e)) {
+    return "momentid: " + momentid::printable(usage->text(momentid::cli::flag_of));
+  }
   if (dynamic_cast<const momentid::Error*>(&e) != nullptr) {
     return "momentid: " + momentid::printable(e.what());
   }

@@ -12,6 +12,21 @@
 
 namespace momentid::cli {
 
+std::string flag_of(const std::string& field) {
+  // The fields whose option has another name; one table for every command.
+  static const std::map<std::string, std::string> kFlags = {
+      {"fixed", "--fix"},
+      {"hold", "--input-hold"},
+      {"inputs", "--input"},
+      {"parameters", "--set"},
+      // Its messages (that the data do not allow it) have always named it bare.
+      {"extrapolate", "extrapolate"}};
+  if (const auto found = kFlags.find(field); found != kFlags.end()) return found->second;
+  std::string flag = "--" + field;
+  std::replace(flag.begin(), flag.end(), '_', '-');
+  return flag;
+}
+
 bool is_model_file(const std::string& path) {
   std::error_code error;
   if (path == "-" || !std::filesystem::is_regular_file(path, error) ||
@@ -68,15 +83,16 @@ void add_layout_options(CLI::App* command, FileLayout& layout) {
           "--decimal", [&layout](const std::string& text) { layout.decimal = text[0]; },
           "the decimal separator, . or , (with ; or blank separated fields)")
       ->check(CLI::IsMember({".", ","}));
-  const std::map<std::string, MissingValues> rules = {{"error", MissingValues::kError},
-                                                      {"drop-row", MissingValues::kDropRow},
-                                                      {"split-run", MissingValues::kSplitRun}};
+  std::map<std::string, MissingValues> rules;
+  for (const std::string& name : names_of<MissingValues>()) {
+    rules[name] = parse_missing_values(name, "missing");
+  }
   command
       ->add_option("--missing", layout.missing,
                    "a missing value (empty, nan, NA): error, drop-row (joins its neighbours) or "
                    "split-run (starts a new run)")
       ->transform(CLI::CheckedTransformer(rules))
-      ->default_str("error");
+      ->default_str(to_string(MissingValues::kError));
   command
       ->add_option("--names", layout.column_names,
                    "names for the columns of a 2-D .npy array, in order")
@@ -174,9 +190,8 @@ std::map<std::string, std::string> column_map_of(const std::string& text, const 
 }
 
 std::optional<InputHold> hold_option(const std::string& text) {
-  if (text == "zoh") return InputHold::kZeroOrderHold;
-  if (text == "sample") return InputHold::kSample;
-  return std::nullopt;
+  if (text.empty()) return std::nullopt;
+  return parse_input_hold(text, "hold");
 }
 
 std::pair<int, int> lag_range(const std::string& text) {

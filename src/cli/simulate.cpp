@@ -19,7 +19,7 @@ struct SimulateCommand {
   std::vector<std::string> inputs;
   std::vector<std::string> noise;
   SimulationOptions options;
-  std::string format = "csv";
+  std::string format = to_string(WriterFormat::kCsv);
   std::string output = "-";
   // The response to a recorded input instead.
   std::string input_file;
@@ -61,8 +61,7 @@ std::vector<InputSpec> input_specs(const Model& model, const std::vector<std::st
 
 int run_simulate(SimulateCommand& command) {
   const Model model = parse_model_file(command.model);
-  const DataWriter::Format format =
-      command.format == "bin" ? DataWriter::Format::kBinary : DataWriter::Format::kCsv;
+  const WriterFormat format = parse_writer_format(command.format, "format");
   if (!command.input_file.empty()) {
     ReplayOptions options;
     options.parameters = parameter_values(model, command.set);
@@ -70,7 +69,7 @@ int run_simulate(SimulateCommand& command) {
     options.dt = command.record_dt;
     options.substeps = command.substeps;
     if (!command.interpolation.empty()) {
-      options.interpolation = parse_interpolation(command.interpolation, "--interpolation");
+      options.interpolation = parse_interpolation(command.interpolation, "interpolation");
     }
     write_replay(model, replay(model, DataSource::file(command.input_file), options),
                  command.output, format);
@@ -150,7 +149,7 @@ Command add_simulate(CLI::App& app) {
                 "start each run from the previous run's last state");
   sub->add_option("--seed", options.seed, "random seed");
   sub->add_option("--format", command->format, "output format")
-      ->check(CLI::IsMember({"csv", "bin"}));
+      ->check(CLI::IsMember(names_of<WriterFormat>()));
   sub->add_option("-o,--output", command->output, "output file, - for standard output");
   for (const char* name : {"--input", "--noise", "--observe", "--samples", "--burn-in", "--runs",
                            "--continue", "--seed"}) {

@@ -56,7 +56,7 @@ int run_validate(ValidateCommand& command) {
     replay.parameters = parameter_values(model, command.set);
   }
   if (!command.interpolation.empty()) {
-    replay.interpolation = parse_interpolation(command.interpolation, "--interpolation");
+    replay.interpolation = parse_interpolation(command.interpolation, "interpolation");
   }
   replay.dt = command.dt;
   replay.columns = column_map(command.columns);

@@ -5,6 +5,43 @@
 
 namespace momentid {
 
+namespace {
+
+// Around a field's name in a message: control characters, which no message has otherwise.
+constexpr char kMentionBegin = '\x01', kMentionEnd = '\x02';
+
+std::string spelled(const std::string& option, const std::string& message,
+                    const std::function<std::string(const std::string&)>& spell) {
+  std::string out = option.empty() ? "" : spell(option) + ": ";
+  for (std::size_t i = 0; i < message.size(); ++i) {
+    const std::size_t end = message.find(kMentionEnd, i);
+    if (message[i] != kMentionBegin || end == std::string::npos) {
+      out += message[i];
+      continue;
+    }
+    out += spell(message.substr(i + 1, end - i - 1));
+    i = end;
+  }
+  return out;
+}
+
+std::string as_field(const std::string& field) { return field; }
+
+}  // namespace
+
+UsageError::UsageError(std::string option, std::string message)
+    : Error(spelled(option, message, as_field)),
+      option_(std::move(option)),
+      message_(std::move(message)) {}
+
+std::string UsageError::text(const std::function<std::string(const std::string&)>& spell) const {
+  return spelled(option_, message_, spell);
+}
+
+std::string UsageError::mention(std::string_view field) {
+  return kMentionBegin + std::string(field) + kMentionEnd;
+}
+
 std::string printable(std::string_view text) {
   std::string out;
   for (std::size_t i = 0; i < text.size(); ++i) {

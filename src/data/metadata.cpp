@@ -15,6 +15,13 @@ std::optional<std::string> DataMetadata::get(const std::string& key) const {
   return std::nullopt;
 }
 
+InputHold DataMetadata::input_hold(const std::string& input) const {
+  std::optional<std::string> hold = get("input-hold");
+  if (hold == "mixed") hold = get("input-hold." + input);
+  return hold == to_string(InputHold::kZeroOrderHold) ? InputHold::kZeroOrderHold
+                                                      : InputHold::kSample;
+}
+
 void DataMetadata::add_line(Line line) { lines_.push_back(std::move(line)); }
 
 std::size_t DataMetadata::size() const {

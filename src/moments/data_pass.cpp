@@ -44,8 +44,7 @@ ColumnRequest column_request(const std::vector<std::string>& states,
 
 InputHold input_hold(const DataMetadata& metadata, const DataOptions& options) {
   if (options.hold) return *options.hold;
-  const auto hold = metadata.get("input-hold");
-  return hold && *hold == "zoh" ? InputHold::kZeroOrderHold : InputHold::kSample;
+  return metadata.input_hold();
 }
 
 // A file's sample interval, from the steps of its shards (else from elsewhere: the metadata,

@@ -36,28 +36,6 @@ std::vector<double> sinc_weights(double fraction) {
 
 }  // namespace
 
-std::string interpolation_name(Interpolation method) {
-  switch (method) {
-    case Interpolation::kHold:
-      return "zoh";
-    case Interpolation::kLinear:
-      return "foh";
-    case Interpolation::kCubic:
-      return "cubic";
-    case Interpolation::kSinc:
-      return "sinc";
-  }
-  return "";
-}
-
-Interpolation parse_interpolation(const std::string& text, const std::string& option) {
-  for (Interpolation m : {Interpolation::kHold, Interpolation::kLinear, Interpolation::kCubic,
-                          Interpolation::kSinc}) {
-    if (text == interpolation_name(m)) return m;
-  }
-  throw UsageError(option + ": expected zoh, foh, cubic or sinc, found '" + text + "'");
-}
-
 Interpolator::Interpolator(Interpolation method, std::vector<double> fractions)
     : method_(method), fractions_(std::move(fractions)) {
   if (method_ == Interpolation::kSinc) {

@@ -162,52 +162,53 @@ bool CompiledModel::solve(double* dydt) const {
 }
 
 void SimulationOptions::validate(const Model& model) const {
-  const auto count = [&](std::size_t found, std::size_t expected, const std::string& what) {
+  const auto count = [&](std::size_t found, std::size_t expected, const std::string& field,
+                         const std::string& what) {
     if (found != expected) {
-      throw UsageError("simulate: model " + model.name() + " needs " + std::to_string(expected) +
-                       " " + what + ", found " + std::to_string(found));
+      throw UsageError(field, "model " + model.name() + " needs " + std::to_string(expected) + " " +
+                                  what + ", found " + std::to_string(found));
     }
   };
-  count(parameters.size(), model.parameters().size(), "parameter values");
-  count(inputs.size(), model.inputs().size(), "input processes");
+  count(parameters.size(), model.parameters().size(), "parameters", "parameter values");
+  count(inputs.size(), model.inputs().size(), "inputs", "input processes");
   if (!(std::isfinite(dt) && dt >= kMinStep && dt <= kMaxStep)) {
-    throw UsageError("simulate: dt must be a number from 1e-9 to 1e6, found " +
-                     shortest_decimal(dt));
+    throw UsageError("dt", "expected a number from 1e-9 to 1e6, found " + shortest_decimal(dt));
   }
-  if (samples == 0) throw UsageError("simulate: the number of samples must be at least 1");
-  if (runs == 0) throw UsageError("simulate: the number of runs must be at least 1");
+  if (samples == 0) throw UsageError("samples", "expected at least 1, found 0");
+  if (runs == 0) throw UsageError("runs", "expected at least 1, found 0");
   for (std::size_t i = 0; i < inputs.size(); ++i) {
-    inputs[i].validate("--input " + model.inputs()[i].name, dt);
+    inputs[i].validate(UsageError::mention("inputs") + " " + model.inputs()[i].name, dt);
   }
   const std::vector<std::string>& channels = model.variables();
   // The index of channel `name`, or a UsageError from `option` listing the channels.
   const auto channel = [&](const std::string& name, const std::string& option) {
     const auto it = std::find(channels.begin(), channels.end(), name);
     if (it == channels.end()) {
-      throw UsageError(option + ": '" + name + "' is not a channel of model " + model.name() +
-                       " (channels: " + join(channels, ", ") + ")");
+      throw UsageError(option, "'" + name + "' is not a channel of model " + model.name() +
+                                   " (channels: " + join(channels, ", ") + ")");
     }
     return static_cast<std::size_t>(it - channels.begin());
   };
   std::vector<bool> observed(channels.size(), observe.empty());
   for (const std::string& name : observe) {
-    const std::size_t c = channel(name, "--observe");
-    if (observed[c]) throw UsageError("--observe: channel '" + name + "' is given twice");
+    const std::size_t c = channel(name, "observe");
+    if (observed[c]) throw UsageError("observe", "channel '" + name + "' is given twice");
     observed[c] = true;
   }
   std::vector<bool> noisy(channels.size(), false);
   for (const ChannelNoise& n : noise) {
-    const std::size_t c = channel(n.channel, "--noise");
-    if (noisy[c]) throw UsageError("--noise: channel '" + n.channel + "' is given twice");
+    const std::size_t c = channel(n.channel, "noise");
+    if (noisy[c]) throw UsageError("noise", "channel '" + n.channel + "' is given twice");
     noisy[c] = true;
     if (!(std::isfinite(n.relative) && n.relative >= 0)) {
-      throw UsageError("--noise: the level of '" + n.channel +
-                       "' must be a finite number of at least 0, found " +
-                       shortest_decimal(n.relative));
+      throw UsageError("noise", "the level of '" + n.channel +
+                                    "' must be a finite number of at least 0, found " +
+                                    shortest_decimal(n.relative));
     }
     if (!observed[c]) {
-      throw UsageError("--noise: channel '" + n.channel + "' is not observed (--observe " +
-                       join(observe, ",") + ")");
+      throw UsageError("noise", "channel '" + n.channel + "' is not observed (" +
+                                    UsageError::mention("observe") + " " + join(observe, ",") +
+                                    ")");
     }
   }
 }
@@ -217,15 +218,15 @@ std::vector<ChannelNoise> parse_noise(const std::vector<std::string>& items) {
   for (const std::string& item : items) {
     const std::size_t eq = item.find('=');
     if (eq == std::string::npos) {
-      throw UsageError("--noise: expected CHANNEL=LEVEL, found '" + item + "'");
+      throw UsageError("noise", "expected CHANNEL=LEVEL, found '" + item + "'");
     }
     ChannelNoise n{item.substr(0, eq), 0};
     const std::string text = item.substr(eq + 1);
     const char* end = text.data() + text.size();
     const auto result = std::from_chars(text.data(), end, n.relative);
     if (text.empty() || result.ec != std::errc() || result.ptr != end) {
-      throw UsageError("--noise: the level of '" + n.channel + "' must be a number, found '" +
-                       text + "'");
+      throw UsageError("noise",
+                       "the level of '" + n.channel + "' must be a number, found '" + text + "'");
     }
     out.push_back(std::move(n));
   }
@@ -443,19 +444,19 @@ std::vector<numeric> assign(const Model& model, const std::vector<std::string>& 
   for (const std::string& a : assignments) {
     const std::size_t eq = a.find('=');
     if (eq == std::string::npos) {
-      throw UsageError(option + ": expected NAME=VALUE, found '" + a + "'");
+      throw UsageError(option, "expected NAME=VALUE, found '" + a + "'");
     }
     const std::string name = a.substr(0, eq), text = a.substr(eq + 1);
     const int p = model.parameter_index(name);
     if (p < 0) {
       std::string known;
       for (const Declaration& d : model.parameters()) known += (known.empty() ? "" : ", ") + d.name;
-      throw UsageError(option + ": '" + name + "' is not a parameter of model " + model.name() +
-                       " (parameters: " + known + ")");
+      throw UsageError(option, "'" + name + "' is not a parameter of model " + model.name() +
+                                   " (parameters: " + known + ")");
     }
     if (!is_decimal(text)) {
-      throw UsageError(option + ": the value of '" + name + "' must be a number, found '" + text +
-                       "'");
+      throw UsageError(option,
+                       "the value of '" + name + "' must be a number, found '" + text + "'");
     }
     const bool negative = text[0] == '-';
     const std::string digits = (text[0] == '-' || text[0] == '+') ? text.substr(1) : text;
@@ -463,7 +464,7 @@ std::vector<numeric> assign(const Model& model, const std::vector<std::string>& 
     try {
       v = parse_exact_number(digits);
     } catch (const std::out_of_range& e) {
-      throw UsageError(option + ": " + e.what());
+      throw UsageError(option, e.what());
     }
     values[static_cast<std::size_t>(p)] = negative ? -v : v;
   }
@@ -486,7 +487,7 @@ std::vector<numeric> parameter_values(const Model& model,
                                       const std::vector<std::string>& assignments) {
   std::vector<std::optional<numeric>> values;
   for (const Declaration& p : model.parameters()) values.push_back(p.value);
-  return assign(model, assignments, std::move(values), "--set");
+  return assign(model, assignments, std::move(values), "parameters");
 }
 
 std::vector<numeric> parameter_values(const Model& model,
@@ -508,7 +509,9 @@ DataMetadata simulation_metadata(const Model& model, const SimulationOptions& op
   std::size_t held = 0;
   for (const InputSpec& input : options.inputs) held += input.held() ? 1 : 0;
   const bool mixed = held != 0 && held != options.inputs.size();
-  const std::string hold = held == options.inputs.size() ? "zoh" : held == 0 ? "sample" : "mixed";
+  const std::string hold = held == options.inputs.size() ? to_string(InputHold::kZeroOrderHold)
+                           : held == 0                   ? to_string(InputHold::kSample)
+                                                         : "mixed";
   DataMetadata::Line first{{"model", model.name()},
                            {"dt", shortest_decimal(options.dt)},
                            {"input-hold", hold},
@@ -529,7 +532,10 @@ DataMetadata simulation_metadata(const Model& model, const SimulationOptions& op
   for (std::size_t i = 0; i < options.inputs.size(); ++i) {
     const std::string& name = model.inputs()[i].name;
     DataMetadata::Line line{{"input." + name, options.inputs[i].text()}};
-    if (mixed) line.emplace_back("input-hold." + name, options.inputs[i].held() ? "zoh" : "sample");
+    if (mixed)
+      line.emplace_back(
+          "input-hold." + name,
+          to_string(options.inputs[i].held() ? InputHold::kZeroOrderHold : InputHold::kSample));
     metadata.add_line(std::move(line));
   }
   if (!options.noise.empty()) {

@@ -60,9 +60,9 @@ int lag_window(const IdentifyResult& r) {
 void check_lagged_options(const Model& model, const IdentifyOptions& options,
                           const std::vector<bool>& measured) {
   if (options.extrapolate) {
-    throw UsageError(
-        "extrapolate: the sampling bias is estimated for the zero-lag equations, and these data "
-        "call for the lagged ones");
+    throw UsageError("extrapolate",
+                     "the sampling bias is estimated for the zero-lag equations, and these data "
+                     "call for the lagged ones");
   }
   if (options.multipliers || options.degree > 0) {
     std::string missing;

@@ -11,10 +11,6 @@
 namespace momentid {
 namespace {
 
-const char* hold_name(InputHold hold) {
-  return hold == InputHold::kZeroOrderHold ? "zoh" : "sample";
-}
-
 void table(std::ostringstream& out, const std::vector<ParameterEstimate>& parameters) {
   std::size_t width = 9;
   for (const auto& p : parameters) width = std::max(width, p.name.size());
@@ -187,7 +183,7 @@ void diagnostics_json(std::ostringstream& out, const IdentifyResult& r, bool gmm
       << ",\n    \"condition\": " << json_number(e.condition) << ",\n    \"batches\": " << e.batches
       << ",\n    \"error_dof\": " << json_number(gmm ? e.gmm_dof : e.dof)
       << ",\n    \"samples\": " << d.rows << ",\n    \"runs\": " << d.runs
-      << ",\n    \"input_hold\": " << json_string(hold_name(d.hold))
+      << ",\n    \"input_hold\": " << json_string(to_string(d.hold))
       << ",\n    \"j_statistic\": " << (e.j_statistic ? json_number(*e.j_statistic) : "null")
       << ",\n    \"j_dof\": " << e.j_dof
       << ",\n    \"j_pvalue\": " << (e.j_pvalue ? json_number(*e.j_pvalue) : "null");
@@ -220,7 +216,7 @@ std::string format_text(const IdentifyResult& r) {
   out << "model " << r.model->name() << ", data " << r.data_name << ": " << d.rows << " rows in "
       << d.runs << (d.runs == 1 ? " run" : " runs");
   if (d.time_step) out << ", dt = " << number(*d.time_step);
-  out << ", input hold " << hold_name(d.hold) << "\n";
+  out << ", input hold " << to_string(d.hold) << "\n";
   if (r.lagged) out << method_text(r) << "\n";
   if (!r.centered.empty()) {
     out << "means removed (--center):";

@@ -60,7 +60,8 @@ void estimate_sampling_bias(IdentifyResult& result, const DataSource& source,
                             const std::vector<std::vector<double>>& fine_errors) {
   if (!result.model->inputs().empty() && result.data.hold == InputHold::kZeroOrderHold) {
     throw UsageError(
-        "extrapolate: the input is held over each sample (input hold zoh): every other sample "
+        "extrapolate",
+        "the input is held over each sample (input hold zoh): every other sample "
         "of such a record is not the record sampled at 2 dt, whose input would be held over "
         "2 dt; the kinks of the held input are corrected from the model instead");
   }

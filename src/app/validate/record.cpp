@@ -91,13 +91,14 @@ void write_replay(const Model& model, const Replay& replay, const std::string& p
   columns.insert(columns.end(), record.columns.begin(), record.columns.end());
   if (record.has_run) columns.push_back("run");
   DataMetadata metadata;
-  DataMetadata::Line line{{"model", model.name()},
-                          {"dt", shortest_decimal(record.dt)},
-                          {"input-hold", record.metadata.get("input-hold").value_or("sample")},
-                          {"input-file", record.name}};
+  DataMetadata::Line line{
+      {"model", model.name()},
+      {"dt", shortest_decimal(record.dt)},
+      {"input-hold", record.metadata.get("input-hold").value_or(to_string(InputHold::kSample))},
+      {"input-file", record.name}};
   for (std::size_t i = 0; i < model.inputs().size(); ++i) {
     line.emplace_back("interpolation." + model.inputs()[i].name,
-                      interpolation_name(replay.interpolation[i]));
+                      to_string(replay.interpolation[i]));
   }
   line.emplace_back("substeps", std::to_string(replay.substeps));
   metadata.add_line(std::move(line));

@@ -79,15 +79,13 @@ std::vector<double> initial_state(const Model& model, const Record& record, cons
 std::vector<Interpolation> interpolation_methods(const Model& model, const Record& record,
                                                  const ReplayOptions& options) {
   std::vector<Interpolation> out;
-  const std::string hold = record.metadata.get("input-hold").value_or("sample");
   for (const Declaration& input : model.inputs()) {
     if (options.interpolation) {
       out.push_back(*options.interpolation);
       continue;
     }
-    const std::string own =
-        hold == "mixed" ? record.metadata.get("input-hold." + input.name).value_or("sample") : hold;
-    out.push_back(own == "zoh" ? Interpolation::kHold : Interpolation::kSinc);
+    const InputHold hold = record.metadata.input_hold(input.name);
+    out.push_back(hold == InputHold::kZeroOrderHold ? Interpolation::kHold : Interpolation::kSinc);
   }
   return out;
 }
@@ -143,7 +141,7 @@ std::pair<int, double> chosen_substeps(const Model& model,
 
 Replay replay(const Model& model, const DataSource& source, const ReplayOptions& options) {
   if (options.dt && !(std::isfinite(*options.dt) && *options.dt > 0)) {
-    throw UsageError("--dt: expected a positive number, found " + shortest_decimal(*options.dt));
+    throw UsageError("dt", "expected a positive number, found " + shortest_decimal(*options.dt));
   }
   Replay out;
   out.record = read_record(model, source, options);
@@ -158,9 +156,9 @@ Replay replay(const Model& model, const DataSource& source, const ReplayOptions&
   }
   if (options.substeps) {
     if (*options.substeps < 1 || *options.substeps > RecordSimulator::kMaxSubsteps) {
-      throw UsageError("--substeps: expected a number from 1 to " +
-                       std::to_string(RecordSimulator::kMaxSubsteps) + ", found " +
-                       std::to_string(*options.substeps));
+      throw UsageError("substeps", "expected a number from 1 to " +
+                                       std::to_string(RecordSimulator::kMaxSubsteps) + ", found " +
+                                       std::to_string(*options.substeps));
     }
     out.substeps = *options.substeps;
   } else {

@@ -79,7 +79,7 @@ std::string format_text(const ValidateResult& r) {
                     ", dt = " + number(record.dt, "%g") + "\n";
   out += "parameters (" + r.parameters_from + "): " + parameters_text(r) + "\n";
   for (std::size_t i = 0; i < model.inputs().size(); ++i) {
-    out += "input " + model.inputs()[i].name + ": " + interpolation_name(replay.interpolation[i]) +
+    out += "input " + model.inputs()[i].name + ": " + to_string(replay.interpolation[i]) +
            " between samples\n";
   }
   const bool converged =
@@ -160,7 +160,7 @@ std::string format_json(const ValidateResult& r) {
       << ",\n  \"interpolation\": {";
   for (std::size_t i = 0; i < model.inputs().size(); ++i) {
     out << (i ? ", " : "") << json_string(model.inputs()[i].name) << ": "
-        << json_string(interpolation_name(replay.interpolation[i]));
+        << json_string(to_string(replay.interpolation[i]));
   }
   out << "},\n  \"substeps\": " << replay.substeps << ",\n  \"initial_state\": [";
   for (std::size_t r0 = 0; r0 < record.runs.size(); ++r0) {
