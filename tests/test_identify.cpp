@@ -221,15 +221,16 @@ TEST_SUITE("identify") {
     const Model model = model_file("duffing.mom");
     const momentid::IdentifyResult r =
         identify_held(model, "ma:K=10,w=0.1,sigma=20", 200000, 0.04, 2, {.degree = 3});
-    REQUIRE(r.held_input.has_value());
-    CHECK(r.held_input->unavailable.empty());
-    REQUIRE(r.held_input->shift.size() == 3);
+    REQUIRE(r.zero_lag->held_input.has_value());
+    CHECK(r.zero_lag->held_input->unavailable.empty());
+    REQUIRE(r.zero_lag->held_input->shift.size() == 3);
     check_near_truth(model, r, 0.001);
     // Without the correction, c and k would be more than four standard errors off.
     for (const std::size_t p : {0, 1}) {
       const momentid::ParameterEstimate& e = r.parameters()[p];
-      INFO(e.name, " moved by ", r.held_input->shift[p], ", error ", e.std_error);
-      CHECK(std::abs(e.estimate - r.held_input->shift[p] - truth_of(model, p)) > 4 * e.std_error);
+      INFO(e.name, " moved by ", r.zero_lag->held_input->shift[p], ", error ", e.std_error);
+      CHECK(std::abs(e.estimate - r.zero_lag->held_input->shift[p] - truth_of(model, p)) >
+            4 * e.std_error);
     }
   }
 
@@ -237,9 +238,9 @@ TEST_SUITE("identify") {
     const momentid::IdentifyResult r =
         identify_held(model_file("duffing.mom"), "ma:K=10,w=0.1,sigma=20", 20000, std::nullopt, 1,
                       {.degree = 3, .hold = InputHold::kZeroOrderHold});
-    REQUIRE(r.held_input.has_value());
-    CHECK(r.held_input->shift.empty());
-    CHECK(r.held_input->unavailable ==
+    REQUIRE(r.zero_lag->held_input.has_value());
+    CHECK(r.zero_lag->held_input->shift.empty());
+    CHECK(r.zero_lag->held_input->unavailable ==
           "the data give no sample interval (a 't' column or a dt in the metadata)");
     CHECK(momentid::format_text(r).find(
               "held input: moments not corrected for the kinks it puts at the samples: the data "
@@ -251,8 +252,8 @@ TEST_SUITE("identify") {
         "state y\ninput x\nparam a = 1, b = 1\ny' = -a*y - b*y + x\n", "ab.mom");
     const momentid::IdentifyResult r = identify_held(model, "ma:K=10,w=0.1", 20000, 0.01, 1, {});
     CHECK(r.estimate.status == Estimate::Status::kRankDeficient);
-    REQUIRE(r.held_input.has_value());
-    CHECK(r.held_input->unavailable ==
+    REQUIRE(r.zero_lag->held_input.has_value());
+    CHECK(r.zero_lag->held_input->unavailable ==
           "the estimate without it does not determine every parameter");
   }
 
@@ -266,10 +267,10 @@ TEST_SUITE("identify") {
       const momentid::IdentifyResult r =
           identify_held(model, "ma:K=10,w=0.1,sigma=20", 100000, dt, 3,
                         {.degree = 3, .hold = InputHold::kZeroOrderHold, .batches = batches});
-      REQUIRE(r.end_values.has_value());
+      REQUIRE(r.zero_lag->end_values.has_value());
       std::vector<double> out;
       for (const momentid::ParameterEstimate& e : r.parameters()) out.push_back(e.std_error);
-      return std::pair{out, *r.end_values};
+      return std::pair{out, *r.zero_lag->end_values};
     };
     const auto [standard, ends] = errors(100, 0.01);
     CHECK(ends.unavailable.empty());
@@ -286,8 +287,8 @@ TEST_SUITE("identify") {
     // Where the rates' products would more than double the pass, the batches estimate it all.
     const momentid::IdentifyResult two =
         identify_held(model_file("duffing_2dof.mom"), "ma:K=10,w=0.1,sigma=20", 5000, 0.01, 1, {});
-    REQUIRE(two.end_values.has_value());
-    CHECK(two.end_values->unavailable ==
+    REQUIRE(two.zero_lag->end_values.has_value());
+    CHECK(two.zero_lag->end_values->unavailable ==
           "their covariance would need 480 more moments than the 470 the pass reads (the "
           "products of 77 rates of change)");
   }
@@ -296,13 +297,14 @@ TEST_SUITE("identify") {
     const momentid::IdentifyResult r = identify_held(
         model_file("duffing.mom"), "ma:K=10,w=0.1,sigma=20", 20000, 0.01, 3, {.degree = 3});
     std::size_t rates = 0;
-    for (const momentid::Monomial& m : r.moments) rates += momentid::rate_of(m, 3).has_value();
+    for (const momentid::Monomial& m : r.zero_lag->moments)
+      rates += momentid::rate_of(m, 3).has_value();
     REQUIRE(rates > 0);
     const auto solve = [&](double scale) {
       momentid::SolveOptions options;
       options.rate_covariance.assign(rates, std::vector<double>(rates, 0.0));
       for (std::size_t i = 0; i < rates; ++i) options.rate_covariance[i][i] = scale * 1e-8;
-      return momentid::solve(r.system, r.data.estimates, options);
+      return momentid::solve(r.zero_lag->system, r.data.estimates, options);
     };
     const Estimate none = solve(0), once = solve(1), four = solve(4);
     for (std::size_t p = 0; p < 3; ++p) {
@@ -316,7 +318,8 @@ TEST_SUITE("identify") {
     }
     momentid::SolveOptions wrong;
     wrong.rate_covariance.assign(rates + 1, std::vector<double>(rates + 1, 0.0));
-    CHECK_THROWS_AS(momentid::solve(r.system, r.data.estimates, wrong), std::invalid_argument);
+    CHECK_THROWS_AS(momentid::solve(r.zero_lag->system, r.data.estimates, wrong),
+                    std::invalid_argument);
   }
 
   TEST_CASE("reading zoh data as samples biases the first-order estimate downwards") {
@@ -387,7 +390,7 @@ TEST_SUITE("identify") {
     const momentid::IdentifyResult r = identify_from_displacement(
         model, 0.05, 0.01, 1000000, {}, "multisine:f1=0.05,f2=1,lines=40,rms=20");
     REQUIRE(r.lagged.has_value());
-    CHECK(r.stencil_reach == 6);  // thirteen points
+    CHECK(r.lagged->stencil_reach == 6);  // thirteen points
     REQUIRE(r.estimate.gmm_parameters.size() == 3);
     check_near_truth(model, r, 0.005);
   }
@@ -428,7 +431,7 @@ TEST_SUITE("identify") {
     const Model model = model_file("duffing.mom");
     const momentid::IdentifyResult r = identify_from_displacement(model, 0);
     REQUIRE(r.lagged.has_value());
-    CHECK(r.lagged->derivatives == std::vector<std::string>{"v = y'"});
+    CHECK(r.lagged->system.derivatives == std::vector<std::string>{"v = y'"});
     REQUIRE(r.estimate.status == Estimate::Status::kOk);
     for (std::size_t p = 0; p < 3; ++p) {
       const double truth = truth_of(model, p);
@@ -437,8 +440,8 @@ TEST_SUITE("identify") {
       CHECK(std::abs(r.parameters()[p].estimate - truth) < 4 * r.parameters()[p].std_error);
     }
     // The default window, about five correlation times of y (period ~314 samples).
-    CHECK(r.lagged->first_lag == 3);
-    CHECK(r.lagged->last_lag == 300);
+    CHECK(r.lagged->system.first_lag == 3);
+    CHECK(r.lagged->system.last_lag == 300);
   }
 
   TEST_CASE("the default lags follow the correlation time of the measured state") {
@@ -447,9 +450,9 @@ TEST_SUITE("identify") {
     const Model model = model_file("duffing.mom");
     const momentid::IdentifyResult r = identify_from_displacement(model, 0, 0.05, 200000);
     REQUIRE(r.lagged.has_value());
-    INFO("lags ", r.lagged->first_lag, "..", r.lagged->last_lag);
-    CHECK(r.lagged->last_lag > 30);
-    CHECK(r.lagged->last_lag < 80);
+    INFO("lags ", r.lagged->system.first_lag, "..", r.lagged->system.last_lag);
+    CHECK(r.lagged->system.last_lag > 30);
+    CHECK(r.lagged->system.last_lag < 80);
     for (std::size_t p = 0; p < 3; ++p) {
       INFO(r.parameters()[p].name, " = ", r.parameters()[p].estimate);
       CHECK(std::abs(r.parameters()[p].estimate - truth_of(model, p)) < 1e-3 * truth_of(model, p));
@@ -462,8 +465,8 @@ TEST_SUITE("identify") {
     const Model model = model_file("duffing.mom");
     const momentid::IdentifyResult r = identify_from_displacement(model, 0, 0.001, 100000);
     REQUIRE(r.lagged.has_value());
-    CHECK(r.lagged->last_lag == 502);
-    CHECK(r.correlation_lags.at("y") == 0);
+    CHECK(r.lagged->system.last_lag == 502);
+    CHECK(r.lagged->correlation_lags.at("y") == 0);
     const auto all = momentid::warnings(r);
     CHECK(std::any_of(all.begin(), all.end(), [](const std::string& w) {
       return w.starts_with("'y' stays correlated across lags 3..502");

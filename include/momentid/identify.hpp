@@ -74,61 +74,69 @@ struct IdentifyOptions {
   void validate(const Model& model) const;
 };
 
-// What an identification yields: the moment equations, the moments estimated from the data, and
-// the estimate with its diagnostics. The result owns everything it holds, a copy of the model
-// included, so it stays valid after the model and the source are gone.
+// What an identification yields: the moment equations (zero-lag or lagged, whichever the data
+// called for), the moments estimated from the data, and the estimate with its diagnostics. The
+// result owns everything it holds, a copy of the model included, so it stays valid after the
+// model and the source are gone.
 struct IdentifyResult {
+  // The zero-lag moment equations and what refined their estimate.
+  struct ZeroLag {
+    MomentSystem system;            // refers to *model
+    std::vector<Monomial> moments;  // the moments of data.estimates, in that order
+    // IdentifyOptions::extrapolate: per parameter of the main result, the estimate from every
+    // other sample, the bias of the estimate at dt, (fine - coarse) / (2^order - 1), and the
+    // standard error of fine - coarse. `applied`: the difference exceeds its standard error for
+    // some parameter, and the main result is the extrapolated estimate (its errors those of the
+    // extrapolation).
+    struct SamplingBias {
+      static constexpr int kOrder = 2;  // of the bias in dt (docs/uncertainty.md, "Sampling bias")
+      std::vector<double> coarse, bias, difference_error;
+      bool applied = false;
+    };
+    std::optional<SamplingBias> sampling_bias;
+    // Data whose input is held over each sample: the moments whose derivative holds the input
+    // were corrected for the kinks it puts into the states at the samples (derive.hpp,
+    // held_input_corrections). `shift`: per parameter of the main result, the corrected estimate
+    // minus the uncorrected one; empty, with `unavailable` saying why, when no correction could
+    // be made.
+    struct HeldInput {
+      std::vector<double> shift;
+      std::string unavailable;
+    };
+    std::optional<HeldInput> held_input;
+    // The zero-lag equations take the stationarity identities E[(g)'] = 0, which a finite record
+    // meets only up to (g(end) - g(start)) / T. The errors that leave are estimated from the
+    // variances of the monomials g (SolveOptions::rate_covariance), and the batch series of the
+    // rates, from the first and last rows of each batch, take them out of the batches' errors.
+    // Set when the equations use such identities; `unavailable` says why the batches had to
+    // estimate them instead (no sample interval, or more products g_i*g_j than the pass reads
+    // otherwise).
+    struct EndValues {
+      std::string unavailable;
+    };
+    std::optional<EndValues> end_values;
+  };
+  // The lagged moment equations and their moments, over `channels` (data columns, by model name).
+  struct Lagged {
+    LaggedSystem system;          // refers to *model
+    std::vector<Moment> moments;  // the moments of data.estimates, in that order
+    std::vector<std::string> channels;
+    std::vector<double> noise;  // the noise variance used per channel
+    int stencil_reach = 0;      // of the lag-derivative stencils
+    // Per measured state the equations read: the lag at which its autocorrelation first falls
+    // below 1/e, 0 if it stays above across the lags.
+    std::map<std::string, int> correlation_lags;
+  };
+
   std::shared_ptr<const Model> model;
   std::string data_name;
-  // The zero-lag equations and their moments, in the order of data.estimates; or
-  MomentSystem system;  // refers to *model
-  std::vector<Monomial> moments;
-  // the lagged equations and their moments, over `channels` (data columns, by model name).
-  std::optional<LaggedSystem> lagged;  // refers to *model
-  std::vector<Moment> lagged_moments;
-  std::vector<std::string> channels;
-  std::vector<double> noise;  // the noise variance used per channel (lagged equations)
-  int stencil_reach = 0;      // of the lag-derivative stencils (lagged equations)
-  // Per measured state the lagged equations read: the lag at which its autocorrelation first
-  // falls below 1/e, 0 if it stays above across the lags.
-  std::map<std::string, int> correlation_lags;
+  std::optional<ZeroLag> zero_lag;  // exactly one of the two is set
+  std::optional<Lagged> lagged;
   DataMoments data;
   Estimate estimate;
   bool gmm = false;  // the optimally weighted estimate is the main result
   std::map<std::string, double>
       centered;  // the means removed, by variable (IdentifyOptions::center)
-  // IdentifyOptions::extrapolate: per parameter of the main result, the estimate from every other
-  // sample, the bias of the estimate at dt, (fine - coarse) / (2^order - 1), and the standard
-  // error of fine - coarse. `applied`: the difference exceeds its standard error for some
-  // parameter, and the main result is the extrapolated estimate (its errors those of the
-  // extrapolation).
-  struct SamplingBias {
-    static constexpr int kOrder = 2;  // of the bias in dt (docs/uncertainty.md, "Sampling bias")
-    std::vector<double> coarse, bias, difference_error;
-    bool applied = false;
-  };
-  std::optional<SamplingBias> sampling_bias;
-  // Data whose input is held over each sample (zero-lag equations): the moments whose
-  // derivative holds the input were corrected for the kinks it puts into the states at the
-  // samples (derive.hpp, held_input_corrections). `shift`: per parameter of the main result, the
-  // corrected estimate minus the uncorrected one; empty, with `unavailable` saying why, when
-  // no correction could be made.
-  struct HeldInput {
-    std::vector<double> shift;
-    std::string unavailable;
-  };
-  std::optional<HeldInput> held_input;
-  // The zero-lag equations take the stationarity identities E[(g)'] = 0, which a finite record
-  // meets only up to (g(end) - g(start)) / T. The errors that leave are estimated from the
-  // variances of the monomials g (SolveOptions::rate_covariance), and the batch series of the
-  // rates, from the first and last rows of each batch, take them out of the batches' errors.
-  // Set when the equations use such identities; `unavailable` says why the batches had to
-  // estimate them instead (no sample interval, or more products g_i*g_j than the pass reads
-  // otherwise).
-  struct EndValues {
-    std::string unavailable;
-  };
-  std::optional<EndValues> end_values;
 
   // The main result: the optimally weighted estimate when it was asked for and could be
   // computed, otherwise least squares.

@@ -129,13 +129,16 @@ std::vector<std::string> warnings(const IdentifyResult& r) {
                              : "it biases the zero-lag estimates (the lagged equations, --lags, "
                                "correct for it in part)"));
   }
-  for (const auto& [name, tau] : r.correlation_lags) {
-    if (tau > 0) continue;
-    rest.push_back("'" + name + "' stays correlated across lags " +
-                   std::to_string(r.lagged->first_lag) + ".." + std::to_string(r.lagged->last_lag) +
-                   " (its autocorrelation stays above 1/e): the lagged equations see less than a "
-                   "correlation time of it; give --lags a longer window (with fewer instruments "
-                   "if the moments run out) or keep every n-th sample of the record");
+  if (r.lagged) {
+    for (const auto& [name, tau] : r.lagged->correlation_lags) {
+      if (tau > 0) continue;
+      rest.push_back("'" + name + "' stays correlated across lags " +
+                     std::to_string(r.lagged->system.first_lag) + ".." +
+                     std::to_string(r.lagged->system.last_lag) +
+                     " (its autocorrelation stays above 1/e): the lagged equations see less than a "
+                     "correlation time of it; give --lags a longer window (with fewer instruments "
+                     "if the moments run out) or keep every n-th sample of the record");
+    }
   }
   for (const std::string& s : r.estimate.warnings) {
     if (s.rfind("no optimally weighted estimate", 0) != 0) rest.push_back(s);

@@ -72,7 +72,7 @@ void correct_for_held_input(IdentifyResult& result, const HeldInputCorrections& 
                             const std::vector<Monomial>& moments, const MomentEstimates& all,
                             const SolveOptions& solve_options) {
   if (held.moments.empty() && held.unavailable.empty()) return;  // no moment needs it
-  IdentifyResult::HeldInput& out = result.held_input.emplace();
+  IdentifyResult::ZeroLag::HeldInput& out = result.zero_lag->held_input.emplace();
   if (held.moments.empty()) {
     out.unavailable = held.unavailable;
     return;
@@ -102,9 +102,9 @@ void correct_for_held_input(IdentifyResult& result, const HeldInputCorrections& 
       return give_up("the estimate without it does not determine every parameter");
     }
     std::optional<MomentEstimates> corrected =
-        corrected_moments(model, held, index, all, result.moments.size(), theta, scale);
+        corrected_moments(model, held, index, all, result.zero_lag->moments.size(), theta, scale);
     if (!corrected) return give_up("its weights cannot be evaluated at the estimated parameters");
-    result.estimate = solve(result.system, *corrected, solve_options);
+    result.estimate = solve(result.zero_lag->system, *corrected, solve_options);
     result.data.estimates = std::move(*corrected);
     theta.clear();
     for (const ParameterEstimate& p : result.parameters()) theta.push_back(p.estimate);

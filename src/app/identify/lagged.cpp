@@ -15,9 +15,9 @@ namespace {
 // the window.
 std::map<std::string, int> correlation_lags(const IdentifyResult& r,
                                             const std::vector<int>& channel) {
-  const LaggedSystem& system = *r.lagged;
+  const LaggedSystem& system = r.lagged->system;
   std::map<Moment, std::size_t> index;
-  for (std::size_t k = 0; k < r.lagged_moments.size(); ++k) index.emplace(r.lagged_moments[k], k);
+  for (std::size_t k = 0; k < r.lagged->moments.size(); ++k) index.emplace(r.lagged->moments[k], k);
   std::map<std::string, int> out;
   for (std::size_t v = 0; v < r.model->states().size(); ++v) {
     if (channel[v] < 0 || !system.measured[v]) continue;
@@ -41,15 +41,15 @@ std::map<std::string, int> correlation_lags(const IdentifyResult& r,
 // window when a state stays correlated across it. Kept within the bounds of the lag options and
 // of the number of moments identify takes.
 int lag_window(const IdentifyResult& r) {
-  const LaggedSystem& system = *r.lagged;
+  const LaggedSystem& system = r.lagged->system;
   int wanted = 0;
-  for (const auto& [name, tau] : r.correlation_lags) {
+  for (const auto& [name, tau] : r.lagged->correlation_lags) {
     wanted = std::max(wanted, tau > 0 ? 5 * tau : 4 * system.last_lag);
   }
   if (wanted == 0) return system.last_lag;
   // The moments grow with the number of lags.
   const double per_lag =
-      static_cast<double>(r.lagged_moments.size()) / (system.last_lag - system.first_lag + 1);
+      static_cast<double>(r.lagged->moments.size()) / (system.last_lag - system.first_lag + 1);
   const int most = system.first_lag - 1 +
                    static_cast<int>(IdentifyOptions::kMaxLaggedMoments / std::max(per_lag, 1.0));
   return std::clamp(std::min(wanted, most), system.first_lag + LagOptions::kMinSpan - 1,
@@ -100,21 +100,21 @@ LaggedChannels lagged_channels(const Model& model, const LaggedSystem& system) {
 // `result`.
 LaggedChannels read_lagged(IdentifyResult& result, const LagOptions& lag_options,
                            const DataSource& source, const IdentifyOptions& options) {
-  result.lagged = derive_lagged(*result.model, lag_options);
-  LaggedChannels c = lagged_channels(*result.model, *result.lagged);
-  result.channels = c.states;
-  result.channels.insert(result.channels.end(), c.inputs.begin(), c.inputs.end());
+  result.lagged.emplace().system = derive_lagged(*result.model, lag_options);
+  LaggedChannels c = lagged_channels(*result.model, result.lagged->system);
+  result.lagged->channels = c.states;
+  result.lagged->channels.insert(result.lagged->channels.end(), c.inputs.begin(), c.inputs.end());
   // The rows need the sample interval, which the data give: accumulate, then build rows.
-  const LaggedRows probe = lagged_rows(*result.lagged, 1.0, c.channel, {});
+  const LaggedRows probe = lagged_rows(result.lagged->system, 1.0, c.channel, {});
   if (probe.moments.size() > IdentifyOptions::kMaxLaggedMoments) {
-    throw UsageError("lags " + std::to_string(result.lagged->first_lag) + ".." +
-                     std::to_string(result.lagged->last_lag) + " with " +
-                     std::to_string(result.lagged->instruments.size()) + " instruments need " +
-                     std::to_string(probe.moments.size()) + " moments, more than " +
-                     std::to_string(IdentifyOptions::kMaxLaggedMoments) +
+    throw UsageError("lags " + std::to_string(result.lagged->system.first_lag) + ".." +
+                     std::to_string(result.lagged->system.last_lag) + " with " +
+                     std::to_string(result.lagged->system.instruments.size()) +
+                     " instruments need " + std::to_string(probe.moments.size()) +
+                     " moments, more than " + std::to_string(IdentifyOptions::kMaxLaggedMoments) +
                      ": use fewer lags or instruments");
   }
-  result.lagged_moments = probe.moments;
+  result.lagged->moments = probe.moments;
   DataOptions data_options = pass_options(options);
   // The optimal weighting estimates the equations' covariance from the batches.
   data_options.min_batches = kBatchesPerEquation * probe.rows.a.size();
@@ -126,7 +126,7 @@ LaggedChannels read_lagged(IdentifyResult& result, const LagOptions& lag_options
                     "the lagged equations need the sample interval: give the data a 't' "
                     "column or a dt in the metadata");
   }
-  result.correlation_lags = correlation_lags(result, c.channel);
+  result.lagged->correlation_lags = correlation_lags(result, c.channel);
   return c;
 }
 
@@ -134,10 +134,10 @@ LaggedChannels read_lagged(IdentifyResult& result, const LagOptions& lag_options
 // taken as measured without noise).
 std::vector<double> noise_variances(const IdentifyResult& result, std::size_t states,
                                     const IdentifyOptions& options) {
-  std::vector<double> noise(result.channels.size(), 0.0);
+  std::vector<double> noise(result.lagged->channels.size(), 0.0);
   for (std::size_t c = 0; c < states; ++c) {
     if (options.noise) {
-      const auto given = options.noise->find(result.channels[c]);
+      const auto given = options.noise->find(result.lagged->channels[c]);
       if (given != options.noise->end()) noise[c] = given->second;
     } else if (const auto& v = result.data.channels[c].noise_variance) {
       noise[c] = std::max(0.0, *v);
@@ -162,18 +162,20 @@ void identify_lagged(IdentifyResult& result, const DataSource& source,
   // second pass takes the lags the data call for.
   if (!options.lags) {
     const int wanted = lag_window(result);
-    const int last = result.lagged->last_lag;
+    const int last = result.lagged->system.last_lag;
     if (2 * wanted > 3 * last || 2 * wanted < last) {
       lag_options.last_lag = wanted;
       channels = read_lagged(result, lag_options, source, options);
     }
   }
-  result.noise = noise_variances(result, channels.states.size(), options);
+  result.lagged->noise = noise_variances(result, channels.states.size(), options);
   // Inputs held over each sample put kinks into the states at the samples, which only the
   // five-point stencils match; band-limited records take the wide ones.
-  result.stencil_reach = result.data.hold == InputHold::kSample ? kWideStencilReach : kStencilReach;
-  const LaggedRows rows = lagged_rows(*result.lagged, *result.data.time_step, channels.channel,
-                                      result.noise, result.stencil_reach);
+  result.lagged->stencil_reach =
+      result.data.hold == InputHold::kSample ? kWideStencilReach : kStencilReach;
+  const LaggedRows rows =
+      lagged_rows(result.lagged->system, *result.data.time_step, channels.channel,
+                  result.lagged->noise, result.lagged->stencil_reach);
   std::vector<std::string> names;
   for (const Declaration& p : model.parameters()) names.push_back(p.name);
   result.gmm = options.gmm.value_or(true);

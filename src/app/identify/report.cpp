@@ -33,21 +33,22 @@ void table(std::ostringstream& out, const std::vector<ParameterEstimate>& parame
 // "lagged moment equations at lags 3..300 samples, instruments y, y^3; not measured: v = y';
 // 5-point lag stencils".
 std::string method_text(const IdentifyResult& r) {
-  std::string out = "lagged moment equations at lags " + std::to_string(r.lagged->first_lag) +
-                    ".." + std::to_string(r.lagged->last_lag) + " samples, instruments ";
-  for (std::size_t i = 0; i < r.lagged->instruments.size(); ++i) {
-    out += (i ? ", " : "") + format_monomial(*r.model, r.lagged->instruments[i]);
+  std::string out = "lagged moment equations at lags " +
+                    std::to_string(r.lagged->system.first_lag) + ".." +
+                    std::to_string(r.lagged->system.last_lag) + " samples, instruments ";
+  for (std::size_t i = 0; i < r.lagged->system.instruments.size(); ++i) {
+    out += (i ? ", " : "") + format_monomial(*r.model, r.lagged->system.instruments[i]);
   }
-  for (std::size_t i = 0; i < r.lagged->derivatives.size(); ++i) {
-    out += (i ? ", " : "; not measured: ") + r.lagged->derivatives[i];
+  for (std::size_t i = 0; i < r.lagged->system.derivatives.size(); ++i) {
+    out += (i ? ", " : "; not measured: ") + r.lagged->system.derivatives[i];
   }
-  out += "; " + std::to_string(2 * r.stencil_reach + 1) + "-point lag stencils";
+  out += "; " + std::to_string(2 * r.lagged->stencil_reach + 1) + "-point lag stencils";
   std::string noise;
-  for (std::size_t c = 0; c < r.noise.size(); ++c) {
-    if (r.noise[c] == 0) continue;
+  for (std::size_t c = 0; c < r.lagged->noise.size(); ++c) {
+    if (r.lagged->noise[c] == 0) continue;
     char text[32];
-    std::snprintf(text, sizeof text, "%.3g", r.noise[c]);
-    noise += (noise.empty() ? "" : ", ") + r.channels[c] + " " + text;
+    std::snprintf(text, sizeof text, "%.3g", r.lagged->noise[c]);
+    noise += (noise.empty() ? "" : ", ") + r.lagged->channels[c] + " " + text;
   }
   if (!noise.empty()) out += "\nnoise variances, corrected for in powers of the channels: " + noise;
   return out;
@@ -68,9 +69,10 @@ std::string lagged_moment_text(const std::vector<std::string>& channels, const M
 // The refinements of a zero-lag estimate: the sampling bias, the held-input correction and the
 // record's ends.
 void refinements_text(std::ostringstream& out, const IdentifyResult& r) {
-  if (const auto& s = r.sampling_bias) {
+  if (!r.zero_lag) return;
+  if (const auto& s = r.zero_lag->sampling_bias) {
     out << "  sampling bias at dt (the estimate from every other sample, bias of order dt^"
-        << IdentifyResult::SamplingBias::kOrder << "):\n";
+        << IdentifyResult::ZeroLag::SamplingBias::kOrder << "):\n";
     const auto& list = r.parameters();
     for (std::size_t p = 0; p < list.size(); ++p) {
       out << "    " << list[p].name << ": " << number(s->bias[p], "%.3g") << " (every other sample "
@@ -80,7 +82,7 @@ void refinements_text(std::ostringstream& out, const IdentifyResult& r) {
     out << (s->applied ? "    removed: the estimates above are extrapolated to dt = 0\n"
                        : "    within the errors: not removed\n");
   }
-  if (const auto& h = r.held_input) {
+  if (const auto& h = r.zero_lag->held_input) {
     if (h->unavailable.empty()) {
       out << "  held input: moments corrected by -dt^2/12 E[g''] for the kinks it puts at the "
              "samples, which moved the estimates by";
@@ -94,7 +96,7 @@ void refinements_text(std::ostringstream& out, const IdentifyResult& r) {
           << h->unavailable << "\n";
     }
   }
-  if (const auto& v = r.end_values) {
+  if (const auto& v = r.zero_lag->end_values) {
     out << (v->unavailable.empty()
                 ? "  record ends: the errors they leave come from the variances of the states "
                   "there, the batches give the rest\n"
@@ -116,7 +118,8 @@ void diagnostics_text(std::ostringstream& out, const IdentifyResult& r) {
       << ", condition number " << number(e.condition, "%.3g") << "\n";
   out << "  batches: " << e.batches;
   if (e.dof > 0) {
-    const bool ends = r.end_values && r.end_values->unavailable.empty();
+    const bool ends =
+        r.zero_lag && r.zero_lag->end_values && r.zero_lag->end_values->unavailable.empty();
     out << "; standard errors from their long-run covariance"
         << (ends ? " and the record's ends" : "") << " on " << number(e.dof, "%.0f")
         << " degrees of freedom";
@@ -141,8 +144,9 @@ void diagnostics_text(std::ostringstream& out, const IdentifyResult& r) {
 }
 
 void refinements_json(std::ostringstream& out, const IdentifyResult& r) {
-  if (const auto& s = r.sampling_bias) {
-    out << ",\n    \"sampling_bias\": {\"order\": " << IdentifyResult::SamplingBias::kOrder
+  if (!r.zero_lag) return;
+  if (const auto& s = r.zero_lag->sampling_bias) {
+    out << ",\n    \"sampling_bias\": {\"order\": " << IdentifyResult::ZeroLag::SamplingBias::kOrder
         << ", \"applied\": " << (s->applied ? "true" : "false") << ", \"parameters\": {";
     const auto& list = r.parameters();
     for (std::size_t p = 0; p < list.size(); ++p) {
@@ -153,7 +157,7 @@ void refinements_json(std::ostringstream& out, const IdentifyResult& r) {
     }
     out << "}}";
   }
-  if (const auto& h = r.held_input) {
+  if (const auto& h = r.zero_lag->held_input) {
     out << ",\n    \"held_input_correction\": {\"applied\": "
         << (h->unavailable.empty() ? "true" : "false");
     if (h->unavailable.empty()) {
@@ -168,7 +172,7 @@ void refinements_json(std::ostringstream& out, const IdentifyResult& r) {
     }
     out << "}";
   }
-  if (const auto& v = r.end_values) {
+  if (const auto& v = r.zero_lag->end_values) {
     out << ",\n    \"end_values\": {\"applied\": " << (v->unavailable.empty() ? "true" : "false");
     if (!v->unavailable.empty()) out << ", \"reason\": " << json_string(v->unavailable);
     out << "}";
@@ -264,16 +268,18 @@ std::string format_json(const IdentifyResult& r) {
       << ",\n  \"parameters\": " << parameters(gmm ? e.gmm_parameters : e.parameters);
   if (gmm) out << ",\n  \"least_squares\": " << parameters(e.parameters);
   if (r.lagged) {
-    out << ",\n  \"method\": {\"name\": \"lagged\", \"lags\": [" << r.lagged->first_lag << ", "
-        << r.lagged->last_lag << "], \"stencil_points\": " << 2 * r.stencil_reach + 1
-        << ", \"instruments\": [";
-    for (std::size_t i = 0; i < r.lagged->instruments.size(); ++i) {
-      out << (i ? ", " : "") << json_string(format_monomial(*r.model, r.lagged->instruments[i]));
+    out << ",\n  \"method\": {\"name\": \"lagged\", \"lags\": [" << r.lagged->system.first_lag
+        << ", " << r.lagged->system.last_lag
+        << "], \"stencil_points\": " << 2 * r.lagged->stencil_reach + 1 << ", \"instruments\": [";
+    for (std::size_t i = 0; i < r.lagged->system.instruments.size(); ++i) {
+      out << (i ? ", " : "")
+          << json_string(format_monomial(*r.model, r.lagged->system.instruments[i]));
     }
-    out << "], \"not_measured\": " << json_strings(r.lagged->derivatives)
+    out << "], \"not_measured\": " << json_strings(r.lagged->system.derivatives)
         << ", \"noise_variance\": {";
-    for (std::size_t c = 0; c < r.noise.size(); ++c) {
-      out << (c ? ", " : "") << json_string(r.channels[c]) << ": " << json_number(r.noise[c]);
+    for (std::size_t c = 0; c < r.lagged->noise.size(); ++c) {
+      out << (c ? ", " : "") << json_string(r.lagged->channels[c]) << ": "
+          << json_number(r.lagged->noise[c]);
     }
     out << "}}";
   }
@@ -288,8 +294,8 @@ std::string format_json(const IdentifyResult& r) {
   out << ",\n  \"equations\": " << json_strings(identified_equations(r));
   out << ",\n  \"moments\": {";
   for (std::size_t k = 0; k < d.estimates.mean.size(); ++k) {
-    const std::string name = r.lagged ? lagged_moment_text(r.channels, r.lagged_moments[k])
-                                      : format_moment(*r.model, r.moments[k]);
+    const std::string name = r.lagged ? lagged_moment_text(r.lagged->channels, r.lagged->moments[k])
+                                      : format_moment(*r.model, r.zero_lag->moments[k]);
     out << (k ? ", " : "") << json_string(name) << ": " << json_number(d.estimates.mean[k]);
   }
   out << "}";

@@ -27,10 +27,11 @@ MomentEstimates every_other_sample(const IdentifyResult& result, const DataSourc
   MomentEstimates coarse;
   for (std::size_t phase = 0; phase < 2; ++phase) {
     data_options.phase = phase;
-    DataMoments pass = moments_from_data(source, state_names(model), input_names(model),
-                                         pass_moments_of(model, result.moments), data_options);
+    DataMoments pass =
+        moments_from_data(source, state_names(model), input_names(model),
+                          pass_moments_of(model, result.zero_lag->moments), data_options);
     MomentEstimates& half = pass.estimates;
-    increments_to_rates(model, result.moments, pass.time_step, half);  // at 2 dt
+    increments_to_rates(model, result.zero_lag->moments, pass.time_step, half);  // at 2 dt
     if (half.batch_means.size() != batches) {
       throw Error(source.name() + ": every other sample gives " +
                   std::to_string(half.batch_means.size()) + " batches, not " +
@@ -69,7 +70,7 @@ void estimate_sampling_bias(IdentifyResult& result, const DataSource& source,
   if (fine_errors.empty() || fine.status != Estimate::Status::kOk) return;
   const MomentEstimates coarse = every_other_sample(result, source, data_options, fine.batches);
   std::vector<std::vector<double>> coarse_errors;
-  const Estimate c = solve(result.system, coarse,
+  const Estimate c = solve(result.zero_lag->system, coarse,
                            {.gmm = result.gmm,
                             .fixed = fixed_values(*result.model, options.fixed),
                             .error_batches = &coarse_errors});
@@ -83,7 +84,7 @@ void estimate_sampling_bias(IdentifyResult& result, const DataSource& source,
     return;
   }
   // theta(h) = theta(0) + C h^p: the bias at dt is (theta(2 dt) - theta(dt)) / (2^p - 1).
-  const double r = 1 / (std::pow(2.0, IdentifyResult::SamplingBias::kOrder) - 1);
+  const double r = 1 / (std::pow(2.0, IdentifyResult::ZeroLag::SamplingBias::kOrder) - 1);
   const auto batches = static_cast<Eigen::Index>(fine_errors.size());
   const auto params = static_cast<Eigen::Index>(list.size());
   Eigen::MatrixXd difference(batches, params), extrapolated(batches, params);
@@ -96,7 +97,7 @@ void estimate_sampling_bias(IdentifyResult& result, const DataSource& source,
     }
   }
   const LongRunCovariance difference_errors = long_run_covariance(difference);
-  IdentifyResult::SamplingBias bias;
+  IdentifyResult::ZeroLag::SamplingBias bias;
   for (Eigen::Index p = 0; p < params; ++p) {
     const auto i = static_cast<std::size_t>(p);
     const double error = std::sqrt(difference_errors.covariance(p, p));
@@ -119,7 +120,7 @@ void estimate_sampling_bias(IdentifyResult& result, const DataSource& source,
     }
     (gmm ? fine.gmm_dof : fine.dof) = errors.dof;
   }
-  result.sampling_bias = std::move(bias);
+  result.zero_lag->sampling_bias = std::move(bias);
 }
 
 }  // namespace momentid

@@ -80,12 +80,13 @@ void identify_zero_lag(IdentifyResult& result, const DataSource& source,
                        const IdentifyOptions& options) {
   const Model& model = *result.model;
   ZeroLagPlan plan = plan_zero_lag(model, options);
-  result.system = plan.system;
-  result.moments = plan.moments;
+  IdentifyResult::ZeroLag& zero_lag = result.zero_lag.emplace();
+  zero_lag.system = plan.system;
+  zero_lag.moments = plan.moments;
   result.gmm = options.gmm.value_or(false);
   DataOptions data_options = pass_options(options);
   // The optimal weighting estimates the equations' covariance from the batches.
-  if (result.gmm) data_options.min_batches = kBatchesPerEquation * result.system.equations.size();
+  if (result.gmm) data_options.min_batches = kBatchesPerEquation * zero_lag.system.equations.size();
   data_options.offsets = channel_offsets(source, state_names(model), input_names(model),
                                          data_options, options.center, result.centered);
   const MomentEstimates all = read_zero_lag(result, plan, source, data_options);
@@ -95,14 +96,14 @@ void identify_zero_lag(IdentifyResult& result, const DataSource& source,
                              .fixed = fixed_values(model, options.fixed),
                              .error_batches = options.extrapolate ? &errors : nullptr};
   if (!plan.rated.empty()) {
-    result.end_values.emplace().unavailable = plan.ends_unavailable;
+    zero_lag.end_values.emplace().unavailable = plan.ends_unavailable;
     if (plan.ends_unavailable.empty() && result.data.estimates.intervals > 0) {
       solve_options.rate_covariance = rate_covariance(
           plan.rated, plan.pass_moments, all, std::max<std::size_t>(result.data.runs, 1),
           static_cast<double>(result.data.estimates.intervals) * *result.data.time_step);
     }
   }
-  result.estimate = solve(result.system, result.data.estimates, solve_options);
+  result.estimate = solve(zero_lag.system, result.data.estimates, solve_options);
   if (result.data.hold == InputHold::kZeroOrderHold) {
     correct_for_held_input(result, plan.held, plan.pass_moments, all, solve_options);
   }
