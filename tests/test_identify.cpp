@@ -302,7 +302,7 @@ TEST_SUITE("identify") {
       momentid::SolveOptions options;
       options.rate_covariance.assign(rates, std::vector<double>(rates, 0.0));
       for (std::size_t i = 0; i < rates; ++i) options.rate_covariance[i][i] = scale * 1e-8;
-      return momentid::solve(r.system, r.data.estimates, options);
+      return momentid::solve(r.system, r.moments, r.data.estimates, options);
     };
     const Estimate none = solve(0), once = solve(1), four = solve(4);
     for (std::size_t p = 0; p < 3; ++p) {
@@ -316,7 +316,8 @@ TEST_SUITE("identify") {
     }
     momentid::SolveOptions wrong;
     wrong.rate_covariance.assign(rates + 1, std::vector<double>(rates + 1, 0.0));
-    CHECK_THROWS_AS(momentid::solve(r.system, r.data.estimates, wrong), std::invalid_argument);
+    CHECK_THROWS_AS(momentid::solve(r.system, r.moments, r.data.estimates, wrong),
+                    std::invalid_argument);
   }
 
   TEST_CASE("reading zoh data as samples biases the first-order estimate downwards") {

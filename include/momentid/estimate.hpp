@@ -51,6 +51,10 @@ struct Estimate {
   std::size_t intervals = 0;  // sample intervals the moments average over
   std::optional<double> j_statistic, j_pvalue;
   int j_dof = 0;
+  // The batch series of the main estimate's first-order errors (the optimally weighted one when
+  // computed, else least squares), batches x parameters, whose long-run covariance gives its
+  // standard errors (zero columns for fixed parameters); empty when nothing is identifiable.
+  std::vector<std::vector<double>> error_batches;
   std::vector<IdentityCheck> identities;
   std::vector<std::string> warnings;
 };
@@ -63,22 +67,22 @@ struct SolveOptions {
   // Each row divided by the length of its coefficients (at the estimated moments), so that
   // equations of different sizes count alike; the delta method takes these weights as fixed.
   bool normalise_rows = false;
-  // When set: receives the batch series of the main estimate's first-order errors (the optimally
-  // weighted one when computed, else least squares), batches x parameters, whose long-run
-  // covariance gives its standard errors.
-  std::vector<std::vector<double>>* error_batches = nullptr;
   // solve() only: the covariance of the record's rates of change (the system's rate moments,
   // rate_key, in the order of moments_to_estimate), known from elsewhere, which is added to the
   // errors (README, "Uncertainty").
   std::vector<std::vector<double>> rate_covariance;
 };
 
-// The moments the solver needs estimates of, in the order `solve` expects them: the system's
-// moments, then those its identities mention.
+// The moments solve() needs estimates of: the system's moments, then those its identities
+// mention.
 std::vector<Monomial> moments_to_estimate(const MomentSystem& system);
 
 // The sample violation of each of the system's pure-data identities whose moments are all among
-// `moments` (the order of `estimates`), in standard errors.
+// `moments`, in standard errors. `moments` names the moment of each entry of `estimates` (its
+// means and the columns of its batch means), in any order; identities that need other moments
+// are left out. The checks are the same, to the last bit, whatever the order of the moments and
+// whatever other moments they list. Throws std::invalid_argument when `moments` does not name
+// every estimate once.
 std::vector<IdentityCheck> check_identities(const MomentSystem& system,
                                             const std::vector<Monomial>& moments,
                                             const MomentEstimates& estimates);
@@ -86,8 +90,13 @@ std::vector<IdentityCheck> check_identities(const MomentSystem& system,
 // Solves A(mu) theta = b(mu) by least squares with scaled columns and a rank-revealing SVD, and
 // estimates the parameters' covariance from the batch series of their first-order errors (delta
 // method), with a long-run covariance that holds whether the moment conditions telescope (records
-// without noise) or not (README, "Uncertainty"). `estimates` are
-// for moments_to_estimate(system), in that order.
+// without noise) or not (README, "Uncertainty").
+//
+// `moments` names the moment of each entry of `estimates` (its means and the columns of its batch
+// means), in any order and possibly with moments the system does not need: solve takes each of
+// moments_to_estimate(system) by its key, and the result is the same, to the last bit, whatever
+// the order and the extra moments. Throws std::invalid_argument naming a moment it needs that
+// `moments` lacks, or when `moments` does not name every estimate once.
 //
 // The record's rates of change (a system derived with DeriveOptions::rates) enter the estimate
 // at 0, their stationary value, as the stationarity identities have it; their batch means enter
@@ -95,8 +104,13 @@ std::vector<IdentityCheck> check_identities(const MomentSystem& system,
 // that the record's own ends leave is added from options.rate_covariance. With no batch series
 // for them (all 0) and no rate_covariance, the estimate and its errors are those of the system
 // derived without rates.
-Estimate solve(const MomentSystem& system, const MomentEstimates& estimates,
-               const SolveOptions& options = {});
+//
+// Example:
+//   const std::vector<Monomial> moments = moments_to_estimate(system);
+//   DataMoments data = moments_from_data(source, states, inputs, moments, {});
+//   Estimate e = solve(system, moments, data.estimates, {.gmm = true});
+Estimate solve(const MomentSystem& system, const std::vector<Monomial>& moments,
+               const MomentEstimates& estimates, const SolveOptions& options = {});
 
 // A linear system in the parameters whose entries are linear in estimated moments: row r reads
 // sum over p of a[r][p] * theta_p = b[r], each entry a constant plus weighted moments (indices
@@ -110,7 +124,10 @@ struct MomentRows {
   std::vector<Entry> b;
 };
 
-// Solves `rows` as solve() does, for parameters named `names`.
+// Solves `rows` as solve() does, for parameters named `names`: one per coefficient of every
+// row. The rows' entries index the moments of `estimates` (its means and the columns of its
+// batch means); SolveOptions::rate_covariance is not read. Throws std::invalid_argument when a
+// row has not one coefficient per name or an entry indexes no estimate.
 Estimate solve_rows(const MomentRows& rows, const std::vector<std::string>& names,
                     const MomentEstimates& estimates, const SolveOptions& options = {});
 

@@ -305,11 +305,10 @@ void estimate_sampling_bias(IdentifyResult& result, const DataSource& source,
     }
     coarse.intervals += half.intervals;
   }
-  std::vector<std::vector<double>> coarse_errors;
-  const Estimate c = solve(result.system, coarse,
-                           {.gmm = result.gmm,
-                            .fixed = fixed_values(*result.model, options.fixed),
-                            .error_batches = &coarse_errors});
+  const Estimate c =
+      solve(result.system, result.moments, coarse,
+            {.gmm = result.gmm, .fixed = fixed_values(*result.model, options.fixed)});
+  const std::vector<std::vector<double>>& coarse_errors = c.error_batches;
   const bool gmm = result.gmm && !fine.gmm_parameters.empty();
   std::vector<ParameterEstimate>& list = gmm ? fine.gmm_parameters : fine.parameters;
   const std::vector<ParameterEstimate>& coarse_list =
@@ -457,7 +456,7 @@ void correct_for_held_input(IdentifyResult& result, const HeldInputCorrections& 
         }
       }
     }
-    result.estimate = solve(result.system, corrected, solve_options);
+    result.estimate = solve(result.system, result.moments, corrected, solve_options);
     result.data.estimates = std::move(corrected);
     theta.clear();
     for (const ParameterEstimate& p : result.parameters()) theta.push_back(p.estimate);
@@ -550,10 +549,7 @@ IdentifyResult identify(const Model& model, const DataSource& source,
                         result.data.estimates);
     const MomentEstimates all = std::move(result.data.estimates);
     result.data.estimates = first_moments(all, result.moments.size());
-    std::vector<std::vector<double>> errors;
-    SolveOptions solve_options{.gmm = result.gmm,
-                               .fixed = fixed_values(model, options.fixed),
-                               .error_batches = options.extrapolate ? &errors : nullptr};
+    SolveOptions solve_options{.gmm = result.gmm, .fixed = fixed_values(model, options.fixed)};
     if (!rated.empty()) {
       result.end_values.emplace().unavailable = ends_unavailable;
       if (ends_unavailable.empty() && result.data.estimates.intervals > 0) {
@@ -562,7 +558,8 @@ IdentifyResult identify(const Model& model, const DataSource& source,
             static_cast<double>(result.data.estimates.intervals) * *result.data.time_step);
       }
     }
-    result.estimate = solve(result.system, result.data.estimates, solve_options);
+    result.estimate = solve(result.system, result.moments, result.data.estimates, solve_options);
+    const std::vector<std::vector<double>> errors = result.estimate.error_batches;
     if (result.data.hold == InputHold::kZeroOrderHold) {
       correct_for_held_input(result, held, pass_moments, all, solve_options);
     }
