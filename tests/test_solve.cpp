@@ -76,6 +76,8 @@ void check_same(const Estimate& a, const Estimate& b) {
   CHECK(bits(a.condition) == bits(b.condition));
   CHECK(bits(a.dof) == bits(b.dof));
   CHECK(bits(a.gmm_dof) == bits(b.gmm_dof));
+  CHECK(bits(a.objective) == bits(b.objective));
+  CHECK(bits(a.gmm_objective.value_or(-1)) == bits(b.gmm_objective.value_or(-1)));
   CHECK(bits(a.j_statistic.value_or(-1)) == bits(b.j_statistic.value_or(-1)));
   CHECK(bits(a.j_pvalue.value_or(-1)) == bits(b.j_pvalue.value_or(-1)));
   CHECK(a.warnings == b.warnings);
@@ -274,6 +276,67 @@ TEST_SUITE("solve") {
     CHECK_THROWS_AS(momentid::solve_rows(rows, {"p", "q"}, estimates), std::invalid_argument);
     rows.b[1].moments[0].first = 2;  // one past the estimates
     CHECK_THROWS_AS(momentid::solve_rows(rows, {"p"}, estimates), std::invalid_argument);
+  }
+
+  TEST_CASE("the least-squares objective is zero for a consistent system") {
+    // b = a theta with theta = 0.75: every product exact, so that only the rounding of the
+    // solution, of relative size 1e-16, is left in the residuals, squared 1e-32 of |b|^2.
+    MomentEstimates estimates;
+    estimates.mean = {0.75, 1.5, -2.25, 6};
+    const Estimate e = momentid::solve_rows(proportional_rows({1, 2, -3, 8}), {"p"}, estimates);
+    CHECK(e.parameters[0].estimate == doctest::Approx(0.75).epsilon(1e-14));
+    CHECK(e.objective >= 0);
+    CHECK(e.objective < 1e-28);
+  }
+
+  TEST_CASE("the least-squares objective is the weighted sum of squared residuals") {
+    // theta = 1, theta = 2, 2 theta = 6: theta = 15 / 6, residuals -1.5, -0.5, 1. Rows
+    // normalised: theta = 1, 2, 3, theta = 2, residuals -1, 0, 1. Rounding only: 1e-14.
+    MomentEstimates estimates;
+    estimates.mean = {1, 2, 6};
+    const MomentRows rows = proportional_rows({1, 1, 2});
+    const Estimate plain = momentid::solve_rows(rows, {"p"}, estimates);
+    CHECK(plain.parameters[0].estimate == doctest::Approx(2.5).epsilon(1e-14));
+    CHECK(plain.objective == doctest::Approx(3.5).epsilon(1e-14));
+    const Estimate normalised =
+        momentid::solve_rows(rows, {"p"}, estimates, {.normalise_rows = true});
+    CHECK(normalised.objective == doctest::Approx(2.0).epsilon(1e-14));
+    CHECK(!plain.gmm_objective);
+
+    // p + q = mu_0, p = mu_1, q = mu_2: with q fixed at 0 the fit is that of the rows without q,
+    // and the objectives of the two parameter subsets compare.
+    MomentRows both;
+    for (std::size_t r = 0; r < 3; ++r) both.b.push_back({0.0, {{r, 1.0}}});
+    both.a = {{{1.0, {}}, {1.0, {}}}, {{1.0, {}}, {0.0, {}}}, {{0.0, {}}, {1.0, {}}}};
+    MomentRows only_p = both;
+    for (auto& row : only_p.a) row.pop_back();
+    const Estimate fixed =
+        momentid::solve_rows(both, {"p", "q"}, estimates, {.fixed = {std::nullopt, 0.0}});
+    const Estimate dropped = momentid::solve_rows(only_p, {"p"}, estimates);
+    CHECK(fixed.objective == doctest::Approx(dropped.objective).epsilon(1e-14));
+    // p = (1 + 2) / 2, residuals -0.5, 0.5, 6.
+    CHECK(dropped.objective == doctest::Approx(36.5).epsilon(1e-14));
+    const Estimate free = momentid::solve_rows(both, {"p", "q"}, estimates);
+    CHECK(free.objective < dropped.objective);
+  }
+
+  TEST_CASE("T times the optimally weighted objective is Hansen's J, which the J test reports") {
+    // Rows with constant coefficients and fewer than kMinSpectralBatches batches: the residual's
+    // long-run covariance is then M (S / B) M', tr(W V) = j_dof, and the calibrated J is Hansen's
+    // to rounding (1e-12).
+    MomentRows rows = proportional_rows({1, 2, -1, 0.5});
+    rows.a[1].push_back({1.0, {}});
+    rows.a[3].push_back({-1.0, {}});
+    rows.a[0].push_back({0.0, {}});
+    rows.a[2].push_back({3.0, {}});
+    const MomentEstimates estimates = random_estimates({1, 2, 3, 4}, 12, 6);
+    REQUIRE(estimates.batch_means.size() < momentid::kMinSpectralBatches);
+    const Estimate e = momentid::solve_rows(rows, {"p", "q"}, estimates, {.gmm = true});
+    REQUIRE(e.gmm_objective.has_value());
+    REQUIRE(e.j_statistic.has_value());
+    CHECK(e.j_dof == 2);
+    CHECK(*e.gmm_objective * static_cast<double>(e.intervals) ==
+          doctest::Approx(*e.j_statistic).epsilon(1e-12));
   }
 
   TEST_CASE("the result holds the batch series of the main estimate's errors") {

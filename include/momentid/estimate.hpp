@@ -1,5 +1,6 @@
 #pragma once
 
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -51,6 +52,24 @@ struct Estimate {
   std::size_t intervals = 0;  // sample intervals the moments average over
   std::optional<double> j_statistic, j_pvalue;
   int j_dof = 0;
+  // What each fit minimised, at its estimate. Fits of the same moment estimates with the same
+  // weights compare by it: other parameter subsets (SolveOptions::fixed at 0 drops a term) or
+  // other systems over the same moments.
+  //
+  // Least squares: the weighted sum of squared row residuals sum_r w_r^2 (b_r - a_r theta)^2,
+  // with w_r = 1, or 1 / |a_r| with SolveOptions::normalise_rows (|a_r| over the free
+  // parameters, so that subsets weight their rows alike only where the rows keep their lengths).
+  // NaN when nothing is identifiable.
+  double objective = std::numeric_limits<double>::quiet_NaN();
+  // The optimally weighted estimate, when computed: Hansen's objective g' Omega^+ g for g = A
+  // theta - b (rows weighted as above), where Omega = T S / B is the covariance of one
+  // interval's g that the weighting used: S / B that of g's record mean, from its batch means at
+  // the least-squares estimate, and T = `intervals` (NaN when 0). T * gmm_objective = g' (S /
+  // B)^+ g is Hansen's J statistic; `j_statistic` reports it calibrated for weights and errors
+  // from the same batches, times j_dof / tr(W V) (solve/j_test.cpp), a factor of 1 when the
+  // residual's long-run covariance V is the projection of S / B (fewer than kMinSpectralBatches
+  // batches, coefficients free of moments).
+  std::optional<double> gmm_objective;
   // The batch series of the main estimate's first-order errors (the optimally weighted one when
   // computed, else least squares), batches x parameters, whose long-run covariance gives its
   // standard errors (zero columns for fixed parameters); empty when nothing is identifiable.

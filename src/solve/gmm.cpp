@@ -34,6 +34,7 @@ OptimalWeighting optimal_weighting(const LinearSystem& system, const LeastSquare
   out.theta_scaled = out.left * system.b;
   out.theta = out.theta_scaled.cwiseQuotient(first.scale);
   out.residual = system.b - as * out.theta_scaled;
+  out.objective = out.residual.dot(out.weight * out.residual);
   return out;
 }
 

@@ -20,6 +20,9 @@ struct OptimalWeighting {
   Eigen::MatrixXd information_inverse, left;
   Eigen::VectorXd theta_scaled, theta;
   Eigen::VectorXd residual;  // b - A theta
+  // The minimised quadratic form g' W g at theta: Hansen's J statistic, W being the inverse
+  // covariance of the record's mean of g rather than of one interval's g.
+  double objective = 0;
 };
 
 // `deviations`: the moments' batch series (batch_deviations); `known`: a covariance of the

@@ -49,7 +49,7 @@ JTest j_test(const LinearSystem& system, const LeastSquares& first, const Optima
     out.dof = 0;
     return out;
   }
-  const double j = gmm.residual.dot(gmm.weight * gmm.residual);
+  const double j = gmm.objective;
   const double k = trace * trace / trace_square;
   out.statistic = j * out.dof / trace;
   out.pvalue = f_upper_tail(j / trace * (n - d + 1) / n, k,

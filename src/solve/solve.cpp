@@ -31,7 +31,7 @@ struct MomentErrors {
   const MatrixXd& known;
 };
 
-// The least-squares estimate's parameters, errors and correlations.
+// The least-squares estimate's parameters, errors, correlations and objective.
 void report_least_squares(Estimate& out, const LinearSystem& system, const LeastSquares& ls,
                           const std::vector<bool>& identifiable, const MomentErrors& moments) {
   const MatrixXd jacobian =
@@ -39,6 +39,7 @@ void report_least_squares(Estimate& out, const LinearSystem& system, const Least
   const MatrixXd series = moments.deviations * jacobian.transpose();
   const LongRunCovariance errors = with_known(long_run_covariance(series), jacobian, moments.known);
   out.error_batches = rows_of(series);
+  out.objective = ls.residual.squaredNorm();
   out.dof = errors.dof;
   const double t975 = out.batches >= 2 ? errors.t975() : kNaN;
   for (std::size_t p = 0; p < out.parameters.size(); ++p) {
@@ -55,7 +56,7 @@ void report_least_squares(Estimate& out, const LinearSystem& system, const Least
   warn_about_errors(out, errors);
 }
 
-// The optimally weighted estimate's parameters and errors, and the J test.
+// The optimally weighted estimate's parameters, errors and objective, and the J test.
 void report_gmm(Estimate& out, const LinearSystem& system, const LeastSquares& ls,
                 const std::vector<bool>& identifiable, const MomentErrors& moments) {
   const OptimalWeighting gmm = optimal_weighting(system, ls, moments.deviations, moments.known);
@@ -65,6 +66,7 @@ void report_gmm(Estimate& out, const LinearSystem& system, const LeastSquares& l
   const MatrixXd series = std::sqrt(finite_sample) * moments.deviations * jacobian.transpose();
   const LongRunCovariance errors = with_known(long_run_covariance(series), jacobian, moments.known);
   out.error_batches = rows_of(series);
+  out.gmm_objective = out.intervals > 0 ? gmm.objective / static_cast<double>(out.intervals) : kNaN;
   out.gmm_dof = errors.dof;
   const double t975 = errors.t975();
   for (std::size_t p = 0; p < out.parameters.size(); ++p) {
