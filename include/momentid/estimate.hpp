@@ -72,7 +72,8 @@ struct Estimate {
   std::optional<double> gmm_objective;
   // The batch series of the main estimate's first-order errors (the optimally weighted one when
   // computed, else least squares), batches x parameters, whose long-run covariance gives its
-  // standard errors (zero columns for fixed parameters); empty when nothing is identifiable.
+  // standard errors (zero columns for fixed parameters); empty when nothing is identifiable. As
+  // solve computed it: identify's extrapolation of the sampling bias leaves it as it was.
   std::vector<std::vector<double>> error_batches;
   std::vector<IdentityCheck> identities;
   std::vector<std::string> warnings;

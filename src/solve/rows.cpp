@@ -54,8 +54,12 @@ MomentEstimates estimates_of(const std::vector<Monomial>& wanted,
   out.intervals = estimates.intervals;
   for (std::size_t k : columns) out.mean.push_back(estimates.mean[k]);
   for (const std::vector<double>& batch : estimates.batch_means) {
+    if (batch.size() != given.size()) {
+      throw std::invalid_argument(who + ": " + std::to_string(given.size()) +
+                                  " moments named for batches of " + std::to_string(batch.size()));
+    }
     std::vector<double>& means = out.batch_means.emplace_back();
-    for (std::size_t k : columns) means.push_back(batch.at(k));
+    for (std::size_t k : columns) means.push_back(batch[k]);
   }
   return out;
 }

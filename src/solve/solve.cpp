@@ -47,10 +47,8 @@ void report_least_squares(Estimate& out, const LinearSystem& system, const Least
     const auto i = static_cast<Index>(p);
     e.estimate = ls.theta(i);
     e.identifiable = identifiable[p];
-    set_error(e,
-              e.identifiable && out.batches >= 2 ? std::sqrt(std::max(0.0, errors.covariance(i, i)))
-                                                 : kNaN,
-              t975);
+    const bool has_error = e.identifiable && out.batches >= 2;
+    set_error(e, has_error ? std::sqrt(std::max(0.0, errors.covariance(i, i))) : kNaN, t975);
   }
   if (out.batches >= 2) out.correlation = correlation_of(errors.covariance, identifiable);
   warn_about_errors(out, errors);
