@@ -79,7 +79,7 @@ momentid::IdentifyResult result_with(const momentid::Model& model,
   momentid::IdentifyResult r;
   r.model = std::make_shared<const momentid::Model>(model);
   for (std::size_t p = 0; p < estimates.size(); ++p) {
-    r.estimate.parameters.push_back({model.parameters()[p].name, estimates[p]});
+    r.estimate.least_squares.parameters.push_back({model.parameters()[p].name, estimates[p]});
   }
   return r;
 }
@@ -109,7 +109,7 @@ TEST_SUITE("app") {
         CHECK(p[i].std_error > 0);
         CHECK(std::abs(p[i].estimate - f.estimate) < 3 * f.std_error);
       }
-      CHECK(std::isnan(fixed.estimate.correlation[1][0]));
+      CHECK(std::isnan(fixed.estimate.least_squares.correlation[1][0]));
       CHECK(momentid::format_json(fixed).find("\"fixed\": true") != std::string::npos);
       CHECK(momentid::format_text(fixed).find("fixed\n") != std::string::npos);
     }
@@ -194,7 +194,7 @@ TEST_SUITE("app") {
           std::vector<std::string>{"y' = v", "v' = -0.5*y - 0.25*v + y*x + 0.05",
                                    "v' + 2*w' = -w + x"});
     momentid::IdentifyResult deficient = result_with(duffing, {0.5, 4, 1});
-    deficient.estimate.status = momentid::Estimate::Status::kRankDeficient;
+    deficient.estimate.status = momentid::Status::kRankDeficient;
     CHECK(momentid::identified_equations(deficient).empty());
   }
 
@@ -215,7 +215,7 @@ TEST_SUITE("app") {
         momentid::identify(file.model, momentid::DataSource::memory(std::move(data)), options);
     CHECK(from_memory.data.rows == 40000);
     CHECK(from_memory.data.runs == 2);
-    REQUIRE(from_file.estimate.status == momentid::Estimate::Status::kOk);
+    REQUIRE(from_file.estimate.status == momentid::Status::kOk);
     // The same values through the same accumulation: equal to the last bit.
     for (std::size_t p = 0; p < 3; ++p) {
       CHECK(from_memory.parameters()[p].estimate == from_file.parameters()[p].estimate);

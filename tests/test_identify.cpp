@@ -24,6 +24,7 @@ using momentid::testing::model_file;
 using momentid::Estimate;
 using momentid::InputHold;
 using momentid::Model;
+using momentid::Status;
 
 // Keeps simulated samples in memory, one column per model variable, and a run column.
 struct Columns : momentid::SampleSink {
@@ -153,12 +154,13 @@ TEST_SUITE("identify") {
       Case c;
       c.input = input;
       const Estimate e = identify(model, c);
-      REQUIRE(e.status == Estimate::Status::kOk);
-      for (std::size_t p = 0; p < e.parameters.size(); ++p) {
+      REQUIRE(e.status == Status::kOk);
+      for (std::size_t p = 0; p < e.least_squares.parameters.size(); ++p) {
         const double truth = truth_of(model, p);
-        INFO(file, " ", e.parameters[p].name, " = ", e.parameters[p].estimate, " +- ",
-             e.parameters[p].std_error, " (truth ", truth, ")");
-        CHECK(std::abs(e.parameters[p].estimate - truth) < 0.01 * std::abs(truth));
+        INFO(file, " ", e.least_squares.parameters[p].name, " = ",
+             e.least_squares.parameters[p].estimate, " +- ",
+             e.least_squares.parameters[p].std_error, " (truth ", truth, ")");
+        CHECK(std::abs(e.least_squares.parameters[p].estimate - truth) < 0.01 * std::abs(truth));
       }
     }
   }
@@ -179,7 +181,8 @@ TEST_SUITE("identify") {
         const Estimate e = identify(model, c);
         for (std::size_t p = 0; p < covered.size(); ++p) {
           const double truth = truth_of(model, p);
-          covered[p] += e.parameters[p].ci_low <= truth && truth <= e.parameters[p].ci_high;
+          covered[p] += e.least_squares.parameters[p].ci_low <= truth &&
+                        truth <= e.least_squares.parameters[p].ci_high;
         }
       }
       for (std::size_t p = 0; p < covered.size(); ++p) {
@@ -251,7 +254,7 @@ TEST_SUITE("identify") {
     const Model model = momentid::parse_model(
         "state y\ninput x\nparam a = 1, b = 1\ny' = -a*y - b*y + x\n", "ab.mom");
     const momentid::IdentifyResult r = identify_held(model, "ma:K=10,w=0.1", 20000, 0.01, 1, {});
-    CHECK(r.estimate.status == Estimate::Status::kRankDeficient);
+    CHECK(r.estimate.status == Status::kRankDeficient);
     REQUIRE(r.zero_lag->held_input.has_value());
     CHECK(r.zero_lag->held_input->unavailable ==
           "the estimate without it does not determine every parameter");
@@ -304,22 +307,23 @@ TEST_SUITE("identify") {
       momentid::SolveOptions options;
       options.rate_covariance.assign(rates, std::vector<double>(rates, 0.0));
       for (std::size_t i = 0; i < rates; ++i) options.rate_covariance[i][i] = scale * 1e-8;
-      return momentid::solve(r.zero_lag->system, r.data.estimates, options);
+      return momentid::solve(r.zero_lag->system, r.zero_lag->moments, r.data.estimates, options);
     };
     const Estimate none = solve(0), once = solve(1), four = solve(4);
     for (std::size_t p = 0; p < 3; ++p) {
-      CHECK(once.parameters[p].estimate == none.parameters[p].estimate);
-      CHECK(four.parameters[p].estimate == none.parameters[p].estimate);
-      const double base = std::pow(none.parameters[p].std_error, 2);
-      const double added = std::pow(once.parameters[p].std_error, 2) - base;
+      CHECK(once.least_squares.parameters[p].estimate == none.least_squares.parameters[p].estimate);
+      CHECK(four.least_squares.parameters[p].estimate == none.least_squares.parameters[p].estimate);
+      const double base = std::pow(none.least_squares.parameters[p].std_error, 2);
+      const double added = std::pow(once.least_squares.parameters[p].std_error, 2) - base;
       CHECK(added > 0);
-      CHECK(std::pow(four.parameters[p].std_error, 2) - base ==
+      CHECK(std::pow(four.least_squares.parameters[p].std_error, 2) - base ==
             doctest::Approx(4 * added).epsilon(1e-9));
     }
     momentid::SolveOptions wrong;
     wrong.rate_covariance.assign(rates + 1, std::vector<double>(rates + 1, 0.0));
-    CHECK_THROWS_AS(momentid::solve(r.zero_lag->system, r.data.estimates, wrong),
-                    std::invalid_argument);
+    CHECK_THROWS_AS(
+        momentid::solve(r.zero_lag->system, r.zero_lag->moments, r.data.estimates, wrong),
+        std::invalid_argument);
   }
 
   TEST_CASE("reading zoh data as samples biases the first-order estimate downwards") {
@@ -333,11 +337,14 @@ TEST_SUITE("identify") {
     const Estimate consistent = identify(model, c);
     c.hold = InputHold::kSample;
     const Estimate mismatched = identify(model, c);
-    const double bias = mismatched.parameters[0].estimate / consistent.parameters[0].estimate - 1;
+    const double bias = mismatched.least_squares.parameters[0].estimate /
+                            consistent.least_squares.parameters[0].estimate -
+                        1;
     INFO("relative bias ", bias);
     CHECK(bias < -0.05);
     CHECK(bias > -0.15);
-    CHECK(std::abs(consistent.parameters[0].estimate - 1) < 4 * consistent.parameters[0].std_error);
+    CHECK(std::abs(consistent.least_squares.parameters[0].estimate - 1) <
+          4 * consistent.least_squares.parameters[0].std_error);
   }
 
   TEST_CASE("a rank-deficient system names the combination the data cannot separate") {
@@ -348,13 +355,14 @@ TEST_SUITE("identify") {
     Case c;
     c.samples = 20000;
     const Estimate e = identify(truth, c, &fitted);
-    CHECK(e.status == Estimate::Status::kRankDeficient);
+    CHECK(e.status == Status::kRankDeficient);
     CHECK(e.rank == 1);
     CHECK(e.message ==
           "the data cannot separate the parameters along a - b: only 1 of 2 parameter "
           "combinations are determined");
-    CHECK_FALSE(e.parameters[0].identifiable);
-    CHECK(std::abs(e.parameters[0].estimate + e.parameters[1].estimate - 1) < 0.05);
+    CHECK_FALSE(e.least_squares.parameters[0].identifiable);
+    CHECK(std::abs(e.least_squares.parameters[0].estimate + e.least_squares.parameters[1].estimate -
+                   1) < 0.05);
   }
 
   TEST_CASE("pairing the input with the state at the end of its interval biases upwards") {
@@ -370,7 +378,7 @@ TEST_SUITE("identify") {
     auto estimate = [&](InputHold hold, long shift) {
       const momentid::IdentifyResult result = momentid::identify(
           model, momentid::DataSource::file(path.string()), {.hold = hold, .input_shift = shift});
-      return result.estimate.parameters[0].estimate;
+      return result.estimate.least_squares.parameters[0].estimate;
     };
     const double end = estimate(InputHold::kSample, 1), start = estimate(InputHold::kSample, 0),
                  consistent = estimate(InputHold::kZeroOrderHold, 0);
@@ -391,7 +399,8 @@ TEST_SUITE("identify") {
         model, 0.05, 0.01, 1000000, {}, "multisine:f1=0.05,f2=1,lines=40,rms=20");
     REQUIRE(r.lagged.has_value());
     CHECK(r.lagged->stencil_reach == 6);  // thirteen points
-    REQUIRE(r.estimate.gmm_parameters.size() == 3);
+    REQUIRE(r.estimate.optimal.has_value());
+    REQUIRE(r.estimate.optimal->parameters.size() == 3);
     check_near_truth(model, r, 0.005);
   }
 
@@ -400,7 +409,7 @@ TEST_SUITE("identify") {
     c.samples = 60001;  // 60000 intervals
     c.input = "ma:K=10,w=0.1,sigma=20";
     const Estimate e = identify(model_file("duffing.mom"), c);
-    CHECK(e.gmm_parameters.empty());
+    CHECK(!e.optimal.has_value());
     CHECK(e.batches == 300);
     c.samples = 10000;  // at least 100
     CHECK(identify(model_file("duffing.mom"), c).batches == 100);
@@ -417,7 +426,7 @@ TEST_SUITE("identify") {
     c.gmm = true;
     c.batches = 5;
     const Estimate e = identify(model, c);
-    CHECK(e.gmm_parameters.empty());
+    CHECK(!e.optimal.has_value());
     CHECK_FALSE(e.j_statistic.has_value());
     CHECK(std::find(e.warnings.begin(), e.warnings.end(),
                     "no optimally weighted estimate: it needs more batches than equations (5 "
@@ -432,7 +441,7 @@ TEST_SUITE("identify") {
     const momentid::IdentifyResult r = identify_from_displacement(model, 0);
     REQUIRE(r.lagged.has_value());
     CHECK(r.lagged->system.derivatives == std::vector<std::string>{"v = y'"});
-    REQUIRE(r.estimate.status == Estimate::Status::kOk);
+    REQUIRE(r.estimate.status == Status::kOk);
     for (std::size_t p = 0; p < 3; ++p) {
       const double truth = truth_of(model, p);
       INFO(r.parameters()[p].name, " = ", r.parameters()[p].estimate, " (truth ", truth, ")");
@@ -506,7 +515,8 @@ TEST_SUITE("identify") {
     CHECK(r.gmm);
     REQUIRE(r.lagged.has_value());
     CHECK(r.estimate.batches >= 4 * r.estimate.rows);
-    REQUIRE(r.estimate.gmm_parameters.size() == 3);
+    REQUIRE(r.estimate.optimal.has_value());
+    REQUIRE(r.estimate.optimal->parameters.size() == 3);
     check_near_truth(model, r, 0.003);
     REQUIRE(r.estimate.j_pvalue.has_value());
     CHECK(*r.estimate.j_pvalue > 0.01);  // the right model, at the 1% level

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -7,6 +8,7 @@
 #include "momentid/accumulator.hpp"
 #include "momentid/derive.hpp"
 #include "momentid/lagged.hpp"
+#include "momentid/types.hpp"
 
 namespace momentid {
 
@@ -28,31 +30,69 @@ struct IdentityCheck {
   double z = 0;
 };
 
-// The result of an identification: parameters with standard errors and 95% intervals, and the
-// diagnostics that say when to distrust them. Like a solver summary, it is a value even when the
-// answer is poor: `status` and `warnings` say so.
-struct Estimate {
-  enum class Status { kOk, kRankDeficient, kNothingIdentifiable };
-  Status status = Status::kOk;
-  std::string message;  // what went wrong, for kRankDeficient and kNothingIdentifiable
+// One estimate of the parameters with its errors: the least-squares fit, or the two-step
+// optimally weighted (GMM) one.
+struct Fit {
+  std::vector<ParameterEstimate> parameters;
+  // The estimates' correlation matrix, parameter by parameter (NaN where a parameter is not
+  // identifiable or has no standard error); empty with fewer than two batches.
+  std::vector<std::vector<double>> correlation;
+  // Degrees of freedom of the standard errors (long_run_covariance): the 95% intervals take
+  // Student's t quantile at them.
+  double dof = 0;
+  // What the fit minimised, at its estimate. Fits of the same moment estimates with the same
+  // weights compare by it: other parameter subsets (SolveOptions::fixed at 0 drops a term) or
+  // other systems over the same moments.
+  //
+  // Least squares: the weighted sum of squared row residuals sum_r w_r^2 (b_r - a_r theta)^2,
+  // with w_r = 1, or 1 / |a_r| with SolveOptions::normalise_rows (|a_r| over the free
+  // parameters, so that subsets weight their rows alike only where the rows keep their lengths).
+  // NaN when nothing is identifiable.
+  //
+  // Optimally weighted: Hansen's objective g' Omega^+ g for g = A theta - b (rows weighted as
+  // above), where Omega = T S / B is the covariance of one interval's g that the weighting used:
+  // S / B that of g's record mean, from its batch means at the least-squares estimate, and T =
+  // Estimate::intervals (NaN when 0). T * objective = g' (S / B)^+ g is Hansen's J statistic;
+  // Estimate::j_statistic reports it calibrated for weights and errors from the same batches,
+  // times j_dof / tr(W V) (solve/j_test.cpp), a factor of 1 when the residual's long-run
+  // covariance V is the projection of S / B (fewer than kMinSpectralBatches batches,
+  // coefficients free of moments).
+  double objective = std::numeric_limits<double>::quiet_NaN();
 
-  std::vector<ParameterEstimate> parameters;      // least squares
-  std::vector<ParameterEstimate> gmm_parameters;  // two-step optimal weighting, when asked
-  // The estimates' correlation matrices, parameter by parameter (NaN where a parameter is not
-  // identifiable or has no standard error), for each of the two.
-  std::vector<std::vector<double>> correlation, gmm_correlation;
-  std::size_t rows = 0;  // equations in the system
+  // The estimates' covariance matrix, from their standard errors and correlation: 0 in the row
+  // and column of a fixed parameter, NaN where an error is unknown.
+  std::vector<std::vector<double>> covariance() const;
+};
+
+// The result of an identification: the least-squares fit and, when asked for and possible, the
+// optimally weighted one, with the diagnostics that say when to distrust them. Like a solver
+// summary, it is a value even when the answer is poor: `status` and `warnings` say so.
+struct Estimate {
+  Status status = Status::kOk;  // never kDoubtful: doubts are the application's (identify.hpp)
+  std::string message;          // what went wrong, for kRankDeficient and kNothingIdentifiable
+
+  Fit least_squares;
+  std::optional<Fit> optimal;  // two-step optimal weighting (SolveOptions::gmm), when computed
+  std::size_t rows = 0;        // equations in the system
   std::size_t rank = 0;
   double condition = 0;  // of the column-scaled coefficient matrix
   std::size_t batches = 0;
-  // Degrees of freedom of the standard errors (long_run_covariance): of the least-squares and of
-  // the optimally weighted estimate. The 95% intervals take Student's t quantile at them.
-  double dof = 0, gmm_dof = 0;
   std::size_t intervals = 0;  // sample intervals the moments average over
   std::optional<double> j_statistic, j_pvalue;
   int j_dof = 0;
+  // The batch series of the main fit's first-order errors, batches x parameters, whose long-run
+  // covariance gives its standard errors (zero columns for fixed parameters); empty when nothing
+  // is identifiable. As solve computed it: identify's extrapolation of the sampling bias leaves
+  // it as it was.
+  std::vector<std::vector<double>> error_batches;
   std::vector<IdentityCheck> identities;
   std::vector<std::string> warnings;
+
+  // The optimally weighted fit when there is one, otherwise least squares.
+  const Fit& main() const { return optimal ? *optimal : least_squares; }
+  Fit& main() { return optimal ? *optimal : least_squares; }
+  // Whether the parameters have estimates: the status is kOk (or kDoubtful).
+  bool usable() const { return status == Status::kOk || status == Status::kDoubtful; }
 };
 
 struct SolveOptions {
@@ -63,22 +103,22 @@ struct SolveOptions {
   // Each row divided by the length of its coefficients (at the estimated moments), so that
   // equations of different sizes count alike; the delta method takes these weights as fixed.
   bool normalise_rows = false;
-  // When set: receives the batch series of the main estimate's first-order errors (the optimally
-  // weighted one when computed, else least squares), batches x parameters, whose long-run
-  // covariance gives its standard errors.
-  std::vector<std::vector<double>>* error_batches = nullptr;
   // solve() only: the covariance of the record's rates of change (the system's rate moments,
   // rate_key, in the order of moments_to_estimate), known from elsewhere, which is added to the
   // errors (docs/uncertainty.md, "End values").
   std::vector<std::vector<double>> rate_covariance;
 };
 
-// The moments the solver needs estimates of, in the order `solve` expects them: the system's
-// moments, then those its identities mention.
+// The moments solve() needs estimates of: the system's moments, then those its identities
+// mention.
 std::vector<Monomial> moments_to_estimate(const MomentSystem& system);
 
 // The sample violation of each of the system's pure-data identities whose moments are all among
-// `moments` (the order of `estimates`), in standard errors.
+// `moments`, in standard errors. `moments` names the moment of each entry of `estimates` (its
+// means and the columns of its batch means), in any order; identities that need other moments
+// are left out. The checks are the same, to the last bit, whatever the order of the moments and
+// whatever other moments they list. Throws std::invalid_argument when `moments` does not name
+// every estimate once.
 std::vector<IdentityCheck> check_identities(const MomentSystem& system,
                                             const std::vector<Monomial>& moments,
                                             const MomentEstimates& estimates);
@@ -86,8 +126,13 @@ std::vector<IdentityCheck> check_identities(const MomentSystem& system,
 // Solves A(mu) theta = b(mu) by least squares with scaled columns and a rank-revealing SVD, and
 // estimates the parameters' covariance from the batch series of their first-order errors (delta
 // method), with a long-run covariance that holds whether the moment conditions telescope (records
-// without noise) or not (docs/uncertainty.md, "Batches"). `estimates` are
-// for moments_to_estimate(system), in that order.
+// without noise) or not (docs/uncertainty.md, "Batches").
+//
+// `moments` names the moment of each entry of `estimates` (its means and the columns of its batch
+// means), in any order and possibly with moments the system does not need: solve takes each of
+// moments_to_estimate(system) by its key, and the result is the same, to the last bit, whatever
+// the order and the extra moments. Throws std::invalid_argument naming a moment it needs that
+// `moments` lacks, or when `moments` does not name every estimate once.
 //
 // The record's rates of change (a system derived with DeriveOptions::rates) enter the estimate
 // at 0, their stationary value, as the stationarity identities have it; their batch means enter
@@ -95,8 +140,13 @@ std::vector<IdentityCheck> check_identities(const MomentSystem& system,
 // that the record's own ends leave is added from options.rate_covariance. With no batch series
 // for them (all 0) and no rate_covariance, the estimate and its errors are those of the system
 // derived without rates.
-Estimate solve(const MomentSystem& system, const MomentEstimates& estimates,
-               const SolveOptions& options = {});
+//
+// Example:
+//   const std::vector<Monomial> moments = moments_to_estimate(system);
+//   DataMoments data = moments_from_data(source, states, inputs, moments, {});
+//   Estimate e = solve(system, moments, data.estimates, {.gmm = true});
+Estimate solve(const MomentSystem& system, const std::vector<Monomial>& moments,
+               const MomentEstimates& estimates, const SolveOptions& options = {});
 
 // A linear system in the parameters whose entries are linear in estimated moments: row r reads
 // sum over p of a[r][p] * theta_p = b[r], each entry a constant plus weighted moments (indices
@@ -110,7 +160,10 @@ struct MomentRows {
   std::vector<Entry> b;
 };
 
-// Solves `rows` as solve() does, for parameters named `names`.
+// Solves `rows` as solve() does, for parameters named `names`: one per coefficient of every
+// row. The rows' entries index the moments of `estimates` (its means and the columns of its
+// batch means); SolveOptions::rate_covariance is not read. Throws std::invalid_argument when a
+// row has not one coefficient per name or an entry indexes no estimate.
 Estimate solve_rows(const MomentRows& rows, const std::vector<std::string>& names,
                     const MomentEstimates& estimates, const SolveOptions& options = {});
 

@@ -169,8 +169,8 @@ std::string format_json(const IdentifyResult& result);
 // (p < 0.01), a stationarity identity violated (|z| > 4), a state with a mean of more than 0.2
 // of its standard deviation when the model is symmetric and its inputs have none.
 std::vector<std::string> doubts(const IdentifyResult& result);
-// "ok", "doubtful" (there are doubts), "rank-deficient" or "nothing-identifiable".
-std::string status_name(const IdentifyResult& result);
+// The solver's status, or kDoubtful when it is kOk and there are doubts.
+Status status(const IdentifyResult& result);
 // Every warning about the result, the most serious first: the solver's status, the doubts, an
 // optimal weighting that could not be made, weakly determined parameters (standard error above
 // 10% of the value) and strongly correlated pairs (|rho| > 0.95), then the data's smoothness and

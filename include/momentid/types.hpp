@@ -58,6 +58,13 @@ enum class Weighting { kAuto, kLeastSquares, kGmm };
 // Names: csv, bin, npy, mat (level 5), mat73 (level 7.3), h5.
 enum class FileFormat { kCsv, kBinary, kNpy, kMat5, kMat73, kHdf5 };
 
+// What an identification came to: kOk, estimates that nothing in the data contradicts;
+// kDoubtful, estimates with doubts (a J test that rejects the model, a violated stationarity
+// identity, an offset: identify.hpp, doubts); kRankDeficient, some parameters determined only in
+// combinations; kNothingIdentifiable, no estimate. The solver reports all but kDoubtful.
+// Names: ok, doubtful, rank-deficient, nothing-identifiable.
+enum class Status { kOk, kDoubtful, kRankDeficient, kNothingIdentifiable };
+
 // The formats DataWriter writes a row at a time (simulate's output). Names: csv, bin.
 enum class WriterFormat { kCsv, kBinary };
 
@@ -67,6 +74,7 @@ std::string to_string(Interpolation method);
 std::string to_string(Weighting weighting);
 std::string to_string(FileFormat format);
 std::string to_string(WriterFormat format);
+std::string to_string(Status status);
 
 InputHold parse_input_hold(std::string_view text, std::string_view option);
 MissingValues parse_missing_values(std::string_view text, std::string_view option);
@@ -74,6 +82,7 @@ Interpolation parse_interpolation(std::string_view text, std::string_view option
 Weighting parse_weighting(std::string_view text, std::string_view option);
 FileFormat parse_file_format(std::string_view text, std::string_view option);
 WriterFormat parse_writer_format(std::string_view text, std::string_view option);
+Status parse_status(std::string_view text, std::string_view option);
 
 template <class Enum>
 std::vector<std::string> names_of();
@@ -89,5 +98,7 @@ template <>
 std::vector<std::string> names_of<FileFormat>();
 template <>
 std::vector<std::string> names_of<WriterFormat>();
+template <>
+std::vector<std::string> names_of<Status>();
 
 }  // namespace momentid

@@ -535,10 +535,10 @@ py::dict validate_series(const ValidateResult& result) {
 // None when the least-squares estimate is the main result.
 py::object least_squares_errors(const IdentifyResult& result) {
   const Estimate& e = result.estimate;
-  if (!result.gmm || e.gmm_parameters.empty()) return py::none();
+  if (!e.optimal) return py::none();
   py::dict out;
-  out["error_dof"] = e.dof;
-  out["correlation"] = e.correlation;
+  out["error_dof"] = e.least_squares.dof;
+  out["correlation"] = e.least_squares.correlation;
   return out;
 }
 

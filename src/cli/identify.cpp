@@ -93,7 +93,7 @@ int run_identify(IdentifyCommand& command) {
   const IdentifyResult result = identify(model, data_sources(command.data), options);
   progress.finish();
   std::cout << (command.format == "json" ? format_json(result) : format_text(result));
-  if (result.estimate.status == Estimate::Status::kNothingIdentifiable) {
+  if (result.estimate.status == Status::kNothingIdentifiable) {
     std::cerr << "momentid: nothing identifiable: " << result.estimate.message << "\n";
     return kNothingIdentifiable;
   }

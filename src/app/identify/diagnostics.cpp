@@ -76,21 +76,14 @@ std::vector<std::string> doubts(const IdentifyResult& r) {
   return out;
 }
 
-std::string status_name(const IdentifyResult& r) {
-  switch (r.estimate.status) {
-    case Estimate::Status::kRankDeficient:
-      return "rank-deficient";
-    case Estimate::Status::kNothingIdentifiable:
-      return "nothing-identifiable";
-    case Estimate::Status::kOk:
-      break;
-  }
-  return doubts(r).empty() ? "ok" : "doubtful";
+Status status(const IdentifyResult& r) {
+  if (r.estimate.status != Status::kOk) return r.estimate.status;
+  return doubts(r).empty() ? Status::kOk : Status::kDoubtful;
 }
 
 std::vector<std::string> warnings(const IdentifyResult& r) {
   std::vector<std::string> w;
-  if (r.estimate.status != Estimate::Status::kOk) w.push_back(r.estimate.message);
+  if (r.estimate.status != Status::kOk) w.push_back(r.estimate.message);
   const std::vector<std::string> doubt = doubts(r);
   w.insert(w.end(), doubt.begin(), doubt.end());
   // The optimal weighting that was asked for and could not be made: before the rest.
@@ -107,8 +100,7 @@ std::vector<std::string> warnings(const IdentifyResult& r) {
                 "% of its value. Excite the system more, add multipliers (--degree) or fix "
                 "parameters you know");
   }
-  const auto& correlation = r.gmm && !r.estimate.gmm_parameters.empty() ? r.estimate.gmm_correlation
-                                                                        : r.estimate.correlation;
+  const auto& correlation = r.estimate.main().correlation;
   for (std::size_t i = 0; i < correlation.size(); ++i) {
     for (std::size_t j = i + 1; j < correlation.size(); ++j) {
       if (!(std::abs(correlation[i][j]) > kStrongCorrelation)) continue;

@@ -97,14 +97,15 @@ void correct_for_held_input(IdentifyResult& result, const HeldInputCorrections& 
   };
   std::vector<double> theta = before;
   for (int round = 0; round < 2; ++round) {
-    if (result.estimate.status != Estimate::Status::kOk ||
+    if (result.estimate.status != Status::kOk ||
         std::any_of(theta.begin(), theta.end(), [](double t) { return !std::isfinite(t); })) {
       return give_up("the estimate without it does not determine every parameter");
     }
     std::optional<MomentEstimates> corrected =
         corrected_moments(model, held, index, all, result.zero_lag->moments.size(), theta, scale);
     if (!corrected) return give_up("its weights cannot be evaluated at the estimated parameters");
-    result.estimate = solve(result.zero_lag->system, *corrected, solve_options);
+    result.estimate =
+        solve(result.zero_lag->system, result.zero_lag->moments, *corrected, solve_options);
     result.data.estimates = std::move(*corrected);
     theta.clear();
     for (const ParameterEstimate& p : result.parameters()) theta.push_back(p.estimate);

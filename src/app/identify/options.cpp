@@ -57,7 +57,7 @@ void IdentifyOptions::validate(const Model& model) const {
 }
 
 const std::vector<ParameterEstimate>& IdentifyResult::parameters() const {
-  return gmm && !estimate.gmm_parameters.empty() ? estimate.gmm_parameters : estimate.parameters;
+  return estimate.main().parameters;
 }
 
 }  // namespace momentid

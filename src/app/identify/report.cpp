@@ -110,21 +110,22 @@ void refinements_text(std::ostringstream& out, const IdentifyResult& r) {
 void diagnostics_text(std::ostringstream& out, const IdentifyResult& r) {
   const Estimate& e = r.estimate;
   out << "\ndiagnostics\n";
-  out << "  status: " << status_name(r) << "\n";
+  out << "  status: " << to_string(status(r)) << "\n";
   const std::vector<std::string> all = warnings(r);
   if (all.empty()) out << "  warnings: none\n";
   for (const std::string& w : all) out << "  warning: " << w << "\n";
-  out << "  equations: " << e.rows << ", rank " << e.rank << " of " << e.parameters.size()
-      << ", condition number " << number(e.condition, "%.3g") << "\n";
+  out << "  equations: " << e.rows << ", rank " << e.rank << " of "
+      << e.least_squares.parameters.size() << ", condition number " << number(e.condition, "%.3g")
+      << "\n";
   out << "  batches: " << e.batches;
-  if (e.dof > 0) {
+  if (e.least_squares.dof > 0) {
     const bool ends =
         r.zero_lag && r.zero_lag->end_values && r.zero_lag->end_values->unavailable.empty();
     out << "; standard errors from their long-run covariance"
-        << (ends ? " and the record's ends" : "") << " on " << number(e.dof, "%.0f")
+        << (ends ? " and the record's ends" : "") << " on " << number(e.least_squares.dof, "%.0f")
         << " degrees of freedom";
-    if (!e.gmm_parameters.empty()) {
-      out << " (optimally weighted: " << number(e.gmm_dof, "%.0f") << ")";
+    if (e.optimal) {
+      out << " (optimally weighted: " << number(e.optimal->dof, "%.0f") << ")";
     }
   }
   out << "\n";
@@ -179,14 +180,14 @@ void refinements_json(std::ostringstream& out, const IdentifyResult& r) {
   }
 }
 
-void diagnostics_json(std::ostringstream& out, const IdentifyResult& r, bool gmm) {
+void diagnostics_json(std::ostringstream& out, const IdentifyResult& r) {
   const Estimate& e = r.estimate;
   const DataMoments& d = r.data;
-  out << ",\n  \"diagnostics\": {\n    \"status\": " << json_string(status_name(r))
+  out << ",\n  \"diagnostics\": {\n    \"status\": " << json_string(to_string(status(r)))
       << ",\n    \"rows\": " << e.rows << ",\n    \"rank\": " << e.rank
       << ",\n    \"condition\": " << json_number(e.condition) << ",\n    \"batches\": " << e.batches
-      << ",\n    \"error_dof\": " << json_number(gmm ? e.gmm_dof : e.dof)
-      << ",\n    \"samples\": " << d.rows << ",\n    \"runs\": " << d.runs
+      << ",\n    \"error_dof\": " << json_number(e.main().dof) << ",\n    \"samples\": " << d.rows
+      << ",\n    \"runs\": " << d.runs
       << ",\n    \"input_hold\": " << json_string(to_string(d.hold))
       << ",\n    \"j_statistic\": " << (e.j_statistic ? json_number(*e.j_statistic) : "null")
       << ",\n    \"j_dof\": " << e.j_dof
@@ -200,7 +201,7 @@ void diagnostics_json(std::ostringstream& out, const IdentifyResult& r, bool gmm
         << "}";
   }
   out << "],\n    \"correlation\": [";
-  const auto& correlation = gmm ? e.gmm_correlation : e.correlation;
+  const auto& correlation = e.main().correlation;
   for (std::size_t i = 0; i < correlation.size(); ++i) {
     out << (i ? ", " : "") << "[";
     for (std::size_t j = 0; j < correlation[i].size(); ++j) {
@@ -228,14 +229,14 @@ std::string format_text(const IdentifyResult& r) {
     out << "\n";
   }
   out << "\n";
-  if (r.gmm && !e.gmm_parameters.empty()) {
+  if (e.optimal) {
     out << "optimally weighted estimate (two-step GMM)\n";
-    table(out, e.gmm_parameters);
+    table(out, e.optimal->parameters);
     out << "\nleast-squares estimate (first step)\n";
   } else {
     out << "least-squares estimate\n";
   }
-  table(out, e.parameters);
+  table(out, e.least_squares.parameters);
   const std::vector<std::string> equations = identified_equations(r);
   if (!equations.empty()) {
     out << "\nidentified model\n";
@@ -261,12 +262,11 @@ std::string format_json(const IdentifyResult& r) {
     }
     return out + "\n  }";
   };
-  const bool gmm = r.gmm && !e.gmm_parameters.empty();
   std::ostringstream out;
   out << "{\n  \"model\": " << json_string(r.model->name())
       << ",\n  \"data\": " << json_string(r.data_name)
-      << ",\n  \"parameters\": " << parameters(gmm ? e.gmm_parameters : e.parameters);
-  if (gmm) out << ",\n  \"least_squares\": " << parameters(e.parameters);
+      << ",\n  \"parameters\": " << parameters(e.main().parameters);
+  if (e.optimal) out << ",\n  \"least_squares\": " << parameters(e.least_squares.parameters);
   if (r.lagged) {
     out << ",\n  \"method\": {\"name\": \"lagged\", \"lags\": [" << r.lagged->system.first_lag
         << ", " << r.lagged->system.last_lag
@@ -299,7 +299,7 @@ std::string format_json(const IdentifyResult& r) {
     out << (k ? ", " : "") << json_string(name) << ": " << json_number(d.estimates.mean[k]);
   }
   out << "}";
-  diagnostics_json(out, r, gmm);
+  diagnostics_json(out, r);
   return out.str();
 }
 

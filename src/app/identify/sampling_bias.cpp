@@ -57,8 +57,7 @@ MomentEstimates every_other_sample(const IdentifyResult& result, const DataSourc
 }  // namespace
 
 void estimate_sampling_bias(IdentifyResult& result, const DataSource& source,
-                            DataOptions data_options, const IdentifyOptions& options,
-                            const std::vector<std::vector<double>>& fine_errors) {
+                            DataOptions data_options, const IdentifyOptions& options) {
   if (!result.model->inputs().empty() && result.data.hold == InputHold::kZeroOrderHold) {
     throw UsageError(
         "extrapolate",
@@ -67,18 +66,17 @@ void estimate_sampling_bias(IdentifyResult& result, const DataSource& source,
         "2 dt; the kinks of the held input are corrected from the model instead");
   }
   Estimate& fine = result.estimate;
-  if (fine_errors.empty() || fine.status != Estimate::Status::kOk) return;
+  const std::vector<std::vector<double>> fine_errors = fine.error_batches;
+  if (fine_errors.empty() || fine.status != Status::kOk) return;
   const MomentEstimates coarse = every_other_sample(result, source, data_options, fine.batches);
-  std::vector<std::vector<double>> coarse_errors;
-  const Estimate c = solve(result.zero_lag->system, coarse,
-                           {.gmm = result.gmm,
-                            .fixed = fixed_values(*result.model, options.fixed),
-                            .error_batches = &coarse_errors});
-  const bool gmm = result.gmm && !fine.gmm_parameters.empty();
-  std::vector<ParameterEstimate>& list = gmm ? fine.gmm_parameters : fine.parameters;
-  const std::vector<ParameterEstimate>& coarse_list =
-      gmm && !c.gmm_parameters.empty() ? c.gmm_parameters : c.parameters;
-  if (c.status != Estimate::Status::kOk || coarse_errors.size() != fine_errors.size() ||
+  const Estimate c =
+      solve(result.zero_lag->system, result.zero_lag->moments, coarse,
+            {.gmm = result.gmm, .fixed = fixed_values(*result.model, options.fixed)});
+  const std::vector<std::vector<double>>& coarse_errors = c.error_batches;
+  Fit& fine_fit = fine.main();
+  std::vector<ParameterEstimate>& list = fine_fit.parameters;
+  const std::vector<ParameterEstimate>& coarse_list = c.main().parameters;
+  if (c.status != Status::kOk || coarse_errors.size() != fine_errors.size() ||
       coarse_list.size() != list.size()) {
     fine.warnings.push_back("no sampling bias: every other sample does not give an estimate");
     return;
@@ -118,7 +116,7 @@ void estimate_sampling_bias(IdentifyResult& result, const DataSource& source,
       e.ci_low = e.estimate - t975 * e.std_error;
       e.ci_high = e.estimate + t975 * e.std_error;
     }
-    (gmm ? fine.gmm_dof : fine.dof) = errors.dof;
+    fine_fit.dof = errors.dof;
   }
   result.zero_lag->sampling_bias = std::move(bias);
 }

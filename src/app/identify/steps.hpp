@@ -126,14 +126,13 @@ void correct_for_held_input(IdentifyResult& result, const HeldInputCorrections& 
                             const std::vector<Monomial>& moments, const MomentEstimates& all,
                             const SolveOptions& solve_options);
 
-// IdentifyOptions::extrapolate, after the zero-lag estimate `result` whose first-order errors
-// over the batches are `fine_errors`: the same estimate from every other sample (both halves of
-// each run, in the same batches), the difference's error from the long-run covariance of the
-// difference of the two error series, and Richardson's extrapolation when a difference exceeds
-// its error.
+// IdentifyOptions::extrapolate, after the zero-lag estimate `result` (whose first-order errors
+// over the batches are result.estimate.error_batches): the same estimate from every other sample
+// (both halves of each run, in the same batches), the difference's error from the long-run
+// covariance of the difference of the two error series, and Richardson's extrapolation when a
+// difference exceeds its error.
 void estimate_sampling_bias(IdentifyResult& result, const DataSource& source,
-                            DataOptions data_options, const IdentifyOptions& options,
-                            const std::vector<std::vector<double>>& fine_errors);
+                            DataOptions data_options, const IdentifyOptions& options);
 
 // ---- the lagged equations ----------------------------------------------------------------------
 

@@ -91,10 +91,7 @@ void identify_zero_lag(IdentifyResult& result, const DataSource& source,
                                          data_options, options.center, result.centered);
   const MomentEstimates all = read_zero_lag(result, plan, source, data_options);
 
-  std::vector<std::vector<double>> errors;
-  SolveOptions solve_options{.gmm = result.gmm,
-                             .fixed = fixed_values(model, options.fixed),
-                             .error_batches = options.extrapolate ? &errors : nullptr};
+  SolveOptions solve_options{.gmm = result.gmm, .fixed = fixed_values(model, options.fixed)};
   if (!plan.rated.empty()) {
     zero_lag.end_values.emplace().unavailable = plan.ends_unavailable;
     if (plan.ends_unavailable.empty() && result.data.estimates.intervals > 0) {
@@ -103,11 +100,11 @@ void identify_zero_lag(IdentifyResult& result, const DataSource& source,
           static_cast<double>(result.data.estimates.intervals) * *result.data.time_step);
     }
   }
-  result.estimate = solve(zero_lag.system, result.data.estimates, solve_options);
+  result.estimate = solve(zero_lag.system, zero_lag.moments, result.data.estimates, solve_options);
   if (result.data.hold == InputHold::kZeroOrderHold) {
     correct_for_held_input(result, plan.held, plan.pass_moments, all, solve_options);
   }
-  if (options.extrapolate) estimate_sampling_bias(result, source, data_options, options, errors);
+  if (options.extrapolate) estimate_sampling_bias(result, source, data_options, options);
 }
 
 }  // namespace momentid

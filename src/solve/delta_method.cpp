@@ -1,0 +1,120 @@
+#include "solve/delta_method.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+#include "solve/numbers.hpp"
+
+namespace momentid {
+
+using Eigen::Index;
+using Eigen::MatrixXd;
+using Eigen::VectorXd;
+
+MatrixXd batch_deviations(const MomentEstimates& estimates) {
+  const auto b = static_cast<Index>(estimates.batch_means.size());
+  const auto k = static_cast<Index>(estimates.mean.size());
+  MatrixXd means(b, k);
+  VectorXd length = VectorXd::Ones(b);
+  for (Index i = 0; i < b; ++i) {
+    const auto row = static_cast<std::size_t>(i);
+    if (estimates.batch_means[row].size() != estimates.mean.size()) {
+      throw std::invalid_argument("estimates: batch " + std::to_string(row) + " has " +
+                                  std::to_string(estimates.batch_means[row].size()) +
+                                  " means for " + std::to_string(k) + " moments");
+    }
+    for (Index j = 0; j < k; ++j)
+      means(i, j) = estimates.batch_means[row][static_cast<std::size_t>(j)];
+    if (!estimates.batch_intervals.empty()) {
+      length(i) = static_cast<double>(estimates.batch_intervals[row]);
+    }
+  }
+  if (b == 0) return means;
+  length /= length.mean();
+  const Eigen::RowVectorXd mean = (length.transpose() * means) / static_cast<double>(b);
+  return length.asDiagonal() * (means.rowwise() - mean);
+}
+
+MatrixXd sensitivity(const LinearSystem& system, const VectorXd& scale,
+                     const MatrixXd& normal_inverse, const MatrixXd& left,
+                     const VectorXd& weighted_residual, const VectorXd& at) {
+  const Index rows = system.a.rows(), params = system.a.cols();
+  const auto moments = static_cast<Index>(system.uses.size());
+  MatrixXd jacobian = MatrixXd::Zero(params, moments);
+  for (Index k = 0; k < moments; ++k) {
+    const MomentUse& use = system.uses[static_cast<std::size_t>(k)];
+    if (use.a.empty() && use.b.empty()) continue;
+    MatrixXd da = MatrixXd::Zero(rows, params);
+    VectorXd db = VectorXd::Zero(rows);
+    for (const auto& [r, p, w] : use.a) da(r, p) += w / scale(p);
+    for (const auto& [r, w] : use.b) db(r) += w;
+    jacobian.col(k) =
+        (normal_inverse * (da.transpose() * weighted_residual) + left * (db - da * at))
+            .cwiseQuotient(scale);
+  }
+  return jacobian;
+}
+
+LongRunCovariance with_known(LongRunCovariance errors, const MatrixXd& jacobian,
+                             const MatrixXd& known) {
+  if (known.isZero(0)) return errors;
+  const MatrixXd added = jacobian * known * jacobian.transpose();
+  double dof = std::numeric_limits<double>::infinity();
+  for (Index i = 0; i < added.rows(); ++i) {
+    const double series = errors.covariance(i, i), total = series + added(i, i);
+    if (series > 0) dof = std::min(dof, errors.dof * (total / series) * (total / series));
+  }
+  errors.covariance += added;
+  if (std::isfinite(dof)) errors.dof = dof;
+  return errors;
+}
+
+std::vector<std::vector<double>> correlation_of(const MatrixXd& cov,
+                                                const std::vector<bool>& identifiable) {
+  const auto n = static_cast<std::size_t>(cov.rows());
+  std::vector<std::vector<double>> out(n, std::vector<double>(n, kNaN));
+  for (std::size_t i = 0; i < n; ++i) {
+    for (std::size_t j = 0; j < n; ++j) {
+      const auto a = static_cast<Index>(i), b = static_cast<Index>(j);
+      const double scale = std::sqrt(cov(a, a) * cov(b, b));
+      // Symmetric to the last bit, whatever the rounding of the products that made cov.
+      if (identifiable[i] && identifiable[j] && scale > 0) {
+        out[i][j] = (cov(a, b) + cov(b, a)) / 2 / scale;
+      }
+    }
+  }
+  return out;
+}
+
+std::vector<std::vector<double>> rows_of(const MatrixXd& matrix) {
+  std::vector<std::vector<double>> out(static_cast<std::size_t>(matrix.rows()));
+  for (Index b = 0; b < matrix.rows(); ++b) {
+    for (Index p = 0; p < matrix.cols(); ++p) {
+      out[static_cast<std::size_t>(b)].push_back(matrix(b, p));
+    }
+  }
+  return out;
+}
+
+void set_error(ParameterEstimate& estimate, double std_error, double t975) {
+  estimate.std_error = std_error;
+  estimate.ci_low = estimate.estimate - t975 * std_error;
+  estimate.ci_high = estimate.estimate + t975 * std_error;
+}
+
+void warn_about_errors(Estimate& out, const LongRunCovariance& errors) {
+  if (errors.order == 0 && out.batches >= 2) {
+    out.warnings.push_back("only " + std::to_string(out.batches) +
+                           " batches: the standard errors take the batch means as independent, "
+                           "which overstates them for records without noise (use a longer record "
+                           "or more batches)");
+  } else if (errors.dof < 10) {
+    out.warnings.push_back("the standard errors rest on " + format_number(errors.dof) +
+                           " degrees of freedom: they are rough (use a longer record)");
+  }
+}
+
+}  // namespace momentid

@@ -1,0 +1,48 @@
+#include "solve/gmm.hpp"
+
+#include "solve/long_run.hpp"
+
+namespace momentid {
+
+using Eigen::Index;
+using Eigen::MatrixXd;
+using Eigen::VectorXd;
+
+OptimalWeighting optimal_weighting(const LinearSystem& system, const LeastSquares& first,
+                                   const MatrixXd& deviations, const MatrixXd& known) {
+  const Index rows = system.a.rows(), params = system.a.cols();
+  const MatrixXd g_mu = equations_jacobian(system, first.theta);
+  const MatrixXd s =
+      batch_covariance(deviations * g_mu.transpose()) + g_mu * known * g_mu.transpose();
+  Eigen::SelfAdjointEigenSolver<MatrixXd> eigen(s);
+  const VectorXd lambda = eigen.eigenvalues();
+  const double lambda_max = lambda.maxCoeff();
+  VectorXd inverse_lambda = VectorXd::Zero(rows);
+  OptimalWeighting out;
+  for (Index i = 0; i < rows; ++i) {
+    if (lambda(i) > 1e-12 * lambda_max) {
+      inverse_lambda(i) = 1 / lambda(i);
+      ++out.rank;
+    }
+  }
+  out.weight =
+      eigen.eigenvectors() * inverse_lambda.asDiagonal() * eigen.eigenvectors().transpose();
+  const MatrixXd& as = first.scaled;
+  const MatrixXd information = as.transpose() * out.weight * as;
+  out.information_inverse = information.ldlt().solve(MatrixXd::Identity(params, params));
+  out.left = out.information_inverse * as.transpose() * out.weight;
+  out.theta_scaled = out.left * system.b;
+  out.theta = out.theta_scaled.cwiseQuotient(first.scale);
+  out.residual = system.b - as * out.theta_scaled;
+  out.objective = out.residual.dot(out.weight * out.residual);
+  return out;
+}
+
+double finite_sample_factor(std::size_t batches, Index equations, Index parameters) {
+  const auto n = static_cast<double>(batches - 1);
+  const auto m = static_cast<double>(equations);
+  const auto q = static_cast<double>(parameters);
+  return n * (n - 1) / ((n - m + q) * (n - m + q - 1));
+}
+
+}  // namespace momentid

@@ -1,0 +1,60 @@
+#include "solve/j_test.hpp"
+
+#include <algorithm>
+
+#include "solve/delta_method.hpp"
+#include "solve/distributions.hpp"
+#include "solve/long_run.hpp"
+
+namespace momentid {
+
+using Eigen::Index;
+using Eigen::MatrixXd;
+
+// The residual g = A theta - b lies in the d = m - q directions that the estimate leaves free,
+// with covariance V there: the long-run covariance of the batch series of M g(mu_b), M = I - A
+// N^-1 A' W. J = g' W g is then a weighted sum of chi-square variables, with weights the
+// eigenvalues of W V, which a scaled chi-square matches in mean and variance (Satterthwaite):
+// J / c ~ chi-square(k), c k = tr(W V), c^2 k = tr((W V)^2), the latter less the excess that the
+// noise of V, on nu degrees of freedom, adds to it as it does to a Wishart matrix: E tr((W V^)^2)
+// = (1 + 1/nu) tr((W V)^2) + tr(W V)^2 / nu. The scale comes from V: J / (c k) ~ F(k, nu'), where
+// tr(W V) sums k components of nu degrees of freedom each (nu counts those of one standardised
+// series). W from the same batches makes J Hotelling's T^2 rather than a chi-square: J (n - d +
+// 1) / n over its scale is F(d, n - d + 1), so the denominator's relative variances add, 1 / nu'
+// = 1 / (n - d + 1) + 1 / (k nu). (With W from few batches, n not far above d, the test is
+// conservative: tr(W V) is then biased upwards, W being fitted to the batches that V also sees.)
+// Reported: J d / tr(W V), whose mean is d for the right model whether the equations telescope (W
+// too small by a factor near B) or not.
+JTest j_test(const LinearSystem& system, const LeastSquares& first, const OptimalWeighting& gmm,
+             const MatrixXd& deviations, const MatrixXd& known, std::size_t batches) {
+  const Index rows = system.a.rows(), params = system.a.cols();
+  JTest out;
+  out.dof = static_cast<int>(gmm.rank - params);
+  if (out.dof <= 0) {
+    out.warning = "no J test: as many equations as parameters (add multipliers)";
+    return out;
+  }
+  const auto n = static_cast<double>(batches - 1);
+  const auto d = static_cast<double>(out.dof);
+  const MatrixXd free_part = MatrixXd::Identity(rows, rows) - first.scaled * gmm.left;
+  const MatrixXd free_mu = free_part * equations_jacobian(system, gmm.theta);
+  const LongRunCovariance residual_errors =
+      with_known(long_run_covariance(deviations * free_mu.transpose()), free_mu, known);
+  const MatrixXd wv = gmm.weight * residual_errors.covariance;
+  const double nu = residual_errors.dof, trace = wv.trace();
+  const double trace_square =
+      std::max(((wv * wv).trace() - trace * trace / nu) / (1 + 1 / nu), trace * trace / out.dof);
+  if (!(trace > 0 && trace_square > 0)) {
+    out.warning = "no J test: the residuals show no sampling error";
+    out.dof = 0;
+    return out;
+  }
+  const double j = gmm.objective;
+  const double k = trace * trace / trace_square;
+  out.statistic = j * out.dof / trace;
+  out.pvalue = f_upper_tail(j / trace * (n - d + 1) / n, k,
+                            std::max(1.0, 1 / (1 / (n - d + 1) + 1 / (k * nu))));
+  return out;
+}
+
+}  // namespace momentid

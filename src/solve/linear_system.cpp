@@ -1,0 +1,94 @@
+#include "solve/linear_system.hpp"
+
+#include <stdexcept>
+#include <string>
+
+namespace momentid {
+namespace {
+
+using Eigen::Index;
+using Eigen::MatrixXd;
+using Eigen::VectorXd;
+
+// The contract of solve_rows: a coefficient per parameter in every row, entries that index
+// the estimates.
+void check_shape(const MomentRows& rows, Index parameters, std::size_t moments) {
+  if (rows.b.size() != rows.a.size()) {
+    throw std::invalid_argument("solve_rows: " + std::to_string(rows.a.size()) + " rows of " +
+                                "coefficients for " + std::to_string(rows.b.size()) +
+                                " right-hand sides");
+  }
+  const auto indexed = [&](const MomentRows::Entry& e) {
+    for (const auto& [k, w] : e.moments) {
+      if (k >= moments) {
+        throw std::invalid_argument("solve_rows: an entry reads moment " + std::to_string(k) +
+                                    " of " + std::to_string(moments) + " estimated");
+      }
+    }
+  };
+  for (std::size_t r = 0; r < rows.a.size(); ++r) {
+    if (rows.a[r].size() != static_cast<std::size_t>(parameters)) {
+      throw std::invalid_argument("solve_rows: row " + std::to_string(r) + " has " +
+                                  std::to_string(rows.a[r].size()) + " coefficients for " +
+                                  std::to_string(parameters) + " parameters");
+    }
+    for (const MomentRows::Entry& e : rows.a[r]) indexed(e);
+    indexed(rows.b[r]);
+  }
+}
+
+// Each row divided by the length of its coefficients; the uses with it.
+void normalise(LinearSystem& system) {
+  const Index rows = system.a.rows();
+  VectorXd weight = VectorXd::Ones(rows);
+  for (Index r = 0; r < rows; ++r) {
+    if (const double norm = system.a.row(r).norm(); norm > 0) weight(r) = 1 / norm;
+  }
+  system.a = weight.asDiagonal() * system.a;
+  system.b = system.b.cwiseProduct(weight);
+  for (MomentUse& use : system.uses) {
+    for (auto& [r, p, w] : use.a) w *= weight(r);
+    for (auto& [r, w] : use.b) w *= weight(r);
+  }
+}
+
+}  // namespace
+
+LinearSystem evaluate(const MomentRows& rows, Index parameters, const std::vector<double>& mean,
+                      bool normalise_rows) {
+  check_shape(rows, parameters, mean.size());
+  const auto count = static_cast<Index>(rows.a.size());
+  LinearSystem out{MatrixXd::Zero(count, parameters), VectorXd::Zero(count),
+                   std::vector<MomentUse>(mean.size())};
+  const auto add = [&](const MomentRows::Entry& e, double& into, auto&& use) {
+    into += e.constant;
+    for (const auto& [k, w] : e.moments) {
+      into += w * mean[k];
+      use(k, w);
+    }
+  };
+  for (Index r = 0; r < count; ++r) {
+    const auto& row = rows.a[static_cast<std::size_t>(r)];
+    for (Index p = 0; p < parameters; ++p) {
+      add(row[static_cast<std::size_t>(p)], out.a(r, p),
+          [&](std::size_t k, double w) { out.uses[k].a.emplace_back(r, p, w); });
+    }
+    add(rows.b[static_cast<std::size_t>(r)], out.b(r),
+        [&](std::size_t k, double w) { out.uses[k].b.emplace_back(r, w); });
+  }
+  if (normalise_rows) normalise(out);
+  return out;
+}
+
+MatrixXd equations_jacobian(const LinearSystem& system, const VectorXd& theta) {
+  const auto moments = static_cast<Index>(system.uses.size());
+  MatrixXd g_mu = MatrixXd::Zero(system.a.rows(), moments);
+  for (Index k = 0; k < moments; ++k) {
+    const MomentUse& use = system.uses[static_cast<std::size_t>(k)];
+    for (const auto& [r, p, w] : use.a) g_mu(r, k) += w * theta(p);
+    for (const auto& [r, w] : use.b) g_mu(r, k) -= w;
+  }
+  return g_mu;
+}
+
+}  // namespace momentid

@@ -1,0 +1,37 @@
+#pragma once
+
+#include <Eigen/Dense>
+#include <tuple>
+#include <utility>
+#include <vector>
+
+#include "momentid/estimate.hpp"
+
+namespace momentid {
+
+// Where one moment enters the system, entry by entry: d A / d mu_k and d b / d mu_k.
+struct MomentUse {
+  std::vector<std::tuple<Eigen::Index, Eigen::Index, double>> a;  // row, parameter, weight
+  std::vector<std::pair<Eigen::Index, double>> b;                 // row, weight
+};
+
+// MomentRows at the estimated moments: A theta = b in numbers, with each moment's place in them,
+// which the delta method differentiates. With weighted rows (SolveOptions::normalise_rows) A, b
+// and the uses are those of the weighted rows, the weights taken as constants.
+struct LinearSystem {
+  Eigen::MatrixXd a;  // rows x parameters
+  Eigen::VectorXd b;
+  std::vector<MomentUse> uses;  // one per moment
+};
+
+// `rows` at the moments' values `mean`, which the rows' entries index. `normalise_rows`: each row
+// divided by the length of its coefficients (rows of zero coefficients as they are). Throws
+// std::invalid_argument when a row has not one coefficient per parameter or an entry indexes no
+// moment.
+LinearSystem evaluate(const MomentRows& rows, Eigen::Index parameters,
+                      const std::vector<double>& mean, bool normalise_rows);
+
+// d g / d mu for the equations g = A theta - b at `theta` (unscaled): rows x moments.
+Eigen::MatrixXd equations_jacobian(const LinearSystem& system, const Eigen::VectorXd& theta);
+
+}  // namespace momentid

@@ -1,0 +1,27 @@
+#pragma once
+
+// From a derived system and estimates named by their moments to the solver's own input:
+// MomentRows over the moments of moments_to_estimate, and the estimates in that order.
+
+#include <map>
+#include <vector>
+
+#include "momentid/estimate.hpp"
+
+namespace momentid {
+
+// Each moment's position in `moments`.
+std::map<Monomial, std::size_t> positions(const std::vector<Monomial>& moments);
+
+// The estimates of `wanted`, in that order, taken by key from `estimates` of `given` (one per
+// entry of estimates.mean, in any order, possibly more than wanted). Throws std::invalid_argument
+// when `given` does not name every estimate once, or lacks a wanted moment (named after
+// `model`'s variables); `caller` opens the message.
+MomentEstimates estimates_of(const std::vector<Monomial>& wanted,
+                             const std::vector<Monomial>& given, const MomentEstimates& estimates,
+                             const Model& model, const char* caller);
+
+// The system's equations as MomentRows over the moments at `index` (every moment they use).
+MomentRows moment_rows(const MomentSystem& system, const std::map<Monomial, std::size_t>& index);
+
+}  // namespace momentid
