@@ -17,6 +17,7 @@
 #include "momentid/moment.hpp"
 #include "momentid/random.hpp"
 #include "momentid/reader.hpp"
+#include "momentid/record_options.hpp"
 #include "momentid/simulate.hpp"
 #include "momentid/types.hpp"
 #include "momentid/validate.hpp"

@@ -13,6 +13,7 @@
 #include "momentid/metadata.hpp"
 #include "momentid/model.hpp"
 #include "momentid/reader.hpp"
+#include "momentid/record_options.hpp"
 #include "momentid/simulate.hpp"
 #include "momentid/writer.hpp"
 
@@ -41,14 +42,12 @@ struct Record {
 
 // How to drive a model with a record's inputs (docs/cli/validate.md, "momentid validate").
 struct ReplayOptions {
+  // The record's columns, sample interval and layout. `hold` and `control` are ignored: the
+  // inputs are interpolated (`interpolation`), and the record is read once, whole.
+  RecordOptions record;
   std::vector<GiNaC::numeric> parameters;  // one per model parameter
-  // Model variable -> data column, for data whose columns have other names.
-  std::map<std::string, std::string> columns;
   // nullopt: per input, kHold when the metadata say it was held (`input-hold=zoh`), else kSinc.
   std::optional<Interpolation> interpolation;
-  // The sample interval; nullopt: the record's (`t` column or `dt` metadata).
-  std::optional<double> dt;
-  FileLayout layout;  // as IdentifyOptions::layout
   // Runge-Kutta steps per sample interval, 1..RecordSimulator::kMaxSubsteps; nullopt: the fewest
   // (1, 2, 4, ...) for which halving the step changes the simulation of the first
   // kSubstepTrialRows rows of the first run by less than kSubstepTolerance of each state's

@@ -65,8 +65,8 @@ int run_simulate(SimulateCommand& command) {
   if (!command.input_file.empty()) {
     ReplayOptions options;
     options.parameters = parameter_values(model, command.set);
-    options.columns = column_map(command.columns);
-    options.dt = command.record_dt;
+    options.record.columns = column_map(command.columns);
+    options.record.dt = command.record_dt;
     options.substeps = command.substeps;
     if (!command.interpolation.empty()) {
       options.interpolation = parse_interpolation(command.interpolation, "interpolation");

@@ -140,9 +140,7 @@ std::pair<int, double> chosen_substeps(const Model& model,
 }  // namespace
 
 Replay replay(const Model& model, const DataSource& source, const ReplayOptions& options) {
-  if (options.dt && !(std::isfinite(*options.dt) && *options.dt > 0)) {
-    throw UsageError("dt", "expected a positive number, found " + shortest_decimal(*options.dt));
-  }
+  options.record.validate(&model);
   Replay out;
   out.record = read_record(model, source, options);
   const Record& record = out.record;
