@@ -14,6 +14,7 @@
 #include "momentid/lagged.hpp"
 #include "momentid/metadata.hpp"
 #include "momentid/model.hpp"
+#include "momentid/parameters.hpp"
 #include "momentid/moment.hpp"
 #include "momentid/random.hpp"
 #include "momentid/reader.hpp"

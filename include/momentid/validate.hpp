@@ -12,6 +12,7 @@
 
 #include "momentid/metadata.hpp"
 #include "momentid/model.hpp"
+#include "momentid/parameters.hpp"
 #include "momentid/reader.hpp"
 #include "momentid/record_options.hpp"
 #include "momentid/simulate.hpp"
@@ -45,7 +46,8 @@ struct ReplayOptions {
   // The record's columns, sample interval and layout. `hold` and `control` are ignored: the
   // inputs are interpolated (`interpolation`), and the record is read once, whole.
   RecordOptions record;
-  std::vector<GiNaC::numeric> parameters;  // one per model parameter
+  // By name; a parameter not given takes its nominal value.
+  ParameterValues parameters;
   // nullopt: per input, kHold when the metadata say it was held (`input-hold=zoh`), else kSinc.
   std::optional<Interpolation> interpolation;
   // Runge-Kutta steps per sample interval, 1..RecordSimulator::kMaxSubsteps; nullopt: the fewest
@@ -89,10 +91,10 @@ Replay replay(const Model& model, const DataSource& source, const ReplayOptions&
 void write_replay(const Model& model, const Replay& replay, const std::string& path,
                   DataWriter::Format format);
 
-// The parameter values of an `identify --format json` result: one per model parameter, in
-// declaration order. Throws DataError located in the file for text that is not JSON, estimates
-// of another model, or a parameter missing or without a numeric estimate.
-std::vector<GiNaC::numeric> read_estimates(const Model& model, const std::string& path);
+// The parameter values of an `identify --format json` result: one per model parameter, by name.
+// Throws DataError located in the file for text that is not JSON, estimates of another model, or a
+// parameter missing or without a numeric estimate.
+ParameterValues read_estimates(const Model& model, const std::string& path);
 
 // How to validate (docs/cli/validate.md, "momentid validate").
 struct ValidateOptions {

@@ -418,7 +418,9 @@ py::tuple simulate_record(const Model& model, const py::dict& options) {
 
 ValidateOptions validate_options(const Model& model, const py::dict& options) {
   ValidateOptions out;
-  out.replay.parameters = parameters_of(model, options, "params");
+  const auto values = get<std::map<std::string, py::object>>(options, "params");
+  out.replay.parameters =
+      parse_parameter_values(model, values ? assignments(*values) : std::vector<std::string>{});
   out.replay.record = record_options(options);
   if (auto substeps = get<int>(options, "substeps")) out.replay.substeps = *substeps;
   if (auto method = get<std::string>(options, "interpolation")) {

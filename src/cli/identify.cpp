@@ -76,12 +76,16 @@ int run_identify(IdentifyCommand& command) {
   if (command.instruments) {
     options.instruments = parse_instrument_list(model, *command.instruments, "--instruments");
   }
-  // --fix k=9,...: the values read as --set reads them.
-  const std::vector<GiNaC::numeric> values = parameter_values(
-      model, command.fix, std::vector<GiNaC::numeric>(model.parameters().size(), 0), "fixed");
-  for (const std::string& item : command.fix) {
-    const std::string name = item.substr(0, item.find('='));
-    options.fixed[name] = values[static_cast<std::size_t>(model.parameter_index(name))].to_double();
+  // --fix k=9,...: the values read as --set reads them, exact decimals rounded once (the
+  // parameters not fixed at 0, so that none lacks a value).
+  const ParameterValues fixed = parse_parameter_values(model, command.fix, "fixed");
+  ParameterValues every;
+  for (const Declaration& p : model.parameters()) every[p.name] = 0.0;
+  for (const auto& entry : fixed) every[entry.first] = entry.second;
+  const std::vector<GiNaC::numeric> values = parameter_vector(model, every, "fixed");
+  for (const auto& entry : fixed) {
+    const auto index = static_cast<std::size_t>(model.parameter_index(entry.first));
+    options.fixed[entry.first] = values[index].to_double();
   }
   if (command.center.size() == 1 && command.center[0] == "all") {
     options.center = model.variables();

@@ -49,11 +49,12 @@ int run_validate(ValidateCommand& command) {
   std::string from = "the model's nominal values";
   if (!command.estimates.empty()) {
     from = command.estimates + (command.set.empty() ? "" : ", then --set");
-    replay.parameters =
-        parameter_values(model, command.set, read_estimates(model, command.estimates));
-  } else {
-    if (!command.set.empty()) from += " and --set";
-    replay.parameters = parameter_values(model, command.set);
+    replay.parameters = read_estimates(model, command.estimates);
+  } else if (!command.set.empty()) {
+    from += " and --set";
+  }
+  for (auto& [name, value] : parse_parameter_values(model, command.set)) {
+    replay.parameters.insert_or_assign(name, value);
   }
   if (!command.interpolation.empty()) {
     replay.interpolation = parse_interpolation(command.interpolation, "interpolation");
