@@ -30,7 +30,7 @@ int main(int argc, char** argv) {
   simulation.samples = rows;
   simulation.burn_in = 2000;
   momentid::ValidateOptions validation;
-  validation.replay.parameters = momentid::parameter_values(model, {"c=0.55"});
+  validation.replay.parameters = {{"c", momentid::ParameterValue::exact("0.55")}};
   std::printf("%zu rows of the Duffing model, median of %d\n", rows, repetitions);
   std::printf("%-8s %12s %12s %8s %10s\n", "format", "simulate s", "validate s", "ratio", "fit %");
   for (const auto& [name, format] : {std::pair{"csv", momentid::DataWriter::Format::kCsv},

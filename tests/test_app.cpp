@@ -289,7 +289,7 @@ TEST_SUITE("app") {
                       }).what()) ==
           "input_shift: expected a number from -1000 to 1000, found 1001");
     CHECK(std::string(error_from<momentid::UsageError>([&] {
-                        momentid::identify(model, source, {.columns = {{"w", "y"}}});
+                        momentid::identify(model, source, {.record = {.columns = {{"w", "y"}}}});
                       }).what()) == "columns: 'w' is not a state or input of model duffing");
     CHECK(std::string(error_from<momentid::UsageError>([&] {
                         momentid::check(source, &model, {.lags = 0});

@@ -69,7 +69,7 @@ Estimate identify(const Model& truth, const Case& c, const Model* fitted = nullp
   data.columns.push_back({"run", columns.runs.data()});
   momentid::IdentifyOptions identify_options;
   identify_options.degree = c.degree;
-  identify_options.hold = c.hold;
+  identify_options.record.hold = c.hold;
   identify_options.batches = c.batches;
   identify_options.gmm = c.gmm;
   return momentid::identify(model, momentid::DataSource::memory(std::move(data)), identify_options)
@@ -240,7 +240,7 @@ TEST_SUITE("identify") {
   TEST_CASE("without the sample interval a held input's kinks are not corrected, and it says so") {
     const momentid::IdentifyResult r =
         identify_held(model_file("duffing.mom"), "ma:K=10,w=0.1,sigma=20", 20000, std::nullopt, 1,
-                      {.degree = 3, .hold = InputHold::kZeroOrderHold});
+                      {.record = {.hold = InputHold::kZeroOrderHold}, .degree = 3});
     REQUIRE(r.zero_lag->held_input.has_value());
     CHECK(r.zero_lag->held_input->shift.empty());
     CHECK(r.zero_lag->held_input->unavailable ==
@@ -267,9 +267,9 @@ TEST_SUITE("identify") {
     // 15-30%); without the sample interval the batches estimate it all.
     const Model model = model_file("duffing.mom");
     const auto errors = [&](std::size_t batches, std::optional<double> dt) {
-      const momentid::IdentifyResult r =
-          identify_held(model, "ma:K=10,w=0.1,sigma=20", 100000, dt, 3,
-                        {.degree = 3, .hold = InputHold::kZeroOrderHold, .batches = batches});
+      const momentid::IdentifyResult r = identify_held(
+          model, "ma:K=10,w=0.1,sigma=20", 100000, dt, 3,
+          {.record = {.hold = InputHold::kZeroOrderHold}, .degree = 3, .batches = batches});
       REQUIRE(r.zero_lag->end_values.has_value());
       std::vector<double> out;
       for (const momentid::ParameterEstimate& e : r.parameters()) out.push_back(e.std_error);
@@ -376,8 +376,9 @@ TEST_SUITE("identify") {
     options.samples = 200000;
     momentid::simulate_to_file(model, options, path.string(), momentid::DataWriter::Format::kCsv);
     auto estimate = [&](InputHold hold, long shift) {
-      const momentid::IdentifyResult result = momentid::identify(
-          model, momentid::DataSource::file(path.string()), {.hold = hold, .input_shift = shift});
+      const momentid::IdentifyResult result =
+          momentid::identify(model, momentid::DataSource::file(path.string()),
+                             {.record = {.hold = hold}, .input_shift = shift});
       return result.estimate.least_squares.parameters[0].estimate;
     };
     const double end = estimate(InputHold::kSample, 1), start = estimate(InputHold::kSample, 0),

@@ -50,13 +50,13 @@ std::vector<Moment> some_moments() {
 DataMoments pass(const std::string& path, std::size_t shard_bytes, std::size_t threads,
                  const momentid::FileLayout& layout = {}) {
   DataOptions options;
-  options.layout = layout;
-  options.control.shard_bytes = shard_bytes;
-  options.control.threads = threads;
+  options.record.layout = layout;
+  options.record.control.shard_bytes = shard_bytes;
+  options.record.control.threads = threads;
   options.lags = 4;
   options.batches = 20;
   // As the simulation wrote (a .npy file keeps no metadata).
-  options.hold = momentid::InputHold::kZeroOrderHold;
+  options.record.hold = momentid::InputHold::kZeroOrderHold;
   return momentid::moments_from_data(DataSource::file(path), {"y", "v"}, {"x"}, some_moments(),
                                      options);
 }
@@ -211,7 +211,7 @@ TEST_SUITE("shards") {
     std::ofstream(dir / "short.csv") << "# " << std::string(5000, 'x') << "\nt,y,v,x\n0,1,2,3\n"
                                      << "0.1,1,2,3\n0.2,1,2,3\n";
     DataOptions options;
-    options.control.shard_bytes = 1024;
+    options.record.control.shard_bytes = 1024;
     options.min_rows = 10;
     const auto e = momentid::testing::error_from<momentid::DataError>([&] {
       momentid::moments_from_data(DataSource::file(dir / "short.csv"), {"y", "v"}, {"x"},

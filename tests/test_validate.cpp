@@ -56,7 +56,7 @@ SimulationOptions duffing_options(const Model& model, std::size_t samples) {
 
 ValidateOptions with_parameters(const Model& model, const std::vector<std::string>& set) {
   ValidateOptions options;
-  options.replay.parameters = parameter_values(model, set);
+  options.replay.parameters = momentid::parse_parameter_values(model, set);
   return options;
 }
 
@@ -121,7 +121,7 @@ TEST_SUITE("validate") {
     const Recorder recorder = simulated(model, duffing_options(model, 3000));
     const MemoryRecord record(model, recorder, {"y", "v", "x"}, "zoh");
     ReplayOptions options;
-    options.parameters = parameter_values(model, {});
+    options.parameters = {};  // the nominal values
     const Replay replay = momentid::replay(model, record.source(), options);
     REQUIRE(replay.interpolation == std::vector<Interpolation>{Interpolation::kHold});
     REQUIRE(replay.simulated.size() == 1);
@@ -142,8 +142,8 @@ TEST_SUITE("validate") {
     const Recorder recorder = simulated(model, options);
     const MemoryRecord record(model, recorder, {"y", "v", "x"}, "sample");
     ReplayOptions replay_options;
-    replay_options.parameters = parameter_values(model, {});
-    replay_options.substeps = 1;  // as the simulator integrated: only the inputs differ
+    replay_options.parameters = {};  // the nominal values
+    replay_options.substeps = 1;     // as the simulator integrated: only the inputs differ
     const std::vector<double> y = recorder.column(1);
     double spread = 0, worst_sinc = 0, worst_cubic = 0;
     for (double v : y) spread = std::max(spread, std::abs(v));
@@ -282,10 +282,11 @@ TEST_SUITE("validate") {
     const std::string good = write(
         "{\"model\": \"duffing\", \"parameters\": {\"c\": {\"estimate\": 0.25}, \"k\": "
         "{\"estimate\": 3}, \"eps\": {\"estimate\": -1e-3}}}");
-    const std::vector<GiNaC::numeric> values = read_estimates(model, good);
+    const momentid::ParameterValues values = read_estimates(model, good);
     REQUIRE(values.size() == 3);
-    CHECK(values[0].to_double() == 0.25);
-    CHECK(values[2].to_double() == -1e-3);
+    CHECK(values.at("c").value == 0.25);
+    CHECK(values.at("eps").value == -1e-3);
+    CHECK(values.at("eps").decimal.empty());
     const DataError bad =
         error_from<DataError>([&] { read_estimates(model, write("{\n  \"model\": duffing\n}")); });
     CHECK(bad.location().line == 2);

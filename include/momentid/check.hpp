@@ -12,22 +12,21 @@
 #include "momentid/estimate.hpp"
 #include "momentid/model.hpp"
 #include "momentid/reader.hpp"
+#include "momentid/record_options.hpp"
 
 namespace momentid {
 
 // How to check data (docs/cli/check.md, "momentid check").
 struct CheckOptions {
-  std::size_t lags = 9;                        // autocorrelations per channel, 1..kMaxLags
-  std::optional<InputHold> hold;               // as IdentifyOptions::hold
-  std::map<std::string, std::string> columns;  // model variable (or `t`) -> data column
-  std::optional<double> dt;                    // as IdentifyOptions::dt
-  FileLayout layout;                           // as IdentifyOptions::layout
-  // Threads, shards and progress of each pass over the data.
-  PassControl control;
+  // The record's columns, sample interval, layout and input hold, and the pass's threads,
+  // shards and progress (every field is used).
+  RecordOptions record;
+  std::size_t lags = 9;  // autocorrelations per channel, 1..kMaxLags
   static constexpr std::size_t kMaxLags = 1000;
 
-  // Throws UsageError for a number of lags out of range.
-  void validate() const;
+  // Throws UsageError for a number of lags out of range, or as RecordOptions::validate (with
+  // `model`, when there is one).
+  void validate(const Model* model) const;
 };
 
 // Whether a record suits the moment method: each channel's statistics and autocorrelations,

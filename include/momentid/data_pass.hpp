@@ -8,6 +8,7 @@
 
 #include "momentid/accumulator.hpp"
 #include "momentid/reader.hpp"
+#include "momentid/record_options.hpp"
 
 namespace momentid {
 
@@ -29,27 +30,11 @@ struct ChannelStatistics {
   std::optional<double> noise_fraction() const;
 };
 
-// How a pass reads its data: on how many threads, in shards of what size, with what report of
-// its progress.
-struct PassControl {
-  // Threads reading at once: 0 for the machine's cores. Files, and shards of large files, are
-  // read in parallel (see moments_from_data).
-  std::size_t threads = 0;
-  // Files are cut into shards of about this many bytes (DataSource::shards).
-  std::size_t shard_bytes = kDefaultShardBytes;
-  static constexpr std::size_t kDefaultShardBytes = std::size_t{16} << 20;
-  // In an MPI job (momentid built with MOMENTID_MPI, MPI started): every process of the job
-  // takes part in each pass, reading a contiguous range of the shards, and every process gets
-  // the whole result. Every process must then make the same passes.
-  bool across_processes = false;
-  // Called a few times a second with the rows read so far and the fraction of the data read,
-  // when known (e.g. to show progress); none: nothing is called.
-  std::function<void(std::size_t rows, std::optional<double> fraction)> progress;
-};
-
+// How one pass reads a record and what it estimates.
 struct DataOptions {
-  // How inputs were sampled; nullopt: the file's `input-hold` metadata, else kSample.
-  std::optional<InputHold> hold;
+  // The record's columns, sample interval, layout and input hold, and the pass's threads and
+  // shards (every field is used).
+  RecordOptions record;
   // How products with a held input are integrated over an interval.
   HeldRule held_rule = HeldRule::kCubic;
   // Contiguous batches of the record for the moments' sampling covariance; 0: automatic, one per
@@ -60,8 +45,7 @@ struct DataOptions {
   std::size_t min_batches = 0;
   static constexpr std::size_t kAutoBatchIntervals = 200, kMinAutoBatches = 100,
                                kMaxAutoBatches = 1000;
-  std::map<std::string, std::string> rename;  // model name -> file column
-  std::size_t lags = 1;                       // autocorrelations computed, per channel
+  std::size_t lags = 1;  // autocorrelations computed, per channel
   std::size_t min_rows = 2;
   // Pair input row n with state row n + input_shift (0: the same row).
   long input_shift = 0;
@@ -72,10 +56,6 @@ struct DataOptions {
   // Per channel (states, then inputs): a value subtracted from every sample as it is read, such
   // as the channel's mean; empty: none.
   std::vector<double> offsets;
-  // The sample interval, overriding the data's (ColumnRequest::dt).
-  std::optional<double> dt;
-  FileLayout layout;
-  PassControl control;
 };
 
 // What one pass over a data file yields.

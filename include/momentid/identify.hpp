@@ -15,28 +15,25 @@
 #include "momentid/lagged.hpp"
 #include "momentid/model.hpp"
 #include "momentid/reader.hpp"
+#include "momentid/record_options.hpp"
 
 namespace momentid {
 
 // How to identify (docs/cli/identify.md, "momentid identify"). The defaults are the command line's.
 struct IdentifyOptions {
+  // The record's columns, sample interval, layout and input hold, and each pass's threads,
+  // shards and progress (every field is used).
+  RecordOptions record;
   // Multipliers for every equation; else all monomials up to `degree` (when > 0); else the
   // model's own or the automatic choice (see DeriveOptions).
   std::optional<std::vector<Monomial>> multipliers;
   int degree = 0;
-  // How the inputs were sampled; nullopt: the data's `input-hold` metadata, else kSample.
-  std::optional<InputHold> hold;
   // Contiguous batches for the standard errors, kMinBatches..kMaxBatches; nullopt: automatic
   // (DataOptions::batches), and at least four per equation for the optimal weighting.
   std::optional<std::size_t> batches;
   // Two-step optimally weighted estimate (GMM) with the J test, besides least squares; nullopt:
   // for the lagged equations only, whose many strongly correlated rows it weights.
   std::optional<bool> gmm;
-  // Model variable (or `t`, the time) -> data column, for data whose columns have other names.
-  std::map<std::string, std::string> columns;
-  // The sample interval, overriding the data's: the time column is then not read.
-  std::optional<double> dt;
-  FileLayout layout;  // units rows, decimal comma
   // Pair input row n with state row n + input_shift, within kMaxInputShift either way.
   long input_shift = 0;
   // Lagged moment equations (docs/measured-data.md) at lags first..last samples, with these
@@ -59,8 +56,6 @@ struct IdentifyOptions {
   // difference estimates the bias of the estimate at the data's dt, which is removed
   // (Richardson's extrapolation to dt = 0) when it exceeds its standard error.
   bool extrapolate = false;
-  // Threads, shards and progress of each pass over the data.
-  PassControl control;
 
   static constexpr std::size_t kMinBatches = 2, kMaxBatches = 10000;
   static constexpr int kMaxDegree = 12;

@@ -12,6 +12,7 @@
 #include "momentid/input.hpp"
 #include "momentid/metadata.hpp"
 #include "momentid/model.hpp"
+#include "momentid/parameters.hpp"
 #include "momentid/writer.hpp"
 
 namespace momentid {
@@ -325,16 +326,21 @@ class RecordSimulator {
   std::vector<Interpolator> within_;  // per input, at the substeps' starts, middles and ends
 };
 
-// The values of the model's parameters: nominal values, overridden by `assignments` (`k=4`,
-// `eps=-0.5`, exact decimals). Throws UsageError for an unknown name or a bad number, and
-// ModelError naming a parameter that has no value.
+// `assignments` (`k=4`, `eps=-0.5`) by name, each kept as the exact decimal it is. Throws
+// UsageError naming `option` for an entry without '=', a name that is not a parameter of the
+// model, or a value that is not a decimal number.
+ParameterValues parse_parameter_values(const Model& model,
+                                       const std::vector<std::string>& assignments,
+                                       const std::string& option = "parameters");
+// The compiled form of `values`: one value per model parameter, in declaration order, the given
+// one or else the nominal one (a decimal exact, a double as it is). Throws UsageError naming
+// `option` for a name that is not a parameter of the model, and ModelError naming a parameter
+// that has no value either way.
+std::vector<GiNaC::numeric> parameter_vector(const Model& model, const ParameterValues& values,
+                                             const std::string& option = "parameters");
+// The nominal values overridden by `assignments`: parameter_vector(model,
+// parse_parameter_values(model, assignments)).
 std::vector<GiNaC::numeric> parameter_values(const Model& model,
                                              const std::vector<std::string>& assignments);
-// The same starting from `base` (one value per parameter) instead of the nominal values, with
-// messages naming `option`.
-std::vector<GiNaC::numeric> parameter_values(const Model& model,
-                                             const std::vector<std::string>& assignments,
-                                             const std::vector<GiNaC::numeric>& base,
-                                             const std::string& option = "parameters");
 
 }  // namespace momentid

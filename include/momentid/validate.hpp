@@ -12,7 +12,9 @@
 
 #include "momentid/metadata.hpp"
 #include "momentid/model.hpp"
+#include "momentid/parameters.hpp"
 #include "momentid/reader.hpp"
+#include "momentid/record_options.hpp"
 #include "momentid/simulate.hpp"
 #include "momentid/writer.hpp"
 
@@ -41,14 +43,13 @@ struct Record {
 
 // How to drive a model with a record's inputs (docs/cli/validate.md, "momentid validate").
 struct ReplayOptions {
-  std::vector<GiNaC::numeric> parameters;  // one per model parameter
-  // Model variable -> data column, for data whose columns have other names.
-  std::map<std::string, std::string> columns;
+  // The record's columns, sample interval and layout. `hold` and `control` are ignored: the
+  // inputs are interpolated (`interpolation`), and the record is read once, whole.
+  RecordOptions record;
+  // By name; a parameter not given takes its nominal value.
+  ParameterValues parameters;
   // nullopt: per input, kHold when the metadata say it was held (`input-hold=zoh`), else kSinc.
   std::optional<Interpolation> interpolation;
-  // The sample interval; nullopt: the record's (`t` column or `dt` metadata).
-  std::optional<double> dt;
-  FileLayout layout;  // as IdentifyOptions::layout
   // Runge-Kutta steps per sample interval, 1..RecordSimulator::kMaxSubsteps; nullopt: the fewest
   // (1, 2, 4, ...) for which halving the step changes the simulation of the first
   // kSubstepTrialRows rows of the first run by less than kSubstepTolerance of each state's
@@ -90,10 +91,10 @@ Replay replay(const Model& model, const DataSource& source, const ReplayOptions&
 void write_replay(const Model& model, const Replay& replay, const std::string& path,
                   DataWriter::Format format);
 
-// The parameter values of an `identify --format json` result: one per model parameter, in
-// declaration order. Throws DataError located in the file for text that is not JSON, estimates
-// of another model, or a parameter missing or without a numeric estimate.
-std::vector<GiNaC::numeric> read_estimates(const Model& model, const std::string& path);
+// The parameter values of an `identify --format json` result: one per model parameter, by name.
+// Throws DataError located in the file for text that is not JSON, estimates of another model, or a
+// parameter missing or without a numeric estimate.
+ParameterValues read_estimates(const Model& model, const std::string& path);
 
 // How to validate (docs/cli/validate.md, "momentid validate").
 struct ValidateOptions {

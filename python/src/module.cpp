@@ -153,6 +153,19 @@ std::optional<InputHold> hold_of(const py::dict& options) {
   return parse_input_hold(*hold, "hold");
 }
 
+// The keywords of RecordOptions: columns, dt, the layout's, input_hold and threads.
+RecordOptions record_options(const py::dict& options) {
+  RecordOptions out;
+  if (auto columns = get<std::map<std::string, std::string>>(options, "columns")) {
+    out.columns = *columns;
+  }
+  out.dt = get<double>(options, "dt");
+  out.layout = layout_of(options);
+  out.hold = hold_of(options);
+  if (auto threads = get<std::size_t>(options, "threads")) out.control.threads = *threads;
+  return out;
+}
+
 // `NAME=VALUE` items, as --set and --fix take them, from a mapping of names to numbers.
 std::vector<std::string> assignments(const std::map<std::string, py::object>& values) {
   std::vector<std::string> out;
@@ -223,7 +236,7 @@ IdentifyOptions identify_options(const Model& model, const py::dict& options) {
     out.multipliers = parse_multiplier_list(model, *text, "multipliers");
   }
   if (auto degree = get<int>(options, "degree")) out.degree = *degree;
-  out.hold = hold_of(options);
+  out.record = record_options(options);
   out.batches = get<std::size_t>(options, "batches");
   if (auto extrapolate = get<std::string>(options, "extrapolate")) {
     if (*extrapolate != "dt") {
@@ -235,11 +248,6 @@ IdentifyOptions identify_options(const Model& model, const py::dict& options) {
     const Weighting weighting = parse_weighting(*text, "weighting");
     if (weighting != Weighting::kAuto) out.gmm = weighting == Weighting::kGmm;
   }
-  if (auto columns = get<std::map<std::string, std::string>>(options, "columns")) {
-    out.columns = *columns;
-  }
-  out.dt = get<double>(options, "dt");
-  out.layout = layout_of(options);
   if (auto shift = get<long>(options, "input_shift")) out.input_shift = *shift;
   out.lags = get<std::pair<int, int>>(options, "lags");
   if (auto text = get<std::string>(options, "instruments")) {
@@ -248,7 +256,6 @@ IdentifyOptions identify_options(const Model& model, const py::dict& options) {
   out.noise = get<std::map<std::string, double>>(options, "noise");
   if (auto fixed = get<std::map<std::string, double>>(options, "fix")) out.fixed = *fixed;
   if (auto center = get<std::vector<std::string>>(options, "center")) out.center = *center;
-  if (auto threads = get<std::size_t>(options, "threads")) out.control.threads = *threads;
   return out;
 }
 
@@ -411,12 +418,10 @@ py::tuple simulate_record(const Model& model, const py::dict& options) {
 
 ValidateOptions validate_options(const Model& model, const py::dict& options) {
   ValidateOptions out;
-  out.replay.parameters = parameters_of(model, options, "params");
-  if (auto columns = get<std::map<std::string, std::string>>(options, "columns")) {
-    out.replay.columns = *columns;
-  }
-  out.replay.dt = get<double>(options, "dt");
-  out.replay.layout = layout_of(options);
+  const auto values = get<std::map<std::string, py::object>>(options, "params");
+  out.replay.parameters =
+      parse_parameter_values(model, values ? assignments(*values) : std::vector<std::string>{});
+  out.replay.record = record_options(options);
   if (auto substeps = get<int>(options, "substeps")) out.replay.substeps = *substeps;
   if (auto method = get<std::string>(options, "interpolation")) {
     out.replay.interpolation = parse_interpolation(*method, "interpolation");
@@ -614,13 +619,7 @@ PYBIND11_MODULE(_momentid, m) {
                      const std::map<std::string, std::string>& metadata, const py::dict& options) {
     CheckOptions check_with;
     if (auto lags = get<std::size_t>(options, "lags")) check_with.lags = *lags;
-    check_with.hold = hold_of(options);
-    if (auto columns = get<std::map<std::string, std::string>>(options, "columns")) {
-      check_with.columns = *columns;
-    }
-    check_with.dt = get<double>(options, "dt");
-    check_with.layout = layout_of(options);
-    if (auto threads = get<std::size_t>(options, "threads")) check_with.control.threads = *threads;
+    check_with.record = record_options(options);
     const Model* with = model.is_none() ? nullptr : &model.cast<const Model&>();
     const DataSource source = data_source(data, name, metadata);
     const CheckResult result = without_gil([&] { return check(source, with, check_with); });

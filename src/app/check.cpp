@@ -12,15 +12,16 @@
 
 namespace momentid {
 
-void CheckOptions::validate() const {
+void CheckOptions::validate(const Model* model) const {
   if (lags < 1 || lags > kMaxLags) {
     throw UsageError("lags", "expected a number from 1 to " + std::to_string(kMaxLags) +
                                  ", found " + std::to_string(lags));
   }
+  record.validate(model);
 }
 
 CheckResult check(const DataSource& source, const Model* model, const CheckOptions& options) {
-  options.validate();
+  options.validate(model);
   CheckResult result;
   result.data_name = source.name();
   result.lags = options.lags;
@@ -29,8 +30,7 @@ CheckResult check(const DataSource& source, const Model* model, const CheckOptio
   // Per model variable: whether the check reads it.
   std::vector<bool> kept;
   if (model != nullptr) {
-    const std::vector<bool> present =
-        variables_present(*model, source, options.columns, options.layout);
+    const std::vector<bool> present = variables_present(*model, source, options.record);
     // The statistics of the states and most identities need no input: inputs missing from the
     // data are left out rather than refused (all of them, so that the channels are the states).
     // So are states the data show only as derivatives (v when y' = v and y is measured); any
@@ -56,16 +56,18 @@ CheckResult check(const DataSource& source, const Model* model, const CheckOptio
       if (kept[v]) (v < state_count ? states : inputs).push_back(model->variables()[v]);
     }
   } else {
-    const std::unique_ptr<DataReader> reader = source.open(
-        {.names = {}, .rename = options.columns, .min_rows = 0, .layout = options.layout});
+    const std::unique_ptr<DataReader> reader = source.open({.names = {},
+                                                            .rename = options.record.columns,
+                                                            .min_rows = 0,
+                                                            .layout = options.record.layout});
     const std::vector<std::string> columns = reader->columns();
     for (const auto& [name, why] : reader->unusable_columns()) {
       result.warnings.push_back("not checked: " + why);
     }
-    const auto time = options.columns.find("t");
+    const auto time = options.record.columns.find("t");
     for (const std::string& c : columns) {
-      const bool is_time =
-          time != options.columns.end() ? c == time->second : c == "t" || data::is_time_name(c);
+      const bool is_time = time != options.record.columns.end() ? c == time->second
+                                                                : c == "t" || data::is_time_name(c);
       if (!c.empty() && !is_time && c != "run") states.push_back(c);
     }
   }
@@ -91,11 +93,7 @@ CheckResult check(const DataSource& source, const Model* model, const CheckOptio
   }
   DataOptions data_options;
   data_options.lags = options.lags;
-  data_options.hold = options.hold;
-  data_options.rename = options.columns;
-  data_options.dt = options.dt;
-  data_options.layout = options.layout;
-  data_options.control = options.control;
+  data_options.record = options.record;
   result.data = moments_from_data(source, states, inputs, moments, data_options);
   if (system) result.identities = check_identities(*system, full_moments, result.data.estimates);
   for (std::string& w : data_warnings(result.data)) result.warnings.push_back(std::move(w));

@@ -57,7 +57,7 @@ std::optional<FileFormat> format_for_path(const std::string& path) {
 std::vector<std::string> convert(const DataSource& source, const std::string& path,
                                  FileFormat format, const FileLayout& layout,
                                  std::optional<double> dt) {
-  const std::vector<std::string> columns = data_columns(source, {}, layout);
+  const std::vector<std::string> columns = data_columns(source, {.layout = layout});
   const ColumnRequest request{
       .names = columns, .rename = {}, .min_rows = 1, .dt = dt, .layout = layout};
   const bool has_time = std::any_of(columns.begin(), columns.end(), [&](const std::string& c) {

@@ -95,7 +95,7 @@ ValidateResult validate(const Model& model, const DataSource& source,
   options.validate();
   ValidateResult result;
   result.model = std::make_shared<const Model>(model);
-  result.parameters = options.replay.parameters;
+  result.parameters = parameter_vector(model, options.replay.parameters);
   result.replay = replay(*result.model, source, options.replay);
   const Replay& replay = result.replay;
   const std::vector<std::size_t> outputs = measured_states(model, replay.record);

@@ -6,20 +6,18 @@
 
 #include "momentid/model.hpp"
 #include "momentid/reader.hpp"
+#include "momentid/record_options.hpp"
 
 namespace momentid {
 
-// The column names of `source`, as a reader with these renames and this layout sees them (a
+// The column names of `source`, as a reader with the record's column map and layout sees them (a
 // 2-D .npy array is named by FileLayout::column_names, a .npy file named in `columns` is a
 // column). Reads the header only.
-std::vector<std::string> data_columns(const DataSource& source,
-                                      const std::map<std::string, std::string>& columns,
-                                      const FileLayout& layout);
+std::vector<std::string> data_columns(const DataSource& source, const RecordOptions& record);
 
 // Per model variable (states, then inputs): whether `source` has its column, under the name
-// `columns` maps it to (model name -> data column) or its own. Reads the header only.
+// RecordOptions::columns maps it to (model name -> data column) or its own. Reads the header only.
 std::vector<bool> variables_present(const Model& model, const DataSource& source,
-                                    const std::map<std::string, std::string>& columns,
-                                    const FileLayout& layout);
+                                    const RecordOptions& record);
 
 }  // namespace momentid

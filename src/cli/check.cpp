@@ -35,10 +35,10 @@ int run_check(CheckCommand& command) {
     model = parse_model_file(files.back());  // reports why it is no model
     files.pop_back();
   }
-  command.options.hold = hold_option(command.hold);
-  command.options.columns = column_map(command.columns);
+  command.options.record.hold = hold_option(command.hold);
+  command.options.record.columns = column_map(command.columns);
   TerminalProgress progress(!command.quiet);
-  command.options.control.progress = progress.callback();
+  command.options.record.control.progress = progress.callback();
   const CheckResult result = check(data_sources(files), model ? &*model : nullptr, command.options);
   progress.finish();
   std::cout << format_text(result);
@@ -59,12 +59,12 @@ Command add_check(CLI::App& app) {
       ->check(CLI::Range(std::size_t{1}, CheckOptions::kMaxLags));
   sub->add_option("--input-hold", command->hold, "how the inputs were sampled")
       ->check(CLI::IsMember(names_of<InputHold>()));
-  sub->add_option("--dt", command->options.dt,
+  sub->add_option("--dt", command->options.record.dt,
                   "sample interval, overriding the data's: the time column is then not read")
       ->check(CLI::PositiveNumber);
   sub->add_option("--columns", command->columns, "NAME=COLUMN: where a model variable is");
-  add_layout_options(sub, command->options.layout);
-  add_pass_options(sub, command->options.control);
+  add_layout_options(sub, command->options.record.layout);
+  add_pass_options(sub, command->options.record.control);
   sub->add_flag("-q,--quiet", command->quiet,
                 "no progress on standard error (shown only on a terminal)");
   return {sub, [command] { return run_check(*command); }};

@@ -66,22 +66,26 @@ int run_identify(IdentifyCommand& command) {
   if (command.multipliers) {
     options.multipliers = parse_multiplier_list(model, *command.multipliers, "--multipliers");
   }
-  options.hold = hold_option(command.hold);
+  options.record.hold = hold_option(command.hold);
   const Weighting weighting = parse_weighting(command.weighting, "weighting");
   if (weighting != Weighting::kAuto) options.gmm = weighting == Weighting::kGmm;
   options.extrapolate = command.extrapolate == "dt";
-  options.columns = column_map(command.columns);
+  options.record.columns = column_map(command.columns);
   if (command.lags) options.lags = lag_range(*command.lags);
   options.noise = noise_option(model, command.noise);
   if (command.instruments) {
     options.instruments = parse_instrument_list(model, *command.instruments, "--instruments");
   }
-  // --fix k=9,...: the values read as --set reads them.
-  const std::vector<GiNaC::numeric> values = parameter_values(
-      model, command.fix, std::vector<GiNaC::numeric>(model.parameters().size(), 0), "fixed");
-  for (const std::string& item : command.fix) {
-    const std::string name = item.substr(0, item.find('='));
-    options.fixed[name] = values[static_cast<std::size_t>(model.parameter_index(name))].to_double();
+  // --fix k=9,...: the values read as --set reads them, exact decimals rounded once (the
+  // parameters not fixed at 0, so that none lacks a value).
+  const ParameterValues fixed = parse_parameter_values(model, command.fix, "fixed");
+  ParameterValues every;
+  for (const Declaration& p : model.parameters()) every[p.name] = 0.0;
+  for (const auto& entry : fixed) every[entry.first] = entry.second;
+  const std::vector<GiNaC::numeric> values = parameter_vector(model, every, "fixed");
+  for (const auto& entry : fixed) {
+    const auto index = static_cast<std::size_t>(model.parameter_index(entry.first));
+    options.fixed[entry.first] = values[index].to_double();
   }
   if (command.center.size() == 1 && command.center[0] == "all") {
     options.center = model.variables();
@@ -89,7 +93,7 @@ int run_identify(IdentifyCommand& command) {
     options.center = command.center;
   }
   TerminalProgress progress(!command.quiet && command.format != "json");
-  options.control.progress = progress.callback();
+  options.record.control.progress = progress.callback();
   const IdentifyResult result = identify(model, data_sources(command.data), options);
   progress.finish();
   std::cout << (command.format == "json" ? format_json(result) : format_text(result));
@@ -143,7 +147,7 @@ Command add_identify(CLI::App& app) {
   sub->add_option("--noise", command->noise,
                   "white sensor noise on the states for the lagged equations: auto (estimated), "
                   "none, or NAME=VARIANCE,...");
-  sub->add_option("--dt", options.dt,
+  sub->add_option("--dt", options.record.dt,
                   "sample interval, overriding the data's: the time column is then not read")
       ->check(CLI::PositiveNumber);
   sub->add_option("--fix", command->fix,
@@ -158,8 +162,8 @@ Command add_identify(CLI::App& app) {
                   "dt: estimate the bias of sampling from every other sample, and remove it when "
                   "it exceeds its error (zero-lag equations, inputs sampled, not held)")
       ->check(CLI::IsMember({"dt"}));
-  add_layout_options(sub, options.layout);
-  add_pass_options(sub, options.control);
+  add_layout_options(sub, options.record.layout);
+  add_pass_options(sub, options.record.control);
   sub->add_flag("-q,--quiet", command->quiet,
                 "no progress on standard error (shown only on a terminal, never with JSON)");
   return {sub, [command] { return run_identify(*command); }};

@@ -64,9 +64,9 @@ int run_simulate(SimulateCommand& command) {
   const WriterFormat format = parse_writer_format(command.format, "format");
   if (!command.input_file.empty()) {
     ReplayOptions options;
-    options.parameters = parameter_values(model, command.set);
-    options.columns = column_map(command.columns);
-    options.dt = command.record_dt;
+    options.parameters = parse_parameter_values(model, command.set);
+    options.record.columns = column_map(command.columns);
+    options.record.dt = command.record_dt;
     options.substeps = command.substeps;
     if (!command.interpolation.empty()) {
       options.interpolation = parse_interpolation(command.interpolation, "interpolation");

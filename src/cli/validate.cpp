@@ -49,17 +49,18 @@ int run_validate(ValidateCommand& command) {
   std::string from = "the model's nominal values";
   if (!command.estimates.empty()) {
     from = command.estimates + (command.set.empty() ? "" : ", then --set");
-    replay.parameters =
-        parameter_values(model, command.set, read_estimates(model, command.estimates));
-  } else {
-    if (!command.set.empty()) from += " and --set";
-    replay.parameters = parameter_values(model, command.set);
+    replay.parameters = read_estimates(model, command.estimates);
+  } else if (!command.set.empty()) {
+    from += " and --set";
+  }
+  for (auto& [name, value] : parse_parameter_values(model, command.set)) {
+    replay.parameters.insert_or_assign(name, value);
   }
   if (!command.interpolation.empty()) {
     replay.interpolation = parse_interpolation(command.interpolation, "interpolation");
   }
-  replay.dt = command.dt;
-  replay.columns = column_map(command.columns);
+  replay.record.dt = command.dt;
+  replay.record.columns = column_map(command.columns);
   command.options.skip = command.skip;
   std::optional<std::pair<double, double>> window;
   if (!command.window.empty()) window = window_option(command.window);
@@ -106,7 +107,7 @@ Command add_validate(CLI::App& app) {
   sub->add_option("--window", command->window,
                   "FROM:TO, the times the plot shows (default: the first 2000 compared rows)")
       ->needs(plot);
-  add_layout_options(sub, command->options.replay.layout);
+  add_layout_options(sub, command->options.replay.record.layout);
   return {sub, [command] { return run_validate(*command); }};
 }
 

@@ -34,16 +34,16 @@ ColumnRequest column_request(const std::vector<std::string>& states,
   ColumnRequest request;
   request.names = states;
   request.names.insert(request.names.end(), inputs.begin(), inputs.end());
-  request.rename = options.rename;
+  request.rename = options.record.columns;
   // Several files: the minimum is the whole record's, checked at its end.
   request.min_rows = several_files ? 0 : options.min_rows;
-  request.dt = options.dt;
-  request.layout = options.layout;
+  request.dt = options.record.dt;
+  request.layout = options.record.layout;
   return request;
 }
 
 InputHold input_hold(const DataMetadata& metadata, const DataOptions& options) {
-  if (options.hold) return *options.hold;
+  if (options.record.hold) return *options.record.hold;
   return metadata.input_hold();
 }
 
@@ -110,7 +110,7 @@ RangeResult read_all(const Pass& pass, std::unique_ptr<DataReader> first,
                      std::exception_ptr open_error, std::size_t channels) {
   const DataOptions& options = *pass.setup.options;
   // With several processes (MPI), each reads a contiguous range of the shards.
-  const bool shared = options.control.across_processes;
+  const bool shared = options.record.control.across_processes;
   const std::size_t ranks = shared ? static_cast<std::size_t>(cluster::size()) : 1;
   const std::size_t rank = shared ? static_cast<std::size_t>(cluster::rank()) : 0;
   const std::size_t begin = pass.shards.size() * rank / ranks;
@@ -170,9 +170,9 @@ DataMoments moments_from_data(const DataSource& source, const std::vector<std::s
   // Rows that depend on their neighbours across a shard's edge in ways the shard cannot see
   // (a shifted input, a row dropped between two, every other row kept) keep files whole.
   const bool whole_files = options.input_shift != 0 || options.stride > 1 ||
-                           options.layout.missing != MissingValues::kError;
+                           options.record.layout.missing != MissingValues::kError;
   const std::vector<DataSource::Shard> shards = source.shards(
-      whole_files ? std::numeric_limits<std::size_t>::max() : options.control.shard_bytes);
+      whole_files ? std::numeric_limits<std::size_t>::max() : options.record.control.shard_bytes);
   request.part.before = std::max<std::size_t>({max_lag_of(keys), options.lags, 1});
   request.part.after = MomentAccumulator::kLookaheadRows;
 
@@ -208,7 +208,7 @@ DataMoments moments_from_data(const DataSource& source, const std::vector<std::s
   check_record(source, *result.state, any_moments, shards.size(), options);
   out.rows = result.state->rows;
   out.runs = result.state->runs;
-  out.time_step = options.dt ? options.dt : first_step;
+  out.time_step = options.record.dt ? options.record.dt : first_step;
   if (out.time_step) *out.time_step *= static_cast<double>(options.stride);
   out.estimates = estimates(
       accumulator,

@@ -69,12 +69,12 @@ class RangeReading {
     std::unique_lock lock(mutex_);
     while (running_ > 0) {
       finished_.wait_for(lock, std::chrono::milliseconds(100));
-      if (options_.control.progress && running_ > 0) {
+      if (options_.record.control.progress && running_ > 0) {
         double shards_done = static_cast<double>(next_merge_ - begin_);
         for (const std::atomic<double>& f : partial_) shards_done += f;
         const double fraction = std::min(1.0, shards_done / static_cast<double>(end_ - begin_));
         lock.unlock();
-        options_.control.progress(rows_done_, fraction);
+        options_.record.control.progress(rows_done_, fraction);
         lock.lock();
       }
     }
@@ -146,8 +146,8 @@ RangeResult read_range(const Pass& pass, std::size_t begin, std::size_t end,
   RangeResult out;
   out.state.emplace(empty_state(pass));
   if (begin == end) return out;
-  const std::size_t threads = options.control.threads > 0
-                                  ? options.control.threads
+  const std::size_t threads = options.record.control.threads > 0
+                                  ? options.record.control.threads
                                   : std::max<unsigned>(1, std::thread::hardware_concurrency());
   const std::size_t workers = std::min(threads, end - begin);
   // With threads to spare, each shard is read on one thread while it is accumulated on another.
@@ -157,7 +157,8 @@ RangeResult read_range(const Pass& pass, std::size_t begin, std::size_t end,
   for (std::size_t w = 0; w < workers; ++w) pool.emplace_back([&reading, w] { reading.work(w); });
   reading.wait();
   for (std::thread& t : pool) t.join();
-  if (options.control.progress && !out.error) options.control.progress(reading.rows_done(), 1.0);
+  if (options.record.control.progress && !out.error)
+    options.record.control.progress(reading.rows_done(), 1.0);
   return out;
 }
 

@@ -180,7 +180,7 @@ ShardState read_shard(DataReader& reader, bool whole, const PassSetup& setup, bo
     if (!pass.take(block)) return;
     rows_done += block.rows;
     // A part of a file cannot tell how far it is; a whole file can.
-    if (setup.options->control.progress && whole) {
+    if (setup.options->record.control.progress && whole) {
       fraction = reader.fraction_read().value_or(0);
     }
   });

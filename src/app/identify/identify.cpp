@@ -14,8 +14,7 @@ IdentifyResult identify(const Model& model, const DataSource& source,
   result.model = std::make_shared<const Model>(model);
   result.data_name = source.name();
   // Which variables the data have: the lagged equations serve data without some state.
-  const std::vector<bool> measured =
-      variables_present(model, source, options.columns, options.layout);
+  const std::vector<bool> measured = variables_present(model, source, options.record);
   switch (choose_equations(model, measured, options)) {
     case EquationKind::kZeroLag:
       identify_zero_lag(result, source, options);

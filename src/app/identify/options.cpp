@@ -44,16 +44,7 @@ void IdentifyOptions::validate(const Model& model) const {
       throw UsageError("center", "'" + name + "' is not a state or input of model " + model.name());
     }
   }
-  if (dt && !(std::isfinite(*dt) && *dt > 0)) {
-    throw UsageError("dt", "expected a positive number");
-  }
-  for (const auto& column : columns) {
-    if (column.first == "t") continue;
-    if (std::find(variables.begin(), variables.end(), column.first) == variables.end()) {
-      throw UsageError("columns",
-                       "'" + column.first + "' is not a state or input of model " + model.name());
-    }
-  }
+  record.validate(&model);
 }
 
 const std::vector<ParameterEstimate>& IdentifyResult::parameters() const {

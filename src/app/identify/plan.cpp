@@ -30,14 +30,10 @@ std::vector<std::string> input_names(const Model& model) {
 
 DataOptions pass_options(const IdentifyOptions& options) {
   DataOptions data_options;
-  data_options.hold = options.hold;
+  data_options.record = options.record;
   data_options.batches = options.batches.value_or(0);
-  data_options.rename = options.columns;
   data_options.min_rows = 2 * (options.batches ? *options.batches : DataOptions::kMinAutoBatches);
   data_options.input_shift = options.input_shift;
-  data_options.dt = options.dt;
-  data_options.layout = options.layout;
-  data_options.control = options.control;
   data_options.lags = 4;  // for the noise estimates
   return data_options;
 }

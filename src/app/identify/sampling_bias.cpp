@@ -17,7 +17,7 @@ MomentEstimates every_other_sample(const IdentifyResult& result, const DataSourc
                                    DataOptions data_options, std::size_t batches) {
   const Model& model = *result.model;
   data_options.stride = 2;
-  data_options.hold = result.data.hold;
+  data_options.record.hold = result.data.hold;
   // The same batches: the accumulator keeps as many stretches, each of half as many intervals
   // (every other sample), so that they cover the same times as the record's, and the same
   // count of them make a batch.

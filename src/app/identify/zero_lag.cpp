@@ -17,7 +17,7 @@ ZeroLagPlan plan_zero_lag(const Model& model, const IdentifyOptions& options) {
   // A held input puts kinks into the states at the samples: the moments whose derivative
   // holds it are then corrected, with E[g''] from moments the pass adds (unless the data are
   // known to be sampled).
-  if (!model.inputs().empty() && options.hold != InputHold::kSample) {
+  if (!model.inputs().empty() && options.record.hold != InputHold::kSample) {
     plan.held = held_input_corrections(model, without_rates(model, plan.moments));
   }
   // The ends of the record: the rates of change, with the products their covariance needs,

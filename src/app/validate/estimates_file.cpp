@@ -27,7 +27,7 @@ SourceLocation location(const std::string& path, const std::string& text, std::s
 
 }  // namespace
 
-std::vector<GiNaC::numeric> read_estimates(const Model& model, const std::string& path) {
+ParameterValues read_estimates(const Model& model, const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw DataError(file_start(path), "cannot open the estimates file");
   std::stringstream buffer;
@@ -63,7 +63,7 @@ std::vector<GiNaC::numeric> read_estimates(const Model& model, const std::string
   }
   const std::size_t parameters_at = key_at("parameters", 0);
   const nlohmann::json& parameters = document["parameters"];
-  std::vector<GiNaC::numeric> out;
+  ParameterValues out;
   for (const Declaration& p : model.parameters()) {
     if (!parameters.contains(p.name)) {
       throw DataError(at(parameters_at), "no estimate of parameter '" + p.name + "'" + expected);
@@ -76,7 +76,7 @@ std::vector<GiNaC::numeric> read_estimates(const Model& model, const std::string
       throw DataError(at(key_at(p.name, parameters_at)),
                       "parameter '" + p.name + "' has no finite number as its \"estimate\"");
     }
-    out.emplace_back(entry["estimate"].get<double>());
+    out[p.name] = entry["estimate"].get<double>();
   }
   for (const auto& [name, value] : parameters.items()) {
     if (model.parameter_index(name) < 0) {

@@ -15,12 +15,11 @@ int Record::column_of(std::size_t v) const {
 SourceLocation file_start(const std::string& name) { return {name, 1, 1, ""}; }
 
 Record read_record(const Model& model, const DataSource& source, const ReplayOptions& options) {
-  const std::vector<bool> present =
-      variables_present(model, source, options.columns, options.layout);
+  const std::vector<bool> present = variables_present(model, source, options.record);
   const std::size_t states = model.states().size();
   Record record;
   record.name = source.name();
-  const std::vector<std::string> header = data_columns(source, options.columns, options.layout);
+  const std::vector<std::string> header = data_columns(source, options.record);
   record.has_time = std::find(header.begin(), header.end(), "t") != header.end();
   record.has_run = std::find(header.begin(), header.end(), "run") != header.end();
   // Every input is requested, so that one the data lack is reported as a missing column.
@@ -31,12 +30,14 @@ Record read_record(const Model& model, const DataSource& source, const ReplayOpt
       record.variables.push_back(v);
       const std::string& name = model.variables()[v];
       names.push_back(name);
-      const auto renamed = options.columns.find(name);
-      record.columns.push_back(renamed == options.columns.end() ? name : renamed->second);
+      const auto renamed = options.record.columns.find(name);
+      record.columns.push_back(renamed == options.record.columns.end() ? name : renamed->second);
     }
   }
-  const auto reader = source.open(
-      {.names = names, .rename = options.columns, .min_rows = 2, .layout = options.layout});
+  const auto reader = source.open({.names = names,
+                                   .rename = options.record.columns,
+                                   .min_rows = 2,
+                                   .layout = options.record.layout});
   const std::size_t first = record.has_time ? 1 : 0;
   const std::size_t width = names.size();
   DataBlock block;
@@ -57,7 +58,7 @@ Record read_record(const Model& model, const DataSource& source, const ReplayOpt
   }
   record.metadata = reader->metadata();
   record.missing = reader->missing();
-  const std::optional<double> dt = options.dt ? options.dt : reader->time_step();
+  const std::optional<double> dt = options.record.dt ? options.record.dt : reader->time_step();
   if (!dt) {
     throw DataError(file_start(record.name),
                     "the data give no sample interval: add a t column or a '# momentid: dt=...' "

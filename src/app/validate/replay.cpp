@@ -140,9 +140,8 @@ std::pair<int, double> chosen_substeps(const Model& model,
 }  // namespace
 
 Replay replay(const Model& model, const DataSource& source, const ReplayOptions& options) {
-  if (options.dt && !(std::isfinite(*options.dt) && *options.dt > 0)) {
-    throw UsageError("dt", "expected a positive number, found " + shortest_decimal(*options.dt));
-  }
+  options.record.validate(&model);
+  const std::vector<GiNaC::numeric> parameters = parameter_vector(model, options.parameters);
   Replay out;
   out.record = read_record(model, source, options);
   const Record& record = out.record;
@@ -162,11 +161,10 @@ Replay replay(const Model& model, const DataSource& source, const ReplayOptions&
     }
     out.substeps = *options.substeps;
   } else {
-    std::tie(out.substeps, out.substep_change) = chosen_substeps(model, options.parameters, out);
+    std::tie(out.substeps, out.substep_change) = chosen_substeps(model, parameters, out);
     out.substeps_chosen = true;
   }
-  const RecordSimulator simulator(model, options.parameters, out.interpolation, record.dt,
-                                  out.substeps);
+  const RecordSimulator simulator(model, parameters, out.interpolation, record.dt, out.substeps);
   for (std::size_t r = 0; r < record.runs.size(); ++r) {
     const RecordRun& run = record.runs[r];
     out.simulated.push_back(simulator.run(run_inputs(model, record, run), out.initial[r],

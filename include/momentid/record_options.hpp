@@ -1,0 +1,67 @@
+#pragma once
+// How to read a record: the options that identify, check and validate share, and that one pass
+// over the data takes. In a header of its own rather than in reader.hpp because it sits a level
+// above the reader: it names model variables (validate() needs the model) and says how a pass
+// runs (threads, shards, progress), which a reader of one file never sees.
+
+#include <cstddef>
+#include <functional>
+#include <map>
+#include <optional>
+#include <string>
+
+#include "momentid/reader.hpp"
+#include "momentid/types.hpp"
+
+namespace momentid {
+
+class Model;
+
+// How a pass reads its data: on how many threads, in shards of what size, with what report of
+// its progress.
+struct PassControl {
+  // Threads reading at once: 0 for the machine's cores. Files, and shards of large files, are
+  // read in parallel (see moments_from_data).
+  std::size_t threads = 0;
+  // Files are cut into shards of about this many bytes (DataSource::shards).
+  std::size_t shard_bytes = kDefaultShardBytes;
+  static constexpr std::size_t kDefaultShardBytes = std::size_t{16} << 20;
+  // In an MPI job (momentid built with MOMENTID_MPI, MPI started): every process of the job
+  // takes part in each pass, reading a contiguous range of the shards, and every process gets
+  // the whole result. Every process must then make the same passes.
+  bool across_processes = false;
+  // Called a few times a second with the rows read so far and the fraction of the data read,
+  // when known (e.g. to show progress); none: nothing is called.
+  std::function<void(std::size_t rows, std::optional<double> fraction)> progress;
+};
+
+// Where a record's channels are, how it is laid out and sampled, and how a pass reads it: a
+// member `record` of IdentifyOptions, CheckOptions, ReplayOptions (validate) and DataOptions.
+// Every command reads columns, dt and layout. identify and check use every field; validate (and
+// simulate --input-file) ignore `hold`, because they interpolate the inputs between samples
+// (ReplayOptions::interpolation), and `control`, because they read the record once, whole, on
+// one thread.
+//
+// Example:
+//   IdentifyOptions options;
+//   options.record.columns = {{"v", "velocity"}, {"t", "time"}};
+//   options.record.dt = 0.01;
+struct RecordOptions {
+  // Model variable (or `t`, the time) -> data column, for data whose columns have other names.
+  std::map<std::string, std::string> columns;
+  // The sample interval, overriding the data's: the time column is then not read.
+  std::optional<double> dt;
+  // How the file departs from the usual layout: units rows, decimal comma, missing values, ...
+  FileLayout layout;
+  // How the inputs were sampled; nullopt: the data's `input-hold` metadata, else kSample.
+  std::optional<InputHold> hold;
+  // Threads, shards and progress of each pass over the data.
+  PassControl control;
+
+  // Throws UsageError for a dt that is not a positive finite number ("dt") and, with a model,
+  // for a column mapped from a name that is neither `t` nor a state or input of the model
+  // ("columns").
+  void validate(const Model* model) const;
+};
+
+}  // namespace momentid

@@ -1,0 +1,26 @@
+#include "momentid/record_options.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "momentid/error.hpp"
+#include "momentid/model.hpp"
+
+namespace momentid {
+
+void RecordOptions::validate(const Model* model) const {
+  if (dt && !(std::isfinite(*dt) && *dt > 0)) {
+    throw UsageError("dt", "expected a positive number");
+  }
+  if (model == nullptr) return;
+  const auto& variables = model->variables();
+  for (const auto& column : columns) {
+    if (column.first == "t") continue;
+    if (std::find(variables.begin(), variables.end(), column.first) == variables.end()) {
+      throw UsageError("columns",
+                       "'" + column.first + "' is not a state or input of model " + model->name());
+    }
+  }
+}
+
+}  // namespace momentid

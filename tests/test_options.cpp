@@ -1,0 +1,81 @@
+// The options that several commands share: how to read a record (RecordOptions) and parameter
+// values by name (ParameterValues).
+
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <limits>
+#include <string>
+
+#include "momentid/record_options.hpp"
+#include "momentid/simulate.hpp"
+#include "test_support.hpp"
+
+namespace {
+
+using momentid::RecordOptions;
+using momentid::UsageError;
+using momentid::testing::error_from;
+using momentid::testing::model_file;
+
+// What validate() throws for `options`, "field: message", after checking that the error names
+// the field.
+std::string refusal(const RecordOptions& options, const momentid::Model* model,
+                    const std::string& field) {
+  const UsageError e = error_from<UsageError>([&] { options.validate(model); });
+  CHECK(e.option() == field);
+  return e.what();
+}
+
+}  // namespace
+
+TEST_SUITE("options") {
+  TEST_CASE("a record's dt must be a positive finite number, with or without a model") {
+    const momentid::Model model = model_file("duffing.mom");
+    for (const double dt : {0.0, -0.01, std::numeric_limits<double>::infinity(),
+                            std::numeric_limits<double>::quiet_NaN()}) {
+      CHECK(refusal({.dt = dt}, nullptr, "dt") == "dt: expected a positive number");
+      CHECK(refusal({.dt = dt}, &model, "dt") == "dt: expected a positive number");
+    }
+    CHECK_NOTHROW(RecordOptions{.dt = 0.01}.validate(&model));
+  }
+
+  TEST_CASE("a record's columns map the model's variables or t, checked when there is a model") {
+    const momentid::Model model = model_file("duffing.mom");
+    const RecordOptions options{.columns = {{"w", "y"}}};
+    CHECK(refusal(options, &model, "columns") ==
+          "columns: 'w' is not a state or input of model duffing");
+    CHECK_NOTHROW(options.validate(nullptr));
+    CHECK_NOTHROW(
+        RecordOptions{.columns = {{"t", "time"}, {"v", "velocity"}, {"x", "force"}}}.validate(
+            &model));
+  }
+
+  TEST_CASE("parameter values by name become the model's values in order, nominal where absent") {
+    const momentid::Model model = model_file("duffing.mom");  // c = 0.5, k = 4, eps = 1
+    const auto values = momentid::parameter_vector(
+        model, {{"eps", momentid::ParameterValue::exact("0.1")}, {"c", 0.25}});
+    REQUIRE(values.size() == 3);
+    CHECK(values[0] == GiNaC::numeric(0.25));  // a double as it is
+    CHECK(values[1] == 4);
+    CHECK(values[2] == GiNaC::numeric(1, 10));  // a decimal exact
+    CHECK(momentid::parse_parameter_values(model, {"k=+2.5e-1"}).at("k").decimal == "+2.5e-1");
+    CHECK(momentid::parse_parameter_values(model, {"k=+2.5e-1"}).at("k").value == 0.25);
+  }
+
+  TEST_CASE("an unknown or missing parameter is named") {
+    const momentid::Model model = model_file("duffing.mom");
+    const UsageError unknown = error_from<UsageError>([&] {
+      momentid::parameter_vector(model, {{"zz", 1.0}}, "parameters");
+    });
+    CHECK(unknown.option() == "parameters");
+    CHECK(std::string(unknown.what()) ==
+          "parameters: 'zz' is not a parameter of model duffing (parameters: c, k, eps)");
+    const momentid::Model bare =
+        momentid::parse_model("model bare\nstate y\nparam a\ny' = -a*y\n", "bare.mom");
+    const momentid::ModelError missing =
+        error_from<momentid::ModelError>([&] { momentid::parameter_vector(bare, {}); });
+    CHECK(missing.message() ==
+          "parameter 'a' has no value: give a nominal value in the model or --set a=VALUE");
+  }
+}
