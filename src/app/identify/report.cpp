@@ -46,9 +46,8 @@ std::string method_text(const IdentifyResult& r) {
   std::string noise;
   for (std::size_t c = 0; c < r.lagged->noise.size(); ++c) {
     if (r.lagged->noise[c] == 0) continue;
-    char text[32];
-    std::snprintf(text, sizeof text, "%.3g", r.lagged->noise[c]);
-    noise += (noise.empty() ? "" : ", ") + r.lagged->channels[c] + " " + text;
+    noise += (noise.empty() ? "" : ", ") + r.lagged->channels[c] + " " +
+             number(r.lagged->noise[c], "%.3g");
   }
   if (!noise.empty()) out += "\nnoise variances, corrected for in powers of the channels: " + noise;
   return out;

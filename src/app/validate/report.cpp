@@ -8,17 +8,11 @@
 #include "app/validate/record.hpp"
 #include "common/decimal.hpp"
 #include "common/json.hpp"
+#include "common/number.hpp"
 #include "momentid/validate.hpp"
 
 namespace momentid {
 namespace {
-
-std::string number(double x, const char* format = "%.6g") {
-  if (std::isnan(x)) return "n/a";
-  char text[64];
-  std::snprintf(text, sizeof text, format, x);
-  return text;
-}
 
 std::string parameters_text(const ValidateResult& r) {
   std::string out;
