@@ -281,6 +281,23 @@ TEST_SUITE("solve") {
     CHECK_THROWS_AS(momentid::solve_rows(rows, {"p", "q"}, estimates), std::invalid_argument);
     rows.b[1].moments[0].first = 2;  // one past the estimates
     CHECK_THROWS_AS(momentid::solve_rows(rows, {"p"}, estimates), std::invalid_argument);
+    // The same with a parameter fixed, whose terms move to the right-hand side first.
+    rows.b[1].moments[0].first = 1;
+    rows.a[0].push_back({1.0, {}});
+    CHECK_THROWS_AS(momentid::solve_rows(rows, {"p"}, estimates, {.fixed = {0.5}}),
+                    std::invalid_argument);
+  }
+
+  TEST_CASE("a fit's covariance is its errors times their correlation, 0 for a fixed parameter") {
+    momentid::Fit fit;
+    fit.parameters = {{"a", 1, 0.5}, {"b", 2, 2}, {"c", 3, 0, 3, 3, true, /*fixed=*/true}};
+    fit.correlation = {{1, -0.25, NAN}, {-0.25, 1, NAN}, {NAN, NAN, NAN}};
+    const std::vector<std::vector<double>> c = fit.covariance();
+    CHECK(c[0][0] == 0.25);
+    CHECK(c[1][1] == 4);
+    CHECK(c[0][1] == -0.25);  // -0.25 * 0.5 * 2, exact
+    CHECK(c[1][0] == -0.25);
+    for (std::size_t i = 0; i < 3; ++i) CHECK((c[i][2] == 0 && c[2][i] == 0));
   }
 
   TEST_CASE("the least-squares objective is zero for a consistent system") {

@@ -44,6 +44,10 @@ TEST_SUITE("types") {
                                  momentid::parse_file_format);
     check_round_trip<WriterFormat>({WriterFormat::kCsv, WriterFormat::kBinary},
                                    momentid::parse_writer_format);
+    check_round_trip<momentid::Status>(
+        {momentid::Status::kOk, momentid::Status::kDoubtful, momentid::Status::kRankDeficient,
+         momentid::Status::kNothingIdentifiable},
+        momentid::parse_status);
   }
 
   TEST_CASE("a bad name is a usage error of its option that lists the accepted names") {

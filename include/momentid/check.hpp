@@ -1,9 +1,6 @@
 #pragma once
 
 #include <cstddef>
-#include <functional>
-#include <map>
-#include <optional>
 #include <string>
 #include <vector>
 

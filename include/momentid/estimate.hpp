@@ -91,8 +91,9 @@ struct Estimate {
   // The optimally weighted fit when there is one, otherwise least squares.
   const Fit& main() const { return optimal ? *optimal : least_squares; }
   Fit& main() { return optimal ? *optimal : least_squares; }
-  // Whether the parameters have estimates: the status is kOk (or kDoubtful).
-  bool usable() const { return status == Status::kOk || status == Status::kDoubtful; }
+  // Whether every parameter has an estimate and an error: the status is kOk (a rank-deficient
+  // estimate has minimum-norm values only).
+  bool usable() const { return status == Status::kOk; }
 };
 
 struct SolveOptions {

@@ -1,7 +1,6 @@
 #pragma once
 
 #include <cstddef>
-#include <functional>
 #include <map>
 #include <memory>
 #include <optional>
@@ -129,7 +128,9 @@ struct IdentifyResult {
   std::optional<Lagged> lagged;
   DataMoments data;
   Estimate estimate;
-  bool gmm = false;  // the optimally weighted estimate is the main result
+  // The optimally weighted estimate was asked for (SolveOptions::gmm); estimate.optimal says
+  // whether it could be made.
+  bool gmm = false;
   std::map<std::string, double>
       centered;  // the means removed, by variable (IdentifyOptions::center)
 

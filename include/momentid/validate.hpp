@@ -3,7 +3,6 @@
 #include <ginac/ginac.h>
 
 #include <cstddef>
-#include <map>
 #include <memory>
 #include <optional>
 #include <string>

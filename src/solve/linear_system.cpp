@@ -4,14 +4,11 @@
 #include <string>
 
 namespace momentid {
-namespace {
 
 using Eigen::Index;
 using Eigen::MatrixXd;
 using Eigen::VectorXd;
 
-// The contract of solve_rows: a coefficient per parameter in every row, entries that index
-// the estimates.
 void check_shape(const MomentRows& rows, Index parameters, std::size_t moments) {
   if (rows.b.size() != rows.a.size()) {
     throw std::invalid_argument("solve_rows: " + std::to_string(rows.a.size()) + " rows of " +
@@ -37,6 +34,8 @@ void check_shape(const MomentRows& rows, Index parameters, std::size_t moments) 
   }
 }
 
+namespace {
+
 // Each row divided by the length of its coefficients; the uses with it.
 void normalise(LinearSystem& system) {
   const Index rows = system.a.rows();
@@ -56,7 +55,6 @@ void normalise(LinearSystem& system) {
 
 LinearSystem evaluate(const MomentRows& rows, Index parameters, const std::vector<double>& mean,
                       bool normalise_rows) {
-  check_shape(rows, parameters, mean.size());
   const auto count = static_cast<Index>(rows.a.size());
   LinearSystem out{MatrixXd::Zero(count, parameters), VectorXd::Zero(count),
                    std::vector<MomentUse>(mean.size())};

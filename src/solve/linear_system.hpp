@@ -24,10 +24,13 @@ struct LinearSystem {
   std::vector<MomentUse> uses;  // one per moment
 };
 
-// `rows` at the moments' values `mean`, which the rows' entries index. `normalise_rows`: each row
-// divided by the length of its coefficients (rows of zero coefficients as they are). Throws
-// std::invalid_argument when a row has not one coefficient per parameter or an entry indexes no
-// moment.
+// The contract of solve_rows: throws std::invalid_argument unless every row has one coefficient
+// per parameter and a right-hand side, and every entry indexes one of `moments` estimates.
+void check_shape(const MomentRows& rows, Eigen::Index parameters, std::size_t moments);
+
+// `rows` (of the shape check_shape wants) at the moments' values `mean`, which the rows' entries
+// index. `normalise_rows`: each row divided by the length of its coefficients (rows of zero
+// coefficients as they are).
 LinearSystem evaluate(const MomentRows& rows, Eigen::Index parameters,
                       const std::vector<double>& mean, bool normalise_rows);
 

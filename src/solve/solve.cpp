@@ -150,6 +150,7 @@ Estimate solve_free(const MomentRows& rows, const std::vector<std::string>& name
 Estimate solve_on(const MomentRows& rows, const std::vector<std::string>& names,
                   const MomentEstimates& estimates, const SolveOptions& options,
                   const MomentErrors& moments) {
+  check_shape(rows, static_cast<Index>(names.size()), estimates.mean.size());
   const auto& fixed = options.fixed;
   if (std::none_of(fixed.begin(), fixed.end(), [](const auto& v) { return v.has_value(); })) {
     return solve_free(rows, names, estimates, options, moments);

@@ -108,7 +108,7 @@ std::string equation_text(const Model& model, const Equation& eq,
 }  // namespace
 
 std::vector<std::string> identified_equations(const IdentifyResult& r) {
-  if (r.estimate.status != Status::kOk) return {};
+  if (!r.estimate.usable()) return {};
   std::vector<std::string> out;
   for (const Equation& eq : r.model->equations()) {
     out.push_back(equation_text(*r.model, eq, r.parameters()));

@@ -1,7 +1,6 @@
 #include <algorithm>
 
 #include "app/identify/steps.hpp"
-#include "app/variables.hpp"
 
 namespace momentid {
 
