@@ -40,7 +40,7 @@ bool symmetric(const Model& model) {
 std::vector<std::string> doubts(const IdentifyResult& r) {
   std::vector<std::string> out;
   const Estimate& e = r.estimate;
-  if (e.j_pvalue && *e.j_pvalue < kJRejection && r.gmm) {
+  if (e.j_pvalue && *e.j_pvalue < kJRejection) {  // the J test comes with the optimal weighting
     out.push_back("the J test rejects the model (p = " + number(*e.j_pvalue, "%.2g") +
                   "): its moment equations disagree with each other more than their errors "
                   "allow. A term may be missing, a noise or an offset not modelled, or the "
