@@ -45,9 +45,12 @@ TEST_SUITE("types") {
     check_round_trip<WriterFormat>({WriterFormat::kCsv, WriterFormat::kBinary},
                                    momentid::parse_writer_format);
     check_round_trip<momentid::Status>(
-        {momentid::Status::kOk, momentid::Status::kDoubtful, momentid::Status::kRankDeficient,
-         momentid::Status::kNothingIdentifiable},
+        {momentid::Status::kOk, momentid::Status::kUntested, momentid::Status::kDoubtful,
+         momentid::Status::kRankDeficient, momentid::Status::kNothingIdentifiable},
         momentid::parse_status);
+    check_round_trip<momentid::Method>(
+        {momentid::Method::kAuto, momentid::Method::kZeroLag, momentid::Method::kLagged},
+        momentid::parse_method);
   }
 
   TEST_CASE("a bad name is a usage error of its option that lists the accepted names") {

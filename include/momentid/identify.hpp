@@ -30,14 +30,20 @@ struct IdentifyOptions {
   // Contiguous batches for the standard errors, kMinBatches..kMaxBatches; nullopt: automatic
   // (DataOptions::batches), and at least four per equation for the optimal weighting.
   std::optional<std::size_t> batches;
-  // Two-step optimally weighted estimate (GMM) with the J test, besides least squares; nullopt:
-  // for the lagged equations only, whose many strongly correlated rows it weights.
-  std::optional<bool> gmm;
+  // Which moment equations: kAuto takes the lagged ones unless the record is known to be
+  // noise-free (simulate's output without noise), or options for the zero-lag ones (multipliers,
+  // a degree, extrapolate) are given, or the data give no sample interval; IdentifyResult::why
+  // says which was taken and why.
+  Method method = Method::kAuto;
+  // The main estimate: kAuto takes the two-step optimally weighted one (GMM), with the J test
+  // that gives `ok` its meaning, whenever the equations outnumber the free parameters; least
+  // squares is always computed beside it.
+  Weighting weighting = Weighting::kAuto;
   // Pair input row n with state row n + input_shift, within kMaxInputShift either way.
   long input_shift = 0;
   // Lagged moment equations (docs/measured-data.md) at lags first..last samples, with these
-  // instruments (nullopt: derive_lagged's choice). They are used when lags are given, and when
-  // the data lack a state's column (then with the default lags).
+  // instruments (nullopt: a window the data's correlation times call for, and derive_lagged's
+  // instruments, both cut to kMaxLaggedMoments). Giving either chooses the lagged equations.
   std::optional<std::pair<int, int>> lags;
   std::optional<std::vector<Monomial>> instruments;
   // White sensor noise on the states, for the lagged equations, which replace powers of noisy
@@ -66,6 +72,14 @@ struct IdentifyOptions {
   // Throws UsageError naming the first option that is out of range or that names a variable
   // `model` does not have.
   void validate(const Model& model) const;
+};
+
+// A channel's mean over the record, with its standard error (from the batches' long-run
+// covariance): a mean many errors from zero in a state of a symmetric model is a sensor offset.
+struct ChannelMean {
+  std::string name;
+  double mean = 0;
+  double std_error = 0;
 };
 
 // What an identification yields: the moment equations (zero-lag or lagged, whichever the data
@@ -120,6 +134,9 @@ struct IdentifyResult {
     // Per measured state the equations read: the lag at which its autocorrelation first falls
     // below 1/e, 0 if it stays above across the lags.
     std::map<std::string, int> correlation_lags;
+    // What was cut from the default lags and instruments to stay within kMaxLaggedMoments, e.g.
+    // "cut to 4 of the 10 instruments to stay within 3000 moments"; empty when nothing was.
+    std::string cut;
   };
 
   std::shared_ptr<const Model> model;
@@ -128,11 +145,16 @@ struct IdentifyResult {
   std::optional<Lagged> lagged;
   DataMoments data;
   Estimate estimate;
-  // The optimally weighted estimate was asked for (SolveOptions::gmm); estimate.optimal says
-  // whether it could be made.
+  // Why these equations were taken (IdentifyOptions::method), e.g. "asked for".
+  std::string why;
+  // The optimally weighted estimate was asked for (SolveOptions::gmm: IdentifyOptions::weighting,
+  // by default when the equations outnumber the free parameters); estimate.optimal says whether
+  // it could be made.
   bool gmm = false;
   std::map<std::string, double>
       centered;  // the means removed, by variable (IdentifyOptions::center)
+  // The means of the channels read (after `centered` was removed), states then inputs.
+  std::vector<ChannelMean> means;
 
   // The main result: the optimally weighted estimate when it was asked for and could be
   // computed, otherwise least squares.
@@ -165,7 +187,8 @@ std::string format_json(const IdentifyResult& result);
 // (p < 0.01), a stationarity identity violated (|z| > 4), a state with a mean of more than 0.2
 // of its standard deviation when the model is symmetric and its inputs have none.
 std::vector<std::string> doubts(const IdentifyResult& result);
-// The solver's status, or kDoubtful when it is kOk and there are doubts.
+// The solver's status; when it is kOk, kDoubtful when there are doubts, else kUntested when no
+// J test was made.
 Status status(const IdentifyResult& result);
 // Every warning about the result, the most serious first: the solver's status, the doubts, an
 // optimal weighting that could not be made, weakly determined parameters (standard error above

@@ -48,22 +48,31 @@ enum class MissingValues {
 // Names: zoh (kHold), foh (kLinear), cubic, sinc.
 enum class Interpolation { kHold, kLinear, kCubic, kSinc };
 
-// Which estimate identify reports as its main result (IdentifyOptions::gmm): kAuto, the
-// optimally weighted one for the lagged equations and least squares for the zero-lag ones;
-// kLeastSquares; kGmm, the two-step optimally weighted one with the J test.
+// Which estimate identify reports as its main result (IdentifyOptions::weighting): kAuto, the
+// two-step optimally weighted one with the J test whenever the equations outnumber the
+// parameters, else least squares; kLeastSquares; kGmm, the optimally weighted one.
 // Names: auto, ls, gmm.
 enum class Weighting { kAuto, kLeastSquares, kGmm };
+
+// Which moment equations identify takes (IdentifyOptions::method, docs/measured-data.md):
+// kAuto, the lagged ones for measured records, which stay unbiased under white sensor noise,
+// and the zero-lag ones for records known to be noise-free (simulate's without noise) or that
+// the lagged ones cannot serve; kZeroLag; kLagged. Names: auto, zero-lag, lagged.
+enum class Method { kAuto, kZeroLag, kLagged };
 
 // The formats `momentid convert` writes (docs/cli/convert.md, "momentid convert").
 // Names: csv, bin, npy, mat (level 5), mat73 (level 7.3), h5.
 enum class FileFormat { kCsv, kBinary, kNpy, kMat5, kMat73, kHdf5 };
 
-// What an identification came to: kOk, estimates that nothing in the data contradicts;
-// kDoubtful, estimates with doubts (a J test that rejects the model, a violated stationarity
-// identity, an offset: identify.hpp, doubts); kRankDeficient, some parameters determined only in
-// combinations; kNothingIdentifiable, no estimate. The solver reports all but kDoubtful.
-// Names: ok, doubtful, rank-deficient, nothing-identifiable.
-enum class Status { kOk, kDoubtful, kRankDeficient, kNothingIdentifiable };
+// What an identification came to: kOk, estimates whose model a misfit test (the J test) did not
+// reject and that nothing else in the data contradicts; kUntested, estimates that no test could
+// check (as many equations as parameters, least squares asked for, or too few batches for the
+// optimal weighting); kDoubtful, estimates with doubts (a J test that rejects the model, a
+// violated stationarity identity, an offset: identify.hpp, doubts); kRankDeficient, some
+// parameters determined only in combinations; kNothingIdentifiable, no estimate. The solver
+// reports kOk, kRankDeficient and kNothingIdentifiable.
+// Names: ok, untested, doubtful, rank-deficient, nothing-identifiable.
+enum class Status { kOk, kUntested, kDoubtful, kRankDeficient, kNothingIdentifiable };
 
 // The formats DataWriter writes a row at a time (simulate's output). Names: csv, bin.
 enum class WriterFormat { kCsv, kBinary };
@@ -72,6 +81,7 @@ std::string to_string(InputHold hold);
 std::string to_string(MissingValues missing);
 std::string to_string(Interpolation method);
 std::string to_string(Weighting weighting);
+std::string to_string(Method method);
 std::string to_string(FileFormat format);
 std::string to_string(WriterFormat format);
 std::string to_string(Status status);
@@ -80,6 +90,7 @@ InputHold parse_input_hold(std::string_view text, std::string_view option);
 MissingValues parse_missing_values(std::string_view text, std::string_view option);
 Interpolation parse_interpolation(std::string_view text, std::string_view option);
 Weighting parse_weighting(std::string_view text, std::string_view option);
+Method parse_method(std::string_view text, std::string_view option);
 FileFormat parse_file_format(std::string_view text, std::string_view option);
 WriterFormat parse_writer_format(std::string_view text, std::string_view option);
 Status parse_status(std::string_view text, std::string_view option);
@@ -94,6 +105,8 @@ template <>
 std::vector<std::string> names_of<Interpolation>();
 template <>
 std::vector<std::string> names_of<Weighting>();
+template <>
+std::vector<std::string> names_of<Method>();
 template <>
 std::vector<std::string> names_of<FileFormat>();
 template <>

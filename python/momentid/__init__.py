@@ -221,7 +221,7 @@ def identify(model: Union[Model, PathLike], data: Any, *,
              columns: Optional[Mapping[str, str]] = None, names: Optional[Sequence[str]] = None,
              dt: Optional[float] = None, multipliers: Monomials = None,
              degree: Optional[int] = None, batches: Optional[int] = None,
-             weighting: Optional[str] = None, lags: Optional[tuple[int, int]] = None,
+             method: Optional[str] = None, weighting: Optional[str] = None, lags: Optional[tuple[int, int]] = None,
              instruments: Monomials = None, noise: Optional[Mapping[str, float]] = None,
              fix: Optional[Mapping[str, float]] = None,
              center: Union[None, str, Sequence[str]] = None, input_hold: Optional[str] = None,
@@ -243,10 +243,14 @@ def identify(model: Union[Model, PathLike], data: Any, *,
     columns: {model variable: data column} for data whose columns have other names, as
       `--columns NAME=COLUMN` ({"y": "disp"} reads state y from column disp).
     dt: the sample interval (overrides the `t` column).
+    method ("auto", "zero-lag", "lagged"): which moment equations (`--method`); by default the
+      lagged ones, unbiased under white sensor noise, unless the record is simulated without
+      noise (its metadata say so) or zero-lag options are given.
     multipliers, degree: the zero-lag equations (as `derive`); lags=(first, last),
       instruments (monomials, as multipliers), noise ({state: variance}; None estimates it):
-      the lagged equations, used by default when the data lack a state.
-    batches, weighting ("auto", "ls", "gmm"): the standard errors and the optimal weighting.
+      the lagged equations.
+    batches, weighting ("auto", "ls", "gmm"): the standard errors and the optimal weighting
+      (by default whenever the equations outnumber the parameters, with the J test).
     fix: {parameter: value} taken as known. center: variables (or "all") whose mean is removed.
     input_hold ("zoh" or "sample"), input_shift, and for files missing ("error", "drop-row", "split-run"), skip_rows, decimal: as on the command line.
     threads: threads reading the data at once (default: one per core); the result is the same
@@ -265,7 +269,7 @@ def identify(model: Union[Model, PathLike], data: Any, *,
     if not isinstance(extrapolate, bool):
         raise UsageError(f"extrapolate: expected True or False, found {extrapolate!r}")
     options = _options(multipliers=_monomials(multipliers), degree=degree, batches=batches,
-                       weighting=weighting, lags=lags, instruments=_monomials(instruments),
+                       method=method, weighting=weighting, lags=lags, instruments=_monomials(instruments),
                        noise=noise, fix=fix, center=center, input_hold=input_hold,
                        input_shift=input_shift, columns=columns, dt=dt, missing=missing,
                        skip_rows=skip_rows, decimal=decimal, names=names, dt_from=dt_from,

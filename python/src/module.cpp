@@ -245,9 +245,9 @@ IdentifyOptions identify_options(const Model& model, const py::dict& options) {
     out.extrapolate = true;
   }
   if (auto text = get<std::string>(options, "weighting")) {
-    const Weighting weighting = parse_weighting(*text, "weighting");
-    if (weighting != Weighting::kAuto) out.gmm = weighting == Weighting::kGmm;
+    out.weighting = parse_weighting(*text, "weighting");
   }
+  if (auto text = get<std::string>(options, "method")) out.method = parse_method(*text, "method");
   if (auto shift = get<long>(options, "input_shift")) out.input_shift = *shift;
   out.lags = get<std::pair<int, int>>(options, "lags");
   if (auto text = get<std::string>(options, "instruments")) {

@@ -59,6 +59,11 @@ def cli_json(cli, cli_csv):
 
 
 @pytest.fixture(scope="session")
+def ls_json(cli, cli_csv):
+    return json.loads(cli("identify", DUFFING, cli_csv, "--format", "json", "--weighting", "ls"))
+
+
+@pytest.fixture(scope="session")
 def record(duffing):
     """A smaller in-memory Duffing record (20000 samples), with metadata."""
     return momentid.simulate(duffing, samples=20000, seed=3, inputs={"x": INPUT})

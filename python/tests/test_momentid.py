@@ -68,12 +68,16 @@ def test_identify_file_equals_cli(duffing, cli_csv, cli_json):
 def test_identify_arrays_equal_cli(duffing, cli_csv, cli_json):
     columns = read_csv(cli_csv)
     assert list(columns) == ["t", "y", "v", "x"]
-    # The arrays lose the file's metadata, so the hold of the input is given.
-    with_t = momentid.identify(duffing, columns, input_hold="zoh")
+    # The arrays lose the file's metadata, so the hold of the input is given, and the equations
+    # its noise-free records take.
+    with_t = momentid.identify(duffing, columns, input_hold="zoh", method="zero-lag")
     assert_same_estimates(with_t, cli_json)
-    with_dt = momentid.identify(duffing, without(columns, "t"), dt=0.01, input_hold="zoh")
+    with_dt = momentid.identify(duffing, without(columns, "t"), dt=0.01, input_hold="zoh",
+                                method="zero-lag")
     assert_same_estimates(with_dt, cli_json)
-    assert without(with_t.to_dict(), "data") == without(cli_json, "data")
+    # The same report but for why the equations were chosen.
+    assert with_t.to_dict()["method"] == {"name": "zero-lag", "why": "asked for"}
+    assert without(with_t.to_dict(), "data", "method") == without(cli_json, "data", "method")
 
 
 def test_simulate_equals_cli_file(duffing, cli_csv, cli_json):
@@ -478,10 +482,11 @@ def test_list_of_files_is_one_record_of_their_runs(duffing, tmp_path):
         kept = [row.rsplit(",", 1)[0] for row in rows if row.rsplit(",", 1)[1] == run]
         path.write_text("\n".join(metadata + [header.rsplit(",", 1)[0]] + kept) + "\n")
         paths.append(path)
-    whole = momentid.identify(duffing, both)
-    split = momentid.identify(duffing, paths)
+    # Least squares: the optimal weighting, like the standard errors, comes from the batches,
+    # and the batches of two files are cut elsewhere than those of one.
+    whole = momentid.identify(duffing, both, weighting="ls")
+    split = momentid.identify(duffing, paths, weighting="ls")
     assert split.diagnostics["runs"] == 2
-    # (Not the standard errors: the batches of two files are cut elsewhere than those of one.)
     for name, value in whole.estimates.items():
         assert split.estimates[name] == pytest.approx(value, rel=1e-12)
 

@@ -19,4 +19,15 @@ std::vector<std::string> data_columns(const DataSource& source, const RecordOpti
 std::vector<bool> variables_present(const Model& model, const DataSource& source,
                                     const RecordOptions& record);
 
+// What identify needs to know of a record before its pass, from its header and metadata.
+struct RecordSurvey {
+  std::vector<bool> present;  // per model variable, as variables_present
+  // The metadata say that `momentid simulate` wrote the record and added no measurement noise.
+  bool noise_free = false;
+  // The record gives a sample interval: RecordOptions::dt, the metadata or a time column.
+  bool timed = false;
+};
+RecordSurvey survey_record(const Model& model, const DataSource& source,
+                           const RecordOptions& record);
+
 }  // namespace momentid

@@ -24,6 +24,7 @@ struct IdentifyCommand {
   IdentifyOptions options;
   std::string hold;
   std::string weighting = to_string(Weighting::kAuto);
+  std::string method = to_string(Method::kAuto);
   std::string extrapolate;
   std::string format = "text";
   std::vector<std::string> columns;
@@ -67,8 +68,8 @@ int run_identify(IdentifyCommand& command) {
     options.multipliers = parse_multiplier_list(model, *command.multipliers, "--multipliers");
   }
   options.record.hold = hold_option(command.hold);
-  const Weighting weighting = parse_weighting(command.weighting, "weighting");
-  if (weighting != Weighting::kAuto) options.gmm = weighting == Weighting::kGmm;
+  options.weighting = parse_weighting(command.weighting, "weighting");
+  options.method = parse_method(command.method, "method");
   options.extrapolate = command.extrapolate == "dt";
   options.record.columns = column_map(command.columns);
   if (command.lags) options.lags = lag_range(*command.lags);
@@ -128,9 +129,13 @@ Command add_identify(CLI::App& app) {
                   "batches for the standard errors (default one per 200 samples, 100 to 1000, and "
                   "at least 4 per equation for the optimal weighting)")
       ->check(CLI::Range(IdentifyOptions::kMinBatches, IdentifyOptions::kMaxBatches));
+  sub->add_option("--method", command->method,
+                  "zero-lag, lagged, or auto: lagged for measured records (unbiased under white "
+                  "sensor noise), zero-lag for records simulated without noise")
+      ->check(CLI::IsMember(names_of<Method>()));
   sub->add_option("--weighting", command->weighting,
-                  "ls (least squares), gmm (two-step optimal), or auto: gmm for the lagged "
-                  "equations, ls for the zero-lag ones")
+                  "ls (least squares), gmm (two-step optimal, with the J test), or auto: gmm "
+                  "when the equations outnumber the parameters")
       ->check(CLI::IsMember(names_of<Weighting>()));
   sub->add_option("--format", command->format, "output format")
       ->check(CLI::IsMember({"text", "json"}));

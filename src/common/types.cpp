@@ -27,7 +27,10 @@ constexpr Names<FileFormat> kFileFormats = {
     {FileFormat::kMat5, "mat"}, {FileFormat::kMat73, "mat73"}, {FileFormat::kHdf5, "h5"}};
 constexpr Names<WriterFormat> kWriterFormats = {{WriterFormat::kCsv, "csv"},
                                                 {WriterFormat::kBinary, "bin"}};
+constexpr Names<Method> kMethods = {
+    {Method::kAuto, "auto"}, {Method::kZeroLag, "zero-lag"}, {Method::kLagged, "lagged"}};
 constexpr Names<Status> kStatuses = {{Status::kOk, "ok"},
+                                     {Status::kUntested, "untested"},
                                      {Status::kDoubtful, "doubtful"},
                                      {Status::kRankDeficient, "rank-deficient"},
                                      {Status::kNothingIdentifiable, "nothing-identifiable"}};
@@ -73,6 +76,7 @@ std::string to_string(Interpolation method) { return name_in(kInterpolations, me
 std::string to_string(Weighting weighting) { return name_in(kWeightings, weighting); }
 std::string to_string(FileFormat format) { return name_in(kFileFormats, format); }
 std::string to_string(WriterFormat format) { return name_in(kWriterFormats, format); }
+std::string to_string(Method method) { return name_in(kMethods, method); }
 std::string to_string(Status status) { return name_in(kStatuses, status); }
 
 InputHold parse_input_hold(std::string_view text, std::string_view option) {
@@ -92,6 +96,9 @@ FileFormat parse_file_format(std::string_view text, std::string_view option) {
 }
 WriterFormat parse_writer_format(std::string_view text, std::string_view option) {
   return parse_in(kWriterFormats, text, option);
+}
+Method parse_method(std::string_view text, std::string_view option) {
+  return parse_in(kMethods, text, option);
 }
 Status parse_status(std::string_view text, std::string_view option) {
   return parse_in(kStatuses, text, option);
@@ -120,6 +127,10 @@ std::vector<std::string> names_of<FileFormat>() {
 template <>
 std::vector<std::string> names_of<WriterFormat>() {
   return list(kWriterFormats);
+}
+template <>
+std::vector<std::string> names_of<Method>() {
+  return list(kMethods);
 }
 template <>
 std::vector<std::string> names_of<Status>() {

@@ -17,7 +17,8 @@ constexpr double kNoiseWarning = 0.02;
 // What makes a result doubtful, and what draws a warning (docs/cli/identify.md, "Warnings").
 constexpr double kIdentityZ = 4;      // |z| of a stationarity identity's violation
 constexpr double kJRejection = 0.01;  // p-value of the J test
-constexpr double kOffset = 0.2;       // |mean| / standard deviation of a channel
+constexpr double kOffsetZ = 3;        // |mean| / its standard error, of a channel
+constexpr double kWeakOffsetZ = 2;    // the same, named when the J test rejects the model
 constexpr double kWeakRelativeError = 0.1;
 constexpr double kStrongCorrelation = 0.95;
 
@@ -35,17 +36,52 @@ bool symmetric(const Model& model) {
   return true;
 }
 
+// The states of a symmetric model whose means lie more than `z` standard errors from zero, while
+// no input's does: zero-mean inputs give such a model zero-mean states, so these are offsets.
+std::vector<const ChannelMean*> offsets(const IdentifyResult& r, double z) {
+  std::vector<const ChannelMean*> out;
+  if (!symmetric(*r.model)) return out;
+  const auto& inputs = r.model->inputs();
+  const auto is_input = [&](const ChannelMean& m) {
+    return std::any_of(inputs.begin(), inputs.end(),
+                       [&](const auto& d) { return d.name == m.name; });
+  };
+  const auto off = [&](const ChannelMean& m) {
+    return m.std_error > 0 && std::abs(m.mean) > z * m.std_error;
+  };
+  for (const ChannelMean& m : r.means) {
+    if (is_input(m) && off(m)) return {};
+  }
+  for (const ChannelMean& m : r.means) {
+    if (!is_input(m) && off(m)) out.push_back(&m);
+  }
+  return out;
+}
+
+// "'y' has the mean 0.0123 (5.1 standard errors from zero)".
+std::string mean_text(const ChannelMean& m) {
+  return "'" + m.name + "' has the mean " + number(m.mean, "%.3g") + " (" +
+         number(std::abs(m.mean) / m.std_error, "%.2g") + " standard errors from zero)";
+}
+
 }  // namespace
 
 std::vector<std::string> doubts(const IdentifyResult& r) {
   std::vector<std::string> out;
   const Estimate& e = r.estimate;
   if (e.j_pvalue && *e.j_pvalue < kJRejection) {  // the J test comes with the optimal weighting
+    // Offsets too small for a warning of their own may still be what the test sees.
+    std::string seen;
+    for (const ChannelMean* m : offsets(r, kWeakOffsetZ)) {
+      seen += "; " + mean_text(*m) + ": an offset? remove it with --center " + m->name;
+      if (std::abs(m->mean) > kOffsetZ * m->std_error) seen += " (see below)";
+    }
     out.push_back("the J test rejects the model (p = " + number(*e.j_pvalue, "%.2g") +
                   "): its moment equations disagree with each other more than their errors "
                   "allow. A term may be missing, a noise or an offset not modelled, or the "
                   "record too coarsely sampled: check the estimates with 'momentid validate' "
-                  "before using them");
+                  "before using them" +
+                  seen);
   }
   for (const IdentityCheck& c : e.identities) {
     if (!(std::abs(c.z) > kIdentityZ)) continue;
@@ -55,37 +91,52 @@ std::vector<std::string> doubts(const IdentifyResult& r) {
                   "end to end), or its columns are not what the model's kinematic equations say "
                   "(v is not y', or the channels are shifted in time)");
   }
-  if (symmetric(*r.model)) {
-    const auto offset = [](const ChannelStatistics& c) {
-      return c.variance > 0 && std::abs(c.mean) > kOffset * std::sqrt(c.variance);
-    };
-    const auto& channels = r.data.channels;
-    const bool inputs_centred = std::none_of(
-        channels.begin(), channels.end(), [&](const auto& c) { return c.is_input && offset(c); });
-    for (const ChannelStatistics& c : channels) {
-      if (c.is_input || !inputs_centred || !offset(c)) continue;
-      out.push_back("'" + c.name + "' has the mean " + number(c.mean, "%.3g") + ", " +
-                    number(std::abs(c.mean) / std::sqrt(c.variance), "%.2g") +
-                    " of its standard deviation, but model " + r.model->name() +
-                    " is symmetric (every term odd) and its inputs have no mean, so its states "
-                    "have none: a sensor offset? It biases the estimates; if it is one, remove "
-                    "it with --center " +
-                    c.name);
-    }
+  for (const ChannelMean* m : offsets(r, kOffsetZ)) {
+    out.push_back(mean_text(*m) + ", but model " + r.model->name() +
+                  " is symmetric (every term odd) and its inputs have no mean, so its states "
+                  "have none: a sensor offset? It biases the estimates; if it is one, remove it "
+                  "with --center " +
+                  m->name);
   }
   return out;
 }
 
 Status status(const IdentifyResult& r) {
   if (r.estimate.status != Status::kOk) return r.estimate.status;
-  return doubts(r).empty() ? Status::kOk : Status::kDoubtful;
+  if (!doubts(r).empty()) return Status::kDoubtful;
+  return r.estimate.j_pvalue ? Status::kOk : Status::kUntested;
 }
+
+namespace {
+
+// Why no J test checked the model of an untested result.
+std::string untested_text(const IdentifyResult& r) {
+  std::string why;
+  if (r.estimate.optimal) {
+    why = "the optimal weighting left no degrees of freedom for the J test";
+  } else if (r.gmm) {
+    why = "the optimal weighting could not be made (see its warning)";
+  } else if (const auto& p = r.estimate.main().parameters;
+             r.estimate.rows <= static_cast<std::size_t>(std::count_if(
+                                    p.begin(), p.end(), [](const auto& q) { return !q.fixed; }))) {
+    why = "there are no more equations than parameters";
+  } else {
+    why = "least squares was asked for, and only the optimal weighting has the J test";
+  }
+  return "no test checked the model: " + why +
+         ". The estimates fit these equations exactly or nearly so whether the model is right or "
+         "not; more equations (multipliers of a higher degree, more instruments) and the optimal "
+         "weighting give the J test";
+}
+
+}  // namespace
 
 std::vector<std::string> warnings(const IdentifyResult& r) {
   std::vector<std::string> w;
   if (r.estimate.status != Status::kOk) w.push_back(r.estimate.message);
   const std::vector<std::string> doubt = doubts(r);
   w.insert(w.end(), doubt.begin(), doubt.end());
+  if (status(r) == Status::kUntested) w.push_back(untested_text(r));
   // The optimal weighting that was asked for and could not be made: before the rest.
   for (const std::string& s : r.estimate.warnings) {
     if (s.rfind("no optimally weighted estimate", 0) == 0) w.push_back(s);

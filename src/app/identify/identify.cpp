@@ -3,7 +3,6 @@
 #include <memory>
 
 #include "app/identify/steps.hpp"
-#include "app/variables.hpp"
 
 namespace momentid {
 
@@ -13,14 +12,15 @@ IdentifyResult identify(const Model& model, const DataSource& source,
   IdentifyResult result;
   result.model = std::make_shared<const Model>(model);
   result.data_name = source.name();
-  // Which variables the data have: the lagged equations serve data without some state.
-  const std::vector<bool> measured = variables_present(model, source, options.record);
-  switch (choose_equations(model, measured, options)) {
+  const RecordSurvey record = survey_record(model, source, options.record);
+  const EquationChoice choice = choose_equations(model, record, options);
+  result.why = choice.why;
+  switch (choice.kind) {
     case EquationKind::kZeroLag:
       identify_zero_lag(result, source, options);
       break;
     case EquationKind::kLagged:
-      identify_lagged(result, source, options, measured);
+      identify_lagged(result, source, options, record.present);
       break;
   }
   return result;

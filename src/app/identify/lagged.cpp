@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numeric>
 #include <tuple>
 
 #include "app/identify/steps.hpp"
@@ -38,8 +39,7 @@ std::map<std::string, int> correlation_lags(const IdentifyResult& r,
 }
 
 // The last lag that spans five correlation times of the slowest measured state; four times the
-// window when a state stays correlated across it. Kept within the bounds of the lag options and
-// of the number of moments identify takes.
+// window when a state stays correlated across it. Kept within the bounds of the lag options.
 int lag_window(const IdentifyResult& r) {
   const LaggedSystem& system = r.lagged->system;
   int wanted = 0;
@@ -47,13 +47,7 @@ int lag_window(const IdentifyResult& r) {
     wanted = std::max(wanted, tau > 0 ? 5 * tau : 4 * system.last_lag);
   }
   if (wanted == 0) return system.last_lag;
-  // The moments grow with the number of lags.
-  const double per_lag =
-      static_cast<double>(r.lagged->moments.size()) / (system.last_lag - system.first_lag + 1);
-  const int most = system.first_lag - 1 +
-                   static_cast<int>(IdentifyOptions::kMaxLaggedMoments / std::max(per_lag, 1.0));
-  return std::clamp(std::min(wanted, most), system.first_lag + LagOptions::kMinSpan - 1,
-                    LagOptions::kMaxLag);
+  return std::clamp(wanted, system.first_lag + LagOptions::kMinSpan - 1, LagOptions::kMaxLag);
 }
 
 // Multipliers, a degree and the sampling bias belong to the zero-lag equations.
@@ -69,10 +63,11 @@ void check_lagged_options(const Model& model, const IdentifyOptions& options,
     for (std::size_t v = 0; v < measured.size(); ++v) {
       if (!measured[v]) missing += (missing.empty() ? "" : ", ") + model.variables()[v];
     }
-    throw UsageError(
-        "multipliers and a degree choose zero-lag equations, but " +
-        (options.lags ? std::string("lags were asked for") : "the data lack " + missing) +
-        ": the lagged equations take instruments instead");
+    const std::string why = options.method == Method::kLagged     ? "the lagged ones were asked for"
+                            : options.lags || options.instruments ? "lags or instruments were given"
+                                                                  : "the data lack " + missing;
+    throw UsageError("multipliers and a degree choose zero-lag equations, but " + why +
+                     ": the lagged equations take instruments instead");
   }
 }
 
@@ -96,6 +91,81 @@ LaggedChannels lagged_channels(const Model& model, const LaggedSystem& system) {
   return out;
 }
 
+// The moments the lagged equations for `lag_options` read.
+std::size_t moment_count(const Model& model, const LagOptions& lag_options) {
+  const LaggedSystem system = derive_lagged(model, lag_options);
+  return lagged_rows(system, 1.0, lagged_channels(model, system).channel, {}).moments.size();
+}
+
+// The last lag at which `count` moments over lags first..last would stay within the budget,
+// taking them to grow in proportion to the number of lags.
+int last_lag_within_budget(int first, int last, std::size_t count) {
+  const double per_lag = static_cast<double>(count) / (last - first + 1);
+  return first - 1 + static_cast<int>(IdentifyOptions::kMaxLaggedMoments / std::max(per_lag, 1.0));
+}
+
+// `all` cut to `keep` instruments: the linear ones (the measured states) before powers, spread
+// evenly over the states when they are more than `keep`.
+std::vector<Monomial> fewer_instruments(const std::vector<Monomial>& all, std::size_t keep) {
+  std::vector<Monomial> linear, powers;
+  for (const Monomial& m : all) {
+    (std::accumulate(m.begin(), m.end(), 0) == 1 ? linear : powers).push_back(m);
+  }
+  std::vector<Monomial> out;
+  if (keep <= linear.size()) {
+    for (std::size_t i = 0; i < keep; ++i) {
+      const std::size_t at = keep == 1 ? 0 : i * (linear.size() - 1) / (keep - 1);
+      out.push_back(linear[at]);
+    }
+    return out;
+  }
+  out = linear;
+  out.insert(out.end(), powers.begin(), powers.begin() + static_cast<long>(keep - linear.size()));
+  return out;
+}
+
+// Fits the lags and instruments of `lag_options` to IdentifyOptions::kMaxLaggedMoments where the
+// user left them to identify: the window shrinks first, to no fewer than LagOptions::kMinSpan
+// lags, then instruments go (powers first) until that window fits, which then grows again as
+// far as the budget allows. Returns the instruments cut ("4 of the 10 instruments"), or empty;
+// throws UsageError naming the options the user gave when these alone exceed the budget.
+std::string fit_to_budget(const Model& model, LagOptions& lag_options,
+                          const IdentifyOptions& options) {
+  const int first = lag_options.first_lag, default_last = lag_options.last_lag;
+  std::size_t count = moment_count(model, lag_options);
+  const std::size_t budget = IdentifyOptions::kMaxLaggedMoments;
+  if (count <= budget) return "";
+  if (!options.lags) {
+    lag_options.last_lag = std::max(first + LagOptions::kMinSpan - 1,
+                                    last_lag_within_budget(first, default_last, count));
+    count = moment_count(model, lag_options);
+  }
+  std::string cut;
+  if (count > budget && !options.instruments) {
+    const std::vector<Monomial> all = derive_lagged(model, lag_options).instruments;
+    for (std::size_t keep = all.size() - 1; keep >= 1 && count > budget; --keep) {
+      lag_options.instruments = fewer_instruments(all, keep);
+      count = moment_count(model, lag_options);
+    }
+    cut = std::to_string(lag_options.instruments->size()) + " of the " +
+          std::to_string(all.size()) + " instruments";
+    if (!options.lags && count <= budget) {
+      lag_options.last_lag =
+          std::min(default_last, last_lag_within_budget(first, lag_options.last_lag, count));
+    }
+  }
+  if (count > budget) {
+    const std::string given = options.lags && options.instruments ? "lags and instruments"
+                              : options.lags                      ? "lags"
+                                                                  : "instruments";
+    throw UsageError(options.lags ? "lags" : "instruments",
+                     "the " + given + " given need " + std::to_string(count) +
+                         " moments, more than " + std::to_string(budget) +
+                         ": give fewer lags or instruments");
+  }
+  return cut;
+}
+
 // Derives the equations for the lags of `lag_options` and makes the pass over the data into
 // `result`.
 LaggedChannels read_lagged(IdentifyResult& result, const LagOptions& lag_options,
@@ -106,21 +176,24 @@ LaggedChannels read_lagged(IdentifyResult& result, const LagOptions& lag_options
   result.lagged->channels.insert(result.lagged->channels.end(), c.inputs.begin(), c.inputs.end());
   // The rows need the sample interval, which the data give: accumulate, then build rows.
   const LaggedRows probe = lagged_rows(result.lagged->system, 1.0, c.channel, {});
-  if (probe.moments.size() > IdentifyOptions::kMaxLaggedMoments) {
-    throw UsageError("lags " + std::to_string(result.lagged->system.first_lag) + ".." +
-                     std::to_string(result.lagged->system.last_lag) + " with " +
-                     std::to_string(result.lagged->system.instruments.size()) +
-                     " instruments need " + std::to_string(probe.moments.size()) +
-                     " moments, more than " + std::to_string(IdentifyOptions::kMaxLaggedMoments) +
-                     ": use fewer lags or instruments");
-  }
   result.lagged->moments = probe.moments;
+  // The channels' means come with the pass.
+  std::vector<Moment> moments = probe.moments;
+  std::vector<std::size_t> mean_index;
+  for (const Monomial& m : first_moments_of(result.lagged->channels.size())) {
+    const Moment mean = Moment::from_monomial(m);
+    const auto found = std::find(moments.begin(), moments.end(), mean);
+    mean_index.push_back(static_cast<std::size_t>(found - moments.begin()));
+    if (found == moments.end()) moments.push_back(mean);
+  }
   DataOptions data_options = pass_options(options);
   // The optimal weighting estimates the equations' covariance from the batches.
   data_options.min_batches = kBatchesPerEquation * probe.rows.a.size();
   data_options.offsets =
       channel_offsets(source, c.states, c.inputs, data_options, options.center, result.centered);
-  result.data = moments_from_data(source, c.states, c.inputs, probe.moments, data_options);
+  result.data = moments_from_data(source, c.states, c.inputs, moments, data_options);
+  result.means = channel_means(result.lagged->channels, result.data.estimates, mean_index);
+  result.data.estimates = first_moments(result.data.estimates, probe.moments.size());
   if (!result.data.time_step) {
     throw DataError({source.name(), 1, 1, ""},
                     "the lagged equations need the sample interval: give the data a 't' "
@@ -156,17 +229,35 @@ void identify_lagged(IdentifyResult& result, const DataSource& source,
   if (options.lags) std::tie(lag_options.first_lag, lag_options.last_lag) = *options.lags;
   lag_options.instruments = options.instruments;
   lag_options.measured = measured;
+  const std::string instruments_cut = fit_to_budget(model, lag_options, options);
   LaggedChannels channels = read_lagged(result, lag_options, source, options);
   // The default lags span about five correlation times of the measured states: when the
   // first pass shows them far from that (more than 1.5 times longer or 2 times shorter), a
-  // second pass takes the lags the data call for.
+  // second pass takes the lags the data call for, as far as the budget allows.
+  std::string window_cut;
   if (!options.lags) {
+    const LaggedSystem& system = result.lagged->system;
     const int wanted = lag_window(result);
-    const int last = result.lagged->system.last_lag;
-    if (2 * wanted > 3 * last || 2 * wanted < last) {
-      lag_options.last_lag = wanted;
+    const int most =
+        last_lag_within_budget(system.first_lag, system.last_lag, result.lagged->moments.size());
+    const int last = system.last_lag;
+    const int granted =
+        std::max(std::min(wanted, most), system.first_lag + LagOptions::kMinSpan - 1);
+    if (2 * granted > 3 * last || 2 * granted < last) {
+      lag_options.last_lag = granted;
       channels = read_lagged(result, lag_options, source, options);
     }
+    if (wanted > 3 * result.lagged->system.last_lag / 2) {
+      window_cut = "lags " + std::to_string(result.lagged->system.first_lag) + ".." +
+                   std::to_string(result.lagged->system.last_lag) +
+                   " (the correlation times call for .." + std::to_string(wanted) + ")";
+    }
+  }
+  if (!instruments_cut.empty() || !window_cut.empty()) {
+    result.lagged->cut = "cut to " + instruments_cut +
+                         (instruments_cut.empty() || window_cut.empty() ? "" : " and ") +
+                         window_cut + " to stay within " +
+                         std::to_string(IdentifyOptions::kMaxLaggedMoments) + " moments";
   }
   result.lagged->noise = noise_variances(result, channels.states.size(), options);
   // Inputs held over each sample put kinks into the states at the samples, which only the
@@ -178,7 +269,7 @@ void identify_lagged(IdentifyResult& result, const DataSource& source,
                   result.lagged->noise, result.lagged->stencil_reach);
   std::vector<std::string> names;
   for (const Declaration& p : model.parameters()) names.push_back(p.name);
-  result.gmm = options.gmm.value_or(true);
+  result.gmm = optimal_weighting(model, options, rows.rows.a.size());
   result.estimate = solve_rows(
       rows.rows, names, result.data.estimates,
       {.gmm = result.gmm, .fixed = fixed_values(model, options.fixed), .normalise_rows = true});

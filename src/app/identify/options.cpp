@@ -23,6 +23,9 @@ void IdentifyOptions::validate(const Model& model) const {
                                         " to " + std::to_string(kMaxInputShift) + ", found " +
                                         std::to_string(input_shift));
   }
+  if (method == Method::kZeroLag && (lags || instruments)) {
+    throw UsageError("method", "the zero-lag equations take no lags or instruments");
+  }
   const auto& variables = model.variables();
   for (const auto& [name, value] : fixed) {
     if (model.parameter_index(name) < 0) {

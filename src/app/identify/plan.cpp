@@ -4,15 +4,27 @@
 
 namespace momentid {
 
-EquationKind choose_equations(const Model& model, const std::vector<bool>& measured,
-                              const IdentifyOptions& options) {
-  const bool all_measured = std::all_of(measured.begin(), measured.end(), [](bool m) { return m; });
-  // Without lags asked for, data that cannot show a state (not even as a derivative) get the
-  // zero-lag pass and its message naming the missing column.
-  if (!options.lags && (all_measured || !derivable_from(model, measured))) {
-    return EquationKind::kZeroLag;
+EquationChoice choose_equations(const Model& model, const RecordSurvey& record,
+                                const IdentifyOptions& options) {
+  using enum EquationKind;
+  const std::vector<bool>& measured = record.present;
+  if (options.method == Method::kZeroLag) return {kZeroLag, "asked for"};
+  if (options.method == Method::kLagged) return {kLagged, "asked for"};
+  if (options.lags || options.instruments) return {kLagged, "lags or instruments were given"};
+  if (!std::all_of(measured.begin(), measured.end(), [](bool m) { return m; })) {
+    // Data that cannot show a state, not even as a derivative, get the zero-lag pass and its
+    // message naming the missing column.
+    if (!derivable_from(model, measured)) return {kZeroLag, "the record lacks a state"};
+    return {kLagged, "the record lacks a state's column, which they read as a derivative"};
   }
-  return EquationKind::kLagged;
+  if (options.multipliers || options.degree > 0 || options.extrapolate) {
+    return {kZeroLag, "multipliers, a degree or the sampling bias were asked for"};
+  }
+  if (record.noise_free) return {kZeroLag, "the record is simulated without noise"};
+  if (!record.timed) {
+    return {kZeroLag, "the record gives no sample interval, which the lagged equations need"};
+  }
+  return {kLagged, "a measured record: they stay unbiased under white sensor noise"};
 }
 
 std::vector<std::string> state_names(const Model& model) {
@@ -62,6 +74,17 @@ std::vector<double> channel_offsets(const DataSource& source,
     centered[channels[c]] = out[c];
   }
   return out;
+}
+
+bool optimal_weighting(const Model& model, const IdentifyOptions& options, std::size_t equations) {
+  if (options.weighting != Weighting::kAuto) return options.weighting == Weighting::kGmm;
+  // The sampling bias is the difference of two estimates by one estimator: each optimal
+  // weighting would be its own.
+  if (options.extrapolate) return false;
+  const std::vector<std::optional<double>> fixed = fixed_values(model, options.fixed);
+  const auto free =
+      static_cast<std::size_t>(std::count(fixed.begin(), fixed.end(), std::optional<double>()));
+  return equations > free;
 }
 
 std::vector<std::optional<double>> fixed_values(const Model& model,

@@ -43,14 +43,18 @@ std::string method_text(const IdentifyResult& r) {
     out += (i ? ", " : "; not measured: ") + r.lagged->system.derivatives[i];
   }
   out += "; " + std::to_string(2 * r.lagged->stencil_reach + 1) + "-point lag stencils";
+  return out;
+}
+
+// "noise variances, corrected for in powers of the channels: y 0.0001"; empty without noise.
+std::string noise_text(const IdentifyResult& r) {
   std::string noise;
   for (std::size_t c = 0; c < r.lagged->noise.size(); ++c) {
     if (r.lagged->noise[c] == 0) continue;
     noise += (noise.empty() ? "" : ", ") + r.lagged->channels[c] + " " +
              number(r.lagged->noise[c], "%.3g");
   }
-  if (!noise.empty()) out += "\nnoise variances, corrected for in powers of the channels: " + noise;
-  return out;
+  return noise.empty() ? "" : "noise variances, corrected for in powers of the channels: " + noise;
 }
 
 // "E[y(t-3)*y^3]": a lagged moment over the named channels.
@@ -221,7 +225,10 @@ std::string format_text(const IdentifyResult& r) {
       << d.runs << (d.runs == 1 ? " run" : " runs");
   if (d.time_step) out << ", dt = " << number(*d.time_step);
   out << ", input hold " << to_string(d.hold) << "\n";
-  if (r.lagged) out << method_text(r) << "\n";
+  out << (r.lagged ? method_text(r) : "zero-lag moment equations") << "\n";
+  out << "  chosen: " << r.why << "\n";
+  if (r.lagged && !r.lagged->cut.empty()) out << "  " << r.lagged->cut << "\n";
+  if (r.lagged && !noise_text(r).empty()) out << noise_text(r) << "\n";
   if (!r.centered.empty()) {
     out << "means removed (--center):";
     for (const auto& [name, mean] : r.centered) out << " " << name << " " << number(mean, "%.4g");
@@ -266,22 +273,25 @@ std::string format_json(const IdentifyResult& r) {
       << ",\n  \"data\": " << json_string(r.data_name)
       << ",\n  \"parameters\": " << parameters(e.main().parameters);
   if (e.optimal) out << ",\n  \"least_squares\": " << parameters(e.least_squares.parameters);
+  out << ",\n  \"method\": {\"name\": \"" << (r.lagged ? "lagged" : "zero-lag")
+      << "\", \"why\": " << json_string(r.why);
   if (r.lagged) {
-    out << ",\n  \"method\": {\"name\": \"lagged\", \"lags\": [" << r.lagged->system.first_lag
-        << ", " << r.lagged->system.last_lag
+    out << ", \"lags\": [" << r.lagged->system.first_lag << ", " << r.lagged->system.last_lag
         << "], \"stencil_points\": " << 2 * r.lagged->stencil_reach + 1 << ", \"instruments\": [";
     for (std::size_t i = 0; i < r.lagged->system.instruments.size(); ++i) {
       out << (i ? ", " : "")
           << json_string(format_monomial(*r.model, r.lagged->system.instruments[i]));
     }
-    out << "], \"not_measured\": " << json_strings(r.lagged->system.derivatives)
+    out << "], \"cut\": " << json_string(r.lagged->cut)
+        << ", \"not_measured\": " << json_strings(r.lagged->system.derivatives)
         << ", \"noise_variance\": {";
     for (std::size_t c = 0; c < r.lagged->noise.size(); ++c) {
       out << (c ? ", " : "") << json_string(r.lagged->channels[c]) << ": "
           << json_number(r.lagged->noise[c]);
     }
-    out << "}}";
+    out << "}";
   }
+  out << "}";
   if (!r.centered.empty()) {
     out << ",\n  \"centered\": {";
     std::size_t k = 0;

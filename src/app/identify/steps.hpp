@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "app/variables.hpp"
 #include "momentid/identify.hpp"
 
 namespace momentid {
@@ -19,12 +20,18 @@ inline constexpr std::size_t kBatchesPerEquation = 4;
 
 enum class EquationKind { kZeroLag, kLagged };
 
-// The zero-lag equations serve data with a column for every variable, and data that cannot show
-// a missing state even as a derivative (their pass then names the missing column); the lagged
-// ones serve the rest, and any data when lags are asked for. `measured`: per model variable,
-// whether the data have its column (variables_present).
-EquationKind choose_equations(const Model& model, const std::vector<bool>& measured,
-                              const IdentifyOptions& options);
+// Which equations identify takes for a record, and why (IdentifyResult::why).
+struct EquationChoice {
+  EquationKind kind;
+  std::string why;
+};
+
+// IdentifyOptions::method, or for kAuto: the lagged equations when lags or instruments are given,
+// or the record lacks a state they can read as a derivative, or it is measured (not known to be
+// noise-free) and gives a sample interval; the zero-lag ones for the rest, and for zero-lag
+// options (multipliers, a degree, extrapolate) on records with every state.
+EquationChoice choose_equations(const Model& model, const RecordSurvey& record,
+                                const IdentifyOptions& options);
 
 // The state and input names of `model`, in declaration order: the channels of a zero-lag pass.
 std::vector<std::string> state_names(const Model& model);
@@ -44,10 +51,27 @@ std::vector<double> channel_offsets(const DataSource& source,
                                     const std::vector<std::string>& center,
                                     std::map<std::string, double>& centered);
 
+// Whether the main estimate is the optimally weighted one (IdentifyOptions::weighting) for a
+// system of `equations` equations in `model`'s parameters, some fixed by `options`: by default
+// whenever the equations outnumber the free parameters, so that the J test can check the model
+// (not with IdentifyOptions::extrapolate, whose two estimates need one weighting).
+bool optimal_weighting(const Model& model, const IdentifyOptions& options, std::size_t equations);
+
 // The parameters fixed by IdentifyOptions::fixed or in the model file (the option's value wins),
 // as SolveOptions::fixed wants them: per parameter, in declaration order.
 std::vector<std::optional<double>> fixed_values(const Model& model,
                                                 const std::map<std::string, double>& fixed);
+
+// ---- the channels' means (channel_means.cpp) ----------------------------------------------------
+
+// The first moments E[c] of `channels` channels, as monomials over them, in channel order.
+std::vector<Monomial> first_moments_of(std::size_t channels);
+
+// Per channel `names[c]`: its mean, the estimate all.mean[index[c]], with the standard error from
+// the long-run covariance of its batch series; empty with fewer than two batches.
+std::vector<ChannelMean> channel_means(const std::vector<std::string>& names,
+                                       const MomentEstimates& all,
+                                       const std::vector<std::size_t>& index);
 
 // ---- the zero-lag equations ---------------------------------------------------------------------
 
@@ -55,8 +79,8 @@ std::vector<std::optional<double>> fixed_values(const Model& model,
 struct ZeroLagPlan {
   MomentSystem system;
   std::vector<Monomial> moments;  // the system's, as moments_to_estimate lists them
-  // `moments`, then those the held-input correction adds, then the products the record's ends
-  // need (unless `ends_unavailable` says why not).
+  // `moments`, then the channels' means, those the held-input correction adds, and the
+  // products the record's ends need (unless `ends_unavailable` says why not).
   std::vector<Monomial> pass_moments;
   HeldInputCorrections held;
   std::vector<Monomial> rated;  // the monomials g of the rates of change E[(g)'] in `moments`
