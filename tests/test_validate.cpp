@@ -180,6 +180,35 @@ TEST_SUITE("validate") {
     CHECK(off.outputs[0].autocorrelation->outside() > 20);
   }
 
+  TEST_CASE("center removes a sensor offset before the simulation and says how much") {
+    const Model model = model_file("duffing.mom");
+    const Recorder recorder = simulated(model, duffing_options(model, 20000));
+    MemoryRecord record(model, recorder, {"y", "x"}, "zoh");
+    const std::vector<double> y = recorder.column(1);
+    const double mean = std::accumulate(y.begin(), y.end(), 0.0) / static_cast<double>(y.size());
+    constexpr double kOffset = 0.3;  // about 0.4 of y's standard deviation
+    for (double& value : record.columns[1]) value += kOffset;
+    ValidateOptions options = with_parameters(model, {});
+    const ValidateResult offset = validate(model, record.source(), options);
+    CHECK(offset.centered.empty());
+    options.center = {"y"};
+    const ValidateResult centered = validate(model, record.source(), options);
+    REQUIRE(centered.centered.size() == 1);
+    CHECK(centered.centered.at("y") == doctest::Approx(kOffset + mean).epsilon(1e-12));
+    MESSAGE("fit with the offset " << offset.outputs[0].fit << "%, centered "
+                                   << centered.outputs[0].fit << "%");
+    // The true mean of y is zero: what is left after centering is the sample mean's error.
+    CHECK(centered.outputs[0].fit > 99);
+    CHECK(offset.outputs[0].fit < 80);
+    CHECK(format_text(centered).find("\nmeans removed (--center): y ") != std::string::npos);
+    CHECK(format_json(centered).find("\"centered\": {\"y\": ") != std::string::npos);
+    CHECK(format_json(offset).find("\"centered\"") == std::string::npos);
+    options.center = {"q"};
+    const UsageError e = error_from<UsageError>([&] { validate(model, record.source(), options); });
+    CHECK(e.option() == "center");
+    CHECK(std::string(e.what()) == "center: 'q' is not a state or input of model duffing");
+  }
+
   TEST_CASE("with 1% sensor noise the fit is its theoretical value and the checks pass") {
     const Model model = model_file("duffing.mom");
     SimulationOptions options = duffing_options(model, 100000);

@@ -55,16 +55,17 @@ class UsageError : public Error {
 };
 
 // An error located in a source text. `what()` is "file:line:col: message"; `message()` is the
-// bare message and `location()` the place, for callers that render the line with a caret.
+// bare message and `location()` the place, for callers that render the line with a caret. A
+// message may name options fields, each written as UsageError::mention("dt"): what() gives the
+// field's name, text() spells it as a front end does (`--dt`, `dt`).
 class LocatedError : public Error {
  public:
-  LocatedError(SourceLocation where, const std::string& message)
-      : Error(where.file + ":" + std::to_string(where.line) + ":" + std::to_string(where.column) +
-              ": " + message),
-        where_(std::move(where)),
-        message_(message) {}
+  LocatedError(SourceLocation where, const std::string& message);
   const SourceLocation& location() const { return where_; }
+  // The bare message, mentions kept (to build another error from it).
   const std::string& message() const { return message_; }
+  // what(), with every mention spelled by `spell`.
+  std::string text(const std::function<std::string(const std::string&)>& spell) const;
 
  private:
   SourceLocation where_;
@@ -96,8 +97,9 @@ class DataError : public LocatedError {
 // '?'; tabs and line feeds stay.
 std::string printable(std::string_view text);
 
-// Renders a located error as the command-line tool prints it: the `what()` line, then the
-// source line and a caret under the column.
-std::string render_with_caret(const LocatedError& error);
+// Renders a located error as the command-line tool prints it: the `what()` line (its mentions
+// spelled by `spell`, when given), then the source line and a caret under the column.
+std::string render_with_caret(const LocatedError& error,
+                              const std::function<std::string(const std::string&)>& spell = {});
 
 }  // namespace momentid

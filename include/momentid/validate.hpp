@@ -3,6 +3,7 @@
 #include <ginac/ginac.h>
 
 #include <cstddef>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -104,6 +105,10 @@ struct ValidateOptions {
   // Lags of the correlation checks: 1..lags for the error's autocorrelation, -lags..lags for its
   // cross-correlation with each input.
   int lags = 25;
+  // States and inputs whose mean (over the whole record) is removed from their columns before
+  // the simulation and the comparison: a sensor's offset on a symmetric system, as
+  // IdentifyOptions::center. A variable the record has no column for is left as it is.
+  std::vector<std::string> center;
 
   static constexpr int kMaxLags = 1000;
   void validate() const;
@@ -147,12 +152,15 @@ struct ValidateResult {
   // inputs, whose response is that to its initial state.
   std::vector<std::size_t> skip;
   bool skip_chosen = false;
+  // The means removed (ValidateOptions::center), by variable.
+  std::map<std::string, double> centered;
   std::vector<OutputFit> outputs;  // the measured states, in model order
   std::vector<std::string> warnings;
 };
 
 // Simulates the model through the record's inputs and compares the states the record has.
-// Throws as replay(), and DataError when a run has no row left to compare after the skip.
+// Throws as replay(), UsageError for a name in `center` that is no state or input of the model,
+// and DataError when a run has no row left to compare after the skip.
 ValidateResult validate(const Model& model, const DataSource& source,
                         const ValidateOptions& options);
 

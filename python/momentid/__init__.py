@@ -355,7 +355,8 @@ def validate(model: Union[Model, PathLike], data: Any,
              interpolation: Optional[str] = None, substeps: Optional[int] = None,
              plot: Optional[PathLike] = None, missing: Optional[str] = None,
              skip_rows: Optional[int] = None, decimal: Optional[str] = None,
-             dt_from: Optional[str] = None) -> ValidateResult:
+             dt_from: Optional[str] = None,
+             center: Union[None, str, Sequence[str]] = None) -> ValidateResult:
     """Simulates the model through the record's inputs and compares its outputs, as
     `momentid validate`: per measured state the RMS error, the fit (100 (1 - |y - ŷ| / |y - ȳ|)
     %), the drift and the residual correlation checks.
@@ -363,6 +364,7 @@ def validate(model: Union[Model, PathLike], data: Any,
     params: {parameter: value} or an IdentifyResult (its estimates); the rest at the nominal
     values. skip: rows left out at the start of each run (default: until the initial state is
     forgotten). interpolation: "zoh", "foh", "cubic" or "sinc". plot: an SVG file to draw.
+    center: variables (or "all") whose mean is removed before simulating and comparing.
     `data` and the other options as for identify().
 
     Returns a ValidateResult: the fit and errors per output, and the series compared (t, the
@@ -375,11 +377,14 @@ def validate(model: Union[Model, PathLike], data: Any,
     elif params:
         origin += " and params"
     source, name, metadata, keep, names = _data_of(data, names)
+    if isinstance(center, str):
+        center = model.states + model.inputs if center == "all" else [center]
     options = _options(params=_numbers(params), parameters_from=origin, skip=skip, lags=lags,
                        interpolation=interpolation, substeps=substeps, columns=columns,
                        dt=dt,
                        plot=None if plot is None else _os.fspath(plot), missing=missing,
-                       skip_rows=skip_rows, decimal=decimal, names=names, dt_from=dt_from)
+                       skip_rows=skip_rows, decimal=decimal, names=names, dt_from=dt_from,
+                       center=center)
     text, json_text, series = _momentid._validate(model._model, source, name, metadata, options)
     del keep
     return ValidateResult(text, json_text, series)

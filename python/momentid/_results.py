@@ -230,6 +230,7 @@ class CheckResult:
 
 class ValidateResult:
     """What validate() found: `fit` {output: percent}, `rms` {output: error}, `warnings`,
+    `centered` {variable: the mean removed} (validate(center=...)),
     `to_dict()` (the JSON of `momentid validate --format json`) and str() its report; and the
     series compared, every run's rows one run after the other (numpy arrays):
 
@@ -250,6 +251,7 @@ class ValidateResult:
         self.fit = {name: o["fit_percent"] for name, o in outputs.items()}
         self.rms = {name: o["rms"] for name, o in outputs.items()}
         self.warnings = list(self._dict["warnings"])
+        self.centered = dict(self._dict.get("centered", {}))
         self.t = series["t"]
         self.run = series["run"]
         self.simulated = dict(series["simulated"])

@@ -49,7 +49,7 @@ void translate(std::exception_ptr thrown) {
   try {
     if (thrown) std::rethrow_exception(thrown);
   } catch (const DataError& e) {
-    raise("DataError", e.what(), &e.location());
+    raise("DataError", e.text(keyword_of), &e.location());
   } catch (const LocatedError& e) {  // ParseError, ModelError
     raise("ModelError", e.what(), &e.location());
   } catch (const UsageError& e) {
@@ -428,6 +428,7 @@ ValidateOptions validate_options(const Model& model, const py::dict& options) {
   }
   out.skip = get<std::size_t>(options, "skip");
   if (auto lags = get<int>(options, "lags")) out.lags = *lags;
+  if (auto center = get<std::vector<std::string>>(options, "center")) out.center = *center;
   return out;
 }
 

@@ -371,6 +371,30 @@ def test_validate_true_parameters(duffing, record):
     assert result.warnings == []
 
 
+def test_validate_center_removes_an_offset(duffing, record):
+    shifted = momentid.Record({**record, "y": record["y"] + 0.3}, record.metadata)
+    result = momentid.validate(duffing, shifted, params=TRUE, center="y")
+    assert result.centered == {"y": pytest.approx(0.3 + np.mean(record["y"]), rel=1e-12)}
+    assert "means removed (--center): y " in str(result)
+    # Centering removes any constant: the shifted record compares as the record does.
+    unshifted = momentid.validate(duffing, record, params=TRUE, center="y")
+    assert result.fit["y"] == pytest.approx(unshifted.fit["y"], rel=1e-9)
+    offset = momentid.validate(duffing, shifted, params=TRUE)
+    assert offset.centered == {}
+    assert offset.fit["y"] < result.fit["y"] - 10
+
+
+def test_irregular_time_stamps_suggest_the_dt_keyword(duffing, record):
+    t = np.round(np.arange(len(record["t"])) / 1024, 6)
+    data = {**record, "t": t}
+    assert momentid.check(data).to_dict() is not None  # six decimals at 1024 Hz: accepted
+    t[20] += 3e-6
+    with pytest.raises(momentid.DataError, match=r"give the sample interval with dt 0.000976\d* if "
+                       r"the samples are equally spaced") as raised:
+        momentid.check(data)
+    assert raised.value.line == 21
+
+
 def test_validate_identify_result_as_params(duffing, record):
     estimated = momentid.identify(duffing, record)
     result = momentid.validate(duffing, record, params=estimated)

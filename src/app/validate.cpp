@@ -1,5 +1,6 @@
 #include "momentid/validate.hpp"
 
+#include <algorithm>
 #include <cstdio>
 #include <memory>
 
@@ -93,10 +94,19 @@ void choose_skips(const Model& model, const ValidateOptions& options, ValidateRe
 ValidateResult validate(const Model& model, const DataSource& source,
                         const ValidateOptions& options) {
   options.validate();
+  const std::vector<std::string>& variables = model.variables();
+  for (const std::string& name : options.center) {
+    if (std::find(variables.begin(), variables.end(), name) == variables.end()) {
+      throw UsageError("center", "'" + name + "' is not a state or input of model " + model.name());
+    }
+  }
+  options.replay.record.validate(&model);
   ValidateResult result;
   result.model = std::make_shared<const Model>(model);
   result.parameters = parameter_vector(model, options.replay.parameters);
-  result.replay = replay(*result.model, source, options.replay);
+  Record record = read_record(model, source, options.replay);
+  result.centered = center_record(model, record, options.center);
+  result.replay = replay_record(*result.model, std::move(record), options.replay);
   const Replay& replay = result.replay;
   const std::vector<std::size_t> outputs = measured_states(model, replay.record);
   if (replay.record.missing.rows > 0) {

@@ -27,7 +27,7 @@ namespace {
 // The message of an error as the command line shows it.
 std::string message_of(const std::exception& e) {
   if (const auto* located = dynamic_cast<const momentid::LocatedError*>(&e)) {
-    return momentid::render_with_caret(*located);
+    return momentid::render_with_caret(*located, momentid::cli::flag_of);
   }
   if (const auto* usage = dynamic_cast<const momentid::UsageError*>(&e)) {
     return "momentid: " + momentid::printable(usage->text(momentid::cli::flag_of));

@@ -22,6 +22,7 @@ struct ValidateCommand {
   std::optional<double> dt;
   std::optional<std::size_t> skip;
   std::vector<std::string> columns;
+  std::vector<std::string> center;
   std::string format = "text";
   std::string plot;
   std::string window;
@@ -62,6 +63,8 @@ int run_validate(ValidateCommand& command) {
   replay.record.dt = command.dt;
   replay.record.columns = column_map(command.columns);
   command.options.skip = command.skip;
+  command.options.center =
+      command.center.size() == 1 && command.center[0] == "all" ? model.variables() : command.center;
   std::optional<std::pair<double, double>> window;
   if (!command.window.empty()) window = window_option(command.window);
   ValidateResult result = validate(model, data_source(command.data), command.options);
@@ -101,6 +104,10 @@ Command add_validate(CLI::App& app) {
   sub->add_option("--lags", command->options.lags, "lags of the correlation checks (default 25)")
       ->check(CLI::Range(1, ValidateOptions::kMaxLags));
   sub->add_option("--columns", command->columns, "NAME=COLUMN: where a model variable is");
+  sub->add_option("--center", command->center,
+                  "remove the means of these channels (NAME,... or all) before simulating and "
+                  "comparing: a sensor offset on a symmetric system")
+      ->delimiter(',');
   sub->add_option("--format", command->format, "output format")
       ->check(CLI::IsMember({"text", "json"}));
   auto* plot = sub->add_option("--plot", command->plot, "draw the comparison into this SVG file");

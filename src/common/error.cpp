@@ -42,6 +42,23 @@ std::string UsageError::mention(std::string_view field) {
   return kMentionBegin + std::string(field) + kMentionEnd;
 }
 
+namespace {
+
+std::string place(const SourceLocation& where) {
+  return where.file + ":" + std::to_string(where.line) + ":" + std::to_string(where.column) + ": ";
+}
+
+}  // namespace
+
+LocatedError::LocatedError(SourceLocation where, const std::string& message)
+    : Error(place(where) + spelled("", message, as_field)),
+      where_(std::move(where)),
+      message_(message) {}
+
+std::string LocatedError::text(const std::function<std::string(const std::string&)>& spell) const {
+  return place(where_) + spelled("", message_, spell);
+}
+
 std::string printable(std::string_view text) {
   std::string out;
   for (std::size_t i = 0; i < text.size(); ++i) {
@@ -66,9 +83,10 @@ std::string printable(std::string_view text) {
   return out;
 }
 
-std::string render_with_caret(const LocatedError& error) {
+std::string render_with_caret(const LocatedError& error,
+                              const std::function<std::string(const std::string&)>& spell) {
   const SourceLocation& w = error.location();
-  std::string out = printable(error.what());
+  std::string out = printable(spell ? error.text(spell) : std::string(error.what()));
   if (w.text.empty()) return out;
   // Long lines are shown as a window around the column, so that the caret stays in view.
   constexpr std::size_t kBefore = 70, kAfter = 50;

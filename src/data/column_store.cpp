@@ -44,7 +44,7 @@ class ColumnStoreReader final : public StreamReader {
         fail(start(), "metadata dt: expected a positive number, found " + quoted_field(*dt));
       }
       header_.metadata_dt = value;
-      header_.metadata_dt_text = *dt;
+      header_.metadata_dt_source = "dt=" + *dt + " in the metadata";
     }
     if (request_.layout.dt_from && !request_.dt) dt_from_scalar();
     for (auto& [variable, column] : request_.rename) column = store_->column_name(column);
@@ -55,6 +55,7 @@ class ColumnStoreReader final : public StreamReader {
     for (std::size_t c = 0; c < all.size(); ++c) every.name_columns.push_back(c + 1);
     for (const std::string& prefix : prefixes) plan_run(every, prefix);
     map_ = runs_.front().map;
+    if (!request_.layout.dt_from && !request_.dt) use_stated_intervals();
     chunk_.resize(runs_.front().fields.size());
   }
 
@@ -186,15 +187,59 @@ class ColumnStoreReader final : public StreamReader {
     if (rate) name = name.substr(2);
     const std::optional<double> value = store_->scalar(name);
     if (!value) {
-      fail(start(), "--dt-from: no scalar named '" + name + "' in the file");
+      fail(start(),
+           UsageError::mention("dt_from") + ": no scalar named '" + name + "' in the file");
     }
     const double dt = rate ? 1 / *value : *value;
     if (!(dt > 0) || !std::isfinite(dt)) {
-      fail(start(), "--dt-from: '" + name + "' is " + shortest_decimal(*value) +
-                        ", which gives no positive sample interval");
+      fail(start(), UsageError::mention("dt_from") + ": '" + name + "' is " +
+                        shortest_decimal(*value) + ", which gives no positive sample interval");
     }
     header_.metadata_dt = dt;
-    header_.metadata_dt_text = shortest_decimal(dt);
+    header_.metadata_dt_source = UsageError::mention("dt_from") + " " + *request_.layout.dt_from +
+                                 " = " + shortest_decimal(dt);
+  }
+
+  // The metadata's dt and the intervals the file states: they must agree, and one that cannot
+  // be used is an error when nothing else gives the interval.
+  void use_stated_intervals() {
+    std::vector<std::size_t> channels;
+    for (const RunPlan& plan : runs_)
+      channels.insert(channels.end(), plan.fields.begin(), plan.fields.end());
+    struct Usable {
+      double dt;
+      std::string source;
+    };
+    std::vector<Usable> usable;
+    if (header_.metadata_dt) usable.push_back({*header_.metadata_dt, header_.metadata_dt_source});
+    std::optional<StatedInterval> unusable;
+    for (StatedInterval& stated : store_->stated_intervals(channels)) {
+      const double dt = !stated.value          ? 0
+                        : is_rate(stated.name) ? 1 / *stated.value
+                                               : *stated.value;
+      if (stated.value && !(dt > 0 && std::isfinite(dt))) {
+        stated.why = "is " + shortest_decimal(*stated.value) + ", not a positive number";
+      } else if (stated.value) {
+        usable.push_back({dt, stated.where + " = " + shortest_decimal(*stated.value)});
+        continue;
+      }
+      if (!unusable) unusable = std::move(stated);
+    }
+    for (const Usable& other : usable) {
+      if (std::abs(other.dt - usable.front().dt) > 1e-6 * usable.front().dt) {
+        fail(start(), other.source + " disagrees with " + usable.front().source +
+                          " (sample intervals " + shortest_decimal(other.dt) + " and " +
+                          shortest_decimal(usable.front().dt) + ")");
+      }
+    }
+    if (!usable.empty()) {
+      header_.metadata_dt = usable.front().dt;
+      header_.metadata_dt_source = usable.front().source;
+    } else if (unusable && map_.time < 0) {
+      fail(start(), unusable->where + " " + unusable->why +
+                        ", and the file has no time channel: give the sample interval with " +
+                        UsageError::mention("dt"));
+    }
   }
 
   [[noreturn]] void bad_value(std::size_t field, double value, const std::string& expected) {

@@ -14,6 +14,21 @@
 
 namespace momentid::data {
 
+// A sample rate or interval that a file states under a name acquisition software uses
+// (kStatedIntervalNames): an HDF5 attribute of the file or of a channel's dataset, or a .mat
+// scalar.
+struct StatedInterval {
+  std::string name;   // `fs`, `wf_increment`, ...
+  std::string where;  // as messages name it: "attribute 'fs' of the file", "variable 'Fs'"
+  std::optional<double> value;  // as stored: a rate or an interval (is_rate); none: unusable
+  std::string why;              // why it is unusable: "holds text, not a number"
+};
+
+// The names under which files state their sampling: rates, then `wf_increment`, an interval (the
+// waveform attribute of National Instruments' files).
+inline constexpr const char* kStatedIntervalNames[] = {"fs", "Fs", "sample_rate", "wf_increment"};
+inline bool is_rate(const std::string& name) { return name != "wf_increment"; }
+
 // The arrays of one file, as channels of equal length. A matrix of N samples and K columns is K
 // channels, `NAME[:, k]` for k from 0.
 class ColumnStore {
@@ -42,6 +57,11 @@ class ColumnStore {
   virtual void read(std::size_t channel, std::size_t first, std::size_t count, double* out) = 0;
   // A scalar stored in the file under `name` (`--dt-from`), or nullopt when there is none.
   virtual std::optional<double> scalar(const std::string& name) { return std::nullopt; }
+  // The rates and intervals the file states (StatedInterval), for the prepared channels among
+  // `channels` and the file.
+  virtual std::vector<StatedInterval> stated_intervals(const std::vector<std::size_t>& channels) {
+    return {};
+  }
   // Metadata the file carries (`dt` among them), as a CSV file's `# momentid:` lines.
   virtual DataMetadata metadata() const { return {}; }
 
@@ -53,8 +73,11 @@ class ColumnStore {
 // is renamed to) and `run`; with FileLayout::runs, run after run, each prefix in front of the
 // names (the channels a user sees are those of the first run, without its prefix). The sample
 // interval comes from ColumnRequest::dt, else from FileLayout::dt_from (a scalar in the file;
-// `1/NAME` for a rate), else from the metadata, else from the time channel. Errors are located at
-// the file, the sample (from 1) as line and the channel's place in names() (from 1) as column.
+// `1/NAME` for a rate), else from the metadata's dt and the intervals the file states
+// (StatedInterval), which must agree to 1e-6, else from the time channel, which must agree with
+// them too. A stated interval that cannot be used fails when nothing else gives the interval.
+// Errors are located at the file, the sample (from 1) as line and the channel's place in names()
+// (from 1) as column.
 std::unique_ptr<DataReader> open_column_store(std::unique_ptr<ColumnStore> store,
                                               const std::string& path,
                                               const ColumnRequest& request);

@@ -3,7 +3,8 @@
 // a 2-D dataset is one channel per column, `PATH[:, k]`, with the samples along its longer
 // dimension (wider than tall: `PATH[k, :]`). Datasets are read in hyperslabs of a few thousand
 // samples, so memory stays flat whatever their size. The root group's attributes are metadata:
-// `dt`, or `fs` (its reciprocal), and text attributes such as `input-hold`.
+// `dt` and text attributes such as `input-hold`; `fs`, `Fs`, `sample_rate` and `wf_increment`,
+// of the file or of a channel's dataset, state the sampling (StatedInterval).
 
 #include <hdf5.h>
 
@@ -122,6 +123,23 @@ class Hdf5Store final : public ColumnStore {
 
   DataMetadata metadata() const override { return metadata_; }
 
+  std::vector<StatedInterval> stated_intervals(const std::vector<std::size_t>& channels) override {
+    std::vector<StatedInterval> out;
+    std::vector<std::string> datasets;
+    for (const char* name : kStatedIntervalNames) stated(file_.get(), name, "the file", out);
+    for (std::size_t channel : channels) {
+      const Channel& c = channels_[channel];
+      if (!c.dataset || std::find(datasets.begin(), datasets.end(), c.path) != datasets.end()) {
+        continue;
+      }
+      datasets.push_back(c.path);
+      for (const char* name : kStatedIntervalNames) {
+        stated(c.dataset.get(), name, "dataset '" + c.path + "'", out);
+      }
+    }
+    return out;
+  }
+
  private:
   struct Channel {
     std::string path;
@@ -233,6 +251,19 @@ class Hdf5Store final : public ColumnStore {
     return value;
   }
 
+  // Attribute `name` of `object` (`owner` in messages), if it has one, as a stated interval.
+  void stated(hid_t object, const std::string& name, const std::string& owner,
+              std::vector<StatedInterval>& out) const {
+    if (H5Aexists(object, name.c_str()) <= 0) return;
+    StatedInterval s{name, "attribute '" + name + "' of " + owner, number_attribute(object, name),
+                     ""};
+    if (!s.value) {
+      const auto text = text_attribute(object, name);
+      s.why = text ? "holds the text '" + *text + "', not a number" : "does not hold one number";
+    }
+    out.push_back(std::move(s));
+  }
+
   // A text attribute of one string, fixed-length or variable-length (as h5py writes a str).
   std::optional<std::string> text_attribute(hid_t object, const std::string& name) const {
     const Handle attribute(H5Aopen(object, name.c_str(), H5P_DEFAULT), H5Aclose);
@@ -289,14 +320,6 @@ class Hdf5Store final : public ColumnStore {
           return 0;
         },
         &context);
-    const auto find = [&](std::string_view key) {
-      return std::find_if(line.begin(), line.end(), [&](const auto& p) { return p.first == key; });
-    };
-    if (const auto fs = find("fs"); fs != line.end() && find("dt") == line.end()) {
-      double rate = 0;
-      if (is_number(fs->second, rate) && rate > 0)
-        line.emplace_back("dt", shortest_decimal(1 / rate));
-    }
     if (!line.empty()) metadata_.add_line(std::move(line));
   }
 

@@ -110,7 +110,7 @@ Header read_header(const std::string& path, LineReader& lines, bool binary) {
       double value = 0;
       is_number(*dt, value);
       header.metadata_dt = value;
-      header.metadata_dt_text = *dt;
+      header.metadata_dt_source = "dt=" + *dt + " in the metadata";
     }
     header.line = number;
     header.text = line;

@@ -18,7 +18,8 @@ namespace momentid::data {
 struct Header {
   DataMetadata metadata;
   std::optional<double> metadata_dt;
-  std::string metadata_dt_text;
+  // Where metadata_dt comes from, as messages name it: "dt=0.01 in the metadata".
+  std::string metadata_dt_source;
   std::vector<std::string> names;
   std::vector<std::size_t> name_columns;  // byte column of each name, from 1
   char separator = ',';                   // ',', ';' or ' ' for runs of blanks and tabs

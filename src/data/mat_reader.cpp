@@ -1,7 +1,8 @@
 // MATLAB .mat files, version 5 (compressed or not) and 7.3 (HDF5 underneath), through matio.
 // Each real double or single vector is a channel named as the variable; a matrix is one channel
 // per column, `NAME[:, k]` (k from 0), with the samples along its longer dimension (a matrix
-// wider than tall holds its channels in rows: `NAME[k, :]`). Scalars serve --dt-from. A
+// wider than tall holds its channels in rows: `NAME[k, :]`). Scalars serve --dt-from, and
+// `fs`, `Fs`, `sample_rate` and `wf_increment` (of any numeric class) state the sampling. A
 // requested variable is read whole when the reading starts.
 
 #include <matio.h>
@@ -122,6 +123,16 @@ class MatStore final : public ColumnStore {
       const std::size_t columns = info->rank >= 2 ? info->dims[1] : 1;
       const bool numeric = (info->class_type == MAT_C_DOUBLE || info->class_type == MAT_C_SINGLE) &&
                            !info->isComplex;
+      const bool number_class =
+          info->class_type >= MAT_C_DOUBLE && info->class_type <= MAT_C_UINT64;
+      if (stated_name(name)) {
+        if (number_class && info->rank == 2 && rows * columns == 1 && !info->isComplex) {
+          scalars_.push_back(name);  // a sample rate saved as an integer is one too
+          continue;
+        }
+        stated_why_[name] = std::string("holds ") + (info->isComplex ? "complex " : "") +
+                            class_name(info->class_type) + " values, not one real number";
+      }
       if (!numeric || info->rank != 2) {
         unusable_[name] = "variable '" + name + "' holds " +
                           (info->rank != 2 ? std::to_string(info->rank) + "-dimensional "
@@ -212,8 +223,19 @@ class MatStore final : public ColumnStore {
     const MatioCall call;
     Variable v{Mat_VarRead(file_.get(), name.c_str())};
     if (!v || v->data == nullptr) return std::nullopt;
-    return v->class_type == MAT_C_DOUBLE ? *static_cast<const double*>(v->data)
-                                         : static_cast<double>(*static_cast<const float*>(v->data));
+    return first_value(*v);
+  }
+
+  std::vector<StatedInterval> stated_intervals(const std::vector<std::size_t>&) override {
+    std::vector<StatedInterval> out;
+    for (const char* name : kStatedIntervalNames) {
+      StatedInterval s{name, "variable '" + std::string(name) + "'", scalar(name), ""};
+      if (const auto why = stated_why_.find(name); !s.value && why != stated_why_.end()) {
+        s.why = why->second;
+      }
+      if (s.value || !s.why.empty()) out.push_back(std::move(s));
+    }
+    return out;
   }
 
  private:
@@ -222,6 +244,39 @@ class MatStore final : public ColumnStore {
     std::size_t index = 0;  // the column (or row) of a matrix
     bool by_rows = false;
   };
+
+  static bool stated_name(const std::string& name) {
+    return std::find_if(std::begin(kStatedIntervalNames), std::end(kStatedIntervalNames),
+                        [&](const char* n) { return name == n; }) != std::end(kStatedIntervalNames);
+  }
+
+  // The first value of a numeric variable, as a double.
+  static std::optional<double> first_value(const matvar_t& v) {
+    switch (v.class_type) {
+      case MAT_C_DOUBLE:
+        return *static_cast<const double*>(v.data);
+      case MAT_C_SINGLE:
+        return *static_cast<const float*>(v.data);
+      case MAT_C_INT8:
+        return *static_cast<const std::int8_t*>(v.data);
+      case MAT_C_UINT8:
+        return *static_cast<const std::uint8_t*>(v.data);
+      case MAT_C_INT16:
+        return *static_cast<const std::int16_t*>(v.data);
+      case MAT_C_UINT16:
+        return *static_cast<const std::uint16_t*>(v.data);
+      case MAT_C_INT32:
+        return *static_cast<const std::int32_t*>(v.data);
+      case MAT_C_UINT32:
+        return *static_cast<const std::uint32_t*>(v.data);
+      case MAT_C_INT64:
+        return static_cast<double>(*static_cast<const std::int64_t*>(v.data));
+      case MAT_C_UINT64:
+        return static_cast<double>(*static_cast<const std::uint64_t*>(v.data));
+      default:
+        return std::nullopt;
+    }
+  }
 
   std::string detail() const { return matio_message.empty() ? "" : ": " + matio_message; }
 
@@ -256,6 +311,7 @@ class MatStore final : public ColumnStore {
   std::string path_;
   MatFile file_;
   std::vector<std::string> names_, scalars_;
+  std::map<std::string, std::string> stated_why_;  // why a kStatedIntervalNames variable is no rate
   std::vector<Channel> channels_;
   std::map<std::string, Variable> loaded_;
   bool metadata_text_ = false;

@@ -22,7 +22,7 @@ class MemoryReader final : public StreamReader {
                                     (dt->empty() ? std::string("nothing") : quoted_field(*dt)));
       }
       header_.metadata_dt = value;
-      header_.metadata_dt_text = *dt;
+      header_.metadata_dt_source = "dt=" + *dt + " in the metadata";
     }
     for (std::size_t c = 0; c < data.columns.size(); ++c) {
       header_.names.push_back(data.columns[c].name);

@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "common/decimal.hpp"
+#include "common/number.hpp"
 #include "data/text.hpp"
 
 namespace momentid::data {
@@ -18,6 +19,14 @@ constexpr double kStepTolerance = 1e-6;
 constexpr double kTimeRounding = 4 * 5.9604644775390625e-8;
 
 }  // namespace
+
+double StreamReader::step_allowance(double t, double reference) const {
+  // Times printed to a few decimals: one unit in the last place, but never half a step, so that
+  // a missing or doubled sample is refused whatever the precision.
+  const double printed = std::min(precision_.unit(), reference / 2);
+  return kStepTolerance * reference + printed +
+         kTimeRounding * std::max(std::abs(t), std::abs(previous_time_));
+}
 
 bool to_run(double value, long& run) {
   constexpr double kLimit = 9.0e18;
@@ -111,6 +120,8 @@ bool StreamReader::next_rows(DataBlock& block, std::size_t max_rows) {
       started_ = true;
       current_run_ = keys.run;
       has_previous_time_ = false;
+      run_span_ = 0;
+      run_steps_ = 0;
     }
     if (map_.time >= 0 && !request_.dt) check_time(keys.t, zone == RowZone::kOwned);
     if (block.rows > 0 && (run_starts || zone != block.zone)) {
@@ -140,7 +151,18 @@ std::optional<double> StreamReader::time_step() const {
   return span_ / static_cast<double>(steps_);
 }
 
+void StreamReader::non_uniform_step(double t, double step) const {
+  const auto [found, expected] = distinguished(step, *step_);
+  // The steps of the run before this one, as the interval a user would give.
+  const double mean = run_steps_ > 0 ? run_span_ / static_cast<double>(run_steps_) : *step_;
+  fail(field_location(map_.time),
+       "non-uniform time step: " + found + " after " + expected + " at t = " + shortest_decimal(t) +
+           " (the steps before it average " + number(mean) + "): give the sample interval with " +
+           UsageError::mention("dt") + " " + number(mean) + " if the samples are equally spaced");
+}
+
 void StreamReader::check_time(double t, bool owned) {
+  precision_.see(t);
   if (has_previous_time_) {
     const double step = t - previous_time_;
     if (!(step > 0)) {
@@ -148,27 +170,27 @@ void StreamReader::check_time(double t, bool owned) {
                                           " after t = " + shortest_decimal(previous_time_) +
                                           " (samples must be in increasing time order)");
     }
-    const double allowance = kTimeRounding * std::max(std::abs(t), std::abs(previous_time_));
     if (joined_) {
       // Rows dropped for missing values lie between: the step is not a sample interval.
     } else if (!step_) {
       const std::optional<double> dt = header_.metadata_dt;
-      if (dt && std::abs(step - *dt) > kStepTolerance * *dt + allowance) {
+      if (dt && std::abs(step - *dt) > step_allowance(t, *dt)) {
         fail(field_location(map_.time), "time step " + distinguished(step, *dt).first +
-                                            " of column 't' disagrees with dt=" +
-                                            header_.metadata_dt_text + " in the metadata");
+                                            " of column 't' disagrees with " +
+                                            header_.metadata_dt_source);
       }
       step_ = step;
-    } else if (std::abs(step - *step_) > kStepTolerance * *step_ + allowance) {
-      const auto [found, expected] = distinguished(step, *step_);
-      fail(field_location(map_.time), "non-uniform time step: " + found + " after " + expected +
-                                          " (t = " + shortest_decimal(t) +
-                                          "; samples must be equally spaced)");
+    } else if (std::abs(step - *step_) > step_allowance(t, *step_)) {
+      non_uniform_step(t, step);
     }
   }
-  if (has_previous_time_ && !joined_ && owned) {
-    span_ += t - previous_time_;
-    ++steps_;
+  if (has_previous_time_ && !joined_) {
+    run_span_ += t - previous_time_;
+    ++run_steps_;
+    if (owned) {
+      span_ += t - previous_time_;
+      ++steps_;
+    }
   }
   joined_ = false;
   previous_time_ = t;

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "data/header.hpp"
+#include "data/time_precision.hpp"
 #include "momentid/reader.hpp"
 
 namespace momentid::data {
@@ -115,6 +116,9 @@ class StreamReader : public DataReader {
  private:
   bool next_rows(DataBlock& block, std::size_t max_rows);
   void check_time(double t, bool owned);
+  // How far a step at time t may differ from `reference`, the first step or the metadata's dt.
+  double step_allowance(double t, double reference) const;
+  [[noreturn]] void non_uniform_step(double t, double step) const;
   RowZone zone_of_last_row() const;
 
   // Fails when the data have fewer than the requested minimum of rows.
@@ -123,6 +127,9 @@ class StreamReader : public DataReader {
   std::optional<double> step_;  // the first step, the reference of the others
   double span_ = 0;             // the steps' sum, over all runs
   std::size_t steps_ = 0;
+  double run_span_ = 0;  // the steps' sum and count in the current run, for messages
+  std::size_t run_steps_ = 0;
+  TimePrecision precision_;  // of the time column
   double previous_time_ = 0;
   bool has_previous_time_ = false;
   bool dropped_ = false;  // a row was dropped since the last one delivered

@@ -190,6 +190,28 @@ def hdf5_group_by_h5py(d, c, csv):
     return ["rec.h5", "--columns", "y=/run1/y,v=/run1/v,x=/run1/x", "--input-hold", "zoh"]
 
 
+def hdf5_rate_attribute(d, c, csv):
+    with h5py.File(d / "rec.h5", "w") as f:
+        for name in ("y", "v", "x"):
+            f[name] = c[name]
+        f.attrs["Fs"] = np.int32(100)
+    return ["rec.h5", "--input-hold", "zoh"]
+
+
+def hdf5_wf_increment_on_datasets(d, c, csv):
+    with h5py.File(d / "rec.h5", "w") as f:
+        for name in ("y", "v", "x"):
+            f[name] = c[name]
+            f[name].attrs["wf_increment"] = 0.01
+    return ["rec.h5", "--input-hold", "zoh"]
+
+
+def mat5_integer_rate(d, c, csv):
+    scipy.io.savemat(d / "rec.mat", {"y": c["y"], "v": c["v"], "x": c["x"],
+                                     "sample_rate": np.int32(100), "fs": 100.0})
+    return ["rec.mat", "--input-hold", "zoh"]
+
+
 def converted(name, extra_convert=(), extra_read=()):
     def build(d, c, csv):
         proc = run("convert", csv, name, *extra_convert, cwd=d)
@@ -215,6 +237,9 @@ VARIANTS = {
     "mat5-compressed-matrix-dt-from-Ts": mat5_compressed_matrix_with_ts,
     "mat5-dt-from-rate": mat5_rate_without_t,
     "hdf5-h5py-group": hdf5_group_by_h5py,
+    "hdf5-rate-attribute": hdf5_rate_attribute,
+    "hdf5-wf-increment-on-datasets": hdf5_wf_increment_on_datasets,
+    "mat5-integer-rate-without-t": mat5_integer_rate,
     "convert-bin": converted("out.bin"),
     "convert-npy": converted("out.npy", extra_read=("--names", "t,y,v,x", "--input-hold", "zoh")),
     "convert-mat": converted("out.mat"),
@@ -443,6 +468,51 @@ def bad_dt_from_zero(d, c):
             "a.mat:1:1: --dt-from: 'Ts' is 0, which gives no positive sample interval")
 
 
+NO_INTERVAL = "and the file has no time channel: give the sample interval with --dt"
+
+
+def bad_rate_text_h5(d, c):
+    save_h5(d / "a.h5", {n: cut(c)[n] for n in ("y", "v", "x")})
+    with h5py.File(d / "a.h5", "a") as f:
+        f.attrs["fs"] = "2 kHz"
+    return ["a.h5"], f"a.h5:1:1: attribute 'fs' of the file holds the text '2 kHz', not a number, {NO_INTERVAL}"
+
+
+def bad_rate_text_mat(d, c):
+    save_mat(d / "a.mat", {n: cut(c)[n] for n in ("y", "v", "x")}, Fs="2 kHz")
+    return ["a.mat"], f"a.mat:1:1: variable 'Fs' holds char (text) values, not one real number, {NO_INTERVAL}"
+
+
+def bad_rate_zero_mat(d, c):
+    save_mat(d / "a.mat", {n: cut(c)[n] for n in ("y", "v", "x")}, fs=0.0)
+    return ["a.mat"], f"a.mat:1:1: variable 'fs' is 0, not a positive number, {NO_INTERVAL}"
+
+
+def bad_rates_disagree_h5(d, c):
+    save_h5(d / "a.h5", {n: cut(c)[n] for n in ("y", "v", "x")})
+    with h5py.File(d / "a.h5", "a") as f:
+        f.attrs["fs"] = 100.0
+        f["y"].attrs["fs"] = 1000.0
+    return ["a.h5"], ("a.h5:1:1: attribute 'fs' of dataset 'y' = 1000 disagrees with attribute "
+                      "'fs' of the file = 100 (sample intervals 0.001 and 0.01)")
+
+
+def bad_rate_disagrees_with_t_mat(d, c):
+    save_mat(d / "a.mat", cut(c), wf_increment=0.001)
+    return ["a.mat"], ("a.mat:2:1: time step 0.01 of column 't' disagrees with variable "
+                       "'wf_increment' = 0.001")
+
+
+def bad_float32_time_gap_h5(d, c):
+    c = cut(c)
+    keep = np.arange(ROWS) != 1234  # one sample lost
+    save_h5(d / "a.h5", {n: c[n][keep] for n in ("y", "v", "x")}, t=c["t"][keep].astype(np.float32))
+    # The float32 stamps are shown as they read, exactly.
+    return ["a.h5"], ("a.h5:1235:1: non-uniform time step: 0.0200005 after 0.01 at "
+                      "t = 12.350000381469727 (the steps before it average 0.01): give the sample "
+                      "interval with --dt 0.01 if the samples are equally spaced")
+
+
 def bad_names_too_few(d, c):
     np.save(d / "a.npy", matrix(cut(c)))
     return ["a.npy", "--names", "t,y,v"], "a.npy:1:1: --names gives 3 names for 4 columns"
@@ -476,6 +546,12 @@ BAD = {
     "dt-from-missing-mat": bad_dt_from_mat,
     "dt-from-missing-rate-hdf5": bad_dt_from_rate_h5,
     "dt-from-zero": bad_dt_from_zero,
+    "hdf5-rate-text": bad_rate_text_h5,
+    "mat-rate-text": bad_rate_text_mat,
+    "mat-rate-zero": bad_rate_zero_mat,
+    "hdf5-rates-disagree": bad_rates_disagree_h5,
+    "mat-rate-disagrees-with-t": bad_rate_disagrees_with_t_mat,
+    "hdf5-float32-time-gap": bad_float32_time_gap_h5,
     "npy-names-too-few": bad_names_too_few,
     "npy-names-too-many": bad_names_too_many,
 }
@@ -518,6 +594,37 @@ def test_convert_to_unknown_extension_is_a_usage_error(record, tmp_path):
         )
         assert not (tmp_path / name).exists()
     assert list(tmp_path.iterdir()) == []
+
+
+# --- Time stamps as acquisition systems write them ----------------------------------------------
+
+
+def test_float32_time_vectors_are_read_with_their_mean_step(record, tmp_path):
+    """A float32 t (500 s at 100 Hz: each stamp off by up to 1.5e-5 s) in HDF5 and .mat: the
+    interval is the mean step, within 1e-7 of 0.01, so the estimates move by far less than their
+    standard errors."""
+    c = record["columns"]
+    with h5py.File(tmp_path / "rec.h5", "w") as f:
+        for name in ("y", "v", "x"):
+            f[name] = c[name]
+        f["t"] = c["t"].astype(np.float32)
+    scipy.io.savemat(tmp_path / "rec.mat", {**{n: c[n] for n in ("y", "v", "x")},
+                                            "t": c["t"].astype(np.float32)})
+    for name in ("rec.h5", "rec.mat"):
+        report = identify(name, "--input-hold", "zoh", cwd=tmp_path)
+        assert report["diagnostics"]["samples"] == SAMPLES
+        for p, (estimate, error) in estimates(report).items():
+            reference = record["reference"][p]
+            assert abs(estimate - reference[0]) < 0.01 * reference[1], (name, p)
+
+
+def test_csv_times_printed_to_six_decimals_at_1024_hz_are_read(tmp_path):
+    """Steps of 0.000976 and 0.000977 agree within the sixth decimal printed."""
+    rows = ["t,y,v,x"] + [f"{n / 1024:.6f},{np.sin(n / 50):.6f},0,0" for n in range(4096)]
+    (tmp_path / "lab.csv").write_text("\n".join(rows) + "\n")
+    proc = run("check", "lab.csv", cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    assert "dt = 0.000976562" in proc.stdout or "dt = 0.0009765" in proc.stdout, proc.stdout
 
 
 # --- Truncated files ------------------------------------------------------------------------------

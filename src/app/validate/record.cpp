@@ -62,10 +62,32 @@ Record read_record(const Model& model, const DataSource& source, const ReplayOpt
   if (!dt) {
     throw DataError(file_start(record.name),
                     "the data give no sample interval: add a t column or a '# momentid: dt=...' "
-                    "line, or give --dt");
+                    "line, or give " +
+                        UsageError::mention("dt"));
   }
   record.dt = *dt;
   return record;
+}
+
+std::map<std::string, double> center_record(const Model& model, Record& record,
+                                            const std::vector<std::string>& center) {
+  std::map<std::string, double> centered;
+  for (std::size_t c = 0; c < record.variables.size(); ++c) {
+    const std::string& name = model.variables()[record.variables[c]];
+    if (std::find(center.begin(), center.end(), name) == center.end()) continue;
+    double sum = 0;
+    std::size_t count = 0;
+    for (const RecordRun& run : record.runs) {
+      for (double x : run.columns[c]) sum += x;
+      count += run.columns[c].size();
+    }
+    const double mean = sum / static_cast<double>(count);
+    for (RecordRun& run : record.runs) {
+      for (double& x : run.columns[c]) x -= mean;
+    }
+    centered[name] = mean;
+  }
+  return centered;
 }
 
 std::vector<std::vector<double>> run_inputs(const Model& model, const Record& record,

@@ -3,6 +3,7 @@
 // replay), and the facts about its runs that the replay and the comparison share.
 
 #include <cstddef>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -18,6 +19,11 @@ SourceLocation file_start(const std::string& name);
 // lack is reported as a missing column), run by run. Throws DataError when the data give no
 // sample interval.
 Record read_record(const Model& model, const DataSource& source, const ReplayOptions& options);
+
+// Removes from the column of each variable named in `center` its mean over every run, and
+// returns the means removed, by name; a variable without a column is left alone.
+std::map<std::string, double> center_record(const Model& model, Record& record,
+                                            const std::vector<std::string>& center);
 
 // The input columns of a run, in model order.
 std::vector<std::vector<double>> run_inputs(const Model& model, const Record& record,

@@ -141,9 +141,13 @@ std::pair<int, double> chosen_substeps(const Model& model,
 
 Replay replay(const Model& model, const DataSource& source, const ReplayOptions& options) {
   options.record.validate(&model);
+  return replay_record(model, read_record(model, source, options), options);
+}
+
+Replay replay_record(const Model& model, Record read, const ReplayOptions& options) {
   const std::vector<GiNaC::numeric> parameters = parameter_vector(model, options.parameters);
   Replay out;
-  out.record = read_record(model, source, options);
+  out.record = std::move(read);
   const Record& record = out.record;
   out.interpolation = interpolation_methods(model, record, options);
   std::vector<bool> measured(model.variables().size(), false);

@@ -7,8 +7,12 @@
 #include <vector>
 
 #include "momentid/simulate.hpp"
+#include "momentid/validate.hpp"
 
 namespace momentid {
+
+// Simulates the model through the inputs of a record already read (replay() reads it first).
+Replay replay_record(const Model& model, Record record, const ReplayOptions& options);
 
 // The row from which the simulation of a run has forgotten its initial state (see
 // ValidateResult::skip), searched over the first half of the run, and the size of the

@@ -89,7 +89,13 @@ std::string format_text(const ValidateResult& r) {
     out += (j ? ", " : "") + model.states()[j].name + " = " + number(replay.initial[0][j], "%.6g") +
            " from " + replay.initial_how[j];
   }
-  out += "\nskipped: " + skip_text(r, model.inputs().empty()) + "\n\n";
+  out += "\nskipped: " + skip_text(r, model.inputs().empty()) + "\n";
+  if (!r.centered.empty()) {
+    out += "means removed (--center):";
+    for (const auto& [name, mean] : r.centered) out += " " + name + " " + number(mean, "%.4g");
+    out += "\n";
+  }
+  out += "\n";
   char line[256];
   std::snprintf(line, sizeof line, "%-10s %10s %12s %9s %14s %12s\n", "output", "samples",
                 "rms error", "fit %", "rms first 10%", "rms rest");
@@ -172,7 +178,16 @@ std::string format_json(const ValidateResult& r) {
   }
   out << "},\n  \"skip\": [";
   for (std::size_t k = 0; k < r.skip.size(); ++k) out << (k ? ", " : "") << r.skip[k];
-  out << "],\n  \"skip_chosen\": " << (r.skip_chosen ? "true" : "false") << ",\n  \"outputs\": {";
+  out << "],\n  \"skip_chosen\": " << (r.skip_chosen ? "true" : "false");
+  if (!r.centered.empty()) {
+    out << ",\n  \"centered\": {";
+    for (auto c = r.centered.begin(); c != r.centered.end(); ++c) {
+      out << (c == r.centered.begin() ? "" : ", ") << json_string(c->first) << ": "
+          << json_number(c->second);
+    }
+    out << "}";
+  }
+  out << ",\n  \"outputs\": {";
   for (std::size_t k = 0; k < r.outputs.size(); ++k) {
     const OutputFit& f = r.outputs[k];
     out << (k ? "," : "") << "\n    " << json_string(f.name) << ": {\"samples\": " << f.samples
