@@ -143,6 +143,7 @@ std::string fit_to_budget(const Model& model, LagOptions& lag_options,
   std::string cut;
   if (count > budget && !options.instruments) {
     const std::vector<Monomial> all = derive_lagged(model, lag_options).instruments;
+    lag_options.instruments = all;
     for (std::size_t keep = all.size() - 1; keep >= 1 && count > budget; --keep) {
       lag_options.instruments = fewer_instruments(all, keep);
       count = moment_count(model, lag_options);
@@ -153,6 +154,11 @@ std::string fit_to_budget(const Model& model, LagOptions& lag_options,
       lag_options.last_lag =
           std::min(default_last, last_lag_within_budget(first, lag_options.last_lag, count));
     }
+  }
+  if (count > budget && !options.lags && !options.instruments) {
+    throw Error("the lagged equations of model " + model.name() + " need " + std::to_string(count) +
+                " moments with one instrument at lags " + std::to_string(first) + ".." +
+                std::to_string(lag_options.last_lag) + ", more than " + std::to_string(budget));
   }
   if (count > budget) {
     const std::string given = options.lags && options.instruments ? "lags and instruments"
