@@ -183,6 +183,26 @@ TEST_SUITE("app") {
           "there is nothing to estimate");
   }
 
+  TEST_CASE("equations whose every term carries an unknown parameter are refused") {
+    // m*v' = -c*v - k*y + b*x holds as well for 2m, 2c, 2k, 2b: all estimates would be 0.
+    const momentid::Model scaled = momentid::parse_model(
+        "model s\nstate y, v\ninput x\nparam m, c, k, b\ny' = v\nm*v' = -c*v - k*y + b*x\n",
+        "s.mom");
+    const auto e =
+        error_from<momentid::ModelError>([&] { momentid::IdentifyOptions{}.validate(scaled); });
+    CHECK(std::string(e.what()) ==
+          "s.mom:6:1: every term of equation 2 carries an unknown parameter (m, c, k, b), so the "
+          "data determine them only up to a common factor: give one of them a value (a constant "
+          "in the model, or fixed)");
+    // A fixed one sets the scale; so does a known term in another equation that shares one.
+    CHECK_NOTHROW(momentid::IdentifyOptions{.fixed = {{"m", 1.0}}}.validate(scaled));
+    const momentid::Model shared = momentid::parse_model(
+        "model s\nstate y, v, w\ninput x\nparam m, c, k\ny' = v\nm*v' = -k*y + x\n"
+        "m*w' = -c*w\n",
+        "s.mom");
+    CHECK_NOTHROW(momentid::IdentifyOptions{}.validate(shared));
+  }
+
   TEST_CASE("the identified model is printed with the estimates substituted") {
     const momentid::Model duffing = model_file("duffing.mom");
     CHECK(momentid::identified_equations(result_with(duffing, {0.5, 4, 1.25})) ==

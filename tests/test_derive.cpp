@@ -318,12 +318,29 @@ multipliers 1, y2
 
   TEST_CASE("the automatic multipliers reach the model's own degree") {
     // Van der Pol (mu*(1 - y^2)*v) is determined at degree 1 but estimated ten times better at
-    // degree 3; a linear model stays at degree 1.
+    // degree 3.
     const MomentSystem vdp = derive(momentid::testing::model_file("van_der_pol.mom"));
     CHECK(vdp.equations.size() ==
           derive(momentid::testing::model_file("van_der_pol.mom"), {.degree = 3}).equations.size());
-    const MomentSystem linear = derive(momentid::testing::model_file("kozin_4_1a.mom"));
-    CHECK(linear.equations.size() == 1);
+  }
+
+  TEST_CASE("the automatic multipliers leave equations to spare for the model's test") {
+    // y' = -a*y + x is square at degree 1 (a*E[y^2] = E[y*x]); degree 2 adds only odd moments,
+    // which vanish for symmetric data; degree 3 adds a*E[y^4] = E[y^3*x].
+    const MomentSystem first = derive(momentid::testing::model_file("kozin_4_1a.mom"));
+    CHECK(first.equations.size() == 3);
+    CHECK(first.symmetric_rank == 1);
+    CHECK(first.symmetric_rank_with_rhs == 2);
+    // Two masses: degree 1 already gives 7 equations for 4 parameters, and stays there.
+    const Model chain = momentid::parse_model(
+        "state y1, v1, y2, v2\ninput x\nparam c, k, c2, k2\ny1' = v1\n"
+        "v1' = -c*v1 - k*y1 - c2*(v1 - v2) - k2*(y1 - y2)\ny2' = v2\n"
+        "v2' = -c2*(v2 - v1) - k2*(y2 - y1) + x\n",
+        "chain.mom");
+    const MomentSystem two = derive(chain);
+    CHECK(two.equations.size() == 7);
+    CHECK(two.symmetric_rank == 4);
+    CHECK(two.symmetric_rank_with_rhs > 4);
   }
 
   TEST_CASE("a kinematic equation of mixed degree does not start an endless identity search") {

@@ -57,7 +57,8 @@ struct SkippedMultiplier {
 // How to choose multipliers. `multipliers` (all equations) wins over `degree` (all monomials in
 // the states of total degree 1..degree), which wins over the model's own `multipliers`
 // statements; with none of these, the degree is raised from 1 until the equations determine
-// every parameter even for symmetric data (at most kMaxAutomaticDegree; see derive()).
+// every parameter even for symmetric data, with equations to spare for the model's test (at
+// most kMaxAutomaticDegree; see derive()).
 //
 // `rates`: keep the record's rates of change (rate_key) where the stationarity identities
 // would put 0, so that the equations hold exactly over a finite record, not only on average.
@@ -101,6 +102,9 @@ struct MomentSystem {
   // The same when moments of odd total degree vanish, as for a system symmetric under
   // y, u -> -y, -u with a symmetric input: equations that only hold odd moments then say 0 = 0.
   int symmetric_rank = 0;
+  // The same with the right-hand sides as one more column: above the number of parameters, the
+  // equations that survive symmetric data have some to spare, which test the model.
+  int symmetric_rank_with_rhs = 0;
 };
 
 // Derives the moment equations. Throws UsageError when `degree` would build more than

@@ -129,8 +129,9 @@ class Deriver {
     }
     needed.erase(Monomial(variables_, 0));
     system.moments.assign(needed.begin(), needed.end());
-    system.generic_rank = generic_rank(system, /*symmetric=*/false);
-    system.symmetric_rank = generic_rank(system, /*symmetric=*/true);
+    system.generic_rank = rank(system, /*symmetric=*/false, /*with_rhs=*/false);
+    system.symmetric_rank = rank(system, /*symmetric=*/true, /*with_rhs=*/false);
+    system.symmetric_rank_with_rhs = rank(system, /*symmetric=*/true, /*with_rhs=*/true);
     return system;
   }
 
@@ -499,9 +500,11 @@ class Deriver {
     }
   }
 
-  // With `symmetric`, moments of odd total degree are set to zero, as they vanish for a system
-  // that is symmetric under y, u -> -y, -u driven by a symmetric input.
-  int generic_rank(const MomentSystem& system, bool symmetric) const {
+  // The rank of the coefficient matrix (with `with_rhs`, of the matrix with the right-hand
+  // sides as one more column) for random moment values. With `symmetric`, moments of odd total
+  // degree are set to zero, as they vanish for a system that is symmetric under y, u -> -y, -u
+  // driven by a symmetric input.
+  int rank(const MomentSystem& system, bool symmetric, bool with_rhs) const {
     if (system.equations.empty() || parameters_ == 0) return 0;
     std::mt19937_64 engine(20260101);
     std::uniform_real_distribution<double> draw(0.5, 2.0);
@@ -510,17 +513,20 @@ class Deriver {
       value[m] = symmetric && degree(m) % 2 == 1 ? 0.0 : draw(engine);
     }
     value[Monomial(variables_, 0)] = 1.0;
-    Eigen::MatrixXd a(system.equations.size(), parameters_);
+    auto value_of = [&](const MomentCombination& combination) {
+      double sum = 0;
+      for (const auto& [m, c] : combination) sum += c.to_double() * value[m];
+      return sum;
+    };
+    const int columns = parameters_ + (with_rhs ? 1 : 0);
+    Eigen::MatrixXd a(system.equations.size(), columns);
     for (std::size_t r = 0; r < system.equations.size(); ++r) {
-      for (int p = 0; p < parameters_; ++p) {
-        double sum = 0;
-        for (const auto& [m, c] : system.equations[r].coefficients[p]) {
-          sum += c.to_double() * value[m];
-        }
-        a(static_cast<Eigen::Index>(r), p) = sum;
-      }
+      const MomentEquation& eq = system.equations[r];
+      const auto row = static_cast<Eigen::Index>(r);
+      for (int p = 0; p < parameters_; ++p) a(row, p) = value_of(eq.coefficients[p]);
+      if (with_rhs) a(row, parameters_) = value_of(eq.rhs);
     }
-    for (int p = 0; p < parameters_; ++p) {
+    for (int p = 0; p < columns; ++p) {
       const double norm = a.col(p).norm();
       if (norm > 0) a.col(p) /= norm;
     }
@@ -646,27 +652,29 @@ MomentSystem derive(const Model& model, const DeriveOptions& options) {
   } else {
     // The lowest degree, at least the model's own (its highest power of the states and inputs,
     // up to kMaxAutomaticDegree), that determines every parameter even when odd moments vanish
-    // (as they do for symmetric systems under symmetric input); failing that, the lowest that
-    // does for generic moments. Below the model's degree the system is square or nearly so,
-    // and its estimates are far poorer (docs/cli/derive.md, "momentid derive").
+    // (as they do for symmetric systems under symmetric input) and leaves equations to spare
+    // for the model's test; failing the spare ones, the lowest that determines them; failing
+    // that, the lowest that does for generic moments. Below the model's degree the system is
+    // square or nearly so, and its estimates are far poorer (docs/cli/derive.md).
     int model_degree = 1;
     for (const Equation& eq : equations) {
       for (const Term& t : eq.terms) model_degree = std::max(model_degree, degree(t.monomial));
     }
     const int parameters = static_cast<int>(model.parameters().size());
-    std::optional<MomentSystem> full, generic;
+    std::optional<MomentSystem> full, low, generic;  // full: at or above the model's degree
     MomentSystem last;
     for (int d = 1; d <= kMaxAutomaticDegree; ++d) {
       if (d > 1 && dynamic * count_monomials(states, d) > kMaxProducts) break;
       all(monomials_up_to(states, d));
       last = deriver.run(multipliers);
       if (last.symmetric_rank == parameters) {
-        if (d >= model_degree) return last;
-        if (!full) full = last;
+        if (d >= model_degree && last.symmetric_rank_with_rhs > parameters) return last;
+        if (!full && d >= model_degree) full = last;
+        if (!low) low = last;
       }
       if (!generic && last.generic_rank == parameters) generic = last;
     }
-    return full ? *full : generic ? *generic : last;
+    return full ? *full : low ? *low : generic ? *generic : last;
   }
   return deriver.run(multipliers);
 }

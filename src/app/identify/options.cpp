@@ -1,11 +1,68 @@
 #include <algorithm>
 #include <cmath>
+#include <functional>
+#include <numeric>
+#include <optional>
 #include <string>
 
 #include "momentid/error.hpp"
 #include "momentid/identify.hpp"
 
 namespace momentid {
+
+namespace {
+
+// Throws when the equations that share some free parameters have no term without one (as in
+// m*v' = -c*v - k*y + b*x with m and b unknown): every moment equation of theirs then has a
+// zero right-hand side, and the data determine those parameters only up to a common factor.
+void check_scale(const Model& model, const std::function<bool(const Declaration&)>& known) {
+  const auto& parameters = model.parameters();
+  std::vector<std::size_t> group(parameters.size());
+  std::iota(group.begin(), group.end(), std::size_t{0});
+  const std::function<std::size_t(std::size_t)> root = [&](std::size_t p) {
+    return group[p] == p ? p : group[p] = root(group[p]);
+  };
+  const auto free_in = [&](const Term& t) {
+    return t.parameter >= 0 && !known(parameters[t.parameter]);
+  };
+  for (const Equation& eq : model.equations()) {
+    std::optional<std::size_t> first;
+    for (const Term& t : eq.terms) {
+      if (!free_in(t)) continue;
+      const auto p = static_cast<std::size_t>(t.parameter);
+      if (first)
+        group[root(p)] = root(*first);
+      else
+        first = p;
+    }
+  }
+  std::vector<bool> anchored(parameters.size(), false);  // by root: some equation has a known term
+  for (const Equation& eq : model.equations()) {
+    const auto free_term = std::find_if(eq.terms.begin(), eq.terms.end(), free_in);
+    if (free_term == eq.terms.end()) continue;
+    if (!std::all_of(eq.terms.begin(), eq.terms.end(), free_in)) {
+      anchored[root(static_cast<std::size_t>(free_term->parameter))] = true;
+    }
+  }
+  for (const Equation& eq : model.equations()) {
+    const auto free_term = std::find_if(eq.terms.begin(), eq.terms.end(), free_in);
+    if (free_term == eq.terms.end()) continue;
+    const std::size_t r = root(static_cast<std::size_t>(free_term->parameter));
+    if (anchored[r]) continue;
+    std::string names;
+    for (std::size_t p = 0; p < parameters.size(); ++p) {
+      if (root(p) == r && !known(parameters[p]))
+        names += (names.empty() ? "" : ", ") + parameters[p].name;
+    }
+    throw ModelError(eq.where, "every term of equation " + eq.name() +
+                                   " carries an unknown parameter (" + names +
+                                   "), so the data determine them only up to a common factor: "
+                                   "give one of them a value (a constant in the model, or " +
+                                   UsageError::mention("fixed") + ")");
+  }
+}
+
+}  // namespace
 
 void IdentifyOptions::validate(const Model& model) const {
   if (batches && (*batches < kMinBatches || *batches > kMaxBatches)) {
@@ -42,6 +99,7 @@ void IdentifyOptions::validate(const Model& model) const {
                                   UsageError::mention("fixed") +
                                   " or in the model file): there is nothing to estimate");
   }
+  check_scale(model, declared_fixed);
   for (const std::string& name : center) {
     if (std::find(variables.begin(), variables.end(), name) == variables.end()) {
       throw UsageError("center", "'" + name + "' is not a state or input of model " + model.name());

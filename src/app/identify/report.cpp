@@ -108,6 +108,17 @@ void refinements_text(std::ostringstream& out, const IdentifyResult& r) {
   }
 }
 
+// The model's constants and the fixed parameters, with their values: the intervals are
+// conditional on them (docs/model-language.md, "Constants are assumptions").
+std::vector<std::pair<std::string, double>> assumed(const IdentifyResult& r) {
+  std::vector<std::pair<std::string, double>> out;
+  for (const Declaration& c : r.model->constants()) out.emplace_back(c.name, c.value->to_double());
+  for (const ParameterEstimate& p : r.parameters()) {
+    if (p.fixed) out.emplace_back(p.name, p.estimate);
+  }
+  return out;
+}
+
 // The status, the warnings, the system's and the errors' figures, the J test, the refinements and
 // the stationarity identities.
 void diagnostics_text(std::ostringstream& out, const IdentifyResult& r) {
@@ -132,6 +143,13 @@ void diagnostics_text(std::ostringstream& out, const IdentifyResult& r) {
     }
   }
   out << "\n";
+  if (const auto values = assumed(r); !values.empty()) {
+    out << "  taken as exact:";
+    for (std::size_t i = 0; i < values.size(); ++i) {
+      out << (i ? ", " : " ") << values[i].first << " = " << number(values[i].second);
+    }
+    out << " (the intervals hold only if these values do)\n";
+  }
   if (e.j_statistic) {
     out << "  J test: J = " << number(*e.j_statistic, "%.4g") << " on " << e.j_dof
         << " degrees of freedom, p = " << number(*e.j_pvalue, "%.3g")
@@ -196,6 +214,12 @@ void diagnostics_json(std::ostringstream& out, const IdentifyResult& r) {
       << ",\n    \"j_dof\": " << e.j_dof
       << ",\n    \"j_pvalue\": " << (e.j_pvalue ? json_number(*e.j_pvalue) : "null");
   refinements_json(out, r);
+  out << ",\n    \"taken_as_exact\": {";
+  const auto values = assumed(r);
+  for (std::size_t i = 0; i < values.size(); ++i) {
+    out << (i ? ", " : "") << json_string(values[i].first) << ": " << json_number(values[i].second);
+  }
+  out << "}";
   out << ",\n    \"identities\": [";
   for (std::size_t i = 0; i < e.identities.size(); ++i) {
     const IdentityCheck& c = e.identities[i];
