@@ -259,8 +259,8 @@ param k
 y' = -k*sin(y)
 )");
     check_error(e,
-                "function 'sin' is not allowed: equations are polynomials (the only call is "
-                "dot(...))",
+                "function 'sin' is not allowed: equations are polynomials, with abs(...) and "
+                "sign(...) of a polynomial in the states and inputs (and dot(...))",
                 3, 9, "y' = -k*sin(y)");
   }
 

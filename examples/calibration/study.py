@@ -5,12 +5,13 @@ The Duffing oscillator (c = 0.5, k = 4, eps = 1; moving-average force K = 10, w 
 sigma = 20; dt = 0.01) is simulated with many seeds at each record length and noise level, and
 identified each time:
 
-  noise 0     y, v and x recorded; the zero-lag equations, degree 3
+  noise 0     y, v and x recorded; the zero-lag equations (degree 3)
   noise f > 0 y and x recorded, white noise of f times the standard deviation of y added to
               y; the lagged equations (momentid's correction for measured data)
 
-Each record is identified with the right model (least squares and the optimally weighted
-estimate, `--weighting gmm`) and with the linear model (eps = 0) for the power of the J test.
+Each record is identified with identify's defaults (which choose the equations above and the
+optimally weighted estimate, whose first step is the least-squares one), with the right model
+and with the linear model (eps = 0) for the power of the J test.
 Per cell and parameter the study reports the coverage of the 95% intervals, the spread of the
 estimates across seeds over their mean standard error (spread/SE; 1 when the errors are
 right), the bias over the mean standard error, the J test's rejection rate of the right model
@@ -72,9 +73,7 @@ def one_run(samples, noise, seed, tmp, linear):
     if noise > 0:
         command += ["--noise", f"y={noise}"]
     momentid(*command)
-    options = ["--weighting", "gmm", "--format", "json"]
-    if noise == 0:
-        options += ["--degree", "3"]
+    options = ["--format", "json"]  # the defaults: zero-lag without noise, lagged with it
     result = json.loads(momentid("identify", MODEL, record, *options))
     out = {}
     for method, key in (("ls", "least_squares"), ("gmm", "parameters")):

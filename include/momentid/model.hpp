@@ -29,6 +29,20 @@ struct Declaration {
   bool fixed = false;
 };
 
+// A factor of a term that is not a power of a state or input: |p| or sign(p) (sign(0) = 0) of
+// a polynomial p in the states and inputs, as in `c2*abs(v)*v` (drag), `f*sign(v)` (Coulomb
+// friction) or `kc*abs(y - g)` (a stop). Monomials give its exponent after the states and
+// inputs (Model::variables()); its moments are data moments like any other, while multipliers
+// and the stationarity identities stay polynomial.
+enum class FunctionKind { kAbs, kSign };
+struct VariableFunction {
+  FunctionKind kind = FunctionKind::kAbs;
+  // p as coefficient * monomial over the states and inputs, in MomentOrder, the first
+  // coefficient positive.
+  std::vector<std::pair<GiNaC::numeric, Monomial>> argument;
+  std::string name;  // as formulas write it: "abs(v)", "sign(y - 1/2)"
+};
+
 // One term of an equation moved to the form `lhs - rhs = 0` and expanded:
 // coefficient * parameter * monomial * derivative, where the parameter and the derivative factor
 // are optional. The model language guarantees at most one of each.
@@ -61,7 +75,8 @@ struct MultiplierSet {
 };
 
 // A model read from the model language (grammar/README.md) and checked for meaning: every name
-// declared once, equations polynomial in the states, inputs and derivatives, each term affine in
+// declared once, equations polynomial in the states, inputs, derivatives and functions
+// (VariableFunction), each term affine in
 // the parameters and with at most one derivative factor, every state's derivative determined.
 //
 // Example:
@@ -77,8 +92,12 @@ class Model {
   const std::vector<Declaration>& inputs() const { return inputs_; }
   const std::vector<Declaration>& parameters() const { return parameters_; }
   const std::vector<Declaration>& constants() const { return constants_; }
-  // The names that monomials are written in: states, then inputs.
+  // The functions of the states and inputs that the equations hold, in order of appearance.
+  const std::vector<VariableFunction>& functions() const { return functions_; }
+  // The names that monomials are written in: states, then inputs, then functions.
   const std::vector<std::string>& variables() const { return variables_; }
+  // The variables that a record has columns for: the states and inputs.
+  std::size_t channel_count() const { return states_.size() + inputs_.size(); }
 
   const std::vector<Equation>& equations() const { return equations_; }
   const std::vector<MultiplierSet>& multipliers() const { return multipliers_; }
@@ -88,10 +107,13 @@ class Model {
   const GiNaC::symbol& derivative_symbol(int i) const { return derivative_symbols_[i]; }
   const GiNaC::symbol& input_symbol(int i) const { return input_symbols_[i]; }
   const GiNaC::symbol& parameter_symbol(int i) const { return parameter_symbols_[i]; }
-  // The symbol of variables()[v]: a state's, then an input's.
+  const GiNaC::symbol& function_symbol(int i) const { return function_symbols_[i]; }
+  // The symbol of variables()[v]: a state's, an input's or a function's.
   const GiNaC::symbol& variable_symbol(std::size_t v) const {
-    return v < state_symbols_.size() ? state_symbols_[v]
-                                     : input_symbols_[v - state_symbols_.size()];
+    const std::size_t states = state_symbols_.size(), inputs = input_symbols_.size();
+    return v < states            ? state_symbols_[v]
+           : v < states + inputs ? input_symbols_[v - states]
+                                 : function_symbols_[v - states - inputs];
   }
 
   // Index of a parameter by name, or -1.
@@ -101,12 +123,26 @@ class Model {
   friend class ModelBuilder;
   std::string name_, title_, file_;
   std::vector<Declaration> states_, inputs_, parameters_, constants_;
+  std::vector<VariableFunction> functions_;
   std::vector<std::string> variables_;
   std::vector<Equation> equations_;
   std::vector<MultiplierSet> multipliers_;
   std::vector<GiNaC::symbol> state_symbols_, derivative_symbols_, input_symbols_,
-      parameter_symbols_;
+      parameter_symbols_, function_symbols_;
 };
+
+// How a monomial over Model::variables() changes when every state and input changes sign:
+// kOdd, it changes sign (its moment vanishes for a symmetric system under a symmetric input);
+// kEven, it does not; kNone, neither (a sign(p) of a p with terms of both parities).
+enum class Parity { kEven, kOdd, kNone };
+Parity parity(const Model& model, const Monomial& monomial);
+
+// Throws ModelError at the first equation with abs(...) or sign(...), for `command` (such as
+// "identify"), which does not handle them.
+void require_polynomial(const Model& model, const std::string& command);
+
+// The value of `f` at the states and inputs `channels` (Model::channel_count() values).
+double evaluate(const VariableFunction& f, const double* channels);
 
 // Reads and checks a model file. Throws ParseError or ModelError naming file, line and column,
 // or Error when the file cannot be read.

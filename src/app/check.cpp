@@ -21,6 +21,7 @@ void CheckOptions::validate(const Model* model) const {
 }
 
 CheckResult check(const DataSource& source, const Model* model, const CheckOptions& options) {
+  if (model != nullptr) require_polynomial(*model, "check");
   options.validate(model);
   CheckResult result;
   result.data_name = source.name();

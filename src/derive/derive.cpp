@@ -501,16 +501,20 @@ class Deriver {
   }
 
   // The rank of the coefficient matrix (with `with_rhs`, of the matrix with the right-hand
-  // sides as one more column) for random moment values. With `symmetric`, moments of odd total
-  // degree are set to zero, as they vanish for a system that is symmetric under y, u -> -y, -u
-  // driven by a symmetric input.
+  // sides as one more column) for random moment values, the record's rates of change at their
+  // expectation 0. With `symmetric`, the moments that change sign with the states and inputs
+  // (Parity::kOdd) are set to zero too, as they vanish for a system that is symmetric under
+  // y, u -> -y, -u driven by a symmetric input.
   int rank(const MomentSystem& system, bool symmetric, bool with_rhs) const {
     if (system.equations.empty() || parameters_ == 0) return 0;
     std::mt19937_64 engine(20260101);
     std::uniform_real_distribution<double> draw(0.5, 2.0);
     std::map<Monomial, double> value;
     for (const Monomial& m : system.moments) {
-      value[m] = symmetric && degree(m) % 2 == 1 ? 0.0 : draw(engine);
+      // A record's rate of change has expectation 0.
+      const bool zero = rate_of(m, static_cast<std::size_t>(variables_)) ||
+                        (symmetric && parity(model_, m) == Parity::kOdd);
+      value[m] = zero ? 0.0 : draw(engine);
     }
     value[Monomial(variables_, 0)] = 1.0;
     auto value_of = [&](const MomentCombination& combination) {

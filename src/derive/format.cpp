@@ -141,6 +141,31 @@ std::string latex_number(const numeric& q) {
   return "\\tfrac{" + number_text(q.numer()) + "}{" + number_text(q.denom()) + "}";
 }
 
+// variables()[v] in LaTeX: a state's or input's name, or |p| and sgn(p) for a function.
+std::string latex_variable(const Model& model, std::size_t v) {
+  if (v < model.channel_count()) return latex_name(model.variables()[v]);
+  const VariableFunction& f = model.functions()[v - model.channel_count()];
+  std::string p;
+  for (const auto& [coefficient, monomial] : f.argument) {
+    const numeric size = abs(coefficient);
+    std::string term;
+    for (std::size_t i = 0; i < monomial.size(); ++i) {
+      if (monomial[i] == 0) continue;
+      if (!term.empty()) term += "\\,";
+      term += latex_name(model.variables()[i]);
+      if (monomial[i] > 1) term += "^{" + std::to_string(monomial[i]) + "}";
+    }
+    if (term.empty()) {
+      term = latex_number(size);
+    } else if (size != 1) {
+      term = latex_number(size) + "\\," + term;
+    }
+    p += p.empty() ? (coefficient < 0 ? "-" : "") + term : (coefficient < 0 ? " - " : " + ") + term;
+  }
+  return f.kind == FunctionKind::kAbs ? "\\lvert " + p + "\\rvert"
+                                      : "\\operatorname{sgn}(" + p + ")";
+}
+
 const Notation& latex() {
   static const Notation n{[](const Model& model, const Monomial& key) {
                             const std::optional<Monomial> g =
@@ -151,7 +176,7 @@ const Notation& latex() {
                             for (std::size_t i = 0; i < m.size(); ++i) {
                               if (m[i] == 0) continue;
                               if (!inside.empty()) inside += "\\,";
-                              inside += latex_name(model.variables()[i]);
+                              inside += latex_variable(model, i);
                               if (m[i] > 1) inside += "^{" + std::to_string(m[i]) + "}";
                               factors += m[i];
                             }

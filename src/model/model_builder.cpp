@@ -16,12 +16,19 @@ Model ModelBuilder::build(const std::vector<SyntaxNode>& statements) {
   model_.inputs_ = symbols_.inputs();
   model_.parameters_ = symbols_.parameters();
   model_.constants_ = symbols_.constants();
-  model_.variables_ = symbols_.variables();
   model_.state_symbols_ = symbols_.state_symbols();
   model_.derivative_symbols_ = symbols_.derivative_symbols();
   model_.input_symbols_ = symbols_.input_symbols();
   model_.parameter_symbols_ = symbols_.parameter_symbols();
   for (const SyntaxNode* eq : equation_nodes_) add_equation(*eq);
+  // The equations add the functions they use as variables: only now are they all known, and
+  // every monomial gets their exponents.
+  model_.functions_ = symbols_.functions();
+  model_.function_symbols_ = symbols_.function_symbols();
+  model_.variables_ = symbols_.variables();
+  for (Equation& eq : model_.equations_) {
+    for (Term& t : eq.terms) t.monomial.resize(model_.variables_.size(), 0);
+  }
   for (const SyntaxNode* m : multiplier_nodes_) add_multipliers(*m);
   check_model(model_, source_);
   return std::move(model_);

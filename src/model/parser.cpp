@@ -258,7 +258,7 @@ std::vector<Monomial> parse_monomial_list(const Model& model, std::string_view t
   if (!root) throw ParseError({source, 1, 1, std::string(text)}, "expected multipliers");
   const std::vector<SyntaxNode> items = top_level(*root);
   const Source where(text, source);
-  const SymbolTable symbols(where, model);
+  SymbolTable symbols(where, model);
   const TermBuilder terms(where, symbols);
   std::vector<Monomial> out;
   for (const SyntaxNode& item : items) {

@@ -14,6 +14,7 @@ SymbolTable::SymbolTable(const Source& source, const Model& model)
       inputs_(model.inputs()),
       parameters_(model.parameters()),
       constants_(model.constants()),
+      functions_(model.functions()),
       variables_(model.variables()) {
   for (std::size_t i = 0; i < states_.size(); ++i) {
     state_symbols_.push_back(model.state_symbol(static_cast<int>(i)));
@@ -24,6 +25,9 @@ SymbolTable::SymbolTable(const Source& source, const Model& model)
   }
   for (std::size_t i = 0; i < parameters_.size(); ++i) {
     parameter_symbols_.push_back(model.parameter_symbol(static_cast<int>(i)));
+  }
+  for (std::size_t i = 0; i < functions_.size(); ++i) {
+    function_symbols_.push_back(model.function_symbol(static_cast<int>(i)));
   }
   index_symbols();
 }
@@ -55,7 +59,7 @@ void SymbolTable::declare(const SyntaxNode& name_node, const SyntaxNode* value_n
   static const std::set<std::string> reserved{
       "model",     "state",      "states",      "input", "inputs", "param",
       "params",    "parameter",  "parameters",  "const", "consts", "constant",
-      "constants", "multiplier", "multipliers", "dot"};
+      "constants", "multiplier", "multipliers", "dot",   "abs",    "sign"};
   if (reserved.count(name) != 0) {
     source_.fail(name_node, "'" + name + "' is a reserved word and cannot be declared");
   }
@@ -124,6 +128,23 @@ void SymbolTable::index_symbols() {
   for (std::size_t i = 0; i < parameters_.size(); ++i) {
     roles_.emplace(parameter_symbols_[i], SymbolRole{SymbolRole::kParameter, static_cast<int>(i)});
   }
+  const int channels = n + static_cast<int>(inputs_.size());
+  for (std::size_t i = 0; i < functions_.size(); ++i) {
+    roles_.emplace(function_symbols_[i],
+                   SymbolRole{SymbolRole::kVariable, channels + static_cast<int>(i)});
+  }
+}
+
+GiNaC::ex SymbolTable::function(const VariableFunction& f) {
+  for (std::size_t i = 0; i < functions_.size(); ++i) {
+    if (functions_[i].name == f.name) return function_symbols_[i];
+  }
+  functions_.push_back(f);
+  function_symbols_.emplace_back(f.name);
+  variables_.push_back(f.name);
+  const int index = static_cast<int>(variables_.size()) - 1;
+  roles_.emplace(function_symbols_.back(), SymbolRole{SymbolRole::kVariable, index});
+  return function_symbols_.back();
 }
 
 // "declared: states y, v; inputs x; parameters c, k, eps; constants m"

@@ -20,7 +20,7 @@ std::string kind_with_article(SymbolKind kind);
 // into its parameter, variable and derivative factors.
 struct SymbolRole {
   enum Kind { kParameter, kVariable, kDerivative } kind;
-  int index;  // into the parameters, the variables (states, then inputs) or the states
+  int index;  // into the parameters, the variables (states, inputs, functions) or the states
 };
 
 // The declarations of one model, in declaration order, and the GiNaC symbols its equations are
@@ -48,16 +48,21 @@ class SymbolTable {
   // The symbol of the time derivative of state `name`, used at `at`.
   GiNaC::ex derivative(const SyntaxNode& at, const std::string& name) const;
   const SymbolRole& role(const GiNaC::ex& symbol) const { return roles_.at(symbol); }
+  // The symbol of `f` (whose name identifies it), a variable after those before it: the first
+  // use adds it.
+  GiNaC::ex function(const VariableFunction& f);
 
   const std::vector<Declaration>& states() const { return states_; }
   const std::vector<Declaration>& inputs() const { return inputs_; }
   const std::vector<Declaration>& parameters() const { return parameters_; }
   const std::vector<Declaration>& constants() const { return constants_; }
+  const std::vector<VariableFunction>& functions() const { return functions_; }
   const std::vector<std::string>& variables() const { return variables_; }
   const std::vector<GiNaC::symbol>& state_symbols() const { return state_symbols_; }
   const std::vector<GiNaC::symbol>& derivative_symbols() const { return derivative_symbols_; }
   const std::vector<GiNaC::symbol>& input_symbols() const { return input_symbols_; }
   const std::vector<GiNaC::symbol>& parameter_symbols() const { return parameter_symbols_; }
+  const std::vector<GiNaC::symbol>& function_symbols() const { return function_symbols_; }
 
  private:
   // `value_node` is the `= value` part, or nullptr.
@@ -74,9 +79,10 @@ class SymbolTable {
 
   const Source& source_;
   std::vector<Declaration> states_, inputs_, parameters_, constants_;
+  std::vector<VariableFunction> functions_;
   std::vector<std::string> variables_;
   std::vector<GiNaC::symbol> state_symbols_, derivative_symbols_, input_symbols_,
-      parameter_symbols_;
+      parameter_symbols_, function_symbols_;
   std::map<std::string, const Declaration*> declared_;    // after all declarations are collected
   std::map<std::string, Declaration> first_declaration_;  // while they are
   std::map<GiNaC::ex, SymbolRole, GiNaC::ex_is_less> roles_;

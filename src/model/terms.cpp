@@ -79,6 +79,11 @@ Equation TermBuilder::equation_checked(const SyntaxNode& n) const {
   for (const SplitTerm& s : split_all(difference)) {
     // Two terms can combine into one that breaks a rule although no term as written does.
     if (total(s.parameters) > 1 || total(s.derivatives) > 1) check_term(n, difference);
+    if (total(s.derivatives) > 0 && function_factor(s)) {
+      source_.fail(n, "term '" + format_term(s) +
+                          "' multiplies a derivative by abs(...) or sign(...): the moment "
+                          "equations can only reduce derivatives times polynomials");
+    }
     Term t;
     t.coefficient = s.coefficient;
     t.monomial = s.variables;
@@ -118,6 +123,11 @@ void TermBuilder::add_monomial_checked(const SyntaxNode& n, std::vector<Monomial
                                  text + "'");
   }
   const Monomial& m = terms[0].variables;
+  if (function_factor(terms[0])) {
+    source_.fail(n, std::string(inputs ? "an instrument" : "a multiplier") +
+                        " cannot hold abs(...) or sign(...), found '" + text +
+                        "': the stationarity identities need polynomials");
+  }
   if (inputs) {
     if (std::find(out.begin(), out.end(), m) == out.end()) out.push_back(m);
     return;
@@ -165,16 +175,93 @@ GiNaC::ex TermBuilder::eval(const SyntaxNode& n) const {
     const SyntaxNode& arg = n.children.at(0);
     return symbols_.derivative(arg, std::string(arg.text));
   }
-  if (n.kind == SyntaxKind::kCall) {
-    const std::string name(n.children.at(0).text);
-    if (const Declaration* d = symbols_.find(name); d != nullptr) {
-      source_.fail(n, "'" + name + "' is " + kind_with_article(d->kind) +
-                          ", not a function: write '" + name + "*(...)' for a product");
-    }
-    source_.fail(n, "function '" + name +
-                        "' is not allowed: equations are polynomials (the only call is dot(...))");
-  }
+  if (n.kind == SyntaxKind::kCall) return eval_call(n);
   source_.fail(n, "unexpected syntax");  // unreachable with the grammar in grammar/
+}
+
+GiNaC::ex TermBuilder::eval_call(const SyntaxNode& n) const {
+  const std::string name(n.children.at(0).text);
+  if (const Declaration* d = symbols_.find(name); d != nullptr) {
+    source_.fail(n, "'" + name + "' is " + kind_with_article(d->kind) +
+                        ", not a function: write '" + name + "*(...)' for a product");
+  }
+  if (name != "abs" && name != "sign") {
+    source_.fail(n, "function '" + name +
+                        "' is not allowed: equations are polynomials, with abs(...) and "
+                        "sign(...) of a polynomial in the states and inputs (and dot(...))");
+  }
+  if (n.children.size() != 2) {
+    source_.fail(n, name + " takes one argument, found " + std::to_string(n.children.size() - 1));
+  }
+  const SyntaxNode& argument = n.children[1];
+  const GiNaC::ex value = eval(argument).expand();
+  std::vector<std::pair<GiNaC::numeric, Monomial>> terms;
+  const auto channels =
+      static_cast<std::ptrdiff_t>(symbols_.states().size() + symbols_.inputs().size());
+  for (const SplitTerm& t : split_all(value)) {
+    if (total(t.parameters) > 0) {
+      source_.fail(argument, "a parameter inside " + name +
+                                 "(...) would make the term nonlinear in it: write it as a "
+                                 "factor outside, as in c*" +
+                                 name + "(v)");
+    }
+    if (total(t.derivatives) > 0) {
+      source_.fail(argument, "a derivative cannot be inside " + name + "(...)");
+    }
+    if (function_factor(t)) source_.fail(argument, "abs(...) and sign(...) cannot be nested");
+    terms.emplace_back(t.coefficient,
+                       Monomial(t.variables.begin(), t.variables.begin() + channels));
+  }
+  const bool is_abs = name == "abs";
+  if (terms.size() <= 1 && (terms.empty() || total(terms[0].second) == 0)) {
+    const GiNaC::numeric c = terms.empty() ? GiNaC::numeric(0) : terms[0].first;
+    return is_abs ? GiNaC::abs(c) : GiNaC::numeric(c.csgn());
+  }
+  // Highest degree first, the first coefficient 1: abs(-2*v) is 2*abs(v), sign(-2*v) -sign(v).
+  std::sort(terms.begin(), terms.end(), [](const auto& a, const auto& b) {
+    const int da = total(a.second), db = total(b.second);
+    return da != db ? da > db : a.second > b.second;
+  });
+  const GiNaC::numeric lead = terms[0].first;
+  for (auto& [coefficient, monomial] : terms) coefficient /= lead;
+  VariableFunction f{is_abs ? FunctionKind::kAbs : FunctionKind::kSign, terms, ""};
+  f.name = name + "(" + format_polynomial(terms) + ")";
+  const GiNaC::numeric factor = is_abs ? GiNaC::abs(lead) : GiNaC::numeric(lead.csgn());
+  return factor * symbols_.function(f);
+}
+
+// `y - 1/2`, `y^2*x + 2*v`: the terms in order, monomials written in the variables' names.
+std::string TermBuilder::format_polynomial(
+    const std::vector<std::pair<GiNaC::numeric, Monomial>>& terms) const {
+  std::string out;
+  for (const auto& [coefficient, monomial] : terms) {
+    std::string factors;
+    for (std::size_t i = 0; i < monomial.size(); ++i) {
+      if (monomial[i] == 0) continue;
+      factors += (factors.empty() ? "" : "*") + symbols_.variables()[i];
+      if (monomial[i] > 1) factors += "^" + std::to_string(monomial[i]);
+    }
+    const GiNaC::numeric size = GiNaC::abs(coefficient);
+    std::ostringstream number;
+    number << size;
+    std::string term = factors.empty() ? number.str()
+                       : size == 1     ? factors
+                                       : number.str() + "*" + factors;
+    if (out.empty()) {
+      out = (coefficient < 0 ? "-" : "") + term;
+    } else {
+      out += (coefficient < 0 ? " - " : " + ") + term;
+    }
+  }
+  return out;
+}
+
+bool TermBuilder::function_factor(const SplitTerm& t) const {
+  const std::size_t channels = symbols_.states().size() + symbols_.inputs().size();
+  for (std::size_t i = channels; i < t.variables.size(); ++i) {
+    if (t.variables[i] != 0) return true;
+  }
+  return false;
 }
 
 // `top_level`: each product of the sum is a term of the equation as written, so it is checked

@@ -14,13 +14,14 @@
 namespace momentid {
 
 // Evaluates the expressions of equations and multipliers and refuses those the moment method
-// cannot use: anything that is not a polynomial, terms that are not affine in the parameters or
-// have more than one derivative factor, and degrees or numbers beyond the limits that keep a
+// cannot use: anything that is not a polynomial (apart from abs and sign of a polynomial in the
+// states and inputs, VariableFunction), terms that are not affine in the parameters or have more
+// than one derivative factor, and degrees or numbers beyond the limits that keep a
 // model small enough to derive and simulate. Every refusal names the place in the source.
 class TermBuilder {
  public:
-  TermBuilder(const Source& source, const SymbolTable& symbols)
-      : source_(source), symbols_(symbols) {}
+  // `symbols` gains the functions (abs, sign) the expressions use.
+  TermBuilder(const Source& source, SymbolTable& symbols) : source_(source), symbols_(symbols) {}
 
   // The two sides of equation `n` and the terms of lhs - rhs; the caller sets label and number.
   Equation equation(const SyntaxNode& n) const;
@@ -44,11 +45,18 @@ class TermBuilder {
   GiNaC::ex eval_sum(const SyntaxNode& n, bool top_level) const;
   GiNaC::ex eval_product(const SyntaxNode& n) const;
   GiNaC::ex eval_power(const SyntaxNode& n) const;
+  // abs(p) or sign(p) as a number times the symbol of the function of p in canonical form.
+  GiNaC::ex eval_call(const SyntaxNode& n) const;
   void check_size(const SyntaxNode& at, const GiNaC::ex& value) const;
 
   // One term of an expanded expression, or every term of it, taken apart.
   SplitTerm split(const GiNaC::ex& term) const;
   std::vector<SplitTerm> split_all(const GiNaC::ex& expanded) const;
+  // Whether the term has a function factor (abs or sign).
+  bool function_factor(const SplitTerm& t) const;
+  // A function's argument as its name shows it.
+  std::string format_polynomial(
+      const std::vector<std::pair<GiNaC::numeric, Monomial>>& terms) const;
   // The term as a message shows it.
   std::string format_term(const SplitTerm& t) const;
   // Every term of `value` must be affine in the parameters and have at most one derivative
@@ -56,7 +64,7 @@ class TermBuilder {
   void check_term(const SyntaxNode& at, const GiNaC::ex& value) const;
 
   const Source& source_;
-  const SymbolTable& symbols_;
+  SymbolTable& symbols_;
 };
 
 }  // namespace momentid

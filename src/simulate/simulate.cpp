@@ -162,6 +162,7 @@ bool CompiledModel::solve(double* dydt) const {
 }
 
 void SimulationOptions::validate(const Model& model) const {
+  require_polynomial(model, "simulate");
   const auto count = [&](std::size_t found, std::size_t expected, const std::string& field,
                          const std::string& what) {
     if (found != expected) {

@@ -22,15 +22,15 @@ constexpr double kWeakOffsetZ = 2;    // the same, named when the J test rejects
 constexpr double kWeakRelativeError = 0.1;
 constexpr double kStrongCorrelation = 0.95;
 
-// Whether every term of every equation has an odd degree, counting a derivative as a factor:
-// then the model is unchanged when every state and input changes sign, and zero-mean inputs
-// give zero-mean states.
+// Whether every term of every equation is odd, counting a derivative as an odd factor: then the
+// model is unchanged when every state and input changes sign, and zero-mean inputs give
+// zero-mean states.
 bool symmetric(const Model& model) {
   for (const Equation& eq : model.equations()) {
     for (const Term& t : eq.terms) {
-      int degree = t.derivative >= 0 ? 1 : 0;
-      for (int e : t.monomial) degree += e;
-      if (degree % 2 == 0) return false;
+      const Parity p = parity(model, t.monomial);
+      if (p == Parity::kNone) return false;
+      if ((p == Parity::kOdd) == (t.derivative >= 0)) return false;
     }
   }
   return true;

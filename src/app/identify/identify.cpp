@@ -8,6 +8,7 @@ namespace momentid {
 
 IdentifyResult identify(const Model& model, const DataSource& source,
                         const IdentifyOptions& options) {
+  require_polynomial(model, "identify");
   options.validate(model);
   IdentifyResult result;
   result.model = std::make_shared<const Model>(model);

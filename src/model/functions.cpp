@@ -1,0 +1,76 @@
+// The functions abs and sign of the states and inputs (VariableFunction): their values and how
+// moments that hold them behave when every state and input changes sign.
+
+#include <algorithm>
+#include <cmath>
+#include <optional>
+
+#include "momentid/model.hpp"
+
+namespace momentid {
+namespace {
+
+// The parity of a polynomial's terms: all of odd degree, all even, or mixed.
+Parity parity_of(const std::vector<std::pair<GiNaC::numeric, Monomial>>& polynomial) {
+  std::optional<Parity> out;
+  for (const auto& [coefficient, monomial] : polynomial) {
+    int degree = 0;
+    for (int e : monomial) degree += e;
+    const Parity p = degree % 2 == 1 ? Parity::kOdd : Parity::kEven;
+    if (out && *out != p) return Parity::kNone;
+    out = p;
+  }
+  return out.value_or(Parity::kEven);
+}
+
+}  // namespace
+
+Parity parity(const Model& model, const Monomial& monomial) {
+  const std::size_t channels = model.channel_count();
+  bool odd = false;
+  // A rate key's last entry (rate_key) marks E[(g)'], whose parity is g's.
+  const std::size_t size = std::min(monomial.size(), model.variables().size());
+  for (std::size_t i = 0; i < size; ++i) {
+    if (monomial[i] % 2 == 0) continue;
+    if (i < channels) {
+      odd = !odd;
+      continue;
+    }
+    const VariableFunction& f = model.functions()[i - channels];
+    if (f.kind == FunctionKind::kAbs) continue;
+    const Parity p = parity_of(f.argument);
+    if (p == Parity::kNone) return Parity::kNone;
+    if (p == Parity::kOdd) odd = !odd;
+  }
+  return odd ? Parity::kOdd : Parity::kEven;
+}
+
+void require_polynomial(const Model& model, const std::string& command) {
+  if (model.functions().empty()) return;
+  for (const Equation& eq : model.equations()) {
+    for (const Term& t : eq.terms) {
+      for (std::size_t i = model.channel_count(); i < t.monomial.size(); ++i) {
+        if (t.monomial[i] == 0) continue;
+        throw ModelError(eq.where, "equation " + eq.name() + " holds " + model.variables()[i] +
+                                       ": " + command +
+                                       " does not take abs(...) or sign(...) terms yet (derive "
+                                       "prints their moment equations)");
+      }
+    }
+  }
+}
+
+double evaluate(const VariableFunction& f, const double* channels) {
+  double p = 0;
+  for (const auto& [coefficient, monomial] : f.argument) {
+    double term = coefficient.to_double();
+    for (std::size_t i = 0; i < monomial.size(); ++i) {
+      for (int e = 0; e < monomial[i]; ++e) term *= channels[i];
+    }
+    p += term;
+  }
+  if (f.kind == FunctionKind::kAbs) return std::abs(p);
+  return p > 0 ? 1.0 : p < 0 ? -1.0 : 0.0;
+}
+
+}  // namespace momentid
