@@ -483,10 +483,15 @@ def moment_estimates(record, case, params=None, multipliers=tuple(MULTIPLIERS), 
     and x, N taken from the case (`params` gives a contact's gap g).
 
     Without `ends` the equations are those an estimator uses, with the stationarity identities;
-    their error is then the record's end terms, of order 1/T. With `ends` each batch's equations
-    carry its own end terms and hold to the accuracy of the record and of the trapezoid rule.
-    With `slip_only` the friction equations leave the stuck samples out, which gives them the
-    true force while stuck.
+    their error is then the record's end terms, of order 1/T, which the nearly parallel terms
+    c v and c2 |v| v (or f sign(v)) can magnify: an inconsistency in k between the equations of
+    y and y^3 and the others moves c and c2 along it (tens of percent on some drag records of
+    10^5 samples, while the four multipliers with a factor v stay within 0.5%). With `ends` each
+    batch's equations carry its own end terms and hold to the accuracy of the record and of the
+    trapezoid rule, except that sign(v) jumps between samples: in the equations of y and y^3,
+    whose multipliers do not vanish with v, each reversal adds an error of order f |y| / fs
+    (0.8% of c and f at 10^5 samples of the default friction). With `slip_only` the friction
+    equations leave the stuck samples out, which gives them the true force while stuck.
 
     The standard errors come from the spread of the equations' residuals over `batches` equal
     batches (batch means), through the least-squares solution. Without `ends` each batch's
