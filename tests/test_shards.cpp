@@ -148,6 +148,41 @@ TEST_SUITE("shards") {
     }
   }
 
+  TEST_CASE("channels computed from the others are averaged like them, whatever the cut") {
+    const Directory dir;
+    const std::string path = duffing_csv(dir);
+    // Channels 3 to 6: abs(v) and sign(v), continuous as v is, and abs(-2*x) and sign(x), held
+    // as x is; their moments must equal those of the products they stand for.
+    DataOptions options;
+    options.batches = 20;
+    options.record.hold = momentid::InputHold::kZeroOrderHold;
+    options.record.control.threads = 2;
+    options.computed = {{.sign = false, .argument = {{1.0, {0, 1, 0}}}},
+                        {.sign = true, .argument = {{1.0, {0, 1, 0}}}},
+                        {.sign = false, .argument = {{-2.0, {0, 0, 1}}}},
+                        {.sign = true, .argument = {{1.0, {0, 0, 1}}}}};
+    const std::vector<Moment> moments{Moment({{1, 2, 0}}),
+                                      Moment({{3, 2, 0}}),  // abs(v)^2 = v^2
+                                      Moment({{3, 1, 0}}),
+                                      Moment({{1, 1, 0}, {4, 1, 0}}),  // v*sign(v) = abs(v)
+                                      Moment({{0, 1, 0}, {5, 1, 0}}),  // y*abs(-2x) = 2*y*abs(x)
+                                      Moment({{0, 1, 0}, {2, 1, 0}, {6, 1, 0}}),  // y*x*sign(x)
+                                      Moment({{3, 1, 0}, {0, 1, 4}})};  // abs(v) and y 4 rows back
+    std::vector<DataMoments> cuts;
+    for (std::size_t bytes : {kWhole, std::size_t{2048}}) {
+      options.record.control.shard_bytes = bytes;
+      cuts.push_back(
+          momentid::moments_from_data(DataSource::file(path), {"y", "v"}, {"x"}, moments, options));
+    }
+    const std::vector<double>& mean = cuts[0].estimates.mean;
+    REQUIRE(mean.size() == moments.size());
+    CHECK(mean[1] == doctest::Approx(mean[0]).epsilon(1e-12));
+    CHECK(mean[3] == doctest::Approx(mean[2]).epsilon(1e-12));
+    CHECK(mean[2] > 0);
+    CHECK(mean[4] == doctest::Approx(2 * mean[5]).epsilon(1e-12));
+    check_same_sums(cuts[0], cuts[1]);
+  }
+
   TEST_CASE("blank lines, CR LF line ends and rows cut by a shard edge read alike") {
     const Directory dir;
     const std::string csv = duffing_csv(dir);

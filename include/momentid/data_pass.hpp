@@ -28,6 +28,15 @@ struct ChannelStatistics {
   std::optional<double> noise_fraction() const;
 };
 
+// A channel computed row by row from the channels read: |p| or sign(p) (0 at 0) of a polynomial
+// p in them, as a model's abs and sign terms need (VariableFunction). Its argument holds states
+// alone or inputs alone, so that it is continuous or held as they are. Moments name the computed
+// channels after the states and inputs, in order.
+struct ComputedChannel {
+  bool sign = false;
+  std::vector<std::pair<double, Monomial>> argument;  // over the states, then the inputs
+};
+
 // How one pass reads a record and what it estimates.
 struct DataOptions {
   // The record's columns, sample interval, layout and input hold, and the pass's threads and
@@ -54,6 +63,8 @@ struct DataOptions {
   // Per channel (states, then inputs): a value subtracted from every sample as it is read, such
   // as the channel's mean; empty: none.
   std::vector<double> offsets;
+  // Channels computed from the others, after the offsets are subtracted.
+  std::vector<ComputedChannel> computed;
 };
 
 // What one pass over a data file yields.

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <span>
 
 #include "momentid/error.hpp"
 #include "momentid/model.hpp"
@@ -13,7 +14,8 @@ void RecordOptions::validate(const Model* model) const {
     throw UsageError("dt", "expected a positive number");
   }
   if (model == nullptr) return;
-  const auto& variables = model->variables();
+  const auto& all = model->variables();
+  const auto variables = std::span(all).first(model->channel_count());
   for (const auto& column : columns) {
     if (column.first == "t") continue;
     if (std::find(variables.begin(), variables.end(), column.first) == variables.end()) {

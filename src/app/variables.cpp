@@ -1,6 +1,7 @@
 #include "app/variables.hpp"
 
 #include <algorithm>
+#include <span>
 
 namespace momentid {
 
@@ -24,7 +25,8 @@ std::vector<bool> present_in(const Model& model, const DataReader& reader,
   std::vector<std::string> header = reader.columns();
   for (const auto& [name, why] : reader.unusable_columns()) header.push_back(name);
   std::vector<bool> present;
-  for (const std::string& v : model.variables()) {
+  const auto& variables = model.variables();
+  for (const std::string& v : std::span(variables).first(model.channel_count())) {
     const auto renamed = record.columns.find(v);
     const std::string& column = renamed == record.columns.end() ? v : renamed->second;
     present.push_back(std::find(header.begin(), header.end(), column) != header.end());

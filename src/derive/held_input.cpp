@@ -20,6 +20,10 @@ Monomial exponents_of(const GiNaC::ex& term, const std::vector<GiNaC::symbol>& v
 HeldInputCorrections held_input_corrections(const Model& model,
                                             const std::vector<Monomial>& moments) {
   HeldInputCorrections out;
+  if (!model.functions().empty()) {
+    out.unavailable = "abs(...) and sign(...) have no second derivative at their switches";
+    return out;
+  }
   const std::size_t states = model.states().size();
   std::vector<GiNaC::symbol> variables;
   for (std::size_t v = 0; v < model.variables().size(); ++v) {

@@ -133,6 +133,20 @@ RangeResult read_all(const Pass& pass, std::unique_ptr<DataReader> first,
   return result;
 }
 
+// `moments` over the accumulator's columns (ChannelLayout) rather than the channels. The
+// columns of the states are theirs, so increments, which are of states, stay as they are.
+std::vector<Moment> in_columns(std::vector<Moment> moments, const ChannelLayout& layout) {
+  for (Moment& m : moments) {
+    if (m.is_increment()) continue;
+    std::vector<MomentFactor> factors = m.factors();
+    for (MomentFactor& f : factors) {
+      f.channel = static_cast<int>(layout.column.at(static_cast<std::size_t>(f.channel)));
+    }
+    m = Moment(std::move(factors));
+  }
+  return moments;
+}
+
 // The channels' statistics, named, the states first.
 std::vector<ChannelStatistics> channel_statistics(const LagSums& sums,
                                                   const std::vector<std::string>& names,
@@ -196,8 +210,15 @@ DataMoments moments_from_data(const DataSource& source, const std::vector<std::s
   const bool collapse = shards.size() >= 4 * batches;
   const std::size_t shard_batches =
       std::max<std::size_t>(2, (batches + shards.size() - 1) / shards.size());
-  const PassSetup setup{keys,          states.size(), inputs.size(), out.hold,
-                        shard_batches, collapse,      &options};
+  ChannelLayout layout(states.size(), inputs.size(), options.computed);
+  const PassSetup setup{in_columns(std::move(keys), layout),
+                        states.size(),
+                        inputs.size(),
+                        std::move(layout),
+                        out.hold,
+                        shard_batches,
+                        collapse,
+                        &options};
   const Pass pass{source, shards, request, setup, (shard_batches + 1) * shards.size()};
   RangeResult result = read_all(pass, std::move(first), open_error, channels);
   const std::optional<double> first_step = check_file_intervals(result, shards, paths, out);

@@ -13,8 +13,8 @@ namespace {
 // The empty sums of a pass, into which its shards are merged.
 ShardState empty_state(const Pass& pass) {
   const PassSetup& setup = pass.setup;
-  return ShardState{MomentAccumulator(setup.moments, setup.states, setup.inputs, setup.hold,
-                                      pass.merged_batches, setup.options->held_rule),
+  return ShardState{MomentAccumulator(setup.moments, setup.layout.states, setup.layout.inputs,
+                                      setup.hold, pass.merged_batches, setup.options->held_rule),
                     LagSums(setup.states + setup.inputs, setup.options->lags)};
 }
 

@@ -1,5 +1,6 @@
 #include "moments/shard.hpp"
 
+#include <cmath>
 #include <cstddef>
 #include <deque>
 
@@ -7,6 +8,61 @@
 
 namespace momentid {
 namespace {
+
+// Whether a computed channel's argument holds an input (then it holds inputs alone).
+bool of_inputs(const ComputedChannel& c, std::size_t states) {
+  for (const auto& [coefficient, monomial] : c.argument) {
+    for (std::size_t i = states; i < monomial.size(); ++i) {
+      if (monomial[i] != 0) return true;
+    }
+  }
+  return false;
+}
+
+double value_of(const ComputedChannel& c, const double* row) {
+  double p = 0;
+  for (const auto& [coefficient, monomial] : c.argument) {
+    double term = coefficient;
+    for (std::size_t i = 0; i < monomial.size(); ++i) {
+      for (int e = 0; e < monomial[i]; ++e) term *= row[i];
+    }
+    p += term;
+  }
+  if (!c.sign) return std::abs(p);
+  return p > 0 ? 1.0 : p < 0 ? -1.0 : 0.0;
+}
+
+// The rows in the accumulator's columns (ChannelLayout): the channels read, with the computed
+// ones. Without computed channels the rows are used as they are.
+class Widen {
+ public:
+  Widen(const PassSetup& setup)
+      : read_(setup.states + setup.inputs),
+        computed_(setup.options->computed),
+        column_(setup.layout.column) {}
+
+  std::size_t width() const { return column_.size(); }
+
+  const double* apply(const double* rows, std::size_t count) {
+    if (computed_.empty()) return rows;
+    out_.resize(count * width());
+    for (std::size_t r = 0; r < count; ++r) {
+      const double* in = rows + r * read_;
+      double* out = out_.data() + r * width();
+      for (std::size_t c = 0; c < read_; ++c) out[column_[c]] = in[c];
+      for (std::size_t k = 0; k < computed_.size(); ++k) {
+        out[column_[read_ + k]] = value_of(computed_[k], in);
+      }
+    }
+    return out_.data();
+  }
+
+ private:
+  std::size_t read_;
+  const std::vector<ComputedChannel>& computed_;
+  const std::vector<std::size_t>& column_;
+  std::vector<double> out_;
+};
 
 // Pairs input row n with state row n + shift within a run (`--input-shift`), for data whose
 // input and state channels are not aligned in time. Rows without a partner are dropped.
@@ -77,12 +133,13 @@ class ShardPass {
   explicit ShardPass(const PassSetup& setup)
       : options_(*setup.options),
         channels_(setup.states + setup.inputs),
-        out_{MomentAccumulator(setup.moments, setup.states, setup.inputs, setup.hold, setup.batches,
-                               options_.held_rule),
+        out_{MomentAccumulator(setup.moments, setup.layout.states, setup.layout.inputs, setup.hold,
+                               setup.batches, options_.held_rule),
              LagSums(channels_, options_.lags)},
-        shift_(setup.states, setup.inputs, options_.input_shift),
-        decimate_(channels_, options_.stride, options_.phase),
-        history_values_(out_.moments.max_lag() * channels_) {}
+        widen_(setup),
+        shift_(setup.layout.states, setup.layout.inputs, options_.input_shift),
+        decimate_(widen_.width(), options_.stride, options_.phase),
+        history_values_(out_.moments.max_lag() * widen_.width()) {}
 
   // Takes the next block; true if it holds rows of the shard's own.
   bool take(DataBlock& block) {
@@ -92,7 +149,8 @@ class ShardPass {
         before(block);
         return false;
       case RowZone::kAfter:
-        if (owned_) out_.moments.add_lookahead(block.values.data(), block.rows);
+        if (owned_)
+          out_.moments.add_lookahead(widen_.apply(block.values.data(), block.rows), block.rows);
         return false;
       case RowZone::kOwned:
         break;
@@ -123,7 +181,8 @@ class ShardPass {
       history_.clear();
       out_.lags.start_run();
     }
-    history_.insert(history_.end(), values, values + block.rows * channels_);
+    const double* wide = widen_.apply(values, block.rows);
+    history_.insert(history_.end(), wide, wide + block.rows * widen_.width());
     if (history_.size() > history_values_) {
       history_.erase(history_.begin(),
                      history_.end() - static_cast<std::ptrdiff_t>(history_values_));
@@ -141,20 +200,22 @@ class ShardPass {
       ++out_.runs;
     } else if (!owned_) {
       out_.moments.continue_run();
-      if (!history_.empty()) out_.moments.add_history(history_.data(), history_.size() / channels_);
+      if (!history_.empty()) {
+        out_.moments.add_history(history_.data(), history_.size() / widen_.width());
+      }
     }
     owned_ = true;
-    const double* rows = values;
+    const double* rows = widen_.apply(values, block.rows);
     std::size_t count = block.rows;
     if (options_.input_shift != 0) {
       const std::vector<double>& shifted = shift_.apply(rows, count);
       rows = shifted.data();
-      count = shifted.size() / channels_;
+      count = shifted.size() / widen_.width();
     }
     if (options_.stride > 1) {
       const std::vector<double>& kept = decimate_.apply(rows, count);
       rows = kept.data();
-      count = kept.size() / channels_;
+      count = kept.size() / widen_.width();
     }
     out_.moments.add(rows, count);
     out_.lags.add(values, block.rows);
@@ -164,6 +225,7 @@ class ShardPass {
   const DataOptions& options_;
   std::size_t channels_;
   ShardState out_;
+  Widen widen_;
   InputShift shift_;
   Decimate decimate_;
   std::vector<double> history_;  // of the current run, before the shard
@@ -172,6 +234,22 @@ class ShardPass {
 };
 
 }  // namespace
+
+ChannelLayout::ChannelLayout(std::size_t states, std::size_t inputs,
+                             const std::vector<ComputedChannel>& computed)
+    : column(states + inputs + computed.size()) {
+  std::vector<std::size_t> continuous, held;  // computed channel indices
+  for (std::size_t k = 0; k < computed.size(); ++k) {
+    (of_inputs(computed[k], states) ? held : continuous).push_back(k);
+  }
+  this->states = states + continuous.size();
+  this->inputs = inputs + held.size();
+  std::size_t next = 0;
+  for (std::size_t c = 0; c < states; ++c) column[c] = next++;
+  for (std::size_t k : continuous) column[states + inputs + k] = next++;
+  for (std::size_t c = states; c < states + inputs; ++c) column[c] = next++;
+  for (std::size_t k : held) column[states + inputs + k] = next++;
+}
 
 ShardState read_shard(DataReader& reader, bool whole, const PassSetup& setup, bool pipelined,
                       std::atomic<std::size_t>& rows_done, std::atomic<double>& fraction) {

@@ -13,10 +13,21 @@
 
 namespace momentid {
 
+// Where the accumulator keeps each channel: the states and the channels computed from them
+// (continuous between rows), then the inputs and those computed from them (held with them).
+struct ChannelLayout {
+  ChannelLayout(std::size_t states, std::size_t inputs,
+                const std::vector<ComputedChannel>& computed);
+  // The accumulator's column of each channel: the states, inputs, then computed ones.
+  std::vector<std::size_t> column;
+  std::size_t states = 0, inputs = 0;  // the accumulator's counts
+};
+
 // What every shard's pass shares.
 struct PassSetup {
-  std::vector<Moment> moments;
-  std::size_t states = 0, inputs = 0;
+  std::vector<Moment> moments;         // over the accumulator's columns (ChannelLayout)
+  std::size_t states = 0, inputs = 0;  // the channels read
+  ChannelLayout layout;
   InputHold hold = InputHold::kSample;
   std::size_t batches = 0;  // per shard
   bool collapse = false;    // each shard one stretch (many shards)

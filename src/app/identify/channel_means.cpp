@@ -8,10 +8,10 @@
 
 namespace momentid {
 
-std::vector<Monomial> first_moments_of(std::size_t channels) {
+std::vector<Monomial> first_moments_of(std::size_t channels, std::size_t variables) {
   std::vector<Monomial> out;
   for (std::size_t c = 0; c < channels; ++c) {
-    Monomial m(channels, 0);
+    Monomial m(std::max(variables, channels), 0);
     m[c] = 1;
     out.push_back(std::move(m));
   }

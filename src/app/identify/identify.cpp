@@ -8,7 +8,6 @@ namespace momentid {
 
 IdentifyResult identify(const Model& model, const DataSource& source,
                         const IdentifyOptions& options) {
-  require_polynomial(model, "identify");
   options.validate(model);
   IdentifyResult result;
   result.model = std::make_shared<const Model>(model);
@@ -21,6 +20,7 @@ IdentifyResult identify(const Model& model, const DataSource& source,
       identify_zero_lag(result, source, options);
       break;
     case EquationKind::kLagged:
+      require_polynomial(model, "identify with the lagged equations");
       identify_lagged(result, source, options, record.present);
       break;
   }

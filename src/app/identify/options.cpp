@@ -3,6 +3,7 @@
 #include <functional>
 #include <numeric>
 #include <optional>
+#include <span>
 #include <string>
 
 #include "momentid/error.hpp"
@@ -83,7 +84,8 @@ void IdentifyOptions::validate(const Model& model) const {
   if (method == Method::kZeroLag && (lags || instruments)) {
     throw UsageError("method", "the zero-lag equations take no lags or instruments");
   }
-  const auto& variables = model.variables();
+  const auto& all = model.variables();
+  const auto variables = std::span(all).first(model.channel_count());
   for (const auto& [name, value] : fixed) {
     if (model.parameter_index(name) < 0) {
       throw UsageError("fixed", "'" + name + "' is not a parameter of model " + model.name());

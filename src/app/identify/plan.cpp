@@ -11,7 +11,13 @@ EquationChoice choose_equations(const Model& model, const RecordSurvey& record,
   if (options.method == Method::kZeroLag) return {kZeroLag, "asked for"};
   if (options.method == Method::kLagged) return {kLagged, "asked for"};
   if (options.lags || options.instruments) return {kLagged, "lags or instruments were given"};
-  if (!std::all_of(measured.begin(), measured.end(), [](bool m) { return m; })) {
+  const bool all_measured = std::all_of(measured.begin(), measured.end(), [](bool m) { return m; });
+  if (!model.functions().empty() && all_measured) {
+    return {kZeroLag,
+            "the model has abs(...) or sign(...) terms, which the lagged equations do "
+            "not take yet"};
+  }
+  if (!all_measured) {
     // Data that cannot show a state, not even as a derivative, get the zero-lag pass and its
     // message naming the missing column.
     if (!derivable_from(model, measured)) return {kZeroLag, "the record lacks a state"};
@@ -36,6 +42,36 @@ std::vector<std::string> state_names(const Model& model) {
 std::vector<std::string> input_names(const Model& model) {
   std::vector<std::string> out;
   for (const auto& d : model.inputs()) out.push_back(d.name);
+  return out;
+}
+
+std::vector<ComputedChannel> computed_channels(const Model& model) {
+  std::vector<ComputedChannel> out;
+  const std::size_t states = model.states().size();
+  for (const VariableFunction& f : model.functions()) {
+    ComputedChannel c{.sign = f.kind == FunctionKind::kSign, .argument = {}};
+    bool of_states = false, of_inputs = false;
+    for (const auto& [coefficient, monomial] : f.argument) {
+      c.argument.emplace_back(coefficient.to_double(), monomial);
+      for (std::size_t i = 0; i < monomial.size(); ++i) {
+        if (monomial[i] != 0) (i < states ? of_states : of_inputs) = true;
+      }
+    }
+    if (of_states && of_inputs) {
+      const Equation* holding = nullptr;
+      const std::size_t v = model.channel_count() + out.size();
+      for (const Equation& eq : model.equations()) {
+        for (const Term& t : eq.terms) {
+          if (!holding && t.monomial[v] != 0) holding = &eq;
+        }
+      }
+      throw ModelError(holding->where, f.name +
+                                           " mixes states and inputs: identify takes abs "
+                                           "and sign of the states alone or of the inputs "
+                                           "alone");
+    }
+    out.push_back(std::move(c));
+  }
   return out;
 }
 

@@ -39,6 +39,10 @@ std::vector<std::string> input_names(const Model& model);
 
 // The options of a pass over the record as `options` ask for it (columns, sample interval,
 // layout, input hold, batches, threads), with the autocorrelations the noise estimates need.
+// The model's abs and sign terms as channels the pass computes; throws ModelError at an equation
+// whose function mixes states and inputs.
+std::vector<ComputedChannel> computed_channels(const Model& model);
+
 DataOptions pass_options(const IdentifyOptions& options);
 
 // The offsets of DataOptions for the channels `states` then `inputs`: the mean of each channel
@@ -64,8 +68,9 @@ std::vector<std::optional<double>> fixed_values(const Model& model,
 
 // ---- the channels' means (channel_means.cpp) ----------------------------------------------------
 
-// The first moments E[c] of `channels` channels, as monomials over them, in channel order.
-std::vector<Monomial> first_moments_of(std::size_t channels);
+// The first moments E[c] of `channels` channels, as monomials over them (over `variables`
+// variables when more, such as a model's functions after its channels), in channel order.
+std::vector<Monomial> first_moments_of(std::size_t channels, std::size_t variables = 0);
 
 // Per channel `names[c]`: its mean, the estimate all.mean[index[c]], with the standard error from
 // the long-run covariance of its batch series; empty with fewer than two batches.

@@ -24,8 +24,8 @@ ZeroLagPlan plan_zero_lag(const Model& model, const IdentifyOptions& options) {
   // unless these would more than double the pass.
   plan.rated = rate_monomials(model, plan.moments);
   plan.pass_moments = plan.moments;
-  const std::vector<Monomial> means =
-      not_among(plan.pass_moments, first_moments_of(model.variables().size()));
+  const std::vector<Monomial> means = not_among(
+      plan.pass_moments, first_moments_of(model.channel_count(), model.variables().size()));
   plan.pass_moments.insert(plan.pass_moments.end(), means.begin(), means.end());
   const std::vector<Monomial> kinks =
       not_among(plan.pass_moments, second_derivative_moments(plan.held));
@@ -88,18 +88,22 @@ void identify_zero_lag(IdentifyResult& result, const DataSource& source,
   zero_lag.moments = plan.moments;
   result.gmm = optimal_weighting(model, options, zero_lag.system.equations.size());
   DataOptions data_options = pass_options(options);
+  data_options.computed = computed_channels(model);
   // The optimal weighting estimates the equations' covariance from the batches.
   if (result.gmm) data_options.min_batches = kBatchesPerEquation * zero_lag.system.equations.size();
   data_options.offsets = channel_offsets(source, state_names(model), input_names(model),
                                          data_options, options.center, result.centered);
   const MomentEstimates all = read_zero_lag(result, plan, source, data_options);
   std::vector<std::size_t> mean_index;
-  for (const Monomial& m : first_moments_of(model.variables().size())) {
+  for (const Monomial& m : first_moments_of(model.channel_count(), model.variables().size())) {
     mean_index.push_back(
         static_cast<std::size_t>(std::find(plan.pass_moments.begin(), plan.pass_moments.end(), m) -
                                  plan.pass_moments.begin()));
   }
-  result.means = channel_means(model.variables(), all, mean_index);
+  const std::vector<std::string>& variables = model.variables();
+  result.means = channel_means(
+      std::vector<std::string>(variables.begin(), variables.begin() + mean_index.size()), all,
+      mean_index);
 
   SolveOptions solve_options{.gmm = result.gmm, .fixed = fixed_values(model, options.fixed)};
   if (!plan.rated.empty()) {
