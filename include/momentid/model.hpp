@@ -141,9 +141,6 @@ Parity parity(const Model& model, const Monomial& monomial);
 // "identify"), which does not handle them.
 void require_polynomial(const Model& model, const std::string& command);
 
-// The value of `f` at the states and inputs `channels` (Model::channel_count() values).
-double evaluate(const VariableFunction& f, const double* channels);
-
 // Reads and checks a model file. Throws ParseError or ModelError naming file, line and column,
 // or Error when the file cannot be read.
 Model parse_model_file(const std::string& path);

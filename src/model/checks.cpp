@@ -89,6 +89,26 @@ void check_derivatives_determined(const Model& model) {
   check_derivatives_independent(model);
 }
 
+// abs(...) and sign(...) belong in terms with a parameter: an equation without one is
+// kinematic (y' = f(y, u)), whose right side the stationarity identities substitute, and they
+// need polynomials there.
+void check_functions_have_parameters(const Model& model) {
+  const std::size_t channels = model.channel_count();
+  for (const Equation& eq : model.equations()) {
+    const bool has_parameter = std::any_of(eq.terms.begin(), eq.terms.end(),
+                                           [](const Term& t) { return t.parameter >= 0; });
+    if (has_parameter) continue;
+    for (const Term& t : eq.terms) {
+      for (std::size_t i = channels; i < t.monomial.size(); ++i) {
+        if (t.monomial[i] == 0) continue;
+        throw ModelError(eq.where, "equation " + eq.name() + " holds " + model.variables()[i] +
+                                       " but no unknown parameter: abs(...) and sign(...) may "
+                                       "only appear in equations with parameters");
+      }
+    }
+  }
+}
+
 }  // namespace
 
 void EquationLabels::add(const SyntaxNode& label, int line) {
@@ -111,30 +131,6 @@ void EquationLabels::check_known(const SyntaxNode& label) const {
                    (known.empty() ? std::string("no equation has a label") : "labels: " + known) +
                    ")");
 }
-
-namespace {
-
-// abs(...) and sign(...) belong in terms with a parameter: an equation without one is
-// kinematic (y' = f(y, u)), whose right side the stationarity identities substitute, and they
-// need polynomials there.
-void check_functions_have_parameters(const Model& model) {
-  const std::size_t channels = model.channel_count();
-  for (const Equation& eq : model.equations()) {
-    const bool has_parameter = std::any_of(eq.terms.begin(), eq.terms.end(),
-                                           [](const Term& t) { return t.parameter >= 0; });
-    if (has_parameter) continue;
-    for (const Term& t : eq.terms) {
-      for (std::size_t i = channels; i < t.monomial.size(); ++i) {
-        if (t.monomial[i] == 0) continue;
-        throw ModelError(eq.where, "equation " + eq.name() + " holds " + model.variables()[i] +
-                                       " but no unknown parameter: abs(...) and sign(...) may "
-                                       "only appear in equations with parameters");
-      }
-    }
-  }
-}
-
-}  // namespace
 
 void check_model(const Model& model, const Source& source) {
   if (model.states().empty()) {

@@ -1,8 +1,7 @@
-// The functions abs and sign of the states and inputs (VariableFunction): their values and how
-// moments that hold them behave when every state and input changes sign.
+// The functions abs and sign of the states and inputs (VariableFunction): how moments that hold
+// them behave when every state and input changes sign, and the commands that do not take them.
 
 #include <algorithm>
-#include <cmath>
 #include <optional>
 
 #include "momentid/model.hpp"
@@ -58,19 +57,6 @@ void require_polynomial(const Model& model, const std::string& command) {
       }
     }
   }
-}
-
-double evaluate(const VariableFunction& f, const double* channels) {
-  double p = 0;
-  for (const auto& [coefficient, monomial] : f.argument) {
-    double term = coefficient.to_double();
-    for (std::size_t i = 0; i < monomial.size(); ++i) {
-      for (int e = 0; e < monomial[i]; ++e) term *= channels[i];
-    }
-    p += term;
-  }
-  if (f.kind == FunctionKind::kAbs) return std::abs(p);
-  return p > 0 ? 1.0 : p < 0 ? -1.0 : 0.0;
 }
 
 }  // namespace momentid
