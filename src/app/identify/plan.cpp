@@ -57,6 +57,7 @@ std::vector<ComputedChannel> computed_channels(const Model& model) {
         if (monomial[i] != 0) (i < states ? of_states : of_inputs) = true;
       }
     }
+    // A function that no term keeps (abs(v) - abs(v)) is read but unused.
     if (of_states && of_inputs) {
       const Equation* holding = nullptr;
       const std::size_t v = model.channel_count() + out.size();
@@ -65,10 +66,12 @@ std::vector<ComputedChannel> computed_channels(const Model& model) {
           if (!holding && t.monomial[v] != 0) holding = &eq;
         }
       }
-      throw ModelError(holding->where, f.name +
-                                           " mixes states and inputs: identify takes abs "
-                                           "and sign of the states alone or of the inputs "
-                                           "alone");
+      if (holding != nullptr) {
+        throw ModelError(holding->where, f.name +
+                                             " mixes states and inputs: identify takes abs "
+                                             "and sign of the states alone or of the inputs "
+                                             "alone");
+      }
     }
     out.push_back(std::move(c));
   }
