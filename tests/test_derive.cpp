@@ -343,6 +343,21 @@ multipliers 1, y2
     CHECK(two.symmetric_rank_with_rhs > 4);
   }
 
+  TEST_CASE("abs and sign factors change sign with the states as their arguments do") {
+    // Variables: y, v, x, then abs(v), sign(v), abs(y - 1), sign(y - 1).
+    const Model model = momentid::parse_model(
+        "state y, v\ninput x\nparam c, f, k, a, b\ny' = v\n"
+        "v' = -c*abs(v)*v - f*sign(v) - k*y - a*abs(y - 1) - b*sign(y - 1) + x\n",
+        "p.mom");
+    REQUIRE(model.variables().size() == 7);
+    using momentid::Parity;
+    CHECK(momentid::parity(model, {0, 1, 0, 1, 0, 0, 0}) == Parity::kOdd);   // v*abs(v)
+    CHECK(momentid::parity(model, {1, 0, 0, 0, 1, 0, 0}) == Parity::kEven);  // y*sign(v)
+    CHECK(momentid::parity(model, {0, 0, 0, 0, 0, 1, 0}) == Parity::kNone);  // abs(y - 1)
+    CHECK(momentid::parity(model, {0, 0, 0, 0, 0, 2, 0}) == Parity::kNone);  // (y - 1)^2
+    CHECK(momentid::parity(model, {0, 1, 0, 0, 0, 0, 2}) == Parity::kOdd);   // v*sign(y - 1)^2
+  }
+
   TEST_CASE("a kinematic equation of mixed degree does not start an endless identity search") {
     // y' = -y - y^3 + x relates moments of degree k to degree k + 2 without end; identities are
     // looked for only up to the equations' own degree.

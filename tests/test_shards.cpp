@@ -174,6 +174,7 @@ TEST_SUITE("shards") {
       cuts.push_back(
           momentid::moments_from_data(DataSource::file(path), {"y", "v"}, {"x"}, moments, options));
     }
+    // Equal products, and 2*y*abs(x) against y*(-2x)... in another order: equal up to rounding.
     const std::vector<double>& mean = cuts[0].estimates.mean;
     REQUIRE(mean.size() == moments.size());
     CHECK(mean[1] == doctest::Approx(mean[0]).epsilon(1e-12));

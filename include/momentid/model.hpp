@@ -37,10 +37,11 @@ struct Declaration {
 enum class FunctionKind { kAbs, kSign };
 struct VariableFunction {
   FunctionKind kind = FunctionKind::kAbs;
-  // p as coefficient * monomial over the states and inputs, in MomentOrder, the first
-  // coefficient positive.
+  // p as coefficient * monomial over the states and inputs, highest degree first, the first
+  // coefficient 1.
   std::vector<std::pair<GiNaC::numeric, Monomial>> argument;
-  std::string name;  // as formulas write it: "abs(v)", "sign(y - 1/2)"
+  std::string name;      // as formulas write it: "abs(v)", "sign(y - 1/2)"
+  SourceLocation where;  // of its first use
 };
 
 // One term of an equation moved to the form `lhs - rhs = 0` and expanded:
@@ -133,12 +134,13 @@ class Model {
 
 // How a monomial over Model::variables() changes when every state and input changes sign:
 // kOdd, it changes sign (its moment vanishes for a symmetric system under a symmetric input);
-// kEven, it does not; kNone, neither (a sign(p) of a p with terms of both parities).
+// kEven, it does not; kNone, neither (abs(p) or sign(p) of a p with terms of both parities,
+// such as abs(y - 1)).
 enum class Parity { kEven, kOdd, kNone };
 Parity parity(const Model& model, const Monomial& monomial);
 
 // Throws ModelError at the first equation with abs(...) or sign(...), for `command` (such as
-// "identify"), which does not handle them.
+// "simulate" or "the lagged equations"), which cannot take them.
 void require_polynomial(const Model& model, const std::string& command);
 
 // Reads and checks a model file. Throws ParseError or ModelError naming file, line and column,

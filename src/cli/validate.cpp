@@ -63,8 +63,11 @@ int run_validate(ValidateCommand& command) {
   replay.record.dt = command.dt;
   replay.record.columns = column_map(command.columns);
   command.options.skip = command.skip;
-  command.options.center =
-      command.center.size() == 1 && command.center[0] == "all" ? model.variables() : command.center;
+  const auto channels =
+      model.variables().begin() + static_cast<std::ptrdiff_t>(model.channel_count());
+  command.options.center = command.center.size() == 1 && command.center[0] == "all"
+                               ? std::vector<std::string>(model.variables().begin(), channels)
+                               : command.center;
   std::optional<std::pair<double, double>> window;
   if (!command.window.empty()) window = window_option(command.window);
   ValidateResult result = validate(model, data_source(command.data), command.options);

@@ -234,6 +234,7 @@ void LagOptions::validate(const Model& model) const {
 }
 
 LaggedSystem derive_lagged(const Model& model, const LagOptions& options) {
+  require_polynomial(model, "the lagged equations");
   const std::size_t variables = model.variables().size();
   std::vector<bool> measured =
       options.measured.empty() ? std::vector<bool>(variables, true) : options.measured;

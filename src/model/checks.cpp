@@ -89,11 +89,26 @@ void check_derivatives_determined(const Model& model) {
   check_derivatives_independent(model);
 }
 
-// abs(...) and sign(...) belong in terms with a parameter: an equation without one is
+// abs(...) and sign(...) belong in equations with a parameter: an equation without one is
 // kinematic (y' = f(y, u)), whose right side the stationarity identities substitute, and they
 // need polynomials there.
 void check_functions_have_parameters(const Model& model) {
   const std::size_t channels = model.channel_count();
+  std::vector<bool> held(model.variables().size() - channels, false);
+  for (const Equation& eq : model.equations()) {
+    for (const Term& t : eq.terms) {
+      for (std::size_t i = channels; i < t.monomial.size(); ++i)
+        if (t.monomial[i] != 0) held[i - channels] = true;
+    }
+  }
+  // One that cancels (abs(v) - abs(v)) would still be a variable, and a data channel to compute.
+  for (std::size_t k = 0; k < held.size(); ++k) {
+    if (!held[k]) {
+      throw ModelError(model.functions()[k].where, model.functions()[k].name +
+                                                       " cancels out of every equation: write the "
+                                                       "equations without it");
+    }
+  }
   for (const Equation& eq : model.equations()) {
     const bool has_parameter = std::any_of(eq.terms.begin(), eq.terms.end(),
                                            [](const Term& t) { return t.parameter >= 0; });

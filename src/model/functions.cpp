@@ -30,16 +30,18 @@ Parity parity(const Model& model, const Monomial& monomial) {
   // A rate key's last entry (rate_key) marks E[(g)'], whose parity is g's.
   const std::size_t size = std::min(monomial.size(), model.variables().size());
   for (std::size_t i = 0; i < size; ++i) {
-    if (monomial[i] % 2 == 0) continue;
+    if (monomial[i] == 0) continue;
+    const bool odd_power = monomial[i] % 2 == 1;
     if (i < channels) {
-      odd = !odd;
+      if (odd_power) odd = !odd;
       continue;
     }
+    // |p| is even when p has a parity; sign(p)^n as p^n, but sign(p)^2 is 1 whatever p.
     const VariableFunction& f = model.functions()[i - channels];
-    if (f.kind == FunctionKind::kAbs) continue;
     const Parity p = parity_of(f.argument);
-    if (p == Parity::kNone) return Parity::kNone;
-    if (p == Parity::kOdd) odd = !odd;
+    const bool squared_sign = f.kind == FunctionKind::kSign && !odd_power;
+    if (p == Parity::kNone && !squared_sign) return Parity::kNone;
+    if (p == Parity::kOdd && f.kind == FunctionKind::kSign && odd_power) odd = !odd;
   }
   return odd ? Parity::kOdd : Parity::kEven;
 }
@@ -51,9 +53,9 @@ void require_polynomial(const Model& model, const std::string& command) {
       for (std::size_t i = model.channel_count(); i < t.monomial.size(); ++i) {
         if (t.monomial[i] == 0) continue;
         throw ModelError(eq.where, "equation " + eq.name() + " holds " + model.variables()[i] +
-                                       ": " + command +
-                                       " does not take abs(...) or sign(...) terms yet (derive "
-                                       "prints their moment equations)");
+                                       ", which " + command +
+                                       " cannot take yet (momentid derive prints the zero-lag "
+                                       "moment equations of abs(...) and sign(...) terms)");
       }
     }
   }

@@ -224,7 +224,8 @@ GiNaC::ex TermBuilder::eval_call(const SyntaxNode& n) const {
   });
   const GiNaC::numeric lead = terms[0].first;
   for (auto& [coefficient, monomial] : terms) coefficient /= lead;
-  VariableFunction f{is_abs ? FunctionKind::kAbs : FunctionKind::kSign, terms, ""};
+  VariableFunction f{is_abs ? FunctionKind::kAbs : FunctionKind::kSign, terms, "",
+                     source_.where(n)};
   f.name = name + "(" + format_polynomial(terms) + ")";
   const GiNaC::numeric factor = is_abs ? GiNaC::abs(lead) : GiNaC::numeric(lead.csgn());
   return factor * symbols_.function(f);

@@ -211,14 +211,9 @@ DataMoments moments_from_data(const DataSource& source, const std::vector<std::s
   const std::size_t shard_batches =
       std::max<std::size_t>(2, (batches + shards.size() - 1) / shards.size());
   ChannelLayout layout(states.size(), inputs.size(), options.computed);
-  const PassSetup setup{in_columns(std::move(keys), layout),
-                        states.size(),
-                        inputs.size(),
-                        std::move(layout),
-                        out.hold,
-                        shard_batches,
-                        collapse,
-                        &options};
+  std::vector<Moment> columns = in_columns(std::move(keys), layout);
+  const PassSetup setup{std::move(columns), states.size(), inputs.size(), std::move(layout),
+                        out.hold,           shard_batches, collapse,      &options};
   const Pass pass{source, shards, request, setup, (shard_batches + 1) * shards.size()};
   RangeResult result = read_all(pass, std::move(first), open_error, channels);
   const std::optional<double> first_step = check_file_intervals(result, shards, paths, out);

@@ -36,7 +36,7 @@ double value_of(const ComputedChannel& c, const double* row) {
 // ones. Without computed channels the rows are used as they are.
 class Widen {
  public:
-  Widen(const PassSetup& setup)
+  explicit Widen(const PassSetup& setup)
       : read_(setup.states + setup.inputs),
         computed_(setup.options->computed),
         column_(setup.layout.column) {}

@@ -20,7 +20,6 @@ IdentifyResult identify(const Model& model, const DataSource& source,
       identify_zero_lag(result, source, options);
       break;
     case EquationKind::kLagged:
-      require_polynomial(model, "identify with the lagged equations");
       identify_lagged(result, source, options, record.present);
       break;
   }

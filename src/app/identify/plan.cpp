@@ -12,7 +12,8 @@ EquationChoice choose_equations(const Model& model, const RecordSurvey& record,
   if (options.method == Method::kLagged) return {kLagged, "asked for"};
   if (options.lags || options.instruments) return {kLagged, "lags or instruments were given"};
   const bool all_measured = std::all_of(measured.begin(), measured.end(), [](bool m) { return m; });
-  if (!model.functions().empty() && all_measured) {
+  if (!model.functions().empty()) {
+    if (!all_measured) return {kLagged, "the record lacks a state's column"};
     return {kZeroLag,
             "the model has abs(...) or sign(...) terms, which the lagged equations do "
             "not take yet"};
@@ -57,8 +58,8 @@ std::vector<ComputedChannel> computed_channels(const Model& model) {
         if (monomial[i] != 0) (i < states ? of_states : of_inputs) = true;
       }
     }
-    // A function that no term keeps (abs(v) - abs(v)) is read but unused.
     if (of_states && of_inputs) {
+      // Some term holds it: check_model refuses a function that cancels.
       const Equation* holding = nullptr;
       const std::size_t v = model.channel_count() + out.size();
       for (const Equation& eq : model.equations()) {
@@ -66,12 +67,10 @@ std::vector<ComputedChannel> computed_channels(const Model& model) {
           if (!holding && t.monomial[v] != 0) holding = &eq;
         }
       }
-      if (holding != nullptr) {
-        throw ModelError(holding->where, f.name +
-                                             " mixes states and inputs: identify takes abs "
-                                             "and sign of the states alone or of the inputs "
-                                             "alone");
-      }
+      throw ModelError(holding->where, f.name +
+                                           " mixes states and inputs: identify takes abs "
+                                           "and sign of the states alone or of the inputs "
+                                           "alone");
     }
     out.push_back(std::move(c));
   }

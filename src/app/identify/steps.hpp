@@ -37,12 +37,12 @@ EquationChoice choose_equations(const Model& model, const RecordSurvey& record,
 std::vector<std::string> state_names(const Model& model);
 std::vector<std::string> input_names(const Model& model);
 
-// The options of a pass over the record as `options` ask for it (columns, sample interval,
-// layout, input hold, batches, threads), with the autocorrelations the noise estimates need.
 // The model's abs and sign terms as channels the pass computes; throws ModelError at an equation
 // whose function mixes states and inputs.
 std::vector<ComputedChannel> computed_channels(const Model& model);
 
+// The options of a pass over the record as `options` ask for it (columns, sample interval,
+// layout, input hold, batches, threads), with the autocorrelations the noise estimates need.
 DataOptions pass_options(const IdentifyOptions& options);
 
 // The offsets of DataOptions for the channels `states` then `inputs`: the mean of each channel
