@@ -149,8 +149,9 @@ class ShardPass {
         before(block);
         return false;
       case RowZone::kAfter:
-        if (owned_)
+        if (owned_) {
           out_.moments.add_lookahead(widen_.apply(block.values.data(), block.rows), block.rows);
+        }
         return false;
       case RowZone::kOwned:
         break;
