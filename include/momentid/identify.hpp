@@ -66,7 +66,10 @@ struct IdentifyOptions {
   static constexpr int kMaxDegree = 12;
   static constexpr long kMaxInputShift = 1000;
   // The lagged equations may need at most this many moments: the accumulator keeps each of them
-  // per stretch of the record.
+  // per stretch of the record, and the stretches grow with the batches that the weighting needs
+  // per equation, so that memory and time grow with moments times equations (docs/benchmarks.md:
+  // the ten-mass chain's full window with every instrument takes 40 times the default's time
+  // for 6% smaller errors).
   static constexpr std::size_t kMaxLaggedMoments = 3000;
 
   // Throws UsageError naming the first option that is out of range or that names a variable

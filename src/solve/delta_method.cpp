@@ -41,27 +41,26 @@ MatrixXd batch_deviations(const MomentEstimates& estimates) {
 MatrixXd sensitivity(const LinearSystem& system, const VectorXd& scale,
                      const MatrixXd& normal_inverse, const MatrixXd& left,
                      const VectorXd& weighted_residual, const VectorXd& at) {
-  const Index rows = system.a.rows(), params = system.a.cols();
+  // Column k: N^-1 (dA_k' W r) - N^-1 A' W dg_k with dg_k = dA_k theta - db_k, the second term
+  // for all moments at once from the sparse d g / d mu.
+  const Index params = system.a.cols();
   const auto moments = static_cast<Index>(system.uses.size());
-  MatrixXd jacobian = MatrixXd::Zero(params, moments);
+  std::vector<Eigen::Triplet<double>> entries;
   for (Index k = 0; k < moments; ++k) {
-    const MomentUse& use = system.uses[static_cast<std::size_t>(k)];
-    if (use.a.empty() && use.b.empty()) continue;
-    MatrixXd da = MatrixXd::Zero(rows, params);
-    VectorXd db = VectorXd::Zero(rows);
-    for (const auto& [r, p, w] : use.a) da(r, p) += w / scale(p);
-    for (const auto& [r, w] : use.b) db(r) += w;
-    jacobian.col(k) =
-        (normal_inverse * (da.transpose() * weighted_residual) + left * (db - da * at))
-            .cwiseQuotient(scale);
+    for (const auto& [r, p, w] : system.uses[static_cast<std::size_t>(k)].a) {
+      entries.emplace_back(p, k, w / scale(p) * weighted_residual(r));
+    }
   }
-  return jacobian;
+  Eigen::SparseMatrix<double> residual_part(params, moments);
+  residual_part.setFromTriplets(entries.begin(), entries.end());
+  const VectorXd theta = at.cwiseQuotient(scale);
+  const MatrixXd jacobian =
+      normal_inverse * residual_part - left * equations_jacobian(system, theta);
+  return scale.cwiseInverse().asDiagonal() * jacobian;
 }
 
-LongRunCovariance with_known(LongRunCovariance errors, const MatrixXd& jacobian,
-                             const MatrixXd& known) {
-  if (known.isZero(0)) return errors;
-  const MatrixXd added = jacobian * known * jacobian.transpose();
+LongRunCovariance with_known(LongRunCovariance errors, const MatrixXd& added) {
+  if (added.isZero(0)) return errors;
   double dof = std::numeric_limits<double>::infinity();
   for (Index i = 0; i < added.rows(); ++i) {
     const double series = errors.covariance(i, i), total = series + added(i, i);

@@ -24,11 +24,10 @@ Eigen::MatrixXd sensitivity(const LinearSystem& system, const Eigen::VectorXd& s
                             const Eigen::MatrixXd& normal_inverse, const Eigen::MatrixXd& left,
                             const Eigen::VectorXd& weighted_residual, const Eigen::VectorXd& at);
 
-// `errors` of a series x = J mu plus the covariance J K J' that a known covariance K of the
-// moments adds, with the degrees of freedom of the sum (Satterthwaite, K taken as exact: the
+// `errors` of a series x = J mu plus the covariance `added` = J K J' that a known covariance K of
+// the moments adds, with the degrees of freedom of the sum (Satterthwaite, K taken as exact: the
 // fewest over the series' components).
-LongRunCovariance with_known(LongRunCovariance errors, const Eigen::MatrixXd& jacobian,
-                             const Eigen::MatrixXd& known);
+LongRunCovariance with_known(LongRunCovariance errors, const Eigen::MatrixXd& added);
 
 // cov(i, j) / sqrt(cov(i, i) cov(j, j)), NaN where a variance is not positive or a parameter
 // is not identifiable.

@@ -9,11 +9,11 @@ using Eigen::MatrixXd;
 using Eigen::VectorXd;
 
 OptimalWeighting optimal_weighting(const LinearSystem& system, const LeastSquares& first,
-                                   const MatrixXd& deviations, const MatrixXd& known) {
+                                   const MatrixXd& deviations, const KnownCovariance& known) {
   const Index rows = system.a.rows(), params = system.a.cols();
-  const MatrixXd g_mu = equations_jacobian(system, first.theta);
-  const MatrixXd s =
-      batch_covariance(deviations * g_mu.transpose()) + g_mu * known * g_mu.transpose();
+  const Eigen::SparseMatrix<double> g_mu = equations_jacobian(system, first.theta);
+  const MatrixXd s = batch_covariance(deviations * g_mu.transpose()) +
+                     MatrixXd(g_mu * known * g_mu.transpose());
   Eigen::SelfAdjointEigenSolver<MatrixXd> eigen(s);
   const VectorXd lambda = eigen.eigenvalues();
   const double lambda_max = lambda.maxCoeff();

@@ -28,7 +28,7 @@ struct OptimalWeighting {
 // `deviations`: the moments' batch series (batch_deviations); `known`: a covariance of the
 // moments' record means known from elsewhere, added to S.
 OptimalWeighting optimal_weighting(const LinearSystem& system, const LeastSquares& first,
-                                   const Eigen::MatrixXd& deviations, const Eigen::MatrixXd& known);
+                                   const Eigen::MatrixXd& deviations, const KnownCovariance& known);
 
 // The weights come from the same batches as the errors, which makes the batch series of the
 // estimate's errors look too small by (n - m + q) / n and the estimate less efficient than with

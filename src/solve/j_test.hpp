@@ -20,6 +20,6 @@ struct JTest {
 };
 
 JTest j_test(const LinearSystem& system, const LeastSquares& first, const OptimalWeighting& gmm,
-             const Eigen::MatrixXd& deviations, const Eigen::MatrixXd& known, std::size_t batches);
+             const Eigen::MatrixXd& deviations, const KnownCovariance& known, std::size_t batches);
 
 }  // namespace momentid

@@ -78,14 +78,16 @@ LinearSystem evaluate(const MomentRows& rows, Index parameters, const std::vecto
   return out;
 }
 
-MatrixXd equations_jacobian(const LinearSystem& system, const VectorXd& theta) {
+Eigen::SparseMatrix<double> equations_jacobian(const LinearSystem& system, const VectorXd& theta) {
   const auto moments = static_cast<Index>(system.uses.size());
-  MatrixXd g_mu = MatrixXd::Zero(system.a.rows(), moments);
+  std::vector<Eigen::Triplet<double>> entries;
   for (Index k = 0; k < moments; ++k) {
     const MomentUse& use = system.uses[static_cast<std::size_t>(k)];
-    for (const auto& [r, p, w] : use.a) g_mu(r, k) += w * theta(p);
-    for (const auto& [r, w] : use.b) g_mu(r, k) -= w;
+    for (const auto& [r, p, w] : use.a) entries.emplace_back(r, k, w * theta(p));
+    for (const auto& [r, w] : use.b) entries.emplace_back(r, k, -w);
   }
+  Eigen::SparseMatrix<double> g_mu(system.a.rows(), moments);
+  g_mu.setFromTriplets(entries.begin(), entries.end());  // duplicates summed
   return g_mu;
 }
 

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <Eigen/Dense>
+#include <Eigen/SparseCore>
 #include <tuple>
 #include <utility>
 #include <vector>
@@ -34,7 +35,15 @@ void check_shape(const MomentRows& rows, Eigen::Index parameters, std::size_t mo
 LinearSystem evaluate(const MomentRows& rows, Eigen::Index parameters,
                       const std::vector<double>& mean, bool normalise_rows);
 
-// d g / d mu for the equations g = A theta - b at `theta` (unscaled): rows x moments.
-Eigen::MatrixXd equations_jacobian(const LinearSystem& system, const Eigen::VectorXd& theta);
+// d g / d mu for the equations g = A theta - b at `theta` (unscaled): rows x moments, sparse
+// (an equation reads few of the moments), so that the batch series of the equations costs the
+// batches times the entries, whatever the number of moments.
+Eigen::SparseMatrix<double> equations_jacobian(const LinearSystem& system,
+                                               const Eigen::VectorXd& theta);
+
+// A covariance of the moments' record means known from elsewhere (moments x moments, nonzero
+// only over the few moments it concerns), and what it adds to the covariance of a series
+// J mu: J K J'.
+using KnownCovariance = Eigen::SparseMatrix<double>;
 
 }  // namespace momentid

@@ -25,11 +25,16 @@ using Eigen::MatrixXd;
 using Eigen::VectorXd;
 
 // What the solver reads from the moments: their batch series and a covariance of their record
-// means known from elsewhere (moments x moments; solve: the rates'), added to the errors.
+// means known from elsewhere (solve: the rates'), added to the errors.
 struct MomentErrors {
   const MatrixXd& deviations;
-  const MatrixXd& known;
+  const KnownCovariance& known;
 };
+
+// The covariance that the known covariance of the moments adds to a series J mu.
+MatrixXd added_by(const MomentErrors& moments, const MatrixXd& jacobian) {
+  return jacobian * moments.known * jacobian.transpose();
+}
 
 // The least-squares estimate's parameters, errors, correlations and objective.
 void report_least_squares(Estimate& out, const LinearSystem& system, const LeastSquares& ls,
@@ -37,7 +42,8 @@ void report_least_squares(Estimate& out, const LinearSystem& system, const Least
   const MatrixXd jacobian =
       sensitivity(system, ls.scale, ls.normal_pinv, ls.pinv, ls.residual, ls.theta_scaled);
   const MatrixXd series = moments.deviations * jacobian.transpose();
-  const LongRunCovariance errors = with_known(long_run_covariance(series), jacobian, moments.known);
+  const LongRunCovariance errors =
+      with_known(long_run_covariance(series), added_by(moments, jacobian));
   out.error_batches = rows_of(series);
   Fit& fit = out.least_squares;
   fit.objective = ls.residual.squaredNorm();
@@ -63,7 +69,8 @@ void report_gmm(Estimate& out, const LinearSystem& system, const LeastSquares& l
                                         gmm.weight * gmm.residual, gmm.theta_scaled);
   const double finite_sample = finite_sample_factor(out.batches, gmm.rank, system.a.cols());
   const MatrixXd series = std::sqrt(finite_sample) * moments.deviations * jacobian.transpose();
-  const LongRunCovariance errors = with_known(long_run_covariance(series), jacobian, moments.known);
+  const LongRunCovariance errors =
+      with_known(long_run_covariance(series), added_by(moments, jacobian));
   out.error_batches = rows_of(series);
   Fit& fit = out.optimal.emplace();
   fit.objective = out.intervals > 0 ? gmm.objective / static_cast<double>(out.intervals) : kNaN;
@@ -168,7 +175,7 @@ Estimate solve_on(const MomentRows& rows, const std::vector<std::string>& names,
 
 // The estimates with the record's rates of change at their stationary value, 0, and the known
 // covariance of all the moments' means: options.rate_covariance over the rates, else 0.
-std::pair<MomentEstimates, MatrixXd> at_rest(const Model& model,
+std::pair<MomentEstimates, KnownCovariance> at_rest(const Model& model,
                                              const std::vector<Monomial>& moments,
                                              MomentEstimates estimates,
                                              const SolveOptions& options) {
@@ -179,17 +186,19 @@ std::pair<MomentEstimates, MatrixXd> at_rest(const Model& model,
     rates.push_back(k);
   }
   const auto k = static_cast<Index>(moments.size());
-  MatrixXd known = MatrixXd::Zero(k, k);
+  KnownCovariance known(k, k);
   if (options.rate_covariance.empty()) return {std::move(estimates), known};
   if (options.rate_covariance.size() != rates.size()) {
     throw std::invalid_argument("solve: rate_covariance must be square over the system's rates");
   }
+  std::vector<Eigen::Triplet<double>> entries;
   for (std::size_t i = 0; i < rates.size(); ++i) {
     for (std::size_t j = 0; j < rates.size(); ++j) {
-      known(static_cast<Index>(rates[i]), static_cast<Index>(rates[j])) =
-          options.rate_covariance[i].at(j);
+      entries.emplace_back(static_cast<Index>(rates[i]), static_cast<Index>(rates[j]),
+                           options.rate_covariance[i].at(j));
     }
   }
+  known.setFromTriplets(entries.begin(), entries.end());
   return {std::move(estimates), known};
 }
 
@@ -214,7 +223,7 @@ Estimate solve_rows(const MomentRows& rows, const std::vector<std::string>& name
                     const MomentEstimates& estimates, const SolveOptions& options) {
   const auto k = static_cast<Index>(estimates.mean.size());
   const MatrixXd deviations = batch_deviations(estimates);
-  const MatrixXd known = MatrixXd::Zero(k, k);
+  const KnownCovariance known(k, k);
   return solve_on(rows, names, estimates, options, {deviations, known});
 }
 
