@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <limits>
 #include <optional>
 #include <string>
 #include <utility>
@@ -34,17 +35,48 @@ class CompiledModel {
   CompiledModel(const Model& model, const std::vector<GiNaC::numeric>& parameters);
 
   int states() const { return states_; }
-  int inputs() const { return variables_ - states_; }
+  int inputs() const { return channels_ - states_; }
+
+  // The model's functions abs(p) and sign(p) (Model::functions), p a polynomial in the states and
+  // inputs. Each is evaluated as written unless a mode is set for it, as the switching
+  // integrator (simulate/switching.hpp) does to keep the right-hand side smooth within a step:
+  // sign(p) then takes the mode's value (+-1 on either side of p = 0, or the value in [-1, 1]
+  // that holds a sliding motion on p = 0), abs(p) is mode * p.
+  std::size_t functions() const { return functions_.size(); }
+  bool is_sign(std::size_t k) const { return functions_[k].sign; }
+  // p of function k at the states y and inputs u.
+  double argument(std::size_t k, const double* y, const double* u) const;
+  // dp/dt of function k at y, u when the states move at `dydt` (the inputs' own change left
+  // out: a sliding motion is a property of the states).
+  double argument_rate(std::size_t k, const double* y, const double* u, const double* dydt) const;
+  // NaN: evaluated as written.
+  void set_mode(std::size_t k, double mode) const { functions_[k].mode = mode; }
+  // Moves y onto p = 0 when function k's argument is one state times a number plus a constant
+  // (sign(v), sign(v - 1/2)), which a sliding motion holds there against rounding.
+  void project(std::size_t k, double* y, const double* u) const;
+  double mode(std::size_t k) const { return functions_[k].mode; }
+  // The sign functions whose arguments a sliding motion holds at 0 (Filippov's convention): at
+  // every evaluation each takes the value, set as its mode, that keeps the rates of their
+  // arguments at 0 (the equations being affine in them).
+  void set_sliding(std::vector<std::size_t> functions) const { sliding_ = std::move(functions); }
+  const std::vector<std::size_t>& sliding() const { return sliding_; }
   // dydt = f(y, u). Returns false if the derivatives cannot be solved for at this point (a
   // state-dependent coefficient matrix that is singular there).
   [[gnu::always_inline]] bool derivative(const double* y, const double* u, double* dydt) const {
+    if (!sliding_.empty()) return slide(y, u, dydt);
+    return smooth_derivative(y, u, dydt);
+  }
+
+ private:
+  [[gnu::always_inline]] bool smooth_derivative(const double* y, const double* u,
+                                                double* dydt) const {
     fill_powers(y, u);
     if (!constant_matrix_) return solve(dydt);
     evaluate_all(dydt, static_cast<std::size_t>(states_));
     return true;
   }
-
- private:
+  // derivative() with the sliding functions' values solved for.
+  bool slide(const double* y, const double* u, double* dydt) const;
   // Sums of coefficient * product of powers of variables, all stored in one flat array: term t
   // of polynomial p is terms_[first_term[p] + t], its factors powers_[factor_index[...]].
   struct TermRef {
@@ -87,17 +119,29 @@ class CompiledModel {
     }
   }
   [[gnu::always_inline]] void fill_powers(const double* y, const double* u) const {
-    double* powers = powers_.data();
-    for (int v = 0; v < variables_; ++v) {
-      double* row = powers + power_offset_[static_cast<std::size_t>(v)];
-      const double x = v < states_ ? y[v] : u[v - states_];
-      row[1] = x;
-      const int top = max_power_[static_cast<std::size_t>(v)];
-      for (int k = 2; k <= top; ++k) row[k] = row[k - 1] * x;
+    for (int v = 0; v < channels_; ++v) fill_power_row(v, v < states_ ? y[v] : u[v - states_]);
+    for (std::size_t k = 0; k < functions_.size(); ++k) {
+      fill_power_row(channels_ + static_cast<int>(k), function_value(k, y, u));
     }
+  }
+  [[gnu::always_inline]] void fill_power_row(int v, double x) const {
+    double* row = powers_.data() + power_offset_[static_cast<std::size_t>(v)];
+    row[1] = x;
+    const int top = max_power_[static_cast<std::size_t>(v)];
+    for (int k = 2; k <= top; ++k) row[k] = row[k - 1] * x;
   }
   // Solves M y' = h at the current powers (a state-dependent matrix).
   bool solve(double* dydt) const;
+  double function_value(std::size_t k, const double* y, const double* u) const;
+
+  // A function's argument as coefficient * product of (channel, power), and its mode.
+  struct Function {
+    bool sign = false;
+    std::vector<std::pair<double, std::vector<std::pair<int, int>>>> terms;
+    int linear_state = -1;  // the state of an argument c y_j + constant, or -1
+    double linear_coefficient = 0;
+    mutable double mode = std::numeric_limits<double>::quiet_NaN();
+  };
 
   std::vector<TermRef> terms_;
   std::vector<std::uint32_t> first_term_{0};  // per polynomial, plus one end
@@ -105,7 +149,10 @@ class CompiledModel {
   std::vector<int> max_power_;                // per variable
   std::vector<std::uint32_t> power_offset_;   // per variable, into powers_
   int states_ = 0;
+  int channels_ = 0;  // states and inputs
   int variables_ = 0;
+  std::vector<Function> functions_;
+  mutable std::vector<std::size_t> sliding_;
   bool constant_matrix_ = true;
   // Constant matrix: polynomial j is the solved f_j. Otherwise polynomials 0..n*n-1 are M
   // (row-major) and n*n..n*n+n-1 are h in M y' = h.

@@ -32,7 +32,7 @@ import pytest
 
 import momentid
 
-from conftest import DUFFING, INPUT, TRUE, read_csv, read_metadata, without
+from conftest import DUFFING, INPUT, ROOT, TRUE, read_csv, read_metadata, without
 
 
 def assert_same_estimates(result, expected, rel=1e-12):
@@ -536,3 +536,17 @@ def test_identify_extrapolate(duffing, cli_csv):
     assert held.diagnostics["end_values"] == {"applied": True}
     with pytest.raises(momentid.UsageError, match=r"^extrapolate: expected True or False, found 't'"):
         momentid.identify(duffing, str(cli_csv), extrapolate="t")
+
+
+def test_simulate_and_replay_friction():
+    # sign(v): the record holds the states and the input, not the sign, and the mass sticks
+    # (v exactly 0, y held) while the force stays within the friction.
+    friction = ROOT / "tests" / "data" / "friction.mom"
+    simulated = momentid.simulate(friction, samples=2000, burn_in=50)
+    assert list(simulated) == ["t", "y", "v", "x"]
+    stuck = simulated["v"] == 0
+    assert 0 < stuck.sum() < 2000
+    held = np.flatnonzero(stuck[:-1] & stuck[1:])
+    np.testing.assert_array_equal(simulated["y"][held], simulated["y"][held + 1])
+    replayed = momentid.validate(friction, simulated)
+    assert replayed.fit["y"] > 99.999 and replayed.fit["v"] > 99.999

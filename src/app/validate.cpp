@@ -93,7 +93,6 @@ void choose_skips(const Model& model, const ValidateOptions& options, ValidateRe
 
 ValidateResult validate(const Model& model, const DataSource& source,
                         const ValidateOptions& options) {
-  require_polynomial(model, "validate");
   options.validate();
   const std::vector<std::string>& variables = model.variables();
   for (const std::string& name : options.center) {

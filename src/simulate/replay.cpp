@@ -7,7 +7,7 @@
 #include "common/decimal.hpp"
 #include "momentid/error.hpp"
 #include "momentid/simulate.hpp"
-#include "simulate/step.hpp"
+#include "simulate/switching.hpp"
 
 namespace momentid {
 namespace {
@@ -104,7 +104,7 @@ std::vector<std::vector<double>> RecordSimulator::run(
       throw std::invalid_argument("RecordSimulator::run: input columns shorter than the run");
     }
   }
-  RungeKuttaStep step(f_);
+  SwitchingStep step(f_);
   std::vector<std::vector<double>> states(n, std::vector<double>(rows));
   std::vector<double> y = initial, u0(m), um(m), u1(m);
   const double h = dt_ / substeps_;
@@ -121,6 +121,12 @@ std::vector<std::vector<double>> RecordSimulator::run(
     if (k == 2 * substeps_) return inputs[i][s + 1];
     return within_[i](inputs[i], s, static_cast<std::size_t>(k - 1));
   };
+  if (rows > 0) {
+    for (std::size_t i = 0; i < m; ++i) u0[i] = input(i, 0, 0);
+    if (!step.start(y.data(), u0.data())) {
+      fail("met a point where the derivatives cannot be solved for", 0);
+    }
+  }
   for (std::size_t s = 0; s < rows; ++s) {
     for (std::size_t j = 0; j < n; ++j) states[j][s] = y[j];
     if (s + 1 == rows) break;

@@ -11,6 +11,7 @@
 #include "common/decimal.hpp"
 #include "momentid/error.hpp"
 #include "simulate/step.hpp"
+#include "simulate/switching.hpp"
 
 namespace momentid {
 namespace {
@@ -46,7 +47,30 @@ std::string join(const std::vector<std::string>& items, const std::string& separ
 
 CompiledModel::CompiledModel(const Model& model, const std::vector<numeric>& parameters)
     : states_(static_cast<int>(model.states().size())),
+      channels_(static_cast<int>(model.channel_count())),
       variables_(static_cast<int>(model.variables().size())) {
+  for (const VariableFunction& f : model.functions()) {
+    Function& compiled = functions_.emplace_back();
+    compiled.sign = f.kind == FunctionKind::kSign;
+    for (const auto& [coefficient, monomial] : f.argument) {
+      auto& term =
+          compiled.terms.emplace_back(coefficient.to_double(), std::vector<std::pair<int, int>>{});
+      for (std::size_t v = 0; v < monomial.size(); ++v) {
+        if (monomial[v] != 0) term.second.emplace_back(static_cast<int>(v), monomial[v]);
+      }
+    }
+    std::size_t linear = 0, constant = 0;
+    for (const auto& [coefficient, factors] : compiled.terms) {
+      if (factors.empty()) {
+        ++constant;
+      } else if (factors.size() == 1 && factors[0].second == 1 && factors[0].first < states_) {
+        ++linear;
+        compiled.linear_state = factors[0].first;
+        compiled.linear_coefficient = coefficient;
+      }
+    }
+    if (linear != 1 || linear + constant != compiled.terms.size()) compiled.linear_state = -1;
+  }
   const auto& equations = model.equations();
   if (equations.size() != static_cast<std::size_t>(states_)) {
     throw ModelError(equations.front().where,
@@ -127,6 +151,75 @@ std::size_t CompiledModel::compile(const Terms& terms) {
   return first_term_.size() - 2;
 }
 
+double CompiledModel::argument(std::size_t k, const double* y, const double* u) const {
+  double sum = 0;
+  for (const auto& [coefficient, factors] : functions_[k].terms) {
+    double product = coefficient;
+    for (const auto& [v, power] : factors) {
+      const double x = v < states_ ? y[v] : u[v - states_];
+      for (int i = 0; i < power; ++i) product *= x;
+    }
+    sum += product;
+  }
+  return sum;
+}
+
+double CompiledModel::argument_rate(std::size_t k, const double* y, const double* u,
+                                    const double* dydt) const {
+  double sum = 0;
+  for (const auto& [coefficient, factors] : functions_[k].terms) {
+    // The product rule over the term's state factors.
+    for (std::size_t d = 0; d < factors.size(); ++d) {
+      if (factors[d].first >= states_) continue;
+      double product = coefficient * factors[d].second * dydt[factors[d].first];
+      for (std::size_t f = 0; f < factors.size(); ++f) {
+        const auto [v, power] = factors[f];
+        const double x = v < states_ ? y[v] : u[v - states_];
+        for (int i = 0; i < power - (f == d ? 1 : 0); ++i) product *= x;
+      }
+      sum += product;
+    }
+  }
+  return sum;
+}
+
+void CompiledModel::project(std::size_t k, double* y, const double* u) const {
+  const Function& f = functions_[k];
+  if (f.linear_state >= 0) y[f.linear_state] -= argument(k, y, u) / f.linear_coefficient;
+}
+
+double CompiledModel::function_value(std::size_t k, const double* y, const double* u) const {
+  const Function& f = functions_[k];
+  if (f.sign && !std::isnan(f.mode)) return f.mode;
+  const double p = argument(k, y, u);
+  if (!std::isnan(f.mode)) return f.mode * p;
+  if (f.sign) return p > 0 ? 1.0 : p < 0 ? -1.0 : 0.0;
+  return std::abs(p);
+}
+
+bool CompiledModel::slide(const double* y, const double* u, double* dydt) const {
+  // The rates of the sliding arguments are affine in the sliding values sigma: d(sigma) = d0 +
+  // G sigma, from the derivatives at sigma = 0 and at each unit vector; d(sigma) = 0 solved.
+  const auto q = static_cast<Eigen::Index>(sliding_.size());
+  Eigen::VectorXd d0(q);
+  Eigen::MatrixXd g(q, q);
+  for (std::size_t k : sliding_) set_mode(k, 0);
+  if (!smooth_derivative(y, u, dydt)) return false;
+  for (Eigen::Index i = 0; i < q; ++i) d0(i) = argument_rate(sliding_[i], y, u, dydt);
+  for (Eigen::Index j = 0; j < q; ++j) {
+    set_mode(sliding_[static_cast<std::size_t>(j)], 1);
+    if (!smooth_derivative(y, u, dydt)) return false;
+    for (Eigen::Index i = 0; i < q; ++i) {
+      g(i, j) = argument_rate(sliding_[static_cast<std::size_t>(i)], y, u, dydt) - d0(i);
+    }
+    set_mode(sliding_[static_cast<std::size_t>(j)], 0);
+  }
+  const Eigen::VectorXd sigma = g.fullPivLu().solve(-d0);
+  if (!sigma.allFinite()) return false;
+  for (Eigen::Index j = 0; j < q; ++j) set_mode(sliding_[static_cast<std::size_t>(j)], sigma(j));
+  return smooth_derivative(y, u, dydt);
+}
+
 bool CompiledModel::solve(double* dydt) const {
   const int n = states_;
   // Gaussian elimination with partial pivoting on [M | h].
@@ -162,7 +255,6 @@ bool CompiledModel::solve(double* dydt) const {
 }
 
 void SimulationOptions::validate(const Model& model) const {
-  require_polynomial(model, "simulate");
   const auto count = [&](std::size_t found, std::size_t expected, const std::string& field,
                          const std::string& what) {
     if (found != expected) {
@@ -180,7 +272,9 @@ void SimulationOptions::validate(const Model& model) const {
   for (std::size_t i = 0; i < inputs.size(); ++i) {
     inputs[i].validate(UsageError::mention("inputs") + " " + model.inputs()[i].name, dt);
   }
-  const std::vector<std::string>& channels = model.variables();
+  const std::vector<std::string> channels(
+      model.variables().begin(),
+      model.variables().begin() + static_cast<long>(model.channel_count()));
   // The index of channel `name`, or a UsageError from `option` listing the channels.
   const auto channel = [&](const std::string& name, const std::string& option) {
     const auto it = std::find(channels.begin(), channels.end(), name);
@@ -247,7 +341,7 @@ void simulate_clean(const Model& model, const SimulationOptions& options, Sample
     inputs.emplace_back(options.inputs[i], options.dt, options.seed, i);
     smooth = smooth || !options.inputs[i].held();
   }
-  RungeKuttaStep step(f);
+  SwitchingStep step(f);
   std::vector<double> values(n + m);
   double* y = values.data();
   double* u = values.data() + n;
@@ -258,7 +352,7 @@ void simulate_clean(const Model& model, const SimulationOptions& options, Sample
   const double h = options.dt;
   std::size_t run = 0;
   double t = 0;
-  bool burning_in = false;
+  bool burning_in = false, started = false;
 
   const auto fail = [&](const std::string& what) {
     const std::string when =
@@ -270,6 +364,10 @@ void simulate_clean(const Model& model, const SimulationOptions& options, Sample
   };
   // One Runge-Kutta step from t to t + h.
   const auto integrate = [&] {
+    if (!started && !step.start(y, u)) {
+      fail("met a point where the derivatives cannot be solved for");
+    }
+    started = true;
     if (!step(y, u, u_middle, u_end, h)) {
       fail("met a point where the derivatives cannot be solved for");
     }
@@ -293,6 +391,7 @@ void simulate_clean(const Model& model, const SimulationOptions& options, Sample
   for (run = 0; run < options.runs; ++run) {
     if (run == 0 || !options.continue_runs) {
       std::fill(y, y + n, 0.0);
+      started = false;
       for (InputProcess& input : inputs) input.start_record(options.burn_in);
       burning_in = true;
       for (std::size_t s = 0; s < options.burn_in; ++s) {
@@ -402,7 +501,7 @@ void simulate(const Model& model, const SimulationOptions& options, SampleSink& 
     throw std::invalid_argument("simulate: one noise standard deviation per noise entry needed");
   }
   if (options.noise.empty()) return simulate_clean(model, options, sink);
-  NoisySamples noisy(sink, model.variables().size(), noise_channels(model, options), noise_sd,
+  NoisySamples noisy(sink, model.channel_count(), noise_channels(model, options), noise_sd,
                      options.seed);
   simulate_clean(model, options, noisy);
 }
@@ -465,7 +564,7 @@ std::vector<std::size_t> observed_channels(const Model& model, const SimulationO
   const std::vector<std::string>& variables = model.variables();
   std::vector<std::size_t> channels;
   if (options.observe.empty()) {
-    for (std::size_t c = 0; c < variables.size(); ++c) channels.push_back(c);
+    for (std::size_t c = 0; c < model.channel_count(); ++c) channels.push_back(c);
   } else {
     for (const std::string& name : options.observe) {
       channels.push_back(static_cast<std::size_t>(
@@ -509,6 +608,10 @@ void StepCheck::sample(double t, const double* values, std::size_t run) {
   std::vector<double> y(values, values + n), plus(static_cast<std::size_t>(n)),
       minus(static_cast<std::size_t>(n));
   const double* u = values + n;
+  // The dynamics on the side of each switch where the sample is: sign(p) is constant there.
+  for (std::size_t k = 0; k < f_.functions(); ++k) {
+    f_.set_mode(k, f_.argument(k, values, u) < 0 ? -1.0 : 1.0);
+  }
   Eigen::MatrixXd jacobian(n, n);
   for (int j = 0; j < n; ++j) {
     // The central difference's error (h^2) and rounding (eps/h) balance near eps^(1/3).

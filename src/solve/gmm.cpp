@@ -12,8 +12,8 @@ OptimalWeighting optimal_weighting(const LinearSystem& system, const LeastSquare
                                    const MatrixXd& deviations, const KnownCovariance& known) {
   const Index rows = system.a.rows(), params = system.a.cols();
   const Eigen::SparseMatrix<double> g_mu = equations_jacobian(system, first.theta);
-  const MatrixXd s = batch_covariance(deviations * g_mu.transpose()) +
-                     MatrixXd(g_mu * known * g_mu.transpose());
+  const MatrixXd s =
+      batch_covariance(deviations * g_mu.transpose()) + MatrixXd(g_mu * known * g_mu.transpose());
   Eigen::SelfAdjointEigenSolver<MatrixXd> eigen(s);
   const VectorXd lambda = eigen.eigenvalues();
   const double lambda_max = lambda.maxCoeff();

@@ -41,7 +41,8 @@ JTest j_test(const LinearSystem& system, const LeastSquares& first, const Optima
   const MatrixXd g = deviations * g_mu.transpose();
   const MatrixXd free_g = g - (g * gmm.left.transpose()) * first.scaled.transpose();
   const MatrixXd free_part = MatrixXd::Identity(rows, rows) - first.scaled * gmm.left;
-  const MatrixXd added = free_part * MatrixXd(g_mu * known * g_mu.transpose()) * free_part.transpose();
+  const MatrixXd added =
+      free_part * MatrixXd(g_mu * known * g_mu.transpose()) * free_part.transpose();
   const LongRunCovariance residual_errors = with_known(long_run_covariance(free_g), added);
   const MatrixXd wv = gmm.weight * residual_errors.covariance;
   const double nu = residual_errors.dof, trace = wv.trace();

@@ -176,9 +176,9 @@ Estimate solve_on(const MomentRows& rows, const std::vector<std::string>& names,
 // The estimates with the record's rates of change at their stationary value, 0, and the known
 // covariance of all the moments' means: options.rate_covariance over the rates, else 0.
 std::pair<MomentEstimates, KnownCovariance> at_rest(const Model& model,
-                                             const std::vector<Monomial>& moments,
-                                             MomentEstimates estimates,
-                                             const SolveOptions& options) {
+                                                    const std::vector<Monomial>& moments,
+                                                    MomentEstimates estimates,
+                                                    const SolveOptions& options) {
   std::vector<std::size_t> rates;
   for (std::size_t k = 0; k < moments.size(); ++k) {
     if (!rate_of(moments[k], model.variables().size())) continue;
