@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <numbers>
 
 #include "common/decimal.hpp"
 #include "momentid/derive.hpp"
@@ -527,5 +528,48 @@ TEST_SUITE("identify") {
     check_near_truth(model, r, 0.003);
     REQUIRE(r.estimate.j_pvalue.has_value());
     CHECK(*r.estimate.j_pvalue > 0.01);  // the right model, at the 1% level
+  }
+
+  TEST_CASE("the Duffing oscillator linearised: frequency and damping within 3 standard errors") {
+    // y'' + c y' + k y + eps y^3 = x at y = 0: w = sqrt(k) = 2 rad/s, zeta = c / (2 w) = 0.125.
+    const Model model = model_file("duffing.mom");
+    const momentid::IdentifyResult r =
+        identify_held(model, "ma:K=10,w=0.1,sigma=20", 200000, 0.01, 1, {});
+    const momentid::LinearisedModes linear = momentid::linearised_modes(r);
+    INFO(linear.unavailable);
+    REQUIRE(linear.modes.size() == 1);
+    const momentid::LinearisedModes::Mode& mode = linear.modes[0];
+    INFO(mode.frequency_hz, " +- ", mode.frequency_se, " Hz, zeta ", mode.damping_ratio, " +- ",
+         mode.damping_se);
+    CHECK(mode.frequency_se > 0);
+    CHECK(mode.damping_se > 0);
+    CHECK(std::abs(mode.frequency_hz - 1 / std::numbers::pi) < 3 * mode.frequency_se);
+    CHECK(std::abs(mode.damping_ratio - 0.125) < 3 * mode.damping_se);
+    // At the equilibrium under the force's mean, k y0 + eps y0^3 = mean(x), v0 = 0, the
+    // stiffness is k + 3 eps y0^2.
+    const auto& p = r.parameters();
+    REQUIRE(linear.equilibrium.size() == 2);
+    const double y0 = linear.equilibrium[0], k = p[1].estimate, eps = p[2].estimate;
+    const double force = std::find_if(r.means.begin(), r.means.end(), [](const auto& m) {
+                           return m.name == "x";
+                         })->mean;
+    CHECK(k * y0 + eps * y0 * y0 * y0 == doctest::Approx(force).epsilon(1e-9));
+    CHECK(linear.equilibrium[1] == 0);
+    const double w = std::sqrt(k + 3 * eps * y0 * y0);
+    CHECK(mode.frequency_hz == doctest::Approx(w / (2 * std::numbers::pi)).epsilon(1e-8));
+    CHECK(mode.damping_ratio == doctest::Approx(p[0].estimate / (2 * w)).epsilon(1e-8));
+  }
+
+  TEST_CASE("a sign(v) term that switches at the equilibrium has no linearisation") {
+    const Model model = momentid::parse_model(
+        "state y, v\ninput x\nparam c = 4, f = 120, k = 1024\ny' = v\n"
+        "v' = -c*v - f*sign(v) - k*y + x\n",
+        "friction.mom");
+    const momentid::IdentifyResult r =
+        identify_held(model, "ma:K=10,w=0.1,sigma=800", 20000, 1.0 / 1024, 1, {});
+    const momentid::LinearisedModes linear = momentid::linearised_modes(r);
+    CHECK(linear.modes.empty());
+    INFO(linear.unavailable);
+    CHECK(linear.unavailable.find("switches there in v") != std::string::npos);
   }
 }

@@ -181,6 +181,22 @@ IdentifyResult identify(const Model& model, const DataSource& source,
 // otherwise with the derivative terms on the left; empty unless the status is ok or doubtful.
 std::vector<std::string> identified_equations(const IdentifyResult& result);
 
+// The identified model linearised at its equilibrium under the inputs' means (Newton from the
+// origin), with the estimates of parameters(): the natural frequency (Hz, for time in seconds)
+// and damping ratio of each oscillating mode (a complex pair of eigenvalues -zeta w +- i w
+// sqrt(1 - zeta^2)), by frequency, with standard errors by the delta method over the main fit's
+// covariance. No modes, with `unavailable` saying why, when the estimate is not usable, no
+// equilibrium is found, an abs(...) or sign(...) term switches at it, or every eigenvalue is real.
+struct LinearisedModes {
+  struct Mode {
+    double frequency_hz = 0, frequency_se = 0, damping_ratio = 0, damping_se = 0;
+  };
+  std::vector<double> equilibrium;  // per state
+  std::vector<Mode> modes;
+  std::string unavailable;
+};
+LinearisedModes linearised_modes(const IdentifyResult& result);
+
 // A table (parameter, estimate, standard error, 95% interval), the identified model, then the
 // diagnostics.
 std::string format_text(const IdentifyResult& result);

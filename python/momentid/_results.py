@@ -149,6 +149,10 @@ class IdentifyResult(Fit):
     nobs: the samples the moments are averaged over; status: "ok", "doubtful", "rank-deficient"
       or "nothing-identifiable"; warnings: what to distrust, the most serious first; equations:
       the identified model; diagnostics: the whole diagnostics section of the JSON.
+    natural_frequencies, damping_ratios: the model linearised at its equilibrium under the
+      inputs' means, one entry per oscillating mode by frequency (Hz), each an array of
+      (estimate, standard error) rows; empty when there is none (engineering["unavailable"]
+      says why); engineering: that section of the JSON, with the equilibrium.
     summary() and str(): the text report of `momentid identify`; to_dict(): the JSON of
       `momentid identify --format json`.
 
@@ -180,6 +184,11 @@ class IdentifyResult(Fit):
         self.equations = list(self._dict.get("equations", []))
         self.nobs = self.diagnostics["samples"]
         self.jval = self.diagnostics["j_statistic"]
+        self.engineering = self._dict.get("engineering", {})
+        self.natural_frequencies, self.damping_ratios = (
+            _read_only(_np.reshape([[_number(m["estimate"]), _number(m["std_error"])]
+                                    for m in self.engineering.get(key, [])], (-1, 2)))
+            for key in ("natural_frequencies_hz", "damping_ratios"))
 
     def jtest(self) -> Optional[tuple]:
         """(J, p-value, degrees of freedom) of Hansen's test that the moment equations hold at

@@ -550,3 +550,16 @@ def test_simulate_and_replay_friction():
     np.testing.assert_array_equal(simulated["y"][held], simulated["y"][held + 1])
     replayed = momentid.validate(friction, simulated)
     assert replayed.fit["y"] > 99.999 and replayed.fit["v"] > 99.999
+
+
+def test_linearised_modes(duffing, cli, cli_csv):
+    # The Duffing oscillator at y = 0: one mode near sqrt(k) / (2 pi) Hz, damping ratio near
+    # c / (2 sqrt(k)); the arrays hold the CLI's JSON values.
+    result = momentid.identify(duffing, cli_csv)
+    engineering = json.loads(cli("identify", DUFFING, cli_csv, "--format", "json"))["engineering"]
+    assert result.natural_frequencies.shape == (1, 2)
+    frequency, error = result.natural_frequencies[0]
+    assert frequency == engineering["natural_frequencies_hz"][0]["estimate"]
+    assert abs(frequency - 1 / np.pi) < 3 * error
+    ratio, error = result.damping_ratios[0]
+    assert abs(ratio - 0.125) < 3 * error

@@ -241,6 +241,44 @@ void diagnostics_json(std::ostringstream& out, const IdentifyResult& r) {
 
 }  // namespace
 
+// The linearised modes (linearised_modes) under the identified model, when there are any.
+void modes_text(std::ostringstream& out, const IdentifyResult& r) {
+  const LinearisedModes linear = linearised_modes(r);
+  if (linear.modes.empty()) return;
+  out << "\nlinearised at the equilibrium (";
+  for (std::size_t j = 0; j < linear.equilibrium.size(); ++j) {
+    out << (j ? ", " : "") << r.model->states()[j].name << " = "
+        << number(linear.equilibrium[j], "%.4g");
+  }
+  out << ")\n";
+  for (std::size_t k = 0; k < linear.modes.size(); ++k) {
+    const LinearisedModes::Mode& m = linear.modes[k];
+    out << "  mode " << k + 1 << ": " << number(m.frequency_hz, "%.6g") << " +- "
+        << number(m.frequency_se, "%.3g") << " Hz, damping ratio "
+        << number(m.damping_ratio, "%.6g") << " +- " << number(m.damping_se, "%.3g") << "\n";
+  }
+}
+
+// The "engineering" value of the JSON layout: the linearised modes, or why there are none.
+std::string modes_json(const IdentifyResult& r) {
+  const LinearisedModes linear = linearised_modes(r);
+  std::string out = "{\"equilibrium\": {";
+  for (std::size_t j = 0; j < linear.equilibrium.size(); ++j) {
+    out += (j ? ", " : "") + json_string(r.model->states()[j].name) + ": " +
+           json_number(linear.equilibrium[j]);
+  }
+  std::string frequencies, damping;
+  for (std::size_t k = 0; k < linear.modes.size(); ++k) {
+    const LinearisedModes::Mode& m = linear.modes[k];
+    frequencies += (k ? ", " : "") + std::string("{\"estimate\": ") + json_number(m.frequency_hz) +
+                   ", \"std_error\": " + json_number(m.frequency_se) + "}";
+    damping += (k ? ", " : "") + std::string("{\"estimate\": ") + json_number(m.damping_ratio) +
+               ", \"std_error\": " + json_number(m.damping_se) + "}";
+  }
+  return out + "}, \"natural_frequencies_hz\": [" + frequencies + "], \"damping_ratios\": [" +
+         damping + "], \"unavailable\": " + json_string(linear.unavailable) + "}";
+}
+
 std::string format_text(const IdentifyResult& r) {
   const Estimate& e = r.estimate;
   const DataMoments& d = r.data;
@@ -272,6 +310,7 @@ std::string format_text(const IdentifyResult& r) {
     out << "\nidentified model\n";
     for (const std::string& line : equations) out << "  " << line << "\n";
   }
+  modes_text(out, r);
   diagnostics_text(out, r);
   return out.str();
 }
@@ -325,6 +364,7 @@ std::string format_json(const IdentifyResult& r) {
     out << "}";
   }
   out << ",\n  \"equations\": " << json_strings(identified_equations(r));
+  out << ",\n  \"engineering\": " << modes_json(r);
   out << ",\n  \"moments\": {";
   for (std::size_t k = 0; k < d.estimates.mean.size(); ++k) {
     const std::string name = r.lagged ? lagged_moment_text(r.lagged->channels, r.lagged->moments[k])
