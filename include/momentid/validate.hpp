@@ -141,6 +141,62 @@ struct OutputFit {
   std::vector<CorrelationCheck> cross;
 };
 
+// How fast two simulations of the model under the record's input separate when one starts
+// from the initial state perturbed by kPerturbation of each state's spread (docs/cli/validate.md,
+// "Sensitivity"). The separation is the root mean square over the states of their differences,
+// each in units of the state's spread; measured over every run, reported for the run where it
+// grew most.
+struct Sensitivity {
+  std::size_t run = 0;          // the run's label
+  double separation = 0;        // the largest separation reached within the run
+  double final_separation = 0;  // at the run's end
+  // Seconds from the run's start until the separation first reached kSpread; nullopt: never.
+  std::optional<double> time_to_spread;
+  // The finite-time largest Lyapunov exponent (1/s): ln(separation / kPerturbation) / T at
+  // T = time_to_spread; when the separation never reached kSpread, at the run's end or where
+  // it first fell below 1e-6 of its start (before rounding blurs it).
+  double lyapunov = 0;
+  // The separation reached kSpread within the record: the trajectory cannot be reproduced, and
+  // the statistics judge the model instead.
+  bool sensitive = false;
+
+  static constexpr double kPerturbation = 1e-6, kSpread = 0.1;
+};
+
+// One statistic of one measured state compared with the same statistic of kRuns simulations
+// (StatisticalValidation). `distance` is how far the record's statistic is from the runs' mean,
+// `run_distances` each run's from the mean of the others; the band is 0..limit, from the runs'
+// distances (docs/cli/validate.md, "Statistics").
+struct StatisticCheck {
+  std::string output;  // the state's name
+  std::string kind;    // "psd", "distribution" or "crossings"
+  // The statistic at `at` (frequencies in Hz, probabilities, or levels): the record's, and the
+  // runs' mean, smallest and largest.
+  std::vector<double> at, measured, mean, low, high;
+  double distance = 0;
+  std::vector<double> run_distances;
+  double limit = 0;
+  bool inside() const { return distance <= limit; }
+};
+
+// The response's statistics, measured against simulations of the model driven by the record's
+// input from kRuns initial states that the model itself visits (its replay's states at rows
+// spread over each run), each with the record's estimated white sensor noise added.
+struct StatisticalValidation {
+  bool compared = false;
+  std::string not_compared;  // why not, when not compared
+  std::size_t runs = 0;
+  std::size_t segment = 0;       // Welch segment length in samples (Hann window, half overlap)
+  double level = 0;              // the probability that every statistic of a right model is inside
+  std::vector<double> noise_sd;  // per measured state, the noise added to the simulations
+  std::vector<StatisticCheck> checks;
+  std::size_t outside() const;
+
+  static constexpr std::size_t kRuns = 12;
+  static constexpr std::size_t kMinSegment = 64, kMaxSegment = 1024, kMinSegments = 8;
+  static constexpr double kLevel = 0.99;
+};
+
 struct ValidateResult {
   std::shared_ptr<const Model> model;
   std::vector<GiNaC::numeric> parameters;
@@ -155,6 +211,14 @@ struct ValidateResult {
   // The means removed (ValidateOptions::center), by variable.
   std::map<std::string, double> centered;
   std::vector<OutputFit> outputs;  // the measured states, in model order
+  Sensitivity sensitivity;
+  // Compared when the model is sensitive, or when its reproducible trajectory fails (to show
+  // where the response differs); otherwise the trajectory judges the model alone.
+  StatisticalValidation statistics;
+  // Sensitive: every statistic inside its band. Otherwise: no output's fit is below 0% or
+  // drifts (the warnings say which).
+  bool consistent = true;
+  std::string verdict;  // one sentence: what judged the model, and what it found
   std::vector<std::string> warnings;
 };
 

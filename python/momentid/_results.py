@@ -248,6 +248,13 @@ class ValidateResult:
       values}, the states the record has; inputs: {input: the record's values that drove it};
     compared: True for the rows the fit and the errors are over (those past each run's skip).
 
+    sensitive: whether nearby trajectories separate to the spread within the record (then the
+    trajectory cannot be reproduced and the statistics judge the model); `sensitivity` its
+    figures (dict: time_to_spread, lyapunov, ...); consistent: the overall verdict as a
+    boolean, `verdict` in words; `statistics`: None, or the statistics compared (dict with
+    `checks`, each with output, kind, distance, limit, inside and the arrays at, measured,
+    mean, low, high).
+
     The fit of output y is 100 (1 - |e| / |m - mean(m)|) over the compared rows, with
     m = measured[y][compared] and e = m - simulated[y][compared].
     """
@@ -261,6 +268,11 @@ class ValidateResult:
         self.rms = {name: o["rms"] for name, o in outputs.items()}
         self.warnings = list(self._dict["warnings"])
         self.centered = dict(self._dict.get("centered", {}))
+        self.sensitive = bool(self._dict["sensitive"])
+        self.consistent = bool(self._dict["consistent"])
+        self.verdict = self._dict["verdict"]
+        self.sensitivity = dict(self._dict["sensitivity"])
+        self.statistics = self._dict["statistics"]
         self.t = series["t"]
         self.run = series["run"]
         self.simulated = dict(series["simulated"])

@@ -371,6 +371,27 @@ def test_validate_true_parameters(duffing, record):
     assert result.warnings == []
 
 
+def test_validate_reports_sensitivity_and_the_verdict(duffing, record):
+    result = momentid.validate(duffing, record, params=TRUE)
+    assert not result.sensitive and result.consistent and result.statistics is None
+    assert result.sensitivity["lyapunov"] < 0 and result.sensitivity["time_to_spread"] is None
+    assert result.verdict.startswith("the trajectory can be reproduced")
+
+
+def test_validate_judges_a_sensitive_model_by_its_statistics(duffing):
+    # A lightly damped, strongly hardening oscillator under a strong force.
+    stiff = {"c": 0.2, "k": 100.0, "eps": 1e4}
+    record = momentid.simulate(duffing, stiff, samples=40000, dt=0.001, seed=5,
+                               inputs={"x": "ou:tau=0.01,sigma=50"}, substeps=4)
+    result = momentid.validate(duffing, record, params=stiff)
+    assert result.sensitive and result.sensitivity["time_to_spread"] > 0
+    assert result.consistent and result.warnings == []
+    checks = result.statistics["checks"]
+    assert [c["kind"] for c in checks] == ["psd", "distribution", "crossings"] * 2
+    assert all(c["inside"] for c in checks)
+    assert len(checks[0]["at"]) == result.statistics["segment"] // 2 + 1
+
+
 def test_validate_center_removes_an_offset(duffing, record):
     shifted = momentid.Record({**record, "y": record["y"] + 0.3}, record.metadata)
     result = momentid.validate(duffing, shifted, params=TRUE, center="y")

@@ -8,12 +8,16 @@
 #include "app/validate/record.hpp"
 #include "app/validate/replay.hpp"
 #include "app/validate/residuals.hpp"
+#include "app/validate/sensitivity.hpp"
+#include "app/validate/statistics.hpp"
 #include "momentid/data_pass.hpp"
 #include "momentid/error.hpp"
 
-// validate: replay the record (validate/replay.cpp), choose the rows to skip, then compare each
-// measured state (validate/fit.cpp) and test its error (validate/residuals.cpp). The reports
-// are in validate/report.cpp.
+// validate: replay the record (validate/replay.cpp), measure how fast nearby trajectories
+// separate (validate/sensitivity.cpp), choose the rows to skip, then compare each measured state
+// (validate/fit.cpp) and test its error (validate/residuals.cpp); for a sensitive model, whose
+// trajectory cannot be reproduced, compare the response's statistics (validate/statistics.cpp).
+// The reports are in validate/report.cpp and validate/report_statistics.cpp.
 
 namespace momentid {
 
@@ -50,13 +54,13 @@ std::string substep_warning(const Replay& replay) {
 }
 
 // The rows left out at the start of each run (ValidateResult::skip), with a warning for a run
-// whose simulation never forgets its initial state.
-void choose_skips(const Model& model, const ValidateOptions& options, ValidateResult& result) {
+// whose simulation never forgets its initial state unless the model is sensitive (which says
+// more).
+void choose_skips(const Model& model, const RecordSimulator& simulator,
+                  const ValidateOptions& options, ValidateResult& result) {
   const Replay& replay = result.replay;
   const Record& record = replay.record;
   result.skip_chosen = !options.skip;
-  const RecordSimulator simulator(model, result.parameters, replay.interpolation, record.dt,
-                                  replay.substeps);
   for (std::size_t r = 0; r < record.runs.size(); ++r) {
     const std::size_t rows = record.runs[r].rows();
     std::size_t skip = 0;
@@ -67,7 +71,7 @@ void choose_skips(const Model& model, const ValidateOptions& options, ValidateRe
           forgetting_row(simulator, run_inputs(model, record, record.runs[r]), replay.initial[r],
                          replay.simulated[r], run_start(record.runs[r]), run_label(record, r));
       skip = row;
-      if (distance > 0.01) {
+      if (distance > 0.01 && !result.sensitivity.sensitive) {
         char text[64];
         std::snprintf(text, sizeof text, "%.3g%%", 100 * distance);
         result.warnings.push_back(
@@ -87,6 +91,45 @@ void choose_skips(const Model& model, const ValidateOptions& options, ValidateRe
     }
     result.skip.push_back(skip);
   }
+}
+
+// The overall verdict: the statistics judge a sensitive model, the trajectory fit any other
+// (whose warnings have set `consistent`).
+void judge(ValidateResult& result) {
+  const std::string cannot =
+      "the trajectory cannot be reproduced (the model is sensitive to its initial state under "
+      "this input): ";
+  if (!result.sensitivity.sensitive) {
+    result.verdict = "the trajectory can be reproduced and its fit judges the model: ";
+    if (result.consistent) {
+      result.verdict += "no output is worse than its mean or drifts";
+    } else {
+      result.verdict += "the warnings say where it fails";
+      if (result.statistics.compared) {
+        result.verdict += ", and " + std::to_string(result.statistics.outside()) + " of " +
+                          std::to_string(result.statistics.checks.size()) +
+                          " statistics of the response are outside their bands";
+      }
+    }
+    return;
+  }
+  const StatisticalValidation& s = result.statistics;
+  if (!s.compared) {
+    result.verdict = cannot + "and its statistics are not compared: " + s.not_compared;
+    return;
+  }
+  const std::string count = std::to_string(s.checks.size());
+  result.consistent = s.outside() == 0;
+  if (result.consistent) {
+    result.verdict = cannot + "its statistics judge it, and all " + count +
+                     " are inside their bands: the model is consistent with the record";
+    return;
+  }
+  result.verdict = cannot + "its statistics judge it, and " + std::to_string(s.outside()) + " of " +
+                   count + " are outside their bands: the model or its parameters are wrong";
+  result.warnings.push_back(std::to_string(s.outside()) + " of " + count +
+                            " statistics of the response are outside their bands: the model or "
+                            "its parameters are wrong");
 }
 
 }  // namespace
@@ -115,15 +158,27 @@ ValidateResult validate(const Model& model, const DataSource& source,
   if (replay.substep_change >= ReplayOptions::kSubstepTolerance) {
     result.warnings.push_back(substep_warning(replay));
   }
-  choose_skips(model, options, result);
+  const RecordSimulator simulator(model, result.parameters, replay.interpolation, replay.record.dt,
+                                  replay.substeps);
+  result.sensitivity = measure_sensitivity(model, simulator, replay);
+  choose_skips(model, simulator, options, result);
   for (std::size_t j : outputs) {
     ComparedRows rows = compared_rows(replay, j, result.skip);
     OutputFit fit = output_fit(model, j, rows);
     add_correlation_checks(model, replay.record, result.skip, std::move(rows.error), options.lags,
                            fit);
-    add_fit_warnings(fit, result.warnings);
+    // A trajectory that cannot be reproduced says nothing against the model.
+    if (!result.sensitivity.sensitive && add_fit_warnings(fit, result.warnings)) {
+      result.consistent = false;
+    }
     result.outputs.push_back(std::move(fit));
   }
+  // The statistics judge a sensitive model, and show where a reproducible trajectory that
+  // fails differs.
+  if (result.sensitivity.sensitive || !result.consistent) {
+    result.statistics = compare_statistics(model, simulator, replay, outputs);
+  }
+  judge(result);
   return result;
 }
 

@@ -64,7 +64,8 @@ OutputFit output_fit(const Model& model, std::size_t state, const ComparedRows& 
   return fit;
 }
 
-void add_fit_warnings(const OutputFit& fit, std::vector<std::string>& warnings) {
+bool add_fit_warnings(const OutputFit& fit, std::vector<std::string>& warnings) {
+  const std::size_t before = warnings.size();
   if (fit.fit < 0) {
     warnings.push_back(fit.name +
                        ": the simulation is further from the data than their mean "
@@ -75,6 +76,7 @@ void add_fit_warnings(const OutputFit& fit, std::vector<std::string>& warnings) 
                        ": the error grows along the record (its rms after the first 10% "
                        "is more than twice the rms over them): the simulation drifts");
   }
+  return warnings.size() > before;
 }
 
 }  // namespace momentid

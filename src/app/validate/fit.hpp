@@ -25,6 +25,7 @@ ComparedRows compared_rows(const Replay& replay, std::size_t state,
 OutputFit output_fit(const Model& model, std::size_t state, const ComparedRows& rows);
 
 // The warnings about a fit: worse than the data's mean, or an error that grows along the record.
-void add_fit_warnings(const OutputFit& fit, std::vector<std::string>& warnings);
+// Returns whether it warned.
+bool add_fit_warnings(const OutputFit& fit, std::vector<std::string>& warnings);
 
 }  // namespace momentid

@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "app/validate/record.hpp"
+#include "app/validate/report_statistics.hpp"
 #include "common/decimal.hpp"
 #include "common/json.hpp"
 #include "common/number.hpp"
@@ -40,7 +41,8 @@ std::string skip_text(const ValidateResult& r, bool autonomous) {
   return out;
 }
 
-std::string check_text(const CorrelationCheck& c) {
+// A check outside its band blames the model, unless the trajectory cannot be reproduced.
+std::string check_text(const CorrelationCheck& c, bool sensitive) {
   const int last = c.first_lag + static_cast<int>(c.values.size()) - 1;
   std::string out = c.with.empty() ? "autocorrelation of the error"
                                    : "cross-correlation of the error with " + c.with;
@@ -54,8 +56,9 @@ std::string check_text(const CorrelationCheck& c) {
   }
   out += " (largest " + number(c.values[worst], "%.3g") + " at lag " +
          std::to_string(c.first_lag + static_cast<int>(worst)) + ")  <- " +
-         (c.with.empty() ? "not white: the model leaves structure in the error"
-                         : "the error depends on the input: the model misses part of its effect");
+         (sensitive        ? "expected of a trajectory that cannot be reproduced"
+          : c.with.empty() ? "not white: the model leaves structure in the error"
+                           : "the error depends on the input: the model misses part of its effect");
   return out;
 }
 
@@ -95,7 +98,7 @@ std::string format_text(const ValidateResult& r) {
     for (const auto& [name, mean] : r.centered) out += " " + name + " " + number(mean, "%.4g");
     out += "\n";
   }
-  out += "\n";
+  out += sensitivity_text(r) + "\n";
   char line[256];
   std::snprintf(line, sizeof line, "%-10s %10s %12s %9s %14s %12s\n", "output", "samples",
                 "rms error", "fit %", "rms first 10%", "rms rest");
@@ -112,10 +115,13 @@ std::string format_text(const ValidateResult& r) {
       out += "  " + f.name + ": the error is zero throughout: nothing to check\n";
       continue;
     }
-    out += "  " + f.name + ": " + check_text(*f.autocorrelation) + "\n";
-    for (const CorrelationCheck& c : f.cross) out += "  " + f.name + ": " + check_text(c) + "\n";
+    const bool sensitive = r.sensitivity.sensitive;
+    out += "  " + f.name + ": " + check_text(*f.autocorrelation, sensitive) + "\n";
+    for (const CorrelationCheck& c : f.cross) {
+      out += "  " + f.name + ": " + check_text(c, sensitive) + "\n";
+    }
   }
-  out += "\n";
+  out += "\n" + statistics_text(r);
   if (r.warnings.empty()) out += "warnings: none\n";
   for (const std::string& w : r.warnings) out += "warning: " + w + "\n";
   return out;
@@ -201,7 +207,8 @@ std::string format_json(const ValidateResult& r) {
     }
     out << "}}";
   }
-  out << "\n  },\n  \"warnings\": " << json_strings(r.warnings) << "\n}\n";
+  out << "\n  }" << statistics_json(r) << ",\n  \"warnings\": " << json_strings(r.warnings)
+      << "\n}\n";
   return out.str();
 }
 

@@ -1,0 +1,199 @@
+#include "app/validate/statistics.hpp"
+
+#include <algorithm>
+#include <cfloat>
+#include <cmath>
+#include <random>
+
+#include "app/validate/record.hpp"
+#include "app/validate/series_statistics.hpp"
+#include "solve/distributions.hpp"
+
+namespace momentid {
+
+std::size_t StatisticalValidation::outside() const {
+  return static_cast<std::size_t>(std::count_if(
+      checks.begin(), checks.end(), [](const StatisticCheck& c) { return !c.inside(); }));
+}
+
+namespace {
+
+using Runs = std::vector<std::vector<double>>;  // one series per record run
+
+// The amplitude quantiles compared, and the levels of the crossings in standard deviations
+// about the mean: the distribution's body and both tails.
+const std::vector<double> kProbabilities = {0.001, 0.01, 0.05, 0.1,  0.25, 0.5,
+                                            0.75,  0.9,  0.95, 0.99, 0.999};
+const std::vector<double> kLevels = {-2, -1, 0, 1, 2};
+// Crossings count with a hysteresis of this many noise standard deviations.
+constexpr double kHysteresis = 3;
+constexpr std::uint64_t kNoiseSeed = 20261125;
+
+// The largest power of two from kMinSegment to kMaxSegment that leaves kMinSegments segments in
+// the shortest run; 0 when none does.
+std::size_t segment_length(const Record& record) {
+  std::size_t shortest = record.runs.front().rows();
+  for (const RecordRun& run : record.runs) shortest = std::min(shortest, run.rows());
+  std::size_t segment = 0;
+  for (std::size_t s = StatisticalValidation::kMinSegment;
+       s <= StatisticalValidation::kMaxSegment &&
+       s * StatisticalValidation::kMinSegments <= shortest;
+       s *= 2) {
+    segment = s;
+  }
+  return segment;
+}
+
+// simulations[k][o]: output o of simulation k, run by run, with white noise of standard
+// deviation noise_sd[o] added. Simulation k of run r starts from the replay's state at row
+// (k + 1) rows / (kRuns + 1).
+std::vector<std::vector<Runs>> simulations(const Model& model, const RecordSimulator& simulator,
+                                           const Replay& replay,
+                                           const std::vector<std::size_t>& outputs,
+                                           const std::vector<double>& noise_sd) {
+  const Record& record = replay.record;
+  constexpr std::size_t kRuns = StatisticalValidation::kRuns;
+  std::vector<std::vector<Runs>> out(kRuns, std::vector<Runs>(outputs.size()));
+  for (std::size_t r = 0; r < record.runs.size(); ++r) {
+    const RecordRun& run = record.runs[r];
+    const std::vector<std::vector<double>> inputs = run_inputs(model, record, run);
+    for (std::size_t k = 0; k < kRuns; ++k) {
+      const std::size_t row = (k + 1) * run.rows() / (kRuns + 1);
+      std::vector<double> initial;
+      for (const std::vector<double>& state : replay.simulated[r]) initial.push_back(state[row]);
+      std::vector<std::vector<double>> states =
+          simulator.run(inputs, initial, run_start(run), run_label(record, r), run.rows());
+      std::mt19937_64 random(kNoiseSeed + kRuns * r + k);
+      for (std::size_t o = 0; o < outputs.size(); ++o) {
+        std::vector<double>& series = states[outputs[o]];
+        if (noise_sd[o] > 0) {
+          std::normal_distribution<double> noise(0.0, noise_sd[o]);
+          for (double& x : series) x += noise(random);
+        }
+        out[k][o].push_back(std::move(series));
+      }
+    }
+  }
+  return out;
+}
+
+// The record's statistic against the runs' (each a vector over `at`): their mean and range, and
+// the distances: the sum of the absolute differences over the sum of the reference (`relative`:
+// spectra and rates), or their mean in units of `unit` (quantiles, in the runs' spread).
+StatisticCheck check(std::string output, std::string kind, std::vector<double> at,
+                     std::vector<double> measured, const std::vector<std::vector<double>>& runs,
+                     bool relative, double unit = 1) {
+  StatisticCheck c{std::move(output), std::move(kind), std::move(at), std::move(measured)};
+  const std::size_t size = c.measured.size();
+  const auto k = static_cast<double>(runs.size());
+  c.mean.assign(size, 0.0);
+  c.low = runs.front();
+  c.high = runs.front();
+  for (const std::vector<double>& run : runs) {
+    for (std::size_t i = 0; i < size; ++i) {
+      c.mean[i] += run[i] / k;
+      c.low[i] = std::min(c.low[i], run[i]);
+      c.high[i] = std::max(c.high[i], run[i]);
+    }
+  }
+  const auto distance = [&](const std::vector<double>& a, const std::vector<double>& reference) {
+    double difference = 0, scale = 0;
+    for (std::size_t i = 0; i < size; ++i) {
+      difference += std::abs(a[i] - reference[i]);
+      scale += relative ? std::abs(reference[i]) : unit;
+    }
+    return difference / scale;
+  };
+  c.distance = distance(c.measured, c.mean);
+  for (const std::vector<double>& run : runs) {
+    std::vector<double> others(size);
+    for (std::size_t i = 0; i < size; ++i) others[i] = (c.mean[i] * k - run[i]) / (k - 1);
+    c.run_distances.push_back(distance(run, others));
+  }
+  return c;
+}
+
+// The band of each check: a prediction bound for one more distance from the runs' distances,
+// on a logarithmic scale (distances are positive and skewed), at a level that holds for all
+// checks together (Bonferroni).
+void set_limits(std::vector<StatisticCheck>& checks, double level) {
+  const double k = StatisticalValidation::kRuns;
+  const double t = student_t_quantile(1 - (1 - level) / static_cast<double>(checks.size()), k - 1);
+  for (StatisticCheck& c : checks) {
+    // Runs that agree exactly have a distance of 0: the smallest double stands for it.
+    std::vector<double> logs;
+    for (double d : c.run_distances) logs.push_back(std::log(std::max(d, DBL_MIN)));
+    double mean = 0, squares = 0;
+    for (double l : logs) mean += l / k;
+    for (double l : logs) squares += (l - mean) * (l - mean);
+    const double sd = std::sqrt(squares / (k - 1));
+    c.limit = std::exp(mean + t * sd * std::sqrt(1 + 1 / k));
+  }
+}
+
+// The three checks of one output.
+void add_checks(const std::string& name, const Runs& measured, const std::vector<Runs>& runs,
+                double dt, std::size_t segment, double noise_sd,
+                std::vector<StatisticCheck>& checks) {
+  std::vector<std::vector<double>> psd, quantile, rate;
+  double mean = 0, spread = 0;
+  for (const Runs& run : runs) {
+    const auto [m, s] = mean_and_spread(run);
+    mean += m / static_cast<double>(runs.size());
+    spread += s / static_cast<double>(runs.size());
+  }
+  std::vector<double> levels;
+  for (double a : kLevels) levels.push_back(mean + a * spread);
+  const double hysteresis = kHysteresis * noise_sd;
+  for (const Runs& run : runs) {
+    psd.push_back(welch_psd(run, dt, segment));
+    quantile.push_back(quantiles(run, kProbabilities));
+    rate.push_back(upcrossing_rates(run, dt, levels, hysteresis));
+  }
+  checks.push_back(check(name, "psd", psd_frequencies(dt, segment),
+                         welch_psd(measured, dt, segment), psd, true));
+  checks.push_back(check(name, "distribution", kProbabilities, quantiles(measured, kProbabilities),
+                         quantile, false, spread));
+  checks.push_back(check(name, "crossings", levels,
+                         upcrossing_rates(measured, dt, levels, hysteresis), rate, true));
+}
+
+}  // namespace
+
+StatisticalValidation compare_statistics(const Model& model, const RecordSimulator& simulator,
+                                         const Replay& replay,
+                                         const std::vector<std::size_t>& outputs) {
+  StatisticalValidation out;
+  const Record& record = replay.record;
+  out.segment = segment_length(record);
+  if (out.segment == 0) {
+    out.not_compared =
+        "a run of fewer than " +
+        std::to_string(StatisticalValidation::kMinSegment * StatisticalValidation::kMinSegments) +
+        " rows is too short for the spectra";
+    return out;
+  }
+  out.compared = true;
+  out.runs = StatisticalValidation::kRuns;
+  out.level = StatisticalValidation::kLevel;
+  std::vector<Runs> measured;
+  for (std::size_t j : outputs) {
+    const auto column = static_cast<std::size_t>(record.column_of(j));
+    Runs series;
+    for (const RecordRun& run : record.runs) series.push_back(run.columns[column]);
+    out.noise_sd.push_back(std::sqrt(white_noise_variance(series)));
+    measured.push_back(std::move(series));
+  }
+  const std::vector<std::vector<Runs>> runs =
+      simulations(model, simulator, replay, outputs, out.noise_sd);
+  for (std::size_t o = 0; o < outputs.size(); ++o) {
+    std::vector<Runs> of_output;
+    for (const std::vector<Runs>& run : runs) of_output.push_back(run[o]);
+    add_checks(model.states()[outputs[o]].name, measured[o], of_output, record.dt, out.segment,
+               out.noise_sd[o], out.checks);
+  }
+  set_limits(out.checks, out.level);
+  return out;
+}
+
+}  // namespace momentid
