@@ -229,6 +229,57 @@ bool has_parameter(const Equation& eq) {
                      [](const Term& t) { return t.parameter >= 0; });
 }
 
+// Each measured state, and its highest power in the equations' terms. With abs or sign terms
+// also its cube: the states alone correlate with v and |v|*v (or sign(v)) alike, which leaves
+// their parameters nearly collinear, and the cubes tell them apart (on the drag, friction and
+// clearance oscillators of docs/measured-data.md the standard errors of c2, f and kc fell 3 to
+// 15 times).
+std::vector<Monomial> default_instruments(const Model& model, const std::vector<bool>& measured) {
+  std::vector<Monomial> out;
+  const int cube = model.functions().empty() ? 1 : 3;
+  for (std::size_t v = 0; v < model.states().size(); ++v) {
+    if (!measured[v]) continue;
+    int highest = 1;
+    for (const Equation& eq : model.equations()) {
+      if (!has_parameter(eq)) continue;
+      for (const Term& t : eq.terms) highest = std::max(highest, t.monomial[v]);
+    }
+    for (int power : {1, cube, highest}) {
+      Monomial m(model.variables().size(), 0);
+      m[v] = power;
+      if (std::find(out.begin(), out.end(), m) == out.end()) out.push_back(m);
+    }
+  }
+  return out;
+}
+
+// Per variable, whether the equations read it; a function's argument's channels are read for it,
+// as the pass computes it from them.
+std::vector<bool> needed_variables(const LaggedSystem& system) {
+  const Model& model = *system.model;
+  std::vector<bool> needed(model.variables().size(), false);
+  const auto mark = [&](const LagCombination& c) {
+    for (const auto& [f, w] : c) {
+      for (std::size_t v = 0; v < needed.size(); ++v) {
+        if (f.instrument[v] != 0 || f.function[v] != 0) needed[v] = true;
+      }
+    }
+  };
+  for (const LaggedEquation& row : system.equations) {
+    for (const LagCombination& c : row.coefficients) mark(c);
+    mark(row.rhs);
+  }
+  for (std::size_t k = 0; k < model.functions().size(); ++k) {
+    if (!needed[model.channel_count() + k]) continue;
+    for (const auto& [coefficient, monomial] : model.functions()[k].argument) {
+      for (std::size_t c = 0; c < monomial.size(); ++c) {
+        if (monomial[c] != 0) needed[c] = true;
+      }
+    }
+  }
+  return needed;
+}
+
 }  // namespace
 
 std::vector<VariableReading> variable_readings(const Model& model,
@@ -291,33 +342,8 @@ LaggedSystem derive_lagged(const Model& model, const LagOptions& options) {
       system.derivatives.push_back(deriver.definition(v));
     }
   }
-  if (options.instruments) {
-    system.instruments = *options.instruments;
-  } else {
-    // Each measured state, and its highest power in the equations' terms. With abs or sign
-    // terms also its cube: the states alone correlate with v and |v|*v (or sign(v)) alike, which
-    // leaves their parameters nearly collinear, and the cubes tell them apart (on the drag,
-    // friction and clearance oscillators of docs/measured-data.md the standard errors of c2, f
-    // and kc fell 3 to 15 times).
-    const int cube = model.functions().empty() ? 1 : 3;
-    for (int v = 0; v < states; ++v) {
-      if (!measured[v]) continue;
-      int highest = 1;
-      for (const Equation& eq : model.equations()) {
-        if (!has_parameter(eq)) continue;
-        for (const Term& t : eq.terms) highest = std::max(highest, t.monomial[v]);
-      }
-      for (int power : {1, cube, highest}) {
-        Monomial m(variables, 0);
-        m[v] = power;
-        if (std::find(system.instruments.begin(), system.instruments.end(), m) ==
-            system.instruments.end()) {
-          system.instruments.push_back(m);
-        }
-      }
-    }
-  }
-
+  system.instruments =
+      options.instruments ? *options.instruments : default_instruments(model, measured);
   if (system.instruments.empty()) {
     throw UsageError("lags: no instruments: the data have none of the model's states");
   }
@@ -355,27 +381,7 @@ LaggedSystem derive_lagged(const Model& model, const LagOptions& options) {
   options.validate(model);
   system.test_functions = lag_test_functions(system.first_lag, system.last_lag);
 
-  system.needed.assign(variables, false);
-  for (const LaggedEquation& row : system.equations) {
-    auto mark = [&](const LagCombination& c) {
-      for (const auto& [f, w] : c) {
-        for (std::size_t v = 0; v < variables; ++v) {
-          if (f.instrument[v] != 0 || f.function[v] != 0) system.needed[v] = true;
-        }
-      }
-    };
-    for (const LagCombination& c : row.coefficients) mark(c);
-    mark(row.rhs);
-  }
-  // The pass computes a function from its argument's channels.
-  for (std::size_t k = 0; k < model.functions().size(); ++k) {
-    if (!system.needed[model.channel_count() + k]) continue;
-    for (const auto& [coefficient, monomial] : model.functions()[k].argument) {
-      for (std::size_t c = 0; c < monomial.size(); ++c) {
-        if (monomial[c] != 0) system.needed[c] = true;
-      }
-    }
-  }
+  system.needed = needed_variables(system);
   return system;
 }
 

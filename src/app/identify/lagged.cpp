@@ -138,13 +138,11 @@ std::vector<std::string> noisy_function_warnings(const IdentifyResult& result,
           *fraction < kNoisyArgument) {
         continue;
       }
-      out.push_back("'" + s.name + "' carries noise of about " + number(100 * *fraction, "%.2g") +
-                    "% of its standard deviation, and the lagged equations compute " + f.name +
-                    " from it: no correction removes noise from inside abs or sign, and the "
-                    "terms with " +
-                    f.name +
-                    " are biased (docs/measured-data.md, \"abs and sign "
-                    "of noisy channels\")");
+      std::string w = "'" + s.name + "' carries noise of about " + number(100 * *fraction, "%.2g");
+      w += "% of its standard deviation, and the lagged equations compute " + f.name;
+      w += " from it: no correction removes noise from inside abs or sign, and the terms with ";
+      w += f.name + " are biased (docs/measured-data.md, \"abs and sign of noisy channels\")";
+      out.push_back(std::move(w));
     }
   }
   return out;
