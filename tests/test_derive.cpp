@@ -1,14 +1,18 @@
 #include <doctest/doctest.h>
 
 #include <algorithm>
+#include <map>
 #include <string>
 
 #include "momentid/derive.hpp"
+#include "momentid/estimate.hpp"
+#include "momentid/lagged.hpp"
 #include "momentid/model.hpp"
 #include "test_support.hpp"
 
 namespace {
 
+using momentid::testing::error_from;
 using momentid::testing::model_file;
 
 using GiNaC::ex;
@@ -490,5 +494,111 @@ multipliers 1, y2
     const auto h = momentid::held_input_corrections(model, {{0, 2, 0}});
     CHECK(h.moments.empty());
     CHECK(h.unavailable == "the derivatives of the states are not polynomials in the states");
+  }
+}
+
+namespace {
+
+// The lagged equation `i` of `system` as derive prints it, after its source column.
+std::string lagged_text(const momentid::LaggedSystem& system, std::size_t i) {
+  const std::string text = momentid::format_text(system);
+  std::size_t at = 0;
+  for (std::size_t line = 0; line < 3 + i; ++line) at = text.find('\n', at) + 1;
+  const std::string line = text.substr(at, text.find('\n', at) - at);
+  const std::size_t source = line.find("(t-s)");
+  REQUIRE(source != std::string::npos);
+  return line.substr(line.find_first_not_of(' ', source + 5));
+}
+
+Model oscillator(const std::string& force) {
+  return momentid::parse_model(
+      "state y, v\ninput x\nparam c, a, k\ny' = v\nv' = -c*v - " + force + " - k*y + x\n",
+      "osc.mom");
+}
+
+}  // namespace
+
+TEST_SUITE("derive lagged abs and sign") {
+  TEST_CASE("drag reads abs(v)*v from a channel computed from the measured velocity") {
+    const Model model = oscillator("a*abs(v)*v");
+    const std::vector<momentid::Monomial> y{{1, 0, 0, 0}};
+    const auto system = momentid::derive_lagged(model, {.instruments = y});
+    REQUIRE(system.equations.size() == 1);
+    CHECK(lagged_text(system, 0) ==
+          "c*C[y;v](s) + a*C[y;v*abs(v)](s) + k*C[y;y](s) = C[y;x](s) - C'[y;v](s)");
+    CHECK(system.needed == std::vector<bool>{true, true, true, true});
+    const std::string text = momentid::format_text(system);
+    CHECK(text.find("channels read: y, v, x\ncomputed from them: abs(v)\n") != std::string::npos);
+    const std::string json = momentid::format_json(system);
+    CHECK(json.find("\"channels\": [\"y\", \"v\", \"x\"],\n  \"computed\": [\"abs(v)\"],") !=
+          std::string::npos);
+    CHECK(momentid::format_latex(system).find("C_{y,\\,v*\\lvert v\\rvert}(s)") !=
+          std::string::npos);
+  }
+
+  TEST_CASE("a clearance spring abs(y)*y needs only y and the force") {
+    const Model model = oscillator("a*abs(y)*y");
+    const auto system = momentid::derive_lagged(model, {.measured = {true, false, true}});
+    // The cube of y as well, which tells abs(y)*y from y.
+    CHECK(system.instruments == std::vector<momentid::Monomial>{{1, 0, 0, 0}, {3, 0, 0, 0}});
+    REQUIRE(system.equations.size() == 2);
+    CHECK(lagged_text(system, 0) ==
+          "c*C'[y;y](s) + a*C[y;y*abs(y)](s) + k*C[y;y](s) = C[y;x](s) - C''[y;y](s)");
+    CHECK(lagged_text(system, 1) ==
+          "c*C'[y^3;y](s) + a*C[y^3;y*abs(y)](s) + k*C[y^3;y](s) = C[y^3;x](s) - C''[y^3;y](s)");
+    CHECK(system.needed == std::vector<bool>{true, false, true, true});
+    CHECK(system.derivatives == std::vector<std::string>{"v = y'"});
+  }
+
+  TEST_CASE("a function of a state without a column is refused, naming the term and the state") {
+    const Model model = oscillator("a*abs(v)*v");
+    const auto e = error_from<momentid::ModelError>([&] {
+      momentid::derive_lagged(model, {.measured = {true, false, true}});
+    });
+    CHECK(e.message() ==
+          "term 'a*v*abs(v)' of equation 2 needs a column for state v: the lagged equations "
+          "compute abs(v) from the measured channels (give the record a column for v)");
+    CHECK(e.location().line == 5);
+    // sign(y)*v is measured sign(y) times the derivative of y, not a time derivative of y.
+    const Model product = oscillator("a*sign(y)*v");
+    const auto f = error_from<momentid::ModelError>([&] {
+      momentid::derive_lagged(product, {.measured = {true, false, true}});
+    });
+    CHECK(f.message() ==
+          "term 'a*v*sign(y)' of equation 2 needs a column for v: it is not a time derivative of "
+          "measured channels (v = y')");
+  }
+
+  TEST_CASE("the noise correction leaves a channel inside abs or sign of the same moment alone") {
+    // a*y^2*sign(v): y's noise is independent of sign(v + e), its power corrected; b*v^2*abs(v):
+    // no polynomial corrects v's noise inside abs(v), so neither is v^2 corrected.
+    const Model model = momentid::parse_model(
+        "state y, v\ninput x\nparam c, a, b, k\ny' = v\n"
+        "v' = -c*v - a*y^2*sign(v) - b*abs(v)*v^2 - k*y + x\n",
+        "noisy.mom");
+    const std::vector<momentid::Monomial> y{{1, 0, 0, 0, 0}};
+    const auto system =
+        momentid::derive_lagged(model, {.first_lag = 3, .last_lag = 60, .instruments = y});
+    // Channels: y, v, x, then sign(v) and abs(v) computed.
+    const auto rows = momentid::lagged_rows(system, 0.01, {0, 1, 2, 3, 4}, {0.01, 0.02, 0});
+    const momentid::LagTestFunction& phi = system.test_functions[0];
+    const int lag = static_cast<int>(phi.centre);
+    const auto weights = [&](std::size_t parameter) {
+      std::map<std::string, double> out;
+      for (const auto& [k, w] : rows.rows.a[0][parameter].moments) {
+        if (rows.moments[k].max_lag() == lag) out[to_string(rows.moments[k])] += w / phi(lag);
+      }
+      return out;
+    };
+    const std::string at = "(t-" + std::to_string(lag) + ")";
+    const auto a = weights(1);
+    REQUIRE(a.size() == 2);
+    CHECK(a.at("c0^2*c3*c0" + at) == doctest::Approx(1));
+    CHECK(a.at("c3*c0" + at) == doctest::Approx(-0.01));
+    // The moment of the correction is listed whatever the noise, here with weight 0.
+    const auto b = weights(2);
+    REQUIRE(b.size() == 2);
+    CHECK(b.at("c1^2*c4*c0" + at) == doctest::Approx(1));
+    CHECK(b.at("c4*c0" + at) == 0);
   }
 }

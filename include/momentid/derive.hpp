@@ -149,6 +149,8 @@ std::vector<Monomial> monomials_up_to(int states, int degree);
 
 // Output formats (docs/cli/derive.md, "momentid derive").
 std::string format_moment(const Model& model, const Monomial& moment);
+// variables()[v] in LaTeX: a state's or input's name, |p| or \operatorname{sgn}(p) for a function.
+std::string format_variable_latex(const Model& model, std::size_t v);
 std::string format_combination(const Model& model, const MomentCombination& combination);
 std::string format_text(const MomentSystem& system);
 std::string format_latex(const MomentSystem& system);

@@ -56,9 +56,12 @@ struct LagOptions {
   int first_lag = 3;
   int last_lag = 300;
   // Instruments, monomials in the measured channels; nullopt: each measured state and its
-  // highest power in the equations (y and y^3 for the Duffing oscillator).
+  // highest power in the equations (y and y^3 for the Duffing oscillator), and its cube when
+  // the model has abs or sign terms.
   std::optional<std::vector<Monomial>> instruments;
-  // Per model variable (states, then inputs): whether the data have it. Empty: all.
+  // Per channel (states, then inputs) or per model variable: whether the data have it. Empty:
+  // all. An abs or sign of channels counts as measured when they all are (the pass computes
+  // it from them), whatever its own flag.
   std::vector<bool> measured;
 
   static constexpr int kMaxLag = 10000;
@@ -71,7 +74,9 @@ struct LagOptions {
 
 // The lagged moment equations: the linear system of the dynamical moment technique with
 // instruments at earlier times. States without a column are expressed through kinematic
-// equations (v = y' when y' = v), so that a record of displacement and force suffices.
+// equations (v = y' when y' = v), so that a record of displacement and force suffices. An
+// abs(p) or sign(p) factor is read as a channel that the pass computes from the measured
+// channels of p, so p must be measured (c2*abs(v)*v needs v's column, kc*abs(y)*y only y's).
 //
 // Example:
 //   Model model = parse_model_file("models/duffing.mom");
@@ -83,8 +88,10 @@ struct LaggedSystem {
   std::vector<LagTestFunction> test_functions;  // each equation is taken with each of them
   std::vector<Monomial> instruments;
   std::vector<LaggedEquation> equations;
-  std::vector<bool> measured;            // per variable, as in LagOptions
-  std::vector<bool> needed;              // per variable: the equations read its column
+  std::vector<bool> measured;  // per variable, as in LagOptions, a function as its argument
+  // Per variable: the equations read its column, or for a function, compute it (its argument's
+  // channels are then read too).
+  std::vector<bool> needed;
   std::vector<std::string> derivatives;  // how unmeasured states are read, e.g. "v = y'"
 };
 
@@ -106,7 +113,8 @@ std::vector<VariableReading> variable_readings(const Model& model,
 
 // Derives the lagged equations. Throws ModelError at an equation with a term that needs a
 // channel the data lack (v^2 when only y is measured is not a time derivative of y), or naming
-// a state that has no column and that no kinematic equation defines; UsageError for bad options.
+// a state that has no column and that no kinematic equation defines, or one inside an abs or
+// sign factor; UsageError for bad options.
 LaggedSystem derive_lagged(const Model& model, const LagOptions& options);
 
 // Central stencils for the order-k lag derivative (k = 0..3): C^(k)(s) ~ sum_j w_j C(s + j) /

@@ -193,6 +193,10 @@ std::string json_equation_name(const Equation& eq) {
 
 }  // namespace
 
+std::string format_variable_latex(const Model& model, std::size_t v) {
+  return latex_variable(model, v);
+}
+
 std::string format_moment(const Model& model, const Monomial& moment) {
   if (const std::optional<Monomial> g = rate_of(moment, model.variables().size())) {
     const std::string inside = format_monomial(model, *g);

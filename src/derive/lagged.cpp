@@ -13,6 +13,7 @@
 
 #include "common/decimal.hpp"
 #include "common/json.hpp"
+#include "momentid/derive.hpp"
 
 namespace momentid {
 namespace {
@@ -56,11 +57,36 @@ std::string term_text(const Model& model, const Term& t) {
   return out;
 }
 
+// The first channel of a function's argument that `measured` (per channel) lacks, or -1.
+int missing_argument(const VariableFunction& f, const std::vector<bool>& measured) {
+  for (const auto& [coefficient, monomial] : f.argument) {
+    for (std::size_t c = 0; c < monomial.size(); ++c) {
+      if (monomial[c] != 0 && !measured[c]) return static_cast<int>(c);
+    }
+  }
+  return -1;
+}
+
+// `flags` per channel (states, then inputs) or per variable, as per variable: a function is
+// measured when its argument's channels are, for the pass computes it from them.
+std::vector<bool> measured_variables(const Model& model, std::vector<bool> flags) {
+  const std::size_t channels = model.channel_count();
+  if (flags.size() != channels && flags.size() != model.variables().size()) {
+    throw UsageError("lags: expected " + std::to_string(channels) +
+                     " flags for the measured variables, found " + std::to_string(flags.size()));
+  }
+  flags.resize(channels);
+  for (const VariableFunction& f : model.functions()) {
+    flags.push_back(missing_argument(f, flags) < 0);
+  }
+  return flags;
+}
+
 class LagDeriver {
  public:
-  LagDeriver(const Model& model, std::vector<bool> measured)
+  LagDeriver(const Model& model, const std::vector<bool>& measured)
       : model_(model),
-        measured_(std::move(measured)),
+        measured_(measured_variables(model, measured)),
         variables_(static_cast<int>(model.variables().size())),
         states_(static_cast<int>(model.states().size())),
         observed_(model.variables().size()) {
@@ -80,6 +106,10 @@ class LagDeriver {
       throw ModelError(eq.where, "term '" + term_text(model_, t) + "' of equation " + eq.name() +
                                      " needs " + observed_[v].reason);
     };
+    // A function first: its message says which column the pass would compute it from.
+    for (int v = static_cast<int>(model_.channel_count()); v < variables_; ++v) {
+      if (t.monomial[v] != 0 && observed_[v].base < 0) unobservable(v);
+    }
     for (int v = 0; v < variables_; ++v) {
       const int e = t.monomial[v];
       if (e == 0) continue;
@@ -142,6 +172,17 @@ class LagDeriver {
       o.base = v;
       return o;
     }
+    const auto channels = static_cast<int>(model_.channel_count());
+    if (v >= channels) {
+      const VariableFunction& f = model_.functions()[static_cast<std::size_t>(v - channels)];
+      const int c = missing_argument(f, measured_);
+      o.reason = "a column for " + std::string(c < states_ ? "state " : "input ") +
+                 model_.variables()[static_cast<std::size_t>(c)] +
+                 ": the lagged equations compute " + f.name +
+                 " from the measured channels (give the record a column for " +
+                 model_.variables()[static_cast<std::size_t>(c)] + ")";
+      return o;
+    }
     o.reason = "a column for " + std::string(v < states_ ? "state " : "input ") + name;
     if (v >= states_ || depth > states_) return o;
     // A kinematic equation c_d*a' + c_v*v = 0 (parameter-free, those two terms only) shows v as
@@ -188,6 +229,57 @@ bool has_parameter(const Equation& eq) {
                      [](const Term& t) { return t.parameter >= 0; });
 }
 
+// Each measured state, and its highest power in the equations' terms. With abs or sign terms
+// also its cube: the states alone correlate with v and |v|*v (or sign(v)) alike, which leaves
+// their parameters nearly collinear, and the cubes tell them apart (on the drag, friction and
+// clearance oscillators of docs/measured-data.md the standard errors of c2, f and kc fell 3 to
+// 15 times).
+std::vector<Monomial> default_instruments(const Model& model, const std::vector<bool>& measured) {
+  std::vector<Monomial> out;
+  const int cube = model.functions().empty() ? 1 : 3;
+  for (std::size_t v = 0; v < model.states().size(); ++v) {
+    if (!measured[v]) continue;
+    int highest = 1;
+    for (const Equation& eq : model.equations()) {
+      if (!has_parameter(eq)) continue;
+      for (const Term& t : eq.terms) highest = std::max(highest, t.monomial[v]);
+    }
+    for (int power : {1, cube, highest}) {
+      Monomial m(model.variables().size(), 0);
+      m[v] = power;
+      if (std::find(out.begin(), out.end(), m) == out.end()) out.push_back(m);
+    }
+  }
+  return out;
+}
+
+// Per variable, whether the equations read it; a function's argument's channels are read for it,
+// as the pass computes it from them.
+std::vector<bool> needed_variables(const LaggedSystem& system) {
+  const Model& model = *system.model;
+  std::vector<bool> needed(model.variables().size(), false);
+  const auto mark = [&](const LagCombination& c) {
+    for (const auto& [f, w] : c) {
+      for (std::size_t v = 0; v < needed.size(); ++v) {
+        if (f.instrument[v] != 0 || f.function[v] != 0) needed[v] = true;
+      }
+    }
+  };
+  for (const LaggedEquation& row : system.equations) {
+    for (const LagCombination& c : row.coefficients) mark(c);
+    mark(row.rhs);
+  }
+  for (std::size_t k = 0; k < model.functions().size(); ++k) {
+    if (!needed[model.channel_count() + k]) continue;
+    for (const auto& [coefficient, monomial] : model.functions()[k].argument) {
+      for (std::size_t c = 0; c < monomial.size(); ++c) {
+        if (monomial[c] != 0) needed[c] = true;
+      }
+    }
+  }
+  return needed;
+}
+
 }  // namespace
 
 std::vector<VariableReading> variable_readings(const Model& model,
@@ -225,7 +317,7 @@ void LagOptions::validate(const Model& model) const {
   if (!instruments) return;
   for (const Monomial& m : *instruments) {
     for (std::size_t v = 0; v < m.size(); ++v) {
-      if (m[v] != 0 && !measured.empty() && !measured[v]) {
+      if (m[v] != 0 && !measured.empty() && (v >= measured.size() || !measured[v])) {
         throw UsageError("instruments: " + format_monomial(model, m) + " uses " +
                          model.variables()[v] + ", which the data do not have");
       }
@@ -234,14 +326,9 @@ void LagOptions::validate(const Model& model) const {
 }
 
 LaggedSystem derive_lagged(const Model& model, const LagOptions& options) {
-  require_polynomial(model, "the lagged equations");
   const std::size_t variables = model.variables().size();
-  std::vector<bool> measured =
-      options.measured.empty() ? std::vector<bool>(variables, true) : options.measured;
-  if (measured.size() != variables) {
-    throw UsageError("lags: expected " + std::to_string(variables) +
-                     " flags for the measured variables, found " + std::to_string(measured.size()));
-  }
+  const std::vector<bool> measured = measured_variables(
+      model, options.measured.empty() ? std::vector<bool>(variables, true) : options.measured);
   const LagDeriver deriver(model, measured);
   const int states = static_cast<int>(model.states().size());
 
@@ -255,28 +342,8 @@ LaggedSystem derive_lagged(const Model& model, const LagOptions& options) {
       system.derivatives.push_back(deriver.definition(v));
     }
   }
-  if (options.instruments) {
-    system.instruments = *options.instruments;
-  } else {
-    // Each measured state, and its highest power in the equations' terms.
-    for (int v = 0; v < states; ++v) {
-      if (!measured[v]) continue;
-      int highest = 1;
-      for (const Equation& eq : model.equations()) {
-        if (!has_parameter(eq)) continue;
-        for (const Term& t : eq.terms) highest = std::max(highest, t.monomial[v]);
-      }
-      for (int power : {1, highest}) {
-        Monomial m(variables, 0);
-        m[v] = power;
-        if (std::find(system.instruments.begin(), system.instruments.end(), m) ==
-            system.instruments.end()) {
-          system.instruments.push_back(m);
-        }
-      }
-    }
-  }
-
+  system.instruments =
+      options.instruments ? *options.instruments : default_instruments(model, measured);
   if (system.instruments.empty()) {
     throw UsageError("lags: no instruments: the data have none of the model's states");
   }
@@ -314,18 +381,7 @@ LaggedSystem derive_lagged(const Model& model, const LagOptions& options) {
   options.validate(model);
   system.test_functions = lag_test_functions(system.first_lag, system.last_lag);
 
-  system.needed.assign(variables, false);
-  for (const LaggedEquation& row : system.equations) {
-    auto mark = [&](const LagCombination& c) {
-      for (const auto& [f, w] : c) {
-        for (std::size_t v = 0; v < variables; ++v) {
-          if (f.instrument[v] != 0 || f.function[v] != 0) system.needed[v] = true;
-        }
-      }
-    };
-    for (const LagCombination& c : row.coefficients) mark(c);
-    mark(row.rhs);
-  }
+  system.needed = needed_variables(system);
   return system;
 }
 
@@ -455,12 +511,40 @@ std::string left_text(const Model& model, const LaggedEquation& eq) {
   return out;
 }
 
-std::string channel_list(const Model& model, const std::vector<bool>& flags, bool value) {
+// The channels (states and inputs) whose flag is set, or "none".
+std::string channel_list(const Model& model, const std::vector<bool>& flags) {
   std::string out;
-  for (std::size_t v = 0; v < flags.size(); ++v) {
-    if (flags[v] == value) out += (out.empty() ? "" : ", ") + model.variables()[v];
+  for (std::size_t v = 0; v < model.channel_count(); ++v) {
+    if (flags[v]) out += (out.empty() ? "" : ", ") + model.variables()[v];
   }
   return out.empty() ? "none" : out;
+}
+
+// The functions the equations read, which the pass computes from the channels.
+std::vector<std::string> computed_functions(const LaggedSystem& system) {
+  const Model& model = *system.model;
+  std::vector<std::string> out;
+  for (std::size_t v = model.channel_count(); v < system.needed.size(); ++v) {
+    if (system.needed[v]) out.push_back(model.variables()[v]);
+  }
+  return out;
+}
+
+// A monomial of a lag function in LaTeX: as format_monomial writes it, with |p| and sgn(p) for
+// the functions.
+std::string latex_monomial(const Model& model, const Monomial& m) {
+  if (std::all_of(m.begin() + static_cast<long>(model.channel_count()), m.end(),
+                  [](int e) { return e == 0; })) {
+    return format_monomial(model, m);
+  }
+  std::string out;
+  for (std::size_t v = 0; v < m.size(); ++v) {
+    if (m[v] == 0) continue;
+    if (!out.empty()) out += "*";
+    out += v < model.channel_count() ? model.variables()[v] : format_variable_latex(model, v);
+    if (m[v] > 1) out += "^{" + std::to_string(m[v]) + "}";
+  }
+  return out;
 }
 
 }  // namespace
@@ -493,7 +577,12 @@ std::string format_text(const LaggedSystem& system) {
   out << "\nequations: " << system.equations.size() << " for every lag, taken with " << tests
       << " test functions phi(s) over lags " << system.first_lag << ".." << system.last_lag << ": "
       << system.equations.size() * tests << " in all\n";
-  out << "channels read: " << channel_list(model, system.needed, true) << "\n";
+  out << "channels read: " << channel_list(model, system.needed) << "\n";
+  const std::vector<std::string> computed = computed_functions(system);
+  for (std::size_t i = 0; i < computed.size(); ++i) {
+    out << (i ? ", " : "computed from them: ") << computed[i]
+        << (i + 1 < computed.size() ? "" : "\n");
+  }
   for (const std::string& d : system.derivatives) out << "not measured: " << d << "\n";
   out << "lag derivatives: central differences in s (error O(dt^4), O(dt^12) for band-limited "
          "records), moved by parts onto phi(s) = (1-u^2)^p\n";
@@ -504,7 +593,7 @@ std::string format_latex(const LaggedSystem& system) {
   const Model& model = *system.model;
   auto lag = [&](const LagFunction& f) {
     return std::string("C") + (f.order == 0 ? "" : "^{(" + std::to_string(f.order) + ")}") + "_{" +
-           format_monomial(model, f.instrument) + ",\\," + format_monomial(model, f.function) +
+           format_monomial(model, f.instrument) + ",\\," + latex_monomial(model, f.function) +
            "}(s)";
   };
   auto combination = [&](const LagCombination& c) {
@@ -580,12 +669,16 @@ std::string format_json(const LaggedSystem& system) {
   }
   out << "\n  ],\n  \"channels\": [";
   bool first = true;
-  for (std::size_t v = 0; v < system.needed.size(); ++v) {
+  for (std::size_t v = 0; v < model.channel_count(); ++v) {
     if (!system.needed[v]) continue;
     out << (first ? "" : ", ") << json_string(model.variables()[v]);
     first = false;
   }
-  out << "],\n  \"not_measured\": " << json_strings(system.derivatives) << "\n}\n";
+  out << "],\n";
+  if (!model.functions().empty()) {
+    out << "  \"computed\": " << json_strings(computed_functions(system)) << ",\n";
+  }
+  out << "  \"not_measured\": " << json_strings(system.derivatives) << "\n}\n";
   return out.str();
 }
 

@@ -1,6 +1,7 @@
 // The lagged moment equations as numbers: each equation summed over lags against each test
 // function of the lag, the lag derivatives moved onto the test function, and powers of noisy
-// channels replaced by their Hermite polynomials in the noise variance.
+// channels replaced by their Hermite polynomials in the noise variance (not where a channel is
+// inside an abs or sign factor of the same moment).
 
 #include <algorithm>
 #include <cmath>
@@ -45,12 +46,49 @@ std::vector<std::pair<Monomial, double>> corrected(const Monomial& m,
   return terms;
 }
 
+// Per channel read: the channels its values are computed from, for an abs or sign of them
+// (empty for a channel of the record).
+std::vector<std::vector<std::size_t>> computed_from(const Model& model,
+                                                    const std::vector<int>& channel) {
+  const int last = channel.empty() ? -1 : *std::max_element(channel.begin(), channel.end());
+  std::vector<std::vector<std::size_t>> out(static_cast<std::size_t>(last + 1));
+  for (std::size_t k = 0; k < model.functions().size(); ++k) {
+    const int read = channel[model.channel_count() + k];
+    if (read < 0) continue;
+    for (const auto& [coefficient, monomial] : model.functions()[k].argument) {
+      for (std::size_t v = 0; v < monomial.size(); ++v) {
+        if (monomial[v] != 0 && channel[v] >= 0) {
+          out[static_cast<std::size_t>(read)].push_back(static_cast<std::size_t>(channel[v]));
+        }
+      }
+    }
+  }
+  return out;
+}
+
+// The noise variances by which to correct a monomial at one time: none for a channel that is
+// also inside one of its abs or sign factors, whose noise no polynomial removes, so that the
+// correction of its power would not be right either (E[(v + e)^2 sign(v + e)] is not
+// E[v^2 sign(v)] plus a multiple of E[sign(v + e)]); the other channels' noise is independent
+// of the factor and corrected as ever.
+std::vector<double> correctable_noise(const Monomial& m, std::vector<double> noise,
+                                      const std::vector<std::vector<std::size_t>>& from) {
+  for (std::size_t c = 0; c < m.size() && c < from.size(); ++c) {
+    if (m[c] == 0) continue;
+    for (std::size_t inside : from[c]) {
+      if (inside < noise.size()) noise[inside] = 0;
+    }
+  }
+  return noise;
+}
+
 }  // namespace
 
 LaggedRows lagged_rows(const LaggedSystem& system, double dt, const std::vector<int>& channel,
                        const std::vector<double>& noise, int stencil) {
   LaggedRows out;
   std::map<Moment, std::size_t> index;
+  const std::vector<std::vector<std::size_t>> from = computed_from(*system.model, channel);
   const auto remap = [&](const Monomial& m) {
     Monomial out_m(m.size(), 0);
     for (std::size_t v = 0; v < m.size(); ++v) {
@@ -72,7 +110,9 @@ LaggedRows lagged_rows(const LaggedSystem& system, double dt, const std::vector<
       const int reach = stencil_reach(f.order, stencil);
       const double scale = weight.to_double() / std::pow(dt, f.order);
       const auto instruments = corrected(remap(f.instrument), noise);
-      const auto functions = corrected(remap(f.function), noise);
+      // The instrument, at an earlier time, carries noise independent of the function's.
+      const Monomial function = remap(f.function);
+      const auto functions = corrected(function, correctable_noise(function, noise, from));
       for (int s = system.first_lag; s <= system.last_lag; ++s) {
         double ws = 0;
         for (int j = -reach; j <= reach; ++j) {

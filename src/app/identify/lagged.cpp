@@ -7,9 +7,21 @@
 #include <tuple>
 
 #include "app/identify/steps.hpp"
+#include "common/number.hpp"
 
 namespace momentid {
 namespace {
+
+// Noise on a function's argument above this fraction of the channel's standard deviation is
+// reported, as the noise itself is (below it the estimate is at the level of the roughness of
+// a state driven through a held input).
+constexpr double kNoisyArgument = 0.02;
+
+// Whether channel `c` (a state or input) is in a function's argument.
+bool function_holds(const VariableFunction& f, std::size_t c) {
+  return std::any_of(f.argument.begin(), f.argument.end(),
+                     [&](const auto& term) { return term.second[c] != 0; });
+}
 
 // Per measured state that the lagged equations read: the lag at which its autocorrelation first
 // falls below 1/e, from the lagged moments C[y;y](s) of the pass; 0 when it stays above across
@@ -72,21 +84,66 @@ void check_lagged_options(const Model& model, const IdentifyOptions& options,
 }
 
 // The channels a lagged pass reads: the variables the equations need, states then inputs, as
-// the accumulator numbers them.
+// the accumulator numbers them, then the functions it computes from them.
 struct LaggedChannels {
   std::vector<std::string> states, inputs;
-  std::vector<int> channel;  // per model variable: its channel, or -1 when not read
+  std::vector<ComputedChannel> computed;  // over the channels read
+  std::vector<int> channel;               // per model variable: its channel, or -1 when not read
 };
 
 LaggedChannels lagged_channels(const Model& model, const LaggedSystem& system) {
   LaggedChannels out;
-  const std::size_t state_count = model.states().size();
+  const std::size_t state_count = model.states().size(), channels = model.channel_count();
   out.channel.assign(model.variables().size(), -1);
-  for (std::size_t v = 0, next = 0; v < model.variables().size(); ++v) {
+  std::size_t next = 0;
+  for (std::size_t v = 0; v < channels; ++v) {
     if (!system.needed[v]) continue;
     (v < state_count ? out.states : out.inputs).push_back(model.variables()[v]);
     // States come first among the channels, and the variables are in that order too.
     out.channel[v] = static_cast<int>(next++);
+  }
+  if (model.functions().empty()) return out;
+  const std::vector<ComputedChannel> all = computed_channels(model);
+  for (std::size_t k = 0; k < all.size(); ++k) {
+    if (!system.needed[channels + k]) continue;
+    ComputedChannel c{.sign = all[k].sign, .argument = {}};
+    for (const auto& [coefficient, monomial] : all[k].argument) {
+      Monomial read(next, 0);
+      for (std::size_t v = 0; v < monomial.size(); ++v) {
+        if (monomial[v] != 0) read[static_cast<std::size_t>(out.channel[v])] = monomial[v];
+      }
+      c.argument.emplace_back(coefficient, std::move(read));
+    }
+    out.computed.push_back(std::move(c));
+    out.channel[channels + k] = static_cast<int>(next + out.computed.size() - 1);
+  }
+  return out;
+}
+
+// The warnings for functions whose argument holds a noisy channel: the Hermite correction
+// replaces powers of a channel, and no polynomial corrects |y + e| or sign(y + e).
+std::vector<std::string> noisy_function_warnings(const IdentifyResult& result,
+                                                 const LaggedChannels& c) {
+  const Model& model = *result.model;
+  std::vector<std::string> out;
+  for (std::size_t k = 0; k < model.functions().size(); ++k) {
+    if (c.channel[model.channel_count() + k] < 0) continue;
+    const VariableFunction& f = model.functions()[k];
+    for (std::size_t v = 0; v < model.states().size(); ++v) {
+      const int read = c.channel[v];
+      if (read < 0 || !function_holds(f, v)) continue;
+      const ChannelStatistics& s = result.data.channels[static_cast<std::size_t>(read)];
+      const std::optional<double> fraction = s.noise_fraction();
+      if (!(result.lagged->noise[static_cast<std::size_t>(read)] > 0) || !fraction ||
+          *fraction < kNoisyArgument) {
+        continue;
+      }
+      std::string w = "'" + s.name + "' carries noise of about " + number(100 * *fraction, "%.2g");
+      w += "% of its standard deviation, and the lagged equations compute " + f.name;
+      w += " from it: no correction removes noise from inside abs or sign, and the terms with ";
+      w += f.name + " are biased (docs/measured-data.md, \"abs and sign of noisy channels\")";
+      out.push_back(std::move(w));
+    }
   }
   return out;
 }
@@ -197,6 +254,7 @@ LaggedChannels read_lagged(IdentifyResult& result, const LagOptions& lag_options
   data_options.min_batches = kBatchesPerEquation * probe.rows.a.size();
   data_options.offsets =
       channel_offsets(source, c.states, c.inputs, data_options, options.center, result.centered);
+  data_options.computed = c.computed;
   result.data = moments_from_data(source, c.states, c.inputs, moments, data_options);
   result.means = channel_means(result.lagged->channels, result.data.estimates, mean_index);
   result.data.estimates = first_moments(result.data.estimates, probe.moments.size());
@@ -266,6 +324,10 @@ void identify_lagged(IdentifyResult& result, const DataSource& source,
                          std::to_string(IdentifyOptions::kMaxLaggedMoments) + " moments";
   }
   result.lagged->noise = noise_variances(result, channels.states.size(), options);
+  // The moments name the computed channels after the channels read (lagged_moment_text).
+  for (std::size_t v = result.model->channel_count(); v < channels.channel.size(); ++v) {
+    if (channels.channel[v] >= 0) result.lagged->channels.push_back(result.model->variables()[v]);
+  }
   // Inputs held over each sample put kinks into the states at the samples, which only the
   // five-point stencils match; band-limited records take the wide ones.
   result.lagged->stencil_reach =
@@ -279,6 +341,8 @@ void identify_lagged(IdentifyResult& result, const DataSource& source,
   result.estimate = solve_rows(
       rows.rows, names, result.data.estimates,
       {.gmm = result.gmm, .fixed = fixed_values(model, options.fixed), .normalise_rows = true});
+  const std::vector<std::string> noisy = noisy_function_warnings(result, channels);
+  result.estimate.warnings.insert(result.estimate.warnings.end(), noisy.begin(), noisy.end());
 }
 
 }  // namespace momentid

@@ -3,6 +3,18 @@
 #include "app/identify/steps.hpp"
 
 namespace momentid {
+namespace {
+
+// Whether data with the channels flagged in `measured` show every state and input, measured or
+// as a derivative: then the lagged equations take them, and name any abs or sign term whose
+// argument they lack.
+bool channels_derivable(const Model& model, const std::vector<bool>& measured) {
+  const std::vector<VariableReading> readings = variable_readings(model, measured);
+  return std::all_of(readings.begin(), readings.begin() + static_cast<long>(model.channel_count()),
+                     [](const VariableReading& r) { return r.base >= 0; });
+}
+
+}  // namespace
 
 EquationChoice choose_equations(const Model& model, const RecordSurvey& record,
                                 const IdentifyOptions& options) {
@@ -12,16 +24,10 @@ EquationChoice choose_equations(const Model& model, const RecordSurvey& record,
   if (options.method == Method::kLagged) return {kLagged, "asked for"};
   if (options.lags || options.instruments) return {kLagged, "lags or instruments were given"};
   const bool all_measured = std::all_of(measured.begin(), measured.end(), [](bool m) { return m; });
-  if (!model.functions().empty()) {
-    if (!all_measured) return {kLagged, "the record lacks a state's column"};
-    return {kZeroLag,
-            "the model has abs(...) or sign(...) terms, which the lagged equations do "
-            "not take yet"};
-  }
   if (!all_measured) {
     // Data that cannot show a state, not even as a derivative, get the zero-lag pass and its
     // message naming the missing column.
-    if (!derivable_from(model, measured)) return {kZeroLag, "the record lacks a state"};
+    if (!channels_derivable(model, measured)) return {kZeroLag, "the record lacks a state"};
     return {kLagged, "the record lacks a state's column, which they read as a derivative"};
   }
   if (options.multipliers || options.degree > 0 || options.extrapolate) {

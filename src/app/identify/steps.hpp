@@ -29,7 +29,9 @@ struct EquationChoice {
 // IdentifyOptions::method, or for kAuto: the lagged equations when lags or instruments are given,
 // or the record lacks a state they can read as a derivative, or it is measured (not known to be
 // noise-free) and gives a sample interval; the zero-lag ones for the rest, and for zero-lag
-// options (multipliers, a degree, extrapolate) on records with every state.
+// options (multipliers, a degree, extrapolate) on records with every state. Models with abs and
+// sign terms alike: a record that lacks the column of such a term's argument, while showing
+// every state, gets the lagged equations, which refuse the term by name.
 EquationChoice choose_equations(const Model& model, const RecordSurvey& record,
                                 const IdentifyOptions& options);
 
