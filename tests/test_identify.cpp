@@ -558,6 +558,26 @@ TEST_SUITE("identify") {
     const double w = std::sqrt(k + 3 * eps * y0 * y0);
     CHECK(mode.frequency_hz == doctest::Approx(w / (2 * std::numbers::pi)).epsilon(1e-8));
     CHECK(mode.damping_ratio == doctest::Approx(p[0].estimate / (2 * w)).epsilon(1e-8));
+
+    // The backbone by harmonic balance about y0: w(A)^2 = k + 3 eps y0^2 + 3/4 eps A^2, which the
+    // true values (k = 4, eps = 1, y0 from the force's mean) give within 3 standard errors.
+    const momentid::NonlinearCurves curves = momentid::nonlinear_curves(r);
+    INFO(curves.unavailable);
+    REQUIRE(curves.amplitude.size() == 20);
+    const double y_true = force / 4;  // eps y^3 is 1e-8 of k y here
+    for (std::size_t i = 0; i < curves.amplitude.size(); ++i) {
+      const double a = curves.amplitude[i];
+      const double truth =
+          std::sqrt(4 + 3 * y_true * y_true + 0.75 * a * a) / (2 * std::numbers::pi);
+      INFO("A = ", a, ": ", curves.frequency_hz[i], " +- ", curves.frequency_se[i], ", truth ",
+           truth);
+      CHECK(std::abs(curves.frequency_hz[i] - truth) < 3 * curves.frequency_se[i]);
+    }
+    // The restoring force k y + eps y^3, its error growing away from the middle.
+    REQUIRE(curves.displacement.size() == 41);
+    const double y = curves.displacement.back();
+    CHECK(curves.force.back() == doctest::Approx(k * y + eps * y * y * y).epsilon(1e-6));
+    CHECK(curves.force_se.back() > curves.force_se[20]);
   }
 
   TEST_CASE("a sign(v) term that switches at the equilibrium has no linearisation") {

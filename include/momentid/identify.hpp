@@ -197,6 +197,20 @@ struct LinearisedModes {
 };
 LinearisedModes linearised_modes(const IdentifyResult& result);
 
+// For an oscillator y' = v, m v' = -R(y) - ... + x with a constant mass m (two states): the
+// restoring force R (m times minus the acceleration at rest, inputs at 0) at 41 displacements over
+// the record's mean +- 3 standard deviations of y, and the backbone, the frequency (Hz) of free
+// undamped oscillation about the equilibrium at 20 amplitudes up to 3 standard deviations by
+// harmonic balance (NaN where the restoring force does not hold it), each with standard errors by
+// the delta method. Empty, with `unavailable` saying why, for other models.
+struct NonlinearCurves {
+  std::string state;
+  std::vector<double> displacement, force, force_se;
+  std::vector<double> amplitude, frequency_hz, frequency_se;
+  std::string unavailable;
+};
+NonlinearCurves nonlinear_curves(const IdentifyResult& result);
+
 // A table (parameter, estimate, standard error, 95% interval), the identified model, then the
 // diagnostics.
 std::string format_text(const IdentifyResult& result);

@@ -4,6 +4,8 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <numbers>
 
 #include "momentid/identify.hpp"
@@ -107,6 +109,80 @@ std::vector<std::pair<double, double>> modes_at(const Model& model,
   return out;
 }
 
+// The estimates of every parameter (fixed ones at their values) and the inputs' means.
+std::vector<double> estimates_of(const IdentifyResult& r) {
+  std::vector<double> out;
+  for (const ParameterEstimate& p : r.parameters()) out.push_back(p.estimate);
+  return out;
+}
+
+std::vector<double> input_means(const IdentifyResult& r) {
+  std::vector<double> out;
+  for (const Declaration& input : r.model->inputs()) {
+    const auto it = std::find_if(r.means.begin(), r.means.end(),
+                                 [&](const ChannelMean& m) { return m.name == input.name; });
+    out.push_back(it == r.means.end() ? 0.0 : it->mean);
+  }
+  return out;
+}
+
+// The standard errors of values(theta) at the estimates by the delta method: derivatives by
+// central differences of a thousandth of each parameter's standard error, over the main fit's
+// covariance. `values` returns the same number of values at every theta, or none when it cannot
+// be evaluated there (that parameter then counts as not moving them).
+template <typename Values>
+VectorXd delta_errors(const IdentifyResult& r, const Values& values) {
+  const std::vector<ParameterEstimate>& parameters = r.parameters();
+  const std::vector<double> theta = estimates_of(r);
+  const VectorXd at = values(theta);
+  const auto count = static_cast<Eigen::Index>(parameters.size());
+  MatrixXd gradient = MatrixXd::Zero(at.size(), count);
+  for (Eigen::Index p = 0; p < count; ++p) {
+    const double h = 1e-3 * parameters[static_cast<std::size_t>(p)].std_error;
+    if (!(h > 0)) continue;
+    std::vector<double> up = theta, down = theta;
+    up[static_cast<std::size_t>(p)] += h;
+    down[static_cast<std::size_t>(p)] -= h;
+    const VectorXd plus = values(up), minus = values(down);
+    if (plus.size() == at.size() && minus.size() == at.size()) {
+      gradient.col(p) = (plus - minus) / (2 * h);
+    }
+  }
+  const Fit& fit = r.estimate.main();
+  MatrixXd covariance = MatrixXd::Zero(count, count);
+  for (Eigen::Index i = 0; i < count; ++i) {
+    for (Eigen::Index j = 0; j < count; ++j) {
+      const double si = parameters[static_cast<std::size_t>(i)].std_error,
+                   sj = parameters[static_cast<std::size_t>(j)].std_error;
+      if (!(si > 0 && sj > 0)) continue;
+      const double rho =
+          i == j ? 1.0
+          : fit.correlation.empty()
+              ? 0.0
+              : fit.correlation[static_cast<std::size_t>(i)][static_cast<std::size_t>(j)];
+      covariance(i, j) = std::isfinite(rho) ? rho * si * sj : 0.0;
+    }
+  }
+  return (gradient * covariance * gradient.transpose()).diagonal().cwiseMax(0).cwiseSqrt();
+}
+
+// The mass m of an oscillator y' = v, m v' = -R(y) - D(v) + ...: the constant coefficient of v'
+// in the equation that holds it, at `theta`; NaN when there is none.
+double mass_of(const Model& model, const std::vector<double>& theta) {
+  double m = 0;
+  for (const Equation& eq : model.equations()) {
+    for (const Term& t : eq.terms) {
+      if (t.derivative != 1) continue;
+      if (std::any_of(t.monomial.begin(), t.monomial.end(), [](int e) { return e != 0; })) {
+        return NAN;
+      }
+      m += t.coefficient.to_double() *
+           (t.parameter >= 0 ? theta[static_cast<std::size_t>(t.parameter)] : 1.0);
+    }
+  }
+  return m != 0 ? m : NAN;
+}
+
 }  // namespace
 
 LinearisedModes linearised_modes(const IdentifyResult& r) {
@@ -116,55 +192,111 @@ LinearisedModes linearised_modes(const IdentifyResult& r) {
     return out;
   }
   const Model& model = *r.model;
-  const std::vector<ParameterEstimate>& parameters = r.parameters();
-  std::vector<double> theta;
-  for (const ParameterEstimate& p : parameters) theta.push_back(p.estimate);
-  std::vector<double> u;
-  for (const Declaration& input : model.inputs()) {
-    const auto it = std::find_if(r.means.begin(), r.means.end(),
-                                 [&](const ChannelMean& m) { return m.name == input.name; });
-    u.push_back(it == r.means.end() ? 0.0 : it->mean);
-  }
+  const std::vector<double> u = input_means(r);
   VectorXd y;
-  const auto modes = modes_at(model, theta, u, y, out.unavailable);
+  const auto modes = modes_at(model, estimates_of(r), u, y, out.unavailable);
   if (modes.empty()) return out;
   out.equilibrium.assign(y.data(), y.data() + y.size());
-  // d (frequency, damping) / d theta_p by central differences, over the parameters with errors.
-  const std::size_t count = parameters.size(), m = modes.size();
-  MatrixXd gradient =
-      MatrixXd::Zero(2 * static_cast<Eigen::Index>(m), static_cast<Eigen::Index>(count));
-  for (std::size_t p = 0; p < count; ++p) {
-    const double se = parameters[p].std_error;
-    if (!(se > 0)) continue;
-    const double h = 1e-3 * se;
-    std::vector<double> up = theta, down = theta;
-    up[p] += h;
-    down[p] -= h;
+  // Frequency and damping of each mode, in turn.
+  const auto values = [&](const std::vector<double>& theta) {
     VectorXd ignored;
     std::string why;
-    const auto plus = modes_at(model, up, u, ignored, why);
-    const auto minus = modes_at(model, down, u, ignored, why);
-    if (plus.size() != m || minus.size() != m) continue;
-    for (std::size_t k = 0; k < m; ++k) {
-      gradient(2 * k, p) = (plus[k].first - minus[k].first) / (2 * h);
-      gradient(2 * k + 1, p) = (plus[k].second - minus[k].second) / (2 * h);
+    const auto at = modes_at(model, theta, u, ignored, why);
+    VectorXd v(2 * static_cast<Eigen::Index>(at.size()));
+    for (std::size_t k = 0; k < at.size(); ++k) {
+      v(static_cast<Eigen::Index>(2 * k)) = at[k].first;
+      v(static_cast<Eigen::Index>(2 * k + 1)) = at[k].second;
     }
+    return v;
+  };
+  const VectorXd errors = delta_errors(r, values);
+  for (std::size_t k = 0; k < modes.size(); ++k) {
+    out.modes.push_back({modes[k].first, errors(static_cast<Eigen::Index>(2 * k)), modes[k].second,
+                         errors(static_cast<Eigen::Index>(2 * k + 1))});
   }
-  const Fit& fit = r.estimate.main();
-  MatrixXd covariance =
-      MatrixXd::Zero(static_cast<Eigen::Index>(count), static_cast<Eigen::Index>(count));
-  for (std::size_t i = 0; i < count; ++i) {
-    for (std::size_t j = 0; j < count; ++j) {
-      const double si = parameters[i].std_error, sj = parameters[j].std_error;
-      if (!(si > 0 && sj > 0)) continue;
-      const double rho = i == j ? 1.0 : fit.correlation.empty() ? 0.0 : fit.correlation[i][j];
-      covariance(i, j) = std::isfinite(rho) ? rho * si * sj : 0.0;
+  return out;
+}
+
+namespace {
+
+// Whether the model's first equation is y' = v (the second state's value), at `theta`.
+bool kinematic(const Model& model, const std::vector<double>& theta, const std::vector<double>& u) {
+  const RightHandSide f(model, theta, u);
+  for (const auto& [y, v] : {std::pair{0.0, 0.0}, {1.0, 0.0}, {0.0, 1.0}, {-2.0, 3.0}}) {
+    if (f(Eigen::Vector2d(y, v))(0) != v) return false;
+  }
+  return true;
+}
+
+// The restoring force R at each displacement, m times minus the acceleration at rest without
+// inputs, and the backbone: omega(A)^2 = 1 / (pi m A) int_0^2pi (R(y0 + A cos p) - R(y0)) cos p dp
+// (harmonic balance) at each amplitude, as frequencies in Hz (NaN where omega^2 <= 0).
+VectorXd curves_at(const Model& model, const std::vector<double>& theta, double y0,
+                   const std::vector<double>& displacements,
+                   const std::vector<double>& amplitudes) {
+  const double m = mass_of(model, theta);
+  const RightHandSide f(model, theta, std::vector<double>(model.inputs().size(), 0.0));
+  const auto force = [&](double y) { return -m * f(Eigen::Vector2d(y, 0))(1); };
+  VectorXd out(static_cast<Eigen::Index>(displacements.size() + amplitudes.size()));
+  Eigen::Index i = 0;
+  for (double y : displacements) out(i++) = force(y);
+  constexpr int kPhases = 64;  // exact for the cosine series of polynomials up to degree 63
+  for (double a : amplitudes) {
+    double sum = 0;
+    for (int k = 0; k < kPhases; ++k) {
+      const double phase = 2 * std::numbers::pi * k / kPhases;
+      sum += (force(y0 + a * std::cos(phase)) - force(y0)) * std::cos(phase);
     }
+    const double omega2 = sum * 2 / kPhases / (m * a);
+    out(i++) = omega2 > 0 ? std::sqrt(omega2) / (2 * std::numbers::pi) : NAN;
   }
-  const MatrixXd errors = gradient * covariance * gradient.transpose();
-  for (std::size_t k = 0; k < m; ++k) {
-    out.modes.push_back({modes[k].first, std::sqrt(std::max(0.0, errors(2 * k, 2 * k))),
-                         modes[k].second, std::sqrt(std::max(0.0, errors(2 * k + 1, 2 * k + 1)))});
+  return out;
+}
+
+}  // namespace
+
+NonlinearCurves nonlinear_curves(const IdentifyResult& r) {
+  NonlinearCurves out;
+  const Model& model = *r.model;
+  const std::vector<double> theta = estimates_of(r);
+  const auto channel =
+      std::find_if(r.data.channels.begin(), r.data.channels.end(), [&](const ChannelStatistics& c) {
+        return model.states().size() == 2 && c.name == model.states()[0].name;
+      });
+  if (!r.estimate.usable() || channel == r.data.channels.end() ||
+      !kinematic(model, theta, input_means(r)) || !std::isfinite(mass_of(model, theta))) {
+    out.unavailable =
+        "the curves are drawn for an oscillator y' = v, m v' = ... with a constant mass, a usable "
+        "estimate and a column for y";
+    return out;
+  }
+  const LinearisedModes linear = linearised_modes(r);
+  const double y0 = linear.equilibrium.empty() ? 0.0 : linear.equilibrium[0];
+  // To 4 digits: the grid does not depend on how the pass summed (threads, processes).
+  const auto rounded = [](double x) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%.4g", x);
+    return std::strtod(text, nullptr);
+  };
+  const double spread = rounded(std::sqrt(channel->variance)), mean = rounded(channel->mean);
+  if (!(spread > 0)) {
+    out.unavailable = "the record's displacement does not vary";
+    return out;
+  }
+  out.state = model.states()[0].name;
+  constexpr int kPoints = 41;
+  for (int k = 0; k < kPoints; ++k) {
+    out.displacement.push_back(mean + spread * (-3 + 6.0 * k / (kPoints - 1)));
+    if (k > 0 && k % 2 == 0) out.amplitude.push_back(3 * spread * k / (kPoints - 1));
+  }
+  const auto values = [&](const std::vector<double>& t) {
+    return curves_at(model, t, y0, out.displacement, out.amplitude);
+  };
+  const VectorXd at = values(theta), errors = delta_errors(r, values);
+  const auto n = static_cast<Eigen::Index>(out.displacement.size());
+  for (Eigen::Index i = 0; i < at.size(); ++i) {
+    (i < n ? out.force : out.frequency_hz).push_back(at(i));
+    (i < n ? out.force_se : out.frequency_se).push_back(errors(i));
   }
   return out;
 }

@@ -241,6 +241,19 @@ void diagnostics_json(std::ostringstream& out, const IdentifyResult& r) {
 
 }  // namespace
 
+// The backbone's ends: the frequency at the smallest and at the largest amplitude.
+void backbone_text(std::ostringstream& out, const IdentifyResult& r) {
+  const NonlinearCurves curves = nonlinear_curves(r);
+  if (curves.amplitude.empty()) return;
+  out << "  backbone (harmonic balance): " << number(curves.frequency_hz.front(), "%.6g") << " +- "
+      << number(curves.frequency_se.front(), "%.3g") << " Hz at amplitude "
+      << number(curves.amplitude.front(), "%.4g") << ", "
+      << number(curves.frequency_hz.back(), "%.6g") << " +- "
+      << number(curves.frequency_se.back(), "%.3g") << " Hz at "
+      << number(curves.amplitude.back(), "%.4g") << " (3 standard deviations of " << curves.state
+      << ")\n";
+}
+
 // The linearised modes (linearised_modes) under the identified model, when there are any.
 void modes_text(std::ostringstream& out, const IdentifyResult& r) {
   const LinearisedModes linear = linearised_modes(r);
@@ -257,6 +270,13 @@ void modes_text(std::ostringstream& out, const IdentifyResult& r) {
         << number(m.frequency_se, "%.3g") << " Hz, damping ratio "
         << number(m.damping_ratio, "%.6g") << " +- " << number(m.damping_se, "%.3g") << "\n";
   }
+  backbone_text(out, r);
+}
+
+std::string json_numbers(const std::vector<double>& values) {
+  std::string out = "[";
+  for (std::size_t i = 0; i < values.size(); ++i) out += (i ? ", " : "") + json_number(values[i]);
+  return out + "]";
 }
 
 // The "engineering" value of the JSON layout: the linearised modes, or why there are none.
@@ -275,8 +295,17 @@ std::string modes_json(const IdentifyResult& r) {
     damping += (k ? ", " : "") + std::string("{\"estimate\": ") + json_number(m.damping_ratio) +
                ", \"std_error\": " + json_number(m.damping_se) + "}";
   }
-  return out + "}, \"natural_frequencies_hz\": [" + frequencies + "], \"damping_ratios\": [" +
-         damping + "], \"unavailable\": " + json_string(linear.unavailable) + "}";
+  out += "}, \"natural_frequencies_hz\": [" + frequencies + "], \"damping_ratios\": [" + damping +
+         "], \"unavailable\": " + json_string(linear.unavailable);
+  const NonlinearCurves curves = nonlinear_curves(r);
+  if (curves.amplitude.empty()) return out + "}";
+  return out + ",\n    \"restoring_force\": {\"state\": " + json_string(curves.state) +
+         ", \"displacement\": " + json_numbers(curves.displacement) +
+         ", \"force\": " + json_numbers(curves.force) +
+         ", \"std_error\": " + json_numbers(curves.force_se) +
+         "},\n    \"backbone\": {\"amplitude\": " + json_numbers(curves.amplitude) +
+         ", \"frequency_hz\": " + json_numbers(curves.frequency_hz) +
+         ", \"std_error\": " + json_numbers(curves.frequency_se) + "}}";
 }
 
 std::string format_text(const IdentifyResult& r) {
