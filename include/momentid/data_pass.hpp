@@ -11,6 +11,13 @@
 namespace momentid {
 
 // Mean, variance and autocorrelations of one channel (pairs never span two runs).
+// White noise adds to the autocovariance at lag 0 only: the autocorrelation at lag 0 of the
+// smooth part of a channel, extrapolated as a + b s^2 + c |s|^3 + d s^4 through its
+// `autocorrelation` at lags 1 .. 4 (at least four of them). 1 minus it is the noise's share of
+// the channel's variance. (The |s|^3 term is that of a state whose derivative jumps with a held
+// input.)
+double smooth_lag_zero(const std::vector<double>& autocorrelation);
+
 struct ChannelStatistics {
   std::string name;
   bool is_input = false;

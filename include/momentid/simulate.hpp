@@ -44,12 +44,20 @@ class CompiledModel {
   // that holds a sliding motion on p = 0), abs(p) is mode * p.
   std::size_t functions() const { return functions_.size(); }
   bool is_sign(std::size_t k) const { return functions_[k].sign; }
+  // Whether function k's argument holds an input (its switches then come with the input).
+  bool reads_inputs(std::size_t k) const {
+    return std::any_of(functions_[k].terms.begin(), functions_[k].terms.end(), [&](const auto& t) {
+      return std::any_of(t.second.begin(), t.second.end(),
+                         [&](const auto& f) { return f.first >= states_; });
+    });
+  }
   // p of function k at the states y and inputs u.
   double argument(std::size_t k, const double* y, const double* u) const;
   // dp/dt of function k at y, u when the states move at `dydt` (the inputs' own change left
   // out: a sliding motion is a property of the states).
   double argument_rate(std::size_t k, const double* y, const double* u, const double* dydt) const;
-  // NaN: evaluated as written.
+  // NaN: evaluated as written. The modes and the sliding set are state of this object, which
+  // derivative() reads: one CompiledModel serves one integration at a time (not thread-safe).
   void set_mode(std::size_t k, double mode) const { functions_[k].mode = mode; }
   // Moves y onto p = 0 when function k's argument is one state times a number plus a constant
   // (sign(v), sign(v - 1/2)), which a sliding motion holds there against rounding.

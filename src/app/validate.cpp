@@ -115,7 +115,10 @@ void judge(ValidateResult& result) {
   }
   const StatisticalValidation& s = result.statistics;
   if (!s.compared) {
-    result.verdict = cannot + "and its statistics are not compared: " + s.not_compared;
+    // Neither the trajectory nor the statistics judged the model: not shown consistent.
+    result.consistent = false;
+    result.verdict =
+        cannot + "nothing judges it, since its statistics are not compared: " + s.not_compared;
     return;
   }
   const std::string count = std::to_string(s.checks.size());

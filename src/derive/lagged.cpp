@@ -73,7 +73,9 @@ std::vector<bool> measured_variables(const Model& model, std::vector<bool> flags
   const std::size_t channels = model.channel_count();
   if (flags.size() != channels && flags.size() != model.variables().size()) {
     throw UsageError("lags: expected " + std::to_string(channels) +
-                     " flags for the measured variables, found " + std::to_string(flags.size()));
+                     " flags for the measured states and inputs (or " +
+                     std::to_string(model.variables().size()) + " with the functions), found " +
+                     std::to_string(flags.size()));
   }
   flags.resize(channels);
   for (const VariableFunction& f : model.functions()) {

@@ -122,13 +122,8 @@ ChannelStatistics LagSums::statistics(std::size_t c) const {
     s.autocorrelation.push_back(rho);
     if (s.correlation_time == lags_ + 1 && rho < std::exp(-1.0)) s.correlation_time = l + 1;
   }
-  // White noise adds to the autocovariance at lag 0 only: the excess of R(0) over the
-  // extrapolation a + b s^2 + c |s|^3 + d s^4 through R(1) .. R(4) estimates its variance.
-  // (The |s|^3 term is that of a state whose derivative jumps with a held input.)
   if (lags_ >= 4 && s.variance > 0) {
-    const auto& rho = s.autocorrelation;
-    const double smooth = 1.92 * rho[0] - 1.44 * rho[1] + 0.64 * rho[2] - 0.12 * rho[3];
-    s.noise_variance = s.variance * (1 - smooth);
+    s.noise_variance = s.variance * (1 - smooth_lag_zero(s.autocorrelation));
   }
   return s;
 }
@@ -139,6 +134,10 @@ void LagSums::remember(const double* row) {
     std::copy(row, row + channels_, &history_[head_ * channels_]);
   }
   ++filled_;
+}
+
+double smooth_lag_zero(const std::vector<double>& rho) {
+  return 1.92 * rho[0] - 1.44 * rho[1] + 0.64 * rho[2] - 0.12 * rho[3];
 }
 
 }  // namespace momentid

@@ -59,6 +59,17 @@ CompiledModel::CompiledModel(const Model& model, const std::vector<numeric>& par
         if (monomial[v] != 0) term.second.emplace_back(static_cast<int>(v), monomial[v]);
       }
     }
+    // A switch that moves with the input would slide along a moving surface, which the
+    // sliding motion (equivalent control over the states' rates) does not follow.
+    bool of_states = false, of_inputs = false;
+    for (const auto& term : compiled.terms) {
+      for (const auto& [v, power] : term.second) (v < states_ ? of_states : of_inputs) = true;
+    }
+    if (of_states && of_inputs) {
+      throw ModelError(f.where, f.name +
+                                    " mixes states and inputs: simulate and validate take abs "
+                                    "and sign of the states alone or of the inputs alone");
+    }
     std::size_t linear = 0, constant = 0;
     for (const auto& [coefficient, factors] : compiled.terms) {
       if (factors.empty()) {

@@ -37,6 +37,7 @@ bool SwitchingStep::slides(std::size_t k, const double* y, const double* u) {
 
 bool SwitchingStep::start(const double* y, const double* u) {
   f_.set_sliding({});
+  for (std::size_t k = 0; k < f_.functions(); ++k) f_.set_mode(k, NAN);
   std::vector<std::size_t> sliding;
   for (std::size_t k = 0; k < f_.functions(); ++k) {
     const double side = side_of(f_.argument(k, y, u));
@@ -85,7 +86,7 @@ double SwitchingStep::switched(const double* y, const double* out, double at) co
   const std::vector<std::size_t>& sliding = f_.sliding();
   if (!sliding.empty()) {
     std::vector<double> rate(n_);
-    if (!f_.derivative(out, u.data(), rate.data())) return 1;
+    if (!f_.derivative(out, u.data(), rate.data())) return NAN;
     for (std::size_t k : sliding) g = std::min(g, 1 - std::abs(f_.mode(k)));
   }
   for (std::size_t k = 0; k < f_.functions(); ++k) {
@@ -103,6 +104,8 @@ double SwitchingStep::switched(const double* y, const double* out, double at) co
 }
 
 bool SwitchingStep::change_modes(double* y, const double* u) {
+  std::vector<double> rate(n_);
+  if (!f_.sliding().empty() && !f_.derivative(y, u, rate.data())) return false;  // sigma at y
   std::vector<std::size_t> sliding;
   for (std::size_t k : f_.sliding()) {
     const double sigma = f_.mode(k);
@@ -128,8 +131,17 @@ bool SwitchingStep::change_modes(double* y, const double* u) {
       }
     }
   }
-  std::vector<double> rate(n_);
   return f_.derivative(y, u, rate.data());
+}
+
+void SwitchingStep::follow_sides(const double* y, const double* u, bool all) {
+  for (std::size_t k = 0; k < f_.functions(); ++k) {
+    const auto& sliding = f_.sliding();
+    if (std::find(sliding.begin(), sliding.end(), k) != sliding.end()) continue;
+    if (!all && !f_.reads_inputs(k)) continue;
+    const double side = side_of(f_.argument(k, y, u));
+    if (side != 0) f_.set_mode(k, side);
+  }
 }
 
 bool SwitchingStep::operator()(double* y, const double* u_start, const double* u_middle,
@@ -139,15 +151,24 @@ bool SwitchingStep::operator()(double* y, const double* u_start, const double* u
   um_ = u_middle;
   u1_ = u_end;
   h_ = h;
+  // A held input jumps between steps, where no switch is located: its functions take the side
+  // the new value puts them on.
+  follow_sides(y, u_start, false);
   double at = 0;
+  bool chattering = false;
   for (int switches = 0;; ++switches) {
     if (!part(y, at, 1 - at, trial_.data())) return false;
-    if (switches == kMaxSwitches || switched(y, trial_.data(), 1) >= 0) break;
+    const double g = switched(y, trial_.data(), 1);
+    if (std::isnan(g)) return false;
+    chattering = switches == kMaxSwitches;
+    if (chattering || g >= 0) break;
     double before = 0, after = 1 - at;
     for (int i = 0; i < kBisections; ++i) {
       const double middle = (before + after) / 2;
       if (!part(y, at, middle, trial_.data())) return false;
-      (switched(y, trial_.data(), at + middle) < 0 ? after : before) = middle;
+      const double gm = switched(y, trial_.data(), at + middle);
+      if (std::isnan(gm)) return false;
+      (gm < 0 ? after : before) = middle;
     }
     if (!part(y, at, after, trial_.data())) return false;
     std::copy(trial_.begin(), trial_.end(), y);
@@ -157,6 +178,12 @@ bool SwitchingStep::operator()(double* y, const double* u_start, const double* u
   }
   std::copy(trial_.begin(), trial_.end(), y);
   inputs_at(1, ua_);
+  if (chattering) {
+    // Switches left unlocated: every function on the side where the step ends, a sliding one
+    // released where its value has left [-1, 1].
+    if (!change_modes(y, ua_.data())) return false;
+    follow_sides(y, ua_.data(), true);
+  }
   for (std::size_t k : f_.sliding()) f_.project(k, y, ua_.data());
   return true;
 }

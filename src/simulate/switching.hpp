@@ -32,7 +32,7 @@ class SwitchingStep {
   int blown_up(const double* y) const { return step_.blown_up(y); }
 
   // At most this many switches are located in one step; beyond (a chattering motion) the rest
-  // of the step is taken as it comes.
+  // of the step is taken as it comes, and the functions then take the sides where it ends.
   static constexpr int kMaxSwitches = 16;
 
  private:
@@ -43,6 +43,9 @@ class SwitchingStep {
   double switched(const double* y, const double* out, double at) const;
   // Changes the modes at a located switch, the state at y with inputs u.
   bool change_modes(double* y, const double* u);
+  // Sets each function that is not sliding to the side of its argument at y, u where that is
+  // not 0: those that read an input, or `all`.
+  void follow_sides(const double* y, const double* u, bool all);
   // Whether sign function k, with those already sliding, would slide at y, u.
   bool slides(std::size_t k, const double* y, const double* u);
   void inputs_at(double fraction, std::vector<double>& out) const;

@@ -93,7 +93,7 @@ std::vector<std::pair<double, double>> modes_at(const Model& model,
     return {};
   }
   const MatrixXd a = jacobian(f, y, kink);
-  if (kink >= 0) {
+  if (kink >= 0 && !model.functions().empty()) {
     why = "the model has no linearisation at its equilibrium: an abs(...) or sign(...) term " +
           std::string("switches there in ") + model.states()[static_cast<std::size_t>(kink)].name;
     return {};
@@ -127,42 +127,38 @@ std::vector<double> input_means(const IdentifyResult& r) {
 }
 
 // The standard errors of values(theta) at the estimates by the delta method: derivatives by
-// central differences of a thousandth of each parameter's standard error, over the main fit's
-// covariance. `values` returns the same number of values at every theta, or none when it cannot
-// be evaluated there (that parameter then counts as not moving them).
+// central differences over the parameters that have an error (a thousandth of it, or of the
+// estimate when that is larger than a ten-thousandth of it), with the main fit's covariance.
+// NaN where values(theta) cannot be evaluated at a perturbed theta (it returns another count)
+// or the covariance is unknown.
 template <typename Values>
 VectorXd delta_errors(const IdentifyResult& r, const Values& values) {
   const std::vector<ParameterEstimate>& parameters = r.parameters();
   const std::vector<double> theta = estimates_of(r);
   const VectorXd at = values(theta);
   const auto count = static_cast<Eigen::Index>(parameters.size());
-  MatrixXd gradient = MatrixXd::Zero(at.size(), count);
-  for (Eigen::Index p = 0; p < count; ++p) {
-    const double h = 1e-3 * parameters[static_cast<std::size_t>(p)].std_error;
-    if (!(h > 0)) continue;
-    std::vector<double> up = theta, down = theta;
-    up[static_cast<std::size_t>(p)] += h;
-    down[static_cast<std::size_t>(p)] -= h;
-    const VectorXd plus = values(up), minus = values(down);
-    if (plus.size() == at.size() && minus.size() == at.size()) {
-      gradient.col(p) = (plus - minus) / (2 * h);
-    }
-  }
-  const Fit& fit = r.estimate.main();
-  MatrixXd covariance = MatrixXd::Zero(count, count);
+  const std::vector<std::vector<double>> cov = r.estimate.main().covariance();
+  MatrixXd gradient = MatrixXd::Zero(at.size(), count), covariance(count, count);
   for (Eigen::Index i = 0; i < count; ++i) {
     for (Eigen::Index j = 0; j < count; ++j) {
-      const double si = parameters[static_cast<std::size_t>(i)].std_error,
-                   sj = parameters[static_cast<std::size_t>(j)].std_error;
-      if (!(si > 0 && sj > 0)) continue;
-      const double rho =
-          i == j ? 1.0
-          : fit.correlation.empty()
-              ? 0.0
-              : fit.correlation[static_cast<std::size_t>(i)][static_cast<std::size_t>(j)];
-      covariance(i, j) = std::isfinite(rho) ? rho * si * sj : 0.0;
+      covariance(i, j) = cov[static_cast<std::size_t>(i)][static_cast<std::size_t>(j)];
     }
   }
+  for (Eigen::Index p = 0; p < count; ++p) {
+    const auto q = static_cast<std::size_t>(p);
+    const double se = parameters[q].std_error;
+    if (!(se > 0)) continue;
+    const double h = std::max(1e-3 * se, 1e-7 * std::abs(theta[q]));
+    std::vector<double> up = theta, down = theta;
+    up[q] += h;
+    down[q] -= h;
+    const VectorXd plus = values(up), minus = values(down);
+    if (plus.size() != at.size() || minus.size() != at.size()) {
+      return VectorXd::Constant(at.size(), NAN);
+    }
+    gradient.col(p) = (plus - minus) / (2 * h);
+  }
+  if (!covariance.allFinite()) return VectorXd::Constant(at.size(), NAN);
   return (gradient * covariance * gradient.transpose()).diagonal().cwiseMax(0).cwiseSqrt();
 }
 

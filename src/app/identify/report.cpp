@@ -239,8 +239,6 @@ void diagnostics_json(std::ostringstream& out, const IdentifyResult& r) {
   out << "],\n    \"warnings\": " << json_strings(warnings(r)) << "\n  }\n}\n";
 }
 
-}  // namespace
-
 // The backbone's ends: the frequency at the smallest and at the largest amplitude.
 void backbone_text(std::ostringstream& out, const IdentifyResult& r) {
   const NonlinearCurves curves = nonlinear_curves(r);
@@ -307,6 +305,8 @@ std::string modes_json(const IdentifyResult& r) {
          ", \"frequency_hz\": " + json_numbers(curves.frequency_hz) +
          ", \"std_error\": " + json_numbers(curves.frequency_se) + "}}";
 }
+
+}  // namespace
 
 std::string format_text(const IdentifyResult& r) {
   const Estimate& e = r.estimate;

@@ -7,6 +7,8 @@
 #include <unsupported/Eigen/FFT>
 #include <utility>
 
+#include "momentid/data_pass.hpp"
+
 namespace momentid {
 
 std::vector<double> welch_psd(const std::vector<std::vector<double>>& runs, double dt,
@@ -109,7 +111,7 @@ std::pair<double, double> mean_and_spread(const std::vector<std::vector<double>>
 double white_noise_variance(const std::vector<std::vector<double>>& runs) {
   const auto [mean, spread] = mean_and_spread(runs);
   if (!(spread > 0)) return 0;
-  double rho[4];
+  std::vector<double> rho(4);
   for (std::size_t lag = 1; lag <= 4; ++lag) {
     double products = 0, pairs = 0;
     for (const std::vector<double>& run : runs) {
@@ -120,9 +122,7 @@ double white_noise_variance(const std::vector<std::vector<double>>& runs) {
     }
     rho[lag - 1] = products / pairs / (spread * spread);
   }
-  // White noise adds to lag 0 only: R(0) against a + b s^2 + c |s|^3 + d s^4 through R(1..4).
-  const double smooth = 1.92 * rho[0] - 1.44 * rho[1] + 0.64 * rho[2] - 0.12 * rho[3];
-  return std::max(0.0, spread * spread * (1 - smooth));
+  return std::max(0.0, spread * spread * (1 - smooth_lag_zero(rho)));
 }
 
 }  // namespace momentid

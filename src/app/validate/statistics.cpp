@@ -102,7 +102,8 @@ StatisticCheck check(std::string output, std::string kind, std::vector<double> a
       difference += std::abs(a[i] - reference[i]);
       scale += relative ? std::abs(reference[i]) : unit;
     }
-    return difference / scale;
+    // A reference of zeros (no run crosses a level) leaves no scale: equal is 0, else out.
+    return scale > 0 ? difference / scale : difference > 0 ? HUGE_VAL : 0.0;
   };
   c.distance = distance(c.measured, c.mean);
   for (const std::vector<double>& run : runs) {
