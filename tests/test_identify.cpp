@@ -592,4 +592,18 @@ TEST_SUITE("identify") {
     INFO(linear.unavailable);
     CHECK(linear.unavailable.find("switches there in v") != std::string::npos);
   }
+
+  TEST_CASE("a held input with abs terms is named as an uncorrected bias") {
+    const Model model = momentid::parse_model(
+        "state y, v\ninput x\nparam c = 0.5, c2 = 2, k = 4\ny' = v\n"
+        "v' = -c*v - c2*abs(v)*v - k*y + x\n",
+        "drag.mom");
+    const momentid::IdentifyResult r =
+        identify_held(model, "ma:K=10,w=0.1,sigma=1", 20000, 0.01, 1, {});
+    REQUIRE(r.zero_lag.has_value());
+    const auto all = momentid::warnings(r);
+    CHECK(std::any_of(all.begin(), all.end(), [](const std::string& w) {
+      return w.starts_with("the input is held over each sample and the model has abs(...)");
+    }));
+  }
 }
