@@ -8,6 +8,7 @@
 #include <cstdlib>
 #include <numbers>
 
+#include "momentid/error.hpp"
 #include "momentid/identify.hpp"
 #include "momentid/simulate.hpp"
 
@@ -179,9 +180,7 @@ double mass_of(const Model& model, const std::vector<double>& theta) {
   return m != 0 ? m : NAN;
 }
 
-}  // namespace
-
-LinearisedModes linearised_modes(const IdentifyResult& r) {
+LinearisedModes modes_of(const IdentifyResult& r) {
   LinearisedModes out;
   if (!r.estimate.usable()) {
     out.unavailable = "the estimate is not usable";
@@ -212,8 +211,6 @@ LinearisedModes linearised_modes(const IdentifyResult& r) {
   }
   return out;
 }
-
-namespace {
 
 // Whether the model's first equation is y' = v (the second state's value), at `theta`.
 bool kinematic(const Model& model, const std::vector<double>& theta, const std::vector<double>& u) {
@@ -249,9 +246,7 @@ VectorXd curves_at(const Model& model, const std::vector<double>& theta, double 
   return out;
 }
 
-}  // namespace
-
-NonlinearCurves nonlinear_curves(const IdentifyResult& r) {
+NonlinearCurves curves_of(const IdentifyResult& r) {
   NonlinearCurves out;
   const Model& model = *r.model;
   const std::vector<double> theta = estimates_of(r);
@@ -295,6 +290,30 @@ NonlinearCurves nonlinear_curves(const IdentifyResult& r) {
     (i < n ? out.force_se : out.frequency_se).push_back(errors(i));
   }
   return out;
+}
+
+}  // namespace
+
+// A model that cannot be solved for its derivatives (algebraic equations, a singular mass)
+// has no linearisation: said, not thrown, for the report stands without it.
+LinearisedModes linearised_modes(const IdentifyResult& r) {
+  try {
+    return modes_of(r);
+  } catch (const Error& e) {
+    LinearisedModes out;
+    out.unavailable = e.what();
+    return out;
+  }
+}
+
+NonlinearCurves nonlinear_curves(const IdentifyResult& r) {
+  try {
+    return curves_of(r);
+  } catch (const Error& e) {
+    NonlinearCurves out;
+    out.unavailable = e.what();
+    return out;
+  }
 }
 
 }  // namespace momentid
