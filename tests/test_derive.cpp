@@ -13,6 +13,7 @@
 namespace {
 
 using momentid::testing::error_from;
+using momentid::testing::lagged_equation_text;
 using momentid::testing::model_file;
 
 using GiNaC::ex;
@@ -499,17 +500,6 @@ multipliers 1, y2
 
 namespace {
 
-// The lagged equation `i` of `system` as derive prints it, after its source column.
-std::string lagged_text(const momentid::LaggedSystem& system, std::size_t i) {
-  const std::string text = momentid::format_text(system);
-  std::size_t at = 0;
-  for (std::size_t line = 0; line < 3 + i; ++line) at = text.find('\n', at) + 1;
-  const std::string line = text.substr(at, text.find('\n', at) - at);
-  const std::size_t source = line.find("(t-s)");
-  REQUIRE(source != std::string::npos);
-  return line.substr(line.find_first_not_of(' ', source + 5));
-}
-
 Model oscillator(const std::string& force) {
   return momentid::parse_model(
       "state y, v\ninput x\nparam c, a, k\ny' = v\nv' = -c*v - " + force + " - k*y + x\n",
@@ -524,7 +514,7 @@ TEST_SUITE("derive lagged abs and sign") {
     const std::vector<momentid::Monomial> y{{1, 0, 0, 0}};
     const auto system = momentid::derive_lagged(model, {.instruments = y});
     REQUIRE(system.equations.size() == 1);
-    CHECK(lagged_text(system, 0) ==
+    CHECK(lagged_equation_text(system, 0) ==
           "c*C[y;v](s) + a*C[y;v*abs(v)](s) + k*C[y;y](s) = C[y;x](s) - C'[y;v](s)");
     CHECK(system.needed == std::vector<bool>{true, true, true, true});
     const std::string text = momentid::format_text(system);
@@ -542,9 +532,9 @@ TEST_SUITE("derive lagged abs and sign") {
     // The cube of y as well, which tells abs(y)*y from y.
     CHECK(system.instruments == std::vector<momentid::Monomial>{{1, 0, 0, 0}, {3, 0, 0, 0}});
     REQUIRE(system.equations.size() == 2);
-    CHECK(lagged_text(system, 0) ==
+    CHECK(lagged_equation_text(system, 0) ==
           "c*C'[y;y](s) + a*C[y;y*abs(y)](s) + k*C[y;y](s) = C[y;x](s) - C''[y;y](s)");
-    CHECK(lagged_text(system, 1) ==
+    CHECK(lagged_equation_text(system, 1) ==
           "c*C'[y^3;y](s) + a*C[y^3;y*abs(y)](s) + k*C[y^3;y](s) = C[y^3;x](s) - C''[y^3;y](s)");
     CHECK(system.needed == std::vector<bool>{true, false, true, true});
     CHECK(system.derivatives == std::vector<std::string>{"v = y'"});

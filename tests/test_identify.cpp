@@ -127,6 +127,13 @@ momentid::IdentifyResult identify_held(const Model& model, const std::string& in
   return momentid::identify(model, momentid::DataSource::memory(std::move(data)), o);
 }
 
+// y' = v, v' = -c*v - `term` - k*y + x with the parameters `parameters` (with values).
+Model oscillator(const std::string& parameters, const std::string& term) {
+  return momentid::parse_model(
+      "state y, v\ninput x\nparam " + parameters + "\ny' = v\nv' = -c*v - " + term + " - k*y + x\n",
+      "oscillator.mom");
+}
+
 double truth_of(const Model& model, std::size_t p) {
   return model.parameters()[p].value->to_double();
 }
@@ -581,10 +588,7 @@ TEST_SUITE("identify") {
   }
 
   TEST_CASE("a sign(v) term that switches at the equilibrium has no linearisation") {
-    const Model model = momentid::parse_model(
-        "state y, v\ninput x\nparam c = 4, f = 120, k = 1024\ny' = v\n"
-        "v' = -c*v - f*sign(v) - k*y + x\n",
-        "friction.mom");
+    const Model model = oscillator("c = 4, f = 120, k = 1024", "f*sign(v)");
     const momentid::IdentifyResult r =
         identify_held(model, "ma:K=10,w=0.1,sigma=800", 20000, 1.0 / 1024, 1, {});
     const momentid::LinearisedModes linear = momentid::linearised_modes(r);
@@ -594,10 +598,7 @@ TEST_SUITE("identify") {
   }
 
   TEST_CASE("a held input with abs terms is named as an uncorrected bias") {
-    const Model model = momentid::parse_model(
-        "state y, v\ninput x\nparam c = 0.5, c2 = 2, k = 4\ny' = v\n"
-        "v' = -c*v - c2*abs(v)*v - k*y + x\n",
-        "drag.mom");
+    const Model model = oscillator("c = 0.5, c2 = 2, k = 4", "c2*abs(v)*v");
     const momentid::IdentifyResult r =
         identify_held(model, "ma:K=10,w=0.1,sigma=1", 20000, 0.01, 1, {});
     REQUIRE(r.zero_lag.has_value());

@@ -14,18 +14,8 @@
 namespace {
 
 using momentid::testing::error_from;
+using momentid::testing::lagged_equation_text;
 using momentid::testing::model_file;
-
-// The text of equation `i`: everything after the source column.
-std::string equation_text(const momentid::LaggedSystem& system, std::size_t i) {
-  const std::string text = momentid::format_text(system);
-  std::size_t at = 0;
-  for (std::size_t line = 0; line < 3 + i; ++line) at = text.find('\n', at) + 1;
-  const std::string line = text.substr(at, text.find('\n', at) - at);
-  const std::size_t source = line.find("(t-s)");
-  REQUIRE(source != std::string::npos);
-  return line.substr(line.find_first_not_of(' ', source + 5));
-}
 
 }  // namespace
 
@@ -35,9 +25,9 @@ TEST_SUITE("lagged") {
     const momentid::Model model = model_file("duffing.mom");
     const auto system = momentid::derive_lagged(model, {.measured = {true, false, true}});
     REQUIRE(system.equations.size() == 2);  // instruments y and y^3
-    CHECK(equation_text(system, 0) ==
+    CHECK(lagged_equation_text(system, 0) ==
           "c*C'[y;y](s) + k*C[y;y](s) + eps*C[y;y^3](s) = C[y;x](s) - C''[y;y](s)");
-    CHECK(equation_text(system, 1) ==
+    CHECK(lagged_equation_text(system, 1) ==
           "c*C'[y^3;y](s) + k*C[y^3;y](s) + eps*C[y^3;y^3](s) = C[y^3;x](s) - C''[y^3;y](s)");
     CHECK(system.needed == std::vector<bool>{true, false, true});
     CHECK(system.derivatives == std::vector<std::string>{"v = y'"});
@@ -49,7 +39,7 @@ TEST_SUITE("lagged") {
     const std::vector<momentid::Monomial> y{{1, 0, 0}};
     const auto system =
         momentid::derive_lagged(model, {.instruments = y, .measured = {true, false, true}});
-    CHECK(equation_text(system, 0) ==
+    CHECK(lagged_equation_text(system, 0) ==
           "mu*(C'[y;y](s) - 1/3*C'[y;y^3](s)) - k*C[y;y](s) = -C[y;x](s) + C''[y;y](s)");
   }
 
@@ -57,7 +47,7 @@ TEST_SUITE("lagged") {
     const momentid::Model model = model_file("kozin_4_1a.mom");
     const auto system = momentid::derive_lagged(model, {.first_lag = 3, .last_lag = 42});
     REQUIRE(system.equations.size() == 1);
-    CHECK(equation_text(system, 0) == "a*C[y;y](s) = C[y;x](s) - C'[y;y](s)");
+    CHECK(lagged_equation_text(system, 0) == "a*C[y;y](s) = C[y;x](s) - C'[y;y](s)");
   }
 
   TEST_CASE("a term the data cannot give is a located error naming the missing column") {

@@ -10,6 +10,7 @@
 #include <typeinfo>
 #include <vector>
 
+#include "momentid/lagged.hpp"
 #include "momentid/model.hpp"
 #include "momentid/simulate.hpp"
 
@@ -57,6 +58,17 @@ inline SimulationOptions options_for(const Model& model, std::size_t samples, st
   options.burn_in = 2000;
   options.seed = seed;
   return options;
+}
+
+// The lagged equation `i` of `system` as derive prints it: everything after its source column.
+inline std::string lagged_equation_text(const LaggedSystem& system, std::size_t i) {
+  const std::string text = format_text(system);
+  std::size_t at = 0;
+  for (std::size_t line = 0; line < 3 + i; ++line) at = text.find('\n', at) + 1;
+  const std::string line = text.substr(at, text.find('\n', at) - at);
+  const std::size_t source = line.find("(t-s)");
+  REQUIRE(source != std::string::npos);
+  return line.substr(line.find_first_not_of(' ', source + 5));
 }
 
 // A model from the project's models/ folder.

@@ -21,8 +21,10 @@ SwitchingStep::SwitchingStep(const CompiledModel& f)
       ua_(m_),
       ub_(m_),
       uc_(m_),
+      at_(m_),
       trial_(n_),
-      dydt_(n_) {}
+      dydt_(n_),
+      rate_(n_) {}
 
 bool SwitchingStep::slides(std::size_t k, const double* y, const double* u) {
   // Both sides drive the argument back to 0: with sign = +1 it falls, with -1 it rises.
@@ -80,13 +82,12 @@ bool SwitchingStep::part(const double* y, double from, double length, double* ou
 
 double SwitchingStep::switched(const double* y, const double* out, double at) const {
   // `at`: the fraction of the step where `out` is; y is where the part began, with inputs ua_.
-  std::vector<double> u(m_);
+  std::vector<double>& u = at_;
   inputs_at(at, u);
   double g = 1;
   const std::vector<std::size_t>& sliding = f_.sliding();
   if (!sliding.empty()) {
-    std::vector<double> rate(n_);
-    if (!f_.derivative(out, u.data(), rate.data())) return NAN;
+    if (!f_.derivative(out, u.data(), rate_.data())) return NAN;
     for (std::size_t k : sliding) g = std::min(g, 1 - std::abs(f_.mode(k)));
   }
   for (std::size_t k = 0; k < f_.functions(); ++k) {

@@ -56,6 +56,8 @@ class SwitchingStep {
   const double *u0_ = nullptr, *um_ = nullptr, *u1_ = nullptr;
   double h_ = 0;
   std::vector<double> ua_, ub_, uc_, trial_, dydt_;
+  // Scratch of switched(): the inputs where the part ends, the rates there.
+  mutable std::vector<double> at_, rate_;
 };
 
 }  // namespace momentid

@@ -292,28 +292,28 @@ NonlinearCurves curves_of(const IdentifyResult& r) {
   return out;
 }
 
-}  // namespace
-
 // A model that cannot be solved for its derivatives (algebraic equations, a singular mass)
-// has no linearisation: said, not thrown, for the report stands without it.
-LinearisedModes linearised_modes(const IdentifyResult& r) {
+// has no linearisation or curves: said in `unavailable`, not thrown, for the report stands
+// without them.
+template <typename Result, typename Compute>
+Result or_unavailable(const Compute& compute) {
   try {
-    return modes_of(r);
+    return compute();
   } catch (const Error& e) {
-    LinearisedModes out;
+    Result out;
     out.unavailable = e.what();
     return out;
   }
 }
 
+}  // namespace
+
+LinearisedModes linearised_modes(const IdentifyResult& r) {
+  return or_unavailable<LinearisedModes>([&] { return modes_of(r); });
+}
+
 NonlinearCurves nonlinear_curves(const IdentifyResult& r) {
-  try {
-    return curves_of(r);
-  } catch (const Error& e) {
-    NonlinearCurves out;
-    out.unavailable = e.what();
-    return out;
-  }
+  return or_unavailable<NonlinearCurves>([&] { return curves_of(r); });
 }
 
 }  // namespace momentid
