@@ -60,7 +60,7 @@ Estimate identify(const Model& truth, const Case& c, const Model* fitted = nullp
   options.dt = c.dt;
   options.burn_in = 5000;
   options.seed = c.seed;
-  Columns columns(truth.variables().size());
+  Columns columns(truth.channel_count());
   momentid::simulate(truth, options, columns);
   momentid::MemoryData data;
   data.rows = c.samples;
@@ -112,7 +112,7 @@ momentid::IdentifyResult identify_held(const Model& model, const std::string& in
   options.samples = samples;
   options.dt = dt.value_or(0.01);
   options.seed = seed;
-  Columns columns(model.variables().size());
+  Columns columns(model.channel_count());
   momentid::simulate(model, options, columns);
   momentid::MemoryData data;
   data.rows = samples;

@@ -43,7 +43,7 @@ struct MemoryRecord {
 
 Recorder simulated(const Model& model, const SimulationOptions& options,
                    const std::vector<double>& noise_sd = {}) {
-  Recorder recorder(model.variables().size());
+  Recorder recorder(model.channel_count());
   simulate(model, options, recorder, noise_sd);
   return recorder;
 }

@@ -28,7 +28,7 @@ struct Record {
     const Model model = model_file("duffing.mom");
     SimulationOptions options = options_for(model, samples, seed);
     options.inputs[0] = InputSpec::parse("ma:K=10,w=0.1,sigma=20", "--input");
-    Recorder recorder(model.variables().size());
+    Recorder recorder(model.channel_count());
     simulate(model, options, recorder);
     for (std::size_t c = 0; c < names.size(); ++c) columns.push_back(recorder.column(c));
   }

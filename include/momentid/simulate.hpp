@@ -173,7 +173,7 @@ class CompiledModel {
 class SampleSink {
  public:
   virtual ~SampleSink() = default;
-  // `values`: states, then inputs.
+  // `values`: the model's channel_count() values, states then inputs.
   virtual void sample(double t, const double* values, std::size_t run) = 0;
 };
 

@@ -21,9 +21,9 @@ SwitchingStep::SwitchingStep(const CompiledModel& f)
       ua_(m_),
       ub_(m_),
       uc_(m_),
-      at_(m_),
       trial_(n_),
       dydt_(n_),
+      at_(m_),
       rate_(n_) {}
 
 bool SwitchingStep::slides(std::size_t k, const double* y, const double* u) {
