@@ -28,10 +28,15 @@ class OutputFile {
  private:
   void remember_temporary();
   void forget_temporary();
+  // Marks the output failed, keeping the first failure's errno for the message.
+  void fail();
+  // ": <the first failure's cause>", or empty.
+  std::string reason() const;
 
   std::string path_, temporary_;
   std::FILE* file_ = nullptr;
   bool failed_ = false;
+  int error_ = 0;
   bool direct_ = false;  // writing straight to a device or pipe, not through a temporary file
 };
 

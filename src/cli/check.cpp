@@ -2,13 +2,13 @@
 
 #include "momentid/check.hpp"
 
-#include <iostream>
 #include <memory>
 #include <utility>
 
 #include "cli/commands.hpp"
 #include "cli/progress.hpp"
 #include "momentid/model.hpp"
+#include "momentid/writer.hpp"
 
 namespace momentid::cli {
 namespace {
@@ -41,7 +41,7 @@ int run_check(CheckCommand& command) {
   command.options.record.control.progress = progress.callback();
   const CheckResult result = check(data_sources(files), model ? &*model : nullptr, command.options);
   progress.finish();
-  std::cout << format_text(result);
+  write_whole_file("-", format_text(result));
   return 0;
 }
 

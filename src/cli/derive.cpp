@@ -9,6 +9,7 @@
 #include "cli/commands.hpp"
 #include "momentid/lagged.hpp"
 #include "momentid/model.hpp"
+#include "momentid/writer.hpp"
 
 namespace momentid::cli {
 namespace {
@@ -33,9 +34,9 @@ int run_lagged(const DeriveCommand& command, const Model& model) {
     options.measured = variable_flags(model.variables(), command.measured, "--measured");
   }
   const LaggedSystem system = derive_lagged(model, options);
-  std::cout << (command.format == "latex"  ? format_latex(system)
-                : command.format == "json" ? format_json(system)
-                                           : format_text(system));
+  write_whole_file("-", command.format == "latex"  ? format_latex(system)
+                        : command.format == "json" ? format_json(system)
+                                                   : format_text(system));
   if (system.equations.empty()) {
     std::cerr << "momentid: no lagged moment equation could be derived for " << command.model
               << "\n";
@@ -53,13 +54,9 @@ int run_derive(const DeriveCommand& command) {
   }
   options.degree = command.degree;
   const MomentSystem system = derive(model, options);
-  if (command.format == "latex") {
-    std::cout << format_latex(system);
-  } else if (command.format == "json") {
-    std::cout << format_json(system);
-  } else {
-    std::cout << format_text(system);
-  }
+  write_whole_file("-", command.format == "latex"  ? format_latex(system)
+                        : command.format == "json" ? format_json(system)
+                                                   : format_text(system));
   if (system.equations.empty()) {
     std::cerr << "momentid: no moment equation could be derived for " << command.model
               << (model.parameters().empty() ? ": the model has no unknown parameters" : "")

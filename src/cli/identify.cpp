@@ -12,6 +12,7 @@
 #include "cli/progress.hpp"
 #include "momentid/model.hpp"
 #include "momentid/simulate.hpp"
+#include "momentid/writer.hpp"
 
 namespace momentid::cli {
 namespace {
@@ -99,7 +100,7 @@ int run_identify(IdentifyCommand& command) {
   options.record.control.progress = progress.callback();
   const IdentifyResult result = identify(model, data_sources(command.data), options);
   progress.finish();
-  std::cout << (command.format == "json" ? format_json(result) : format_text(result));
+  write_whole_file("-", command.format == "json" ? format_json(result) : format_text(result));
   if (result.estimate.status == Status::kNothingIdentifiable) {
     std::cerr << "momentid: nothing identifiable: " << result.estimate.message << "\n";
     return kNothingIdentifiable;

@@ -4,11 +4,11 @@
 
 #include <charconv>
 #include <cmath>
-#include <iostream>
 #include <memory>
 
 #include "cli/commands.hpp"
 #include "momentid/model.hpp"
+#include "momentid/writer.hpp"
 
 namespace momentid::cli {
 namespace {
@@ -73,7 +73,7 @@ int run_validate(ValidateCommand& command) {
   ValidateResult result = validate(model, data_source(command.data), command.options);
   result.parameters_from = from;
   if (!command.plot.empty()) write_plot(result, command.plot, window);
-  std::cout << (command.format == "json" ? format_json(result) : format_text(result));
+  write_whole_file("-", command.format == "json" ? format_json(result) : format_text(result));
   return 0;
 }
 

@@ -73,24 +73,33 @@ OutputFile::~OutputFile() {
 }
 
 void OutputFile::write(const char* data, std::size_t size) {
-  if (size > 0 && std::fwrite(data, 1, size, file_) != size) failed_ = true;
+  if (size > 0 && std::fwrite(data, 1, size, file_) != size) fail();
+}
+
+void OutputFile::fail() {
+  if (!failed_) error_ = errno;
+  failed_ = true;
+}
+
+std::string OutputFile::reason() const {
+  return error_ != 0 ? std::string(": ") + std::strerror(error_) : std::string();
 }
 
 void OutputFile::commit() {
-  if (std::fflush(file_) != 0 || std::ferror(file_)) failed_ = true;
+  if (std::fflush(file_) != 0 || std::ferror(file_)) fail();
   if (file_ == stdout) {
-    if (failed_) throw Error("cannot write to standard output");
+    if (failed_) throw Error("cannot write to standard output" + reason());
     return;
   }
-  const int closed = std::fclose(file_);
+  if (std::fclose(file_) != 0) fail();
   file_ = nullptr;
   if (direct_) {
-    if (failed_ || closed != 0) throw Error(path_ + ": writing the output failed");
+    if (failed_) throw Error(path_ + ": writing the output failed" + reason());
     return;
   }
-  if (failed_ || closed != 0) {
+  if (failed_) {
     std::remove(temporary_.c_str());
-    throw Error(path_ + ": writing the output file failed: " + std::strerror(errno));
+    throw Error(path_ + ": writing the output file failed" + reason());
   }
   // mkstemp creates the file readable by its owner only; give it the usual permissions.
   std::error_code ignored;
