@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdio>
 #include <map>
 #include <memory>
 #include <optional>
@@ -168,6 +169,8 @@ struct MemoryData {
 //   auto reader = source.open({.names = {"y", "x"}});
 class DataSource {
  public:
+  // A file; a pipe or a device (a FIFO, /dev/stdin, a shell's <(...)) is read to its end now,
+  // as standard_input() is, and keeps its path in messages.
   static DataSource file(std::string path);
   // Several files, read one after the other as one record of many runs: a file's runs are
   // never joined to the next file's. The files may be of different formats, and must have the
@@ -201,9 +204,12 @@ class DataSource {
   std::vector<std::string> paths() const;
 
  private:
+  // `in` read to its end into a temporary file that the source owns, named `name`.
+  static DataSource stored(std::FILE* in, const std::string& name);
+
   std::string name_;
   std::optional<MemoryData> memory_;
-  std::shared_ptr<const std::string> stored_;  // the file standard input was stored in
+  std::shared_ptr<const std::string> stored_;  // the file standard input or a pipe was stored in
   std::vector<std::string> paths_;             // several files
 };
 

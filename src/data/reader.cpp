@@ -80,6 +80,16 @@ void MissingSummary::add(const MissingSummary& later) {
 }
 
 DataSource DataSource::file(std::string path) {
+  // A pipe (a FIFO, /dev/stdin, a shell's <(...)) can be read only once, and every pass opens
+  // the source again: it is stored like standard input.
+  std::error_code error;
+  const auto status = std::filesystem::status(path, error);
+  if (!error && std::filesystem::exists(status) && !std::filesystem::is_regular_file(status) &&
+      !std::filesystem::is_directory(status)) {
+    const data::File in(std::fopen(path.c_str(), "rb"));
+    if (!in) throw Error(path + ": cannot open the data file: " + std::strerror(errno));
+    return stored(in.get(), path);
+  }
   DataSource source;
   source.name_ = std::move(path);
   return source;
@@ -102,12 +112,15 @@ DataSource DataSource::memory(MemoryData data) {
   return source;
 }
 
-DataSource DataSource::standard_input() {
-  std::string path = (std::filesystem::temp_directory_path() / "momentid_stdin_XXXXXX").string();
+DataSource DataSource::standard_input() { return stored(stdin, "<stdin>"); }
+
+DataSource DataSource::stored(std::FILE* in, const std::string& name) {
+  const auto failed = [&](const std::string& why) {
+    return Error(name + ": cannot store the data in a temporary file: " + why);
+  };
+  std::string path = (std::filesystem::temp_directory_path() / "momentid_stream_XXXXXX").string();
   const int fd = mkstemp(path.data());
-  if (fd < 0) {
-    throw Error("<stdin>: cannot store standard input: " + std::string(std::strerror(errno)));
-  }
+  if (fd < 0) throw failed(std::strerror(errno));
   // Removed when the last copy of the source is gone.
   auto stored = std::shared_ptr<const std::string>(new std::string(path), [](const std::string* p) {
     std::remove(p->c_str());
@@ -116,20 +129,20 @@ DataSource DataSource::standard_input() {
   data::File out(fdopen(fd, "wb"));
   if (!out) {
     ::close(fd);
-    throw Error("<stdin>: cannot store standard input: " + std::string(std::strerror(errno)));
+    throw failed(std::strerror(errno));
   }
   std::vector<char> buffer(1 << 20);
   for (;;) {
-    const std::size_t got = std::fread(buffer.data(), 1, buffer.size(), stdin);
+    const std::size_t got = std::fread(buffer.data(), 1, buffer.size(), in);
     if (got > 0 && std::fwrite(buffer.data(), 1, got, out.get()) != got) {
-      throw Error("<stdin>: cannot store standard input: " + std::string(std::strerror(errno)));
+      throw failed(std::strerror(errno));
     }
     if (got < buffer.size()) break;
   }
-  if (std::ferror(stdin)) throw Error("<stdin>: cannot read standard input");
-  if (std::fclose(out.release()) != 0) throw Error("<stdin>: cannot store standard input");
+  if (std::ferror(in)) throw Error(name + ": cannot read the data: " + std::strerror(errno));
+  if (std::fclose(out.release()) != 0) throw failed(std::strerror(errno));
   DataSource source;
-  source.name_ = "<stdin>";
+  source.name_ = name;
   source.stored_ = std::move(stored);
   return source;
 }

@@ -236,20 +236,20 @@ class ShardPass {
 
 }  // namespace
 
-ChannelLayout::ChannelLayout(std::size_t states, std::size_t inputs,
+ChannelLayout::ChannelLayout(std::size_t read_states, std::size_t read_inputs,
                              const std::vector<ComputedChannel>& computed)
-    : column(states + inputs + computed.size()) {
+    : column(read_states + read_inputs + computed.size()) {
   std::vector<std::size_t> continuous, held;  // computed channel indices
   for (std::size_t k = 0; k < computed.size(); ++k) {
-    (of_inputs(computed[k], states) ? held : continuous).push_back(k);
+    (of_inputs(computed[k], read_states) ? held : continuous).push_back(k);
   }
-  this->states = states + continuous.size();
-  this->inputs = inputs + held.size();
+  states = read_states + continuous.size();
+  inputs = read_inputs + held.size();
   std::size_t next = 0;
-  for (std::size_t c = 0; c < states; ++c) column[c] = next++;
-  for (std::size_t k : continuous) column[states + inputs + k] = next++;
-  for (std::size_t c = states; c < states + inputs; ++c) column[c] = next++;
-  for (std::size_t k : held) column[states + inputs + k] = next++;
+  for (std::size_t c = 0; c < read_states; ++c) column[c] = next++;
+  for (std::size_t k : continuous) column[read_states + read_inputs + k] = next++;
+  for (std::size_t c = read_states; c < read_states + read_inputs; ++c) column[c] = next++;
+  for (std::size_t k : held) column[read_states + read_inputs + k] = next++;
 }
 
 ShardState read_shard(DataReader& reader, bool whole, const PassSetup& setup, bool pipelined,

@@ -16,7 +16,7 @@ namespace momentid {
 // Where the accumulator keeps each channel: the states and the channels computed from them
 // (continuous between rows), then the inputs and those computed from them (held with them).
 struct ChannelLayout {
-  ChannelLayout(std::size_t states, std::size_t inputs,
+  ChannelLayout(std::size_t read_states, std::size_t read_inputs,
                 const std::vector<ComputedChannel>& computed);
   // The accumulator's column of each channel: the states, inputs, then computed ones.
   std::vector<std::size_t> column;
