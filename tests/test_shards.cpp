@@ -6,6 +6,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -255,5 +256,46 @@ TEST_SUITE("shards") {
     });
     CHECK(std::string(e.what()) ==
           dir / "short.csv" + ":1:1: the data have 3 rows; at least 10 are needed");
+  }
+  TEST_CASE("a file that changes while the pass reads it is an error naming it") {
+    const Directory dir;
+    const std::string path = duffing_csv(dir);
+    const auto size = fs::file_size(path);
+    const std::string copy = dir / "copy.csv";
+    fs::copy_file(path, copy);
+    // Each change is made once, as the pass reports that it has read everything.
+    const auto changed_by = [&](const std::function<void()>& change) {
+      fs::copy_file(copy, path, fs::copy_options::overwrite_existing);
+      DataOptions options;
+      options.record.control.threads = 2;
+      options.record.control.shard_bytes = 4096;
+      bool done = false;
+      options.record.control.progress = [&](std::size_t, std::optional<double> fraction) {
+        if (done || fraction != 1.0) return;
+        done = true;
+        change();
+      };
+      const auto e = momentid::testing::error_from<momentid::Error>([&] {
+        momentid::moments_from_data(DataSource::file(path), {"y", "v"}, {"x"}, some_moments(),
+                                    options);
+      });
+      CHECK(done);
+      return std::string(e.what());
+    };
+    const auto cut = size * 2 / 5;
+    CHECK(changed_by([&] { fs::resize_file(path, cut); }) ==
+          path + ": the file changed while it was read (its size went from " +
+              std::to_string(size) + " to " + std::to_string(cut) +
+              " bytes): read it when it is complete");
+    CHECK(changed_by([&] { std::ofstream(path, std::ios::app) << "600,0,0,0\n"; }) ==
+          path + ": the file changed while it was read (its size went from " +
+              std::to_string(size) + " to " + std::to_string(size + 10) +
+              " bytes): read it when it is complete");
+    // A new version moved into place, as a writer that renames its temporary file does.
+    CHECK(changed_by([&] {
+            fs::copy_file(copy, dir / "new.csv", fs::copy_options::overwrite_existing);
+            fs::rename(dir / "new.csv", path);
+          }) == path + ": the file changed while it was read (it was replaced or removed): read "
+                       "it when it is complete");
   }
 }

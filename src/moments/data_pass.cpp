@@ -1,5 +1,7 @@
 #include "momentid/data_pass.hpp"
 
+#include <sys/stat.h>
+
 #include <algorithm>
 #include <exception>
 #include <limits>
@@ -76,6 +78,49 @@ std::optional<double> check_file_intervals(const RangeResult& result,
     }
   }
   return first_step;
+}
+
+// What tells a file that changed from the one read: its size, modification time and inode.
+struct FileStamp {
+  off_t size = 0;
+  timespec modified{};
+  ino_t inode = 0;
+  bool operator==(const FileStamp& o) const {
+    return size == o.size && modified.tv_sec == o.modified.tv_sec &&
+           modified.tv_nsec == o.modified.tv_nsec && inode == o.inode;
+  }
+};
+
+// The stamps of `paths`; a file that cannot be examined has none (its reader says why).
+std::vector<std::optional<FileStamp>> stamps(const std::vector<std::string>& paths) {
+  std::vector<std::optional<FileStamp>> out;
+  for (const std::string& path : paths) {
+    struct stat s {};
+    out.push_back(::stat(path.c_str(), &s) == 0
+                      ? std::optional<FileStamp>({s.st_size, s.st_mtim, s.st_ino})
+                      : std::nullopt);
+  }
+  return out;
+}
+
+// Throws when a file of the record changed while the pass read it (an acquisition still
+// writing it, a copy over it): its rows would be a mixture, or cut short.
+void check_unchanged(const DataSource& source, const std::vector<std::string>& paths,
+                     const std::vector<std::optional<FileStamp>>& before) {
+  const std::vector<std::optional<FileStamp>> after = stamps(paths);
+  for (std::size_t f = 0; f < paths.size(); ++f) {
+    if (!before[f] || after[f] == before[f]) continue;
+    const std::string name = paths.size() == 1 ? source.name() : paths[f];
+    std::string what = "it was replaced or removed";
+    if (after[f] && after[f]->inode == before[f]->inode) {
+      what = after[f]->size == before[f]->size
+                 ? "it was written to"
+                 : "its size went from " + std::to_string(before[f]->size) + " to " +
+                       std::to_string(after[f]->size) + " bytes";
+    }
+    throw Error(name + ": the file changed while it was read (" + what +
+                "): read it when it is complete");
+  }
 }
 
 // Throws when the record as a whole has too few rows, or no interval to average over.
@@ -175,6 +220,7 @@ DataMoments moments_from_data(const DataSource& source, const std::vector<std::s
                               const std::vector<std::string>& inputs, std::vector<Moment> keys,
                               const DataOptions& options) {
   const std::vector<std::string> paths = source.paths();
+  const std::vector<std::optional<FileStamp>> before = stamps(paths);
   ColumnRequest request = column_request(states, inputs, options, paths.size() > 1);
   const std::size_t channels = request.names.size();
   if (!options.offsets.empty() && options.offsets.size() != channels) {
@@ -216,6 +262,8 @@ DataMoments moments_from_data(const DataSource& source, const std::vector<std::s
                         out.hold,           shard_batches, collapse,      &options};
   const Pass pass{source, shards, request, setup, (shard_batches + 1) * shards.size()};
   RangeResult result = read_all(pass, std::move(first), open_error, channels);
+  // Before the readers' errors: a file cut short mid-row reads as a malformed row.
+  check_unchanged(source, paths, before);
   const std::optional<double> first_step = check_file_intervals(result, shards, paths, out);
   if (result.error) std::rethrow_exception(result.error);
 
