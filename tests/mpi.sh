@@ -2,7 +2,7 @@
 # mpirun -np 2 and 4 give the one-process result to the last bit, on a record cut into shards
 # and on a record in several files; a data error in a shard that another process reads stops
 # every process with the located error and exit status 2; an error every process finds is said
-# once.
+# once; a file that one process sees shorter than the others is an error on every process.
 # Usage: mpi.sh MPIRUN MOMENTID MODEL DIRECTORY
 set -euo pipefail
 mpirun=$1 momentid=$2 model=$3 dir=$4
@@ -63,3 +63,21 @@ if [[ $status -ne 1 ]] || [[ $(grep -c "run derive as one process" "$dir/err.txt
   exit 1
 fi
 echo "errors every process has: said once, exit 2 and 1"
+
+# One process sees a shorter copy of the record (a stale copy on one node): each process runs in
+# a directory of its own, where record.csv is the whole record or its first 90000 rows.
+for r in 0 1; do mkdir -p "$dir/rank$r"; done
+cp "$dir/record.csv" "$dir/rank0/record.csv"
+head -n 90000 "$dir/record.csv" >"$dir/rank1/record.csv"
+status=0
+# shellcheck disable=SC2016  # the rank is the launched shell's to expand
+launch 2 bash -c 'cd "$1/rank$OMPI_COMM_WORLD_RANK" && exec "$2" identify "$3" record.csv' \
+  - "$dir" "$momentid" "$model" >"$dir/out.txt" 2>"$dir/err.txt" || status=$?
+sizes="$(stat -c %s "$dir/rank0/record.csv") on process 0, $(stat -c %s "$dir/rank1/record.csv") on process 1"
+expected="momentid: record.csv: the processes of the job see different files (bytes: $sizes): give every process the same file"
+if [[ $status -ne 2 ]] || [[ $(grep -cxF "$expected" "$dir/err.txt") -ne 1 ]] || [[ -s $dir/out.txt ]]; then
+  echo "one process seeing a shorter file: exit $status (expected 2), standard error:"
+  cat "$dir/err.txt"
+  exit 1
+fi
+echo "one process seeing a shorter file: exit 2, $expected"

@@ -3,6 +3,8 @@
 #include <sys/stat.h>
 
 #include <algorithm>
+#include <cstdint>
+#include <cstring>
 #include <exception>
 #include <limits>
 #include <stdexcept>
@@ -123,6 +125,38 @@ void check_unchanged(const DataSource& source, const std::vector<std::string>& p
   }
 }
 
+// In an MPI job, throws on every process alike unless each sees every file at the same size (a
+// stale copy on one node would give it other rows, or fewer).
+void check_same_files(const DataSource& source, const std::vector<std::string>& paths,
+                      const std::vector<std::optional<FileStamp>>& stamps) {
+  std::vector<std::uint8_t> bytes;
+  for (const std::optional<FileStamp>& s : stamps) {
+    const std::int64_t size = s ? static_cast<std::int64_t>(s->size) : -1;
+    const auto* p = reinterpret_cast<const std::uint8_t*>(&size);
+    bytes.insert(bytes.end(), p, p + sizeof size);
+  }
+  const std::vector<std::vector<std::uint8_t>> all = cluster::all_gather(bytes);
+  for (std::size_t f = 0; f < paths.size(); ++f) {
+    std::vector<std::int64_t> sizes;
+    for (const std::vector<std::uint8_t>& rank : all) {
+      std::int64_t size = 0;
+      std::memcpy(&size, rank.data() + f * sizeof size, sizeof size);
+      sizes.push_back(size);
+    }
+    if (std::all_of(sizes.begin(), sizes.end(), [&](std::int64_t v) { return v == sizes[0]; })) {
+      continue;
+    }
+    std::string seen;
+    for (std::size_t r = 0; r < sizes.size(); ++r) {
+      seen += (r ? ", " : "") + (sizes[r] < 0 ? std::string("none") : std::to_string(sizes[r])) +
+              " on process " + std::to_string(r);
+    }
+    throw Error((paths.size() == 1 ? source.name() : paths[f]) +
+                ": the processes of the job see different files (bytes: " + seen +
+                "): give every process the same file");
+  }
+}
+
 // Throws when the record as a whole has too few rows, or no interval to average over.
 void check_record(const DataSource& source, const ShardState& state, bool any_moments,
                   std::size_t shards, const DataOptions& options) {
@@ -221,6 +255,9 @@ DataMoments moments_from_data(const DataSource& source, const std::vector<std::s
                               const DataOptions& options) {
   const std::vector<std::string> paths = source.paths();
   const std::vector<std::optional<FileStamp>> before = stamps(paths);
+  if (options.record.control.across_processes && cluster::size() > 1) {
+    check_same_files(source, paths, before);
+  }
   ColumnRequest request = column_request(states, inputs, options, paths.size() > 1);
   const std::size_t channels = request.names.size();
   if (!options.offsets.empty() && options.offsets.size() != channels) {
