@@ -11,6 +11,7 @@
 
 #include "cli/commands.hpp"
 #include "common/cluster.hpp"
+#include "data/array_writers.hpp"
 #include "momentid/convert.hpp"
 #include "momentid/error.hpp"
 #include "momentid/version.hpp"
@@ -49,6 +50,7 @@ int exit_code_of(const std::exception& e) {
 int main(int argc, char** argv) {
   // Under mpirun, the processes of the job share each pass over the data (identify, check);
   // the first prints, the others are silent.
+  momentid::data::quiet_array_libraries();
   const momentid::cluster::Session mpi(argc, argv);
   const int rank = momentid::cluster::rank();
   const bool several = momentid::cluster::size() > 1;

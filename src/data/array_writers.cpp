@@ -125,6 +125,9 @@ class MatWriter final : public ArrayWriter {
   }
 
   void commit() override {
+#ifdef MOMENTID_WITH_HDF5
+    if (level_73_) H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // errors are ours to report
+#endif
     mat_t* file =
         Mat_CreateVer(temporary_.path().c_str(), nullptr, level_73_ ? MAT_FT_MAT73 : MAT_FT_MAT5);
     if (file == nullptr) throw Error(target_ + ": cannot write the MATLAB file");
@@ -153,11 +156,27 @@ class MatWriter final : public ArrayWriter {
       write("momentid_metadata", MAT_C_CHAR, MAT_T_UINT8, lines.size(), lines.data());
     }
     ok = Mat_Close(file) == 0 && ok;
-    if (!ok) throw Error(target_ + ": cannot write the MATLAB file");
+    if (!ok || !reads_back()) throw Error(target_ + ": cannot write the MATLAB file");
     temporary_.commit();
   }
 
  private:
+  // Whether the file holds every column as written: matio's compressed writer reports success
+  // when the disk is full, and leaves a file cut short.
+  bool reads_back() const {
+    mat_t* file = Mat_Open(temporary_.path().c_str(), MAT_ACC_RDONLY);
+    if (file == nullptr) return false;
+    bool ok = true;
+    for (std::size_t c = 0; c < data_.size() && ok; ++c) {
+      matvar_t* v = Mat_VarRead(file, names_[c].c_str());
+      ok = v != nullptr && v->data_type == MAT_T_DOUBLE && v->rank == 2 &&
+           v->dims[0] * v->dims[1] == rows_ && v->data != nullptr &&
+           (rows_ == 0 || std::memcmp(v->data, data_[c].data(), rows_ * sizeof(double)) == 0);
+      Mat_VarFree(v);
+    }
+    return Mat_Close(file) == 0 && ok;
+  }
+
   std::string target_;
   TemporaryPath temporary_;
   std::vector<std::string> names_;
@@ -311,6 +330,14 @@ std::unique_ptr<ArrayWriter> open_hdf5_writer(const std::string& path,
   return std::make_unique<Hdf5Writer>(path, columns, metadata, rows);
 #else
   throw Error(path + ": this momentid was built without HDF5: it writes no HDF5 files");
+#endif
+}
+
+void quiet_array_libraries() {
+#ifdef MOMENTID_WITH_HDF5
+  // Before any other HDF5 call, or it has no effect.
+  H5dont_atexit();
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
 #endif
 }
 

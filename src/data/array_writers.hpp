@@ -37,6 +37,11 @@ std::unique_ptr<ArrayWriter> open_hdf5_writer(const std::string& path,
                                               const std::vector<std::string>& columns,
                                               const DataMetadata& metadata, std::size_t rows);
 
+// For a program (the command line) that reports every error itself, once at its start: HDF5
+// (also under .mat level 7.3) prints no diagnostic stack of its own, and skips its clean-up at
+// exit, which crashes after a file failed to close (a full disk).
+void quiet_array_libraries();
+
 // A MATLAB variable name for `name`: letters, digits and '_', beginning with a letter, at most
 // 63 characters.
 std::string matlab_name(const std::string& name);
