@@ -1,24 +1,49 @@
 #!/usr/bin/env bash
-# An interrupted `simulate -o FILE` must leave neither FILE nor its temporary file behind.
+# An interrupted output must leave neither the target nor its temporary file behind: `simulate
+# -o FILE` (SIGINT, SIGTERM, SIGHUP), and `convert` to .mat, .mat (level 7.3) and HDF5, whose
+# libraries write the temporary file themselves.
 # Usage: interrupt.sh MOMENTID MODEL DIRECTORY
 set -euo pipefail
 momentid=$1 model=$2 dir=$3
-rm -rf "$dir" && mkdir -p "$dir"
-for signal in INT TERM; do
-  "$momentid" simulate "$model" --samples 100000000 -o "$dir/out.csv" &
-  pid=$!
-  # Wait until the temporary file exists, so the signal arrives while rows are being written.
-  for _ in $(seq 100); do
-    compgen -G "$dir/out.csv.partial-*" >/dev/null && break
-    sleep 0.05
+rm -rf "$dir" && mkdir -p "$dir/out"
+
+# interrupt SIGNAL COMMAND...: starts the command, which writes $dir/out/out.*, signals it once
+# its temporary file exists, and checks that nothing is left in $dir/out.
+interrupt() {
+  local signal=$1
+  shift
+  "$@" &
+  local pid=$!
+  # Wait until the temporary file exists, so the signal arrives while it is being written.
+  local seen=0
+  for _ in $(seq 400); do
+    if compgen -G "$dir/out/out.*.partial-*" >/dev/null; then
+      seen=1
+      break
+    fi
+    sleep 0.02
   done
-  kill -s "$signal" "$pid"
-  status=0
+  kill -s "$signal" "$pid" 2>/dev/null || true
+  local status=0
   wait "$pid" || status=$?
-  leftovers=$(ls -A "$dir")
-  if [[ -n $leftovers ]]; then
-    echo "after SIG$signal (exit $status) the directory holds: $leftovers"
+  local leftovers
+  leftovers=$(ls -A "$dir/out")
+  if [[ $seen == 0 || -n $leftovers ]]; then
+    echo "$* after SIG$signal (exit $status; temporary file seen: $seen) leaves: $leftovers"
     exit 1
   fi
-  echo "SIG$signal: exit $status, nothing left behind"
+  echo "$*: SIG$signal, exit $status, nothing left behind"
+}
+
+for signal in INT TERM HUP; do
+  interrupt "$signal" "$momentid" simulate "$model" --samples 100000000 -o "$dir/out/out.csv"
+done
+"$momentid" simulate "$model" --samples 3000000 --format bin -o "$dir/record.bin"
+for format in mat mat73 h5; do
+  extension=$format
+  [[ $format == mat73 ]] && extension=mat
+  for signal in INT TERM HUP; do
+    interrupt "$signal" "$momentid" convert "$dir/record.bin" "$dir/out/out.$extension" \
+      --format "$format"
+  done
 done

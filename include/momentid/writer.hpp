@@ -26,8 +26,6 @@ class OutputFile {
   void commit();
 
  private:
-  void remember_temporary();
-  void forget_temporary();
   // Marks the output failed, keeping the first failure's errno for the message.
   void fail();
   // ": <the first failure's cause>", or empty.

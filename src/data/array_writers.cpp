@@ -14,10 +14,13 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <set>
 
 #include "common/decimal.hpp"
 #include "data/format.hpp"
+#include "data/temporary.hpp"
+#include "data/text.hpp"
 #include "momentid/error.hpp"
 #include "momentid/writer.hpp"
 
@@ -25,30 +28,53 @@ namespace momentid::data {
 namespace {
 
 // A file name beside the target for a library that opens files itself; removed unless
-// renamed into place.
+// renamed into place, and by a signal that ends the program. A device or a pipe is not replaced:
+// the finished file is copied into it.
 class TemporaryPath {
  public:
   explicit TemporaryPath(const std::string& target) : target_(target) {
     path_ = target + ".partial-XXXXXX";
     const int fd = mkstemp(path_.data());
     if (fd < 0) throw Error(target + ": cannot write the output file: " + std::strerror(errno));
+    remember_temporary(path_);
     ::close(fd);
     std::remove(path_.c_str());  // the library creates it afresh
   }
   TemporaryPath(const TemporaryPath&) = delete;
   TemporaryPath& operator=(const TemporaryPath&) = delete;
   ~TemporaryPath() {
-    if (!done_) std::remove(path_.c_str());
+    if (done_) return;
+    std::remove(path_.c_str());
+    forget_temporary();
   }
   const std::string& path() const { return path_; }
   void commit() {
-    if (std::rename(path_.c_str(), target_.c_str()) != 0) {
+    std::error_code error;
+    const auto status = std::filesystem::status(target_, error);
+    if (std::filesystem::exists(status) && !std::filesystem::is_regular_file(status)) {
+      copy_into_target();
+    } else if (std::rename(path_.c_str(), target_.c_str()) != 0) {
       throw Error(target_ + ": cannot write the output file: " + std::strerror(errno));
     }
     done_ = true;
+    forget_temporary();
   }
 
  private:
+  void copy_into_target() const {
+    const File in(std::fopen(path_.c_str(), "rb"));
+    if (!in) throw Error(target_ + ": cannot write the output file: " + std::strerror(errno));
+    OutputFile out(target_);
+    std::vector<char> buffer(1 << 20);
+    std::size_t got = 0;
+    while ((got = std::fread(buffer.data(), 1, buffer.size(), in.get())) > 0) {
+      out.write(buffer.data(), got);
+    }
+    if (std::ferror(in.get())) throw Error(target_ + ": cannot write the output file");
+    out.commit();
+    std::remove(path_.c_str());
+  }
+
   std::string target_, path_;
   bool done_ = false;
 };

@@ -14,6 +14,7 @@
 #include <filesystem>
 
 #include "data/format.hpp"
+#include "data/temporary.hpp"
 #include "momentid/error.hpp"
 
 namespace momentid {
@@ -51,14 +52,14 @@ OutputFile::OutputFile(const std::string& path) : path_(path) {
     for (int signal : {SIGINT, SIGTERM, SIGHUP}) sigaddset(&interrupts, signal);
     pthread_sigmask(SIG_BLOCK, &interrupts, &previous);
     const int fd = mkstemp(temporary_.data());
-    if (fd >= 0) remember_temporary();
+    if (fd >= 0) data::remember_temporary(temporary_);
     pthread_sigmask(SIG_SETMASK, &previous, nullptr);
     if (fd < 0) throw Error(path_ + ": cannot create the output file: " + std::strerror(errno));
     file_ = fdopen(fd, "wb");
     if (file_ == nullptr) {
       ::close(fd);
       std::remove(temporary_.c_str());
-      forget_temporary();
+      data::forget_temporary();
       throw Error(path_ + ": cannot write the output file: " + std::strerror(errno));
     }
   }
@@ -69,7 +70,7 @@ OutputFile::~OutputFile() {
     std::fclose(file_);
     if (!direct_) std::remove(temporary_.c_str());
   }
-  forget_temporary();
+  data::forget_temporary();
 }
 
 void OutputFile::write(const char* data, std::size_t size) {
@@ -111,10 +112,10 @@ void OutputFile::commit() {
   if (std::rename(temporary_.c_str(), path_.c_str()) != 0) {
     const std::string reason = std::strerror(errno);
     std::remove(temporary_.c_str());
-    forget_temporary();
+    data::forget_temporary();
     throw Error(path_ + ": cannot move the output file into place: " + reason);
   }
-  forget_temporary();
+  data::forget_temporary();
 }
 
 void write_whole_file(const std::string& path, const std::string& contents) {
@@ -184,14 +185,19 @@ extern "C" void remove_and_reraise(int signal) {
 }
 }  // namespace
 
-void OutputFile::remember_temporary() {
-  if (temporary_.size() < sizeof g_temporary) {
-    std::memcpy(g_temporary, temporary_.c_str(), temporary_.size() + 1);
+namespace data {
+
+void remember_temporary(const std::string& path) {
+  if (path.size() < sizeof g_temporary) {
+    g_has_temporary = 0;
+    std::memcpy(g_temporary, path.c_str(), path.size() + 1);
     g_has_temporary = 1;
   }
 }
 
-void OutputFile::forget_temporary() { g_has_temporary = 0; }
+void forget_temporary() { g_has_temporary = 0; }
+
+}  // namespace data
 
 void remove_partial_output_on_interrupt() {
   std::signal(SIGINT, remove_and_reraise);
