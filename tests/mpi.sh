@@ -2,7 +2,8 @@
 # mpirun -np 2 and 4 give the one-process result to the last bit, on a record cut into shards
 # and on a record in several files; a data error in a shard that another process reads stops
 # every process with the located error and exit status 2; an error every process finds is said
-# once; a file that one process sees shorter than the others is an error on every process.
+# once; a file that one process sees shorter than the others is an error on every process; a
+# process that stops answering ends the job after a minute.
 # Usage: mpi.sh MPIRUN MOMENTID MODEL DIRECTORY
 set -euo pipefail
 mpirun=$1 momentid=$2 model=$3 dir=$4
@@ -81,3 +82,19 @@ if [[ $status -ne 2 ]] || [[ $(grep -cxF "$expected" "$dir/err.txt") -ne 1 ]] ||
   exit 1
 fi
 echo "one process seeing a shorter file: exit 2, $expected"
+
+# A process that stops answering (here it waits for a writer to a FIFO that never comes, before
+# the pass): the others give up after a minute, and the job ends with exit status 2.
+rm -f "$dir/rank1/record.csv" && mkfifo "$dir/rank1/record.csv"
+status=0
+start=$SECONDS
+# shellcheck disable=SC2016
+launch 2 bash -c 'cd "$1/rank$OMPI_COMM_WORLD_RANK" && exec "$2" identify "$3" record.csv' \
+  - "$dir" "$momentid" "$model" >"$dir/out.txt" 2>"$dir/err.txt" || status=$?
+expected="momentid (process 0): waited 60 s for the other processes of the job to finish their part of the pass (one has stopped, or is far slower): the job ends"
+if [[ $status -ne 2 ]] || [[ $(grep -cxF "$expected" "$dir/err.txt") -ne 1 ]]; then
+  echo "a process that stops answering: exit $status (expected 2), standard error:"
+  cat "$dir/err.txt"
+  exit 1
+fi
+echo "a process that stops answering: exit 2 after $((SECONDS - start)) s, $expected"

@@ -108,7 +108,7 @@ int main(int argc, char** argv) {
     }
     // Every process fails alike (the same model or data error): the first says it, and the
     // others' messages where they differ.
-    if (const auto all = momentid::cluster::all_failed(text, std::chrono::seconds(10))) {
+    if (const auto all = momentid::cluster::all_failed(text, std::chrono::seconds(1))) {
       for (std::size_t r = 0; r < all->size(); ++r) {
         if (r == 0 || (*all)[r] != all->front()) {
           std::cerr << (r == 0 ? "" : "process " + std::to_string(r) + ": ") << (*all)[r] << "\n";
@@ -117,7 +117,10 @@ int main(int argc, char** argv) {
       return exit_code_of(e);
     }
     // This process alone fails, and the others may wait for it: it says so, and ends them all.
-    const std::string alone = "momentid (process " + std::to_string(rank) + "): " + text + "\n";
+    const std::string prefix = "momentid: ";
+    const std::string alone = "momentid (process " + std::to_string(rank) + "): " +
+                              (text.starts_with(prefix) ? text.substr(prefix.size()) : text) +
+                              "\n";
     if (write(errors_fd, alone.data(), alone.size()) < 0) {
       // Nowhere left to say it.
     }

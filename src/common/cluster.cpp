@@ -1,9 +1,12 @@
 #include "common/cluster.hpp"
 
+#include <algorithm>
 #include <cstdlib>
 #include <limits>
 #include <stdexcept>
 #include <thread>
+
+#include "momentid/error.hpp"
 
 #ifdef MOMENTID_WITH_MPI
 #include <mpi.h>
@@ -51,9 +54,30 @@ int size() {
 
 namespace {
 
+// Waits for `request` without spinning (MPI's blocking calls poll at full speed while a process
+// waits for slower ones); throws when `deadline` passes first.
+void wait_for(MPI_Request& request, std::chrono::steady_clock::time_point deadline,
+              std::chrono::steady_clock::duration patience) {
+  auto pause = std::chrono::microseconds(50);
+  for (int done = 0;;) {
+    MPI_Test(&request, &done, MPI_STATUS_IGNORE);
+    if (done != 0) return;
+    if (std::chrono::steady_clock::now() > deadline) {
+      const auto seconds = std::chrono::duration_cast<std::chrono::seconds>(patience).count();
+      throw Error("waited " + std::to_string(seconds) +
+                  " s for the other processes of the job to finish their part of the pass (one "
+                  "has stopped, or is far slower): the job ends");
+    }
+    std::this_thread::sleep_for(pause);
+    pause = std::min<std::chrono::microseconds>(2 * pause, std::chrono::milliseconds(10));
+  }
+}
+
 // all_gather in communicator `comm`.
 std::vector<std::vector<std::uint8_t>> gather_in(MPI_Comm comm,
-                                                 const std::vector<std::uint8_t>& bytes) {
+                                                 const std::vector<std::uint8_t>& bytes,
+                                                 std::chrono::steady_clock::duration patience) {
+  const auto deadline = std::chrono::steady_clock::now() + patience;
   int n = 1;
   MPI_Comm_size(comm, &n);
   // MPI counts in int: a process's share is its accumulator state, far below 2 GB.
@@ -62,15 +86,18 @@ std::vector<std::vector<std::uint8_t>> gather_in(MPI_Comm comm,
   }
   const int mine = static_cast<int>(bytes.size());
   std::vector<int> counts(static_cast<std::size_t>(n)), offsets(static_cast<std::size_t>(n));
-  MPI_Allgather(&mine, 1, MPI_INT, counts.data(), 1, MPI_INT, comm);
+  MPI_Request request;
+  MPI_Iallgather(&mine, 1, MPI_INT, counts.data(), 1, MPI_INT, comm, &request);
+  wait_for(request, deadline, patience);
   std::size_t total = 0;
   for (int r = 0; r < n; ++r) {
     offsets[static_cast<std::size_t>(r)] = static_cast<int>(total);
     total += static_cast<std::size_t>(counts[static_cast<std::size_t>(r)]);
   }
   std::vector<std::uint8_t> all(total);
-  MPI_Allgatherv(bytes.data(), mine, MPI_BYTE, all.data(), counts.data(), offsets.data(), MPI_BYTE,
-                 comm);
+  MPI_Iallgatherv(bytes.data(), mine, MPI_BYTE, all.data(), counts.data(), offsets.data(),
+                  MPI_BYTE, comm, &request);
+  wait_for(request, deadline, patience);
   std::vector<std::vector<std::uint8_t>> out;
   for (int r = 0; r < n; ++r) {
     const auto at = all.begin() + offsets[static_cast<std::size_t>(r)];
@@ -81,9 +108,10 @@ std::vector<std::vector<std::uint8_t>> gather_in(MPI_Comm comm,
 
 }  // namespace
 
-std::vector<std::vector<std::uint8_t>> all_gather(const std::vector<std::uint8_t>& bytes) {
+std::vector<std::vector<std::uint8_t>> all_gather(const std::vector<std::uint8_t>& bytes,
+                                                  std::chrono::steady_clock::duration patience) {
   if (size() == 1) return {bytes};
-  return gather_in(MPI_COMM_WORLD, bytes);
+  return gather_in(MPI_COMM_WORLD, bytes, patience);
 }
 
 std::optional<std::vector<std::string>> all_failed(const std::string& message,
@@ -99,8 +127,9 @@ std::optional<std::vector<std::string>> all_failed(const std::string& message,
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   }
   std::vector<std::string> out;
-  for (const auto& bytes :
-       gather_in(errors, std::vector<std::uint8_t>(message.begin(), message.end()))) {
+  for (const auto& bytes : gather_in(errors,
+                                     std::vector<std::uint8_t>(message.begin(), message.end()),
+                                     wait)) {
     out.emplace_back(bytes.begin(), bytes.end());
   }
   return out;
@@ -135,7 +164,8 @@ void abort(int status) {
 std::string library() { return {}; }
 int rank() { return 0; }
 int size() { return 1; }
-std::vector<std::vector<std::uint8_t>> all_gather(const std::vector<std::uint8_t>& bytes) {
+std::vector<std::vector<std::uint8_t>> all_gather(const std::vector<std::uint8_t>& bytes,
+                                                  std::chrono::steady_clock::duration) {
   return {bytes};
 }
 std::optional<std::vector<std::string>> all_failed(const std::string& message,

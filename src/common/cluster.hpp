@@ -16,8 +16,11 @@ std::string library();
 int rank();
 int size();
 
-// Every process's bytes, in rank order: a collective call that every process makes.
-std::vector<std::vector<std::uint8_t>> all_gather(const std::vector<std::uint8_t>& bytes);
+// Every process's bytes, in rank order: a collective call that every process makes. A process
+// waits for the others without spinning, and throws Error when they have not all come within
+// `patience` (one has stopped, or is far slower).
+std::vector<std::vector<std::uint8_t>> all_gather(const std::vector<std::uint8_t>& bytes,
+                                                  std::chrono::steady_clock::duration patience);
 
 // Starts MPI for its lifetime when the build has it and a launcher (mpirun, srun) started this
 // process (threads may run; only this one calls MPI).

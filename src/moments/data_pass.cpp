@@ -3,6 +3,7 @@
 #include <sys/stat.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cstdint>
 #include <cstring>
 #include <exception>
@@ -22,6 +23,10 @@ namespace momentid {
 namespace {
 
 using data::plural;
+
+// How long a process of an MPI job waits for the others at least, before it ends the job as one
+// of them has stopped (docs/robustness.md).
+constexpr std::chrono::seconds kMinimumPatience(60);
 
 // The largest lag of the moments, in rows.
 std::size_t max_lag_of(const std::vector<Moment>& moments) {
@@ -135,7 +140,8 @@ void check_same_files(const DataSource& source, const std::vector<std::string>& 
     const auto* p = reinterpret_cast<const std::uint8_t*>(&size);
     bytes.insert(bytes.end(), p, p + sizeof size);
   }
-  const std::vector<std::vector<std::uint8_t>> all = cluster::all_gather(bytes);
+  const std::vector<std::vector<std::uint8_t>> all =
+      cluster::all_gather(bytes, kMinimumPatience);
   for (std::size_t f = 0; f < paths.size(); ++f) {
     std::vector<std::int64_t> sizes;
     for (const std::vector<std::uint8_t>& rank : all) {
@@ -194,6 +200,8 @@ RangeResult read_all(const Pass& pass, std::unique_ptr<DataReader> first,
   const std::size_t rank = shared ? static_cast<std::size_t>(cluster::rank()) : 0;
   const std::size_t begin = pass.shards.size() * rank / ranks;
   const std::size_t end = pass.shards.size() * (rank + 1) / ranks;
+  using clock = std::chrono::steady_clock;
+  const clock::time_point start = clock::now();
   RangeResult result;
   if (open_error) {
     result = read_range(pass, 0, 0, nullptr);
@@ -203,8 +211,11 @@ RangeResult read_all(const Pass& pass, std::unique_ptr<DataReader> first,
     result = read_range(pass, begin, end, begin == 0 ? std::move(first) : nullptr);
   }
   if (ranks > 1) {
+    // The others read as much: a process that has not finished long after this one has stopped.
+    const auto patience =
+        std::max<std::chrono::steady_clock::duration>(kMinimumPatience, 4 * (clock::now() - start));
     std::vector<RangeResult> ranges;
-    for (const std::vector<std::uint8_t>& bytes : cluster::all_gather(encode(result))) {
+    for (const std::vector<std::uint8_t>& bytes : cluster::all_gather(encode(result), patience)) {
       ranges.push_back(decode(bytes, channels, options.lags));
     }
     result = merge_ranges(std::move(ranges));
