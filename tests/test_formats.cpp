@@ -140,4 +140,26 @@ TEST_SUITE("formats") {
     }
     CHECK(std::distance(fs::directory_iterator(dir.path), fs::directory_iterator()) == 1);
   }
+  TEST_CASE("a .npy file cut short while it is read is a located error, not a crash") {
+    const Directory dir;
+    const momentid::Model model = momentid::testing::model_file("duffing.mom");
+    const std::string csv = dir / "long.csv";
+    momentid::simulate_to_file(model, momentid::testing::options_for(model, 200000, 3), csv,
+                               momentid::DataWriter::Format::kCsv);
+    const std::string npy = dir / "long.npy";
+    momentid::convert(momentid::DataSource::file(csv), npy, momentid::FileFormat::kNpy);
+    momentid::FileLayout layout;
+    layout.column_names = {"t", "y", "v", "x"};
+    const auto reader = momentid::DataReader::open(
+        npy, {.names = {"y", "v", "x"}, .min_rows = 1, .layout = layout});
+    momentid::DataBlock block;
+    REQUIRE(reader->next(block, 1000));
+    fs::resize_file(npy, fs::file_size(npy) / 2);
+    const auto e = momentid::testing::error_from<momentid::DataError>([&] {
+      while (reader->next(block, 1000)) {
+      }
+    });
+    CHECK(std::string(e.what()) ==
+          npy + ":1:1: the file ends inside the array: it was cut short while it was read");
+  }
 }

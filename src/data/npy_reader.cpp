@@ -1,12 +1,13 @@
 // NumPy .npy files (format versions 1 to 3): a header holding a Python dict literal with the
-// keys 'descr', 'fortran_order' and 'shape', then the array's bytes, which are memory-mapped.
+// keys 'descr', 'fortran_order' and 'shape', then the array's bytes, read as they are needed
+// (not mapped: a file cut short while it is read must be an error, not SIGBUS).
 // A 1-D array is one channel named after the file (`disp.npy` is `disp`); an N x K array is K
 // channels, named by FileLayout::column_names (`--names`) or `NAME[:, k]`. Channels in
 // other .npy files join through ColumnRequest::rename (`--columns x=force.npy`): each such file
 // holds one 1-D array, the channel named as written there.
 
-#include <sys/mman.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include <bit>
 #include <cerrno>
@@ -22,36 +23,37 @@ namespace {
 
 constexpr std::string_view kNpyMagic = "\x93NUMPY";
 
-// One memory-mapped array.
+// One array, read from its file.
 class NpyArray {
  public:
-  NpyArray(const std::string& path, int descriptor) : path_(path) {
+  NpyArray(const std::string& path, File file) : path_(path), file_(std::move(file)) {
     struct stat info;
-    if (fstat(descriptor, &info) != 0 || !S_ISREG(info.st_mode)) {
+    if (fstat(fileno(file_.get()), &info) != 0 || !S_ISREG(info.st_mode)) {
       fail(where(), "cannot read the file as a NumPy array: not a regular file");
     }
     size_ = static_cast<std::size_t>(info.st_size);
     if (size_ < 10) fail(where(), "the file ends inside its NumPy header");
-    void* mapped = mmap(nullptr, size_, PROT_READ, MAP_PRIVATE, descriptor, 0);
-    if (mapped == MAP_FAILED) {
-      fail(where(), std::string("cannot map the file: ") + std::strerror(errno));
-    }
-    bytes_ = static_cast<const unsigned char*>(mapped);
     parse_header();
   }
-  NpyArray(const NpyArray&) = delete;
-  NpyArray& operator=(const NpyArray&) = delete;
-  ~NpyArray() { munmap(const_cast<unsigned char*>(bytes_), size_); }
 
   std::size_t rows() const { return shape_[0]; }
   std::size_t columns() const { return shape_.size() == 2 ? shape_[1] : 1; }
   bool two_dimensional() const { return shape_.size() == 2; }
 
-  // Values [first, first + count) of column `column`.
-  void read(std::size_t column, std::size_t first, std::size_t count, double* out) const {
-    const std::size_t step = fortran_ ? 1 : columns();
-    const unsigned char* at =
-        data_ + (fortran_ ? column * rows() + first : first * columns() + column) * width_;
+  // Values [first, first + count) of column `column`. The rows of a C-order array with several
+  // columns are read once for all of them.
+  void read(std::size_t column, std::size_t first, std::size_t count, double* out) {
+    const bool contiguous = fortran_ || columns() == 1;
+    const std::size_t step = contiguous ? 1 : columns();
+    if (contiguous) {
+      read_bytes((column * rows() + first) * width_, count * width_);
+    } else if (first != cached_first_ || count != cached_count_) {
+      read_bytes(first * columns() * width_, count * columns() * width_);
+      cached_first_ = first;
+      cached_count_ = count;
+    }
+    const unsigned char* at = buffer_.data() + (contiguous ? 0 : column * width_);
+    if (contiguous) cached_count_ = 0;  // the buffer holds one column now
     if (width_ == 8 && little_ == (std::endian::native == std::endian::little)) {
       for (std::size_t i = 0; i < count; ++i, at += step * 8) std::memcpy(out + i, at, 8);
       return;
@@ -61,6 +63,28 @@ class NpyArray {
 
  private:
   SourceLocation where() const { return {path_, 1, 1, ""}; }
+
+  // `size` bytes at `offset` of the array's data into buffer_; the file must hold them.
+  void read_bytes(std::size_t offset, std::size_t size) {
+    buffer_.resize(size);
+    if (read_at(data_offset_ + offset, buffer_.data(), size) < size) {
+      fail(where(), "the file ends inside the array: it was cut short while it was read");
+    }
+  }
+
+  // Up to `size` bytes at `offset` of the file (fewer at its end).
+  std::size_t read_at(std::size_t offset, unsigned char* into, std::size_t size) const {
+    std::size_t got = 0;
+    while (got < size) {
+      const ssize_t n =
+          pread(fileno(file_.get()), into + got, size - got, static_cast<off_t>(offset + got));
+      if (n < 0 && errno == EINTR) continue;
+      if (n < 0) fail(where(), std::string("cannot read the file: ") + std::strerror(errno));
+      if (n == 0) break;
+      got += static_cast<std::size_t>(n);
+    }
+    return got;
+  }
 
   double value(const unsigned char* at) const {
     std::uint64_t bits = 0;
@@ -102,21 +126,27 @@ class NpyArray {
   }
 
   void parse_header() {
-    const unsigned major = bytes_[6];
+    unsigned char lead[12] = {};
+    read_at(0, lead, std::min<std::size_t>(size_, sizeof lead));
+    const unsigned major = lead[6];
     std::size_t length = 0, start = 0;
     if (major == 1) {
-      length = bytes_[8] | (std::size_t{bytes_[9]} << 8);
+      length = lead[8] | (std::size_t{lead[9]} << 8);
       start = 10;
     } else if (major == 2 || major == 3) {
       if (size_ < 12) fail(where(), "the file ends inside its NumPy header");
-      length = bytes_[8] | (std::size_t{bytes_[9]} << 8) | (std::size_t{bytes_[10]} << 16) |
-               (std::size_t{bytes_[11]} << 24);
+      length = lead[8] | (std::size_t{lead[9]} << 8) | (std::size_t{lead[10]} << 16) |
+               (std::size_t{lead[11]} << 24);
       start = 12;
     } else {
       fail(where(), "NumPy format version " + std::to_string(major) + " (expected 1, 2 or 3)");
     }
     if (start + length > size_) fail(where(), "the file ends inside its NumPy header");
-    const std::string_view header(reinterpret_cast<const char*>(bytes_) + start, length);
+    std::vector<unsigned char> text(length);
+    if (read_at(start, text.data(), length) < length) {
+      fail(where(), "the file ends inside its NumPy header");
+    }
+    const std::string_view header(reinterpret_cast<const char*>(text.data()), length);
     std::string descr(entry(header, "descr"));
     if (descr.size() >= 2 && (descr.front() == '\'' || descr.front() == '"')) {
       descr = descr.substr(1, descr.size() - 2);
@@ -152,7 +182,7 @@ class NpyArray {
       fail(where(), "the array has " + std::to_string(shape_.size()) +
                         " dimensions: expected 1 (a channel) or 2 (samples x channels)");
     }
-    data_ = bytes_ + start + length;
+    data_offset_ = start + length;
     // The array's bytes, which must all be in the file (a shape too large wraps around).
     std::size_t bytes = width_;
     bool overflow = false;
@@ -180,9 +210,12 @@ class NpyArray {
   }
 
   std::string path_;
-  const unsigned char* bytes_ = nullptr;
+  File file_;
   std::size_t size_ = 0;
-  const unsigned char* data_ = nullptr;
+  std::size_t data_offset_ = 0;  // where the array's values begin
+  // The bytes last read, and for a C-order array the rows they are.
+  std::vector<unsigned char> buffer_;
+  std::size_t cached_first_ = 0, cached_count_ = 0;
   std::vector<std::size_t> shape_;
   std::size_t width_ = 8;
   bool little_ = true, fortran_ = false;
@@ -191,7 +224,7 @@ class NpyArray {
 class NpyStore final : public ColumnStore {
  public:
   NpyStore(File file, const std::string& path, const ColumnRequest& request) {
-    arrays_.push_back(std::make_unique<NpyArray>(path, fileno(file.get())));
+    arrays_.push_back(std::make_unique<NpyArray>(path, std::move(file)));
     const NpyArray& main = *arrays_.front();
     const std::string stem = std::filesystem::path(path).stem().string();
     if (!request.layout.column_names.empty() &&
@@ -212,7 +245,7 @@ class NpyStore final : public ColumnStore {
       }
       File other(std::fopen(column.c_str(), "rb"));
       if (!other) fail({column, 1, 1, ""}, std::string("cannot open: ") + std::strerror(errno));
-      arrays_.push_back(std::make_unique<NpyArray>(column, fileno(other.get())));
+      arrays_.push_back(std::make_unique<NpyArray>(column, std::move(other)));
       if (arrays_.back()->two_dimensional()) {
         fail({column, 1, 1, ""}, "a channel in a file of its own must be a 1-D array, found " +
                                      std::to_string(arrays_.back()->columns()) + " columns");
