@@ -33,8 +33,10 @@ int main(int argc, char** argv) {
   validation.replay.parameters = {{"c", momentid::ParameterValue::exact("0.55")}};
   std::printf("%zu rows of the Duffing model, median of %d\n", rows, repetitions);
   std::printf("%-8s %12s %12s %8s %10s\n", "format", "simulate s", "validate s", "ratio", "fit %");
-  for (const auto& [name, format] : {std::pair{"csv", momentid::DataWriter::Format::kCsv},
-                                     std::pair{"bin", momentid::DataWriter::Format::kBinary}}) {
+  for (const auto& [name, writer_format] :
+       {std::pair{"csv", momentid::DataWriter::Format::kCsv},
+        std::pair{"bin", momentid::DataWriter::Format::kBinary}}) {
+    const auto format = writer_format;  // a lambda may not capture a structured binding (clang 14)
     const std::string path = directory + "/bench_validate." + name;
     const double simulate = median_seconds(
         repetitions, [&] { momentid::simulate_to_file(model, simulation, path, format); });

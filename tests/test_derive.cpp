@@ -480,8 +480,9 @@ multipliers 1, y2
     REQUIRE(h.moments.size() == 1);
     const ex m = sym(model, "m");
     bool found = false;
-    for (const auto& [monomial, weight] : h.moments[0].second_derivative) {
-      if (monomial == momentid::Monomial{0, 0, 2}) {
+    for (const auto& term : h.moments[0].second_derivative) {
+      const ex& weight = term.second;
+      if (term.first == momentid::Monomial{0, 0, 2}) {
         found = true;
         CHECK_MESSAGE((weight - 2 / (m * m)).normal().is_zero(), weight);
       }

@@ -97,12 +97,13 @@ TEST_SUITE("formats") {
     const Directory dir;
     const std::string csv = write_record(dir);
     const Table original = read_all(csv);
-    for (const auto& [format, name] :
+    for (const auto& [format, file_name] :
          std::vector<std::pair<FileFormat, std::string>>{{FileFormat::kBinary, "r.bin"},
                                                          {FileFormat::kNpy, "r.npy"},
                                                          {FileFormat::kMat5, "r.mat"},
                                                          {FileFormat::kMat73, "r73.mat"},
                                                          {FileFormat::kHdf5, "r.h5"}}) {
+      const std::string& name = file_name;  // for CAPTURE, which cannot capture a binding
       CAPTURE(name);
       const auto notes = momentid::convert(momentid::DataSource::file(csv), dir / name, format);
       momentid::FileLayout layout;

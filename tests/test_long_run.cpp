@@ -94,7 +94,8 @@ TEST_SUITE("long-run covariance") {
     // (the batch covariance would change by the factor). A record's variance has a relative
     // standard deviation near sqrt(2 / dof) = 0.35 (dof near 16); over 200 records a mean has
     // 0.025, a ratio of two at most 0.035: four of those.
-    for (const auto& [white, boundary] : {std::pair{1.0, 0.0}, std::pair{0.0, 1.0}}) {
+    for (const auto& [white_level, boundary_level] : {std::pair{1.0, 0.0}, std::pair{0.0, 1.0}}) {
+      const double white = white_level, boundary = boundary_level;  // for INFO (no bindings)
       double sum[3] = {0, 0, 0};
       momentid::PortableRandom random(5, 0);
       for (int r = 0; r < 200; ++r) {

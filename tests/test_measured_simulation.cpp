@@ -334,8 +334,10 @@ TEST_SUITE("measured simulation") {
     REQUIRE(sd.size() == 2);
     const double bound = 4 / std::sqrt(static_cast<double>(n));
     std::vector<std::vector<double>> noise;
-    for (const auto& [column, relative, absolute] :
+    for (const auto& channel :
          {std::tuple{std::size_t{1}, 0.2, sd[0]}, std::tuple{std::size_t{3}, 0.5, sd[1]}}) {
+      const std::size_t column = std::get<0>(channel);
+      const double relative = std::get<1>(channel), absolute = std::get<2>(channel);
       const std::vector<double> c = clean.column(column), m = noisy.column(column);
       // The deviation recorded is the level times the clean channel's (population) deviation.
       const double want = relative * std::sqrt(variance_of(c));

@@ -92,10 +92,12 @@ TEST_SUITE("simulate") {
     }
     // 40 batches of 10^4 samples: far longer than the response's correlation time (~50
     // samples), so the batch means are nearly independent. Tolerance: 4 standard errors.
-    for (const auto& [name, samples, exact] :
+    for (const auto& moment :
          {std::tuple{"E[y1^2]", &y1y1, exact_y1}, std::tuple{"E[y2^2]", &y2y2, exact_y2},
           std::tuple{"E[y1*y2]", &y1y2, exact_y12}, std::tuple{"E[x^2]", &xx, 0.1}}) {
-      const MeanWithError m = batch_mean(*samples, 40);
+      const char* name = std::get<0>(moment);
+      const double exact = std::get<2>(moment);
+      const MeanWithError m = batch_mean(*std::get<1>(moment), 40);
       INFO(name, ": sample ", m.mean, " +- ", m.error, ", exact ", exact);
       CHECK(std::abs(m.mean - exact) < 4 * m.error);
       CHECK(m.error < 0.05 * std::abs(exact) + 1e-4);  // the test has power

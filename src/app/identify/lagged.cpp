@@ -233,7 +233,8 @@ std::string fit_to_budget(const Model& model, LagOptions& lag_options,
 // `result`.
 LaggedChannels read_lagged(IdentifyResult& result, const LagOptions& lag_options,
                            const DataSource& source, const IdentifyOptions& options) {
-  result.lagged.emplace().system = derive_lagged(*result.model, lag_options);
+  result.lagged = IdentifyResult::Lagged{};
+  result.lagged->system = derive_lagged(*result.model, lag_options);
   LaggedChannels c = lagged_channels(*result.model, result.lagged->system);
   result.lagged->channels = c.states;
   result.lagged->channels.insert(result.lagged->channels.end(), c.inputs.begin(), c.inputs.end());
