@@ -139,10 +139,6 @@ class Model {
 enum class Parity { kEven, kOdd, kNone };
 Parity parity(const Model& model, const Monomial& monomial);
 
-// Throws ModelError at the first equation with abs(...) or sign(...), for `command` (such as
-// "simulate" or "the lagged equations"), which cannot take them.
-void require_polynomial(const Model& model, const std::string& command);
-
 // Reads and checks a model file. Throws ParseError or ModelError naming file, line and column,
 // or Error when the file cannot be read.
 Model parse_model_file(const std::string& path);

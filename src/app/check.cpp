@@ -21,7 +21,6 @@ void CheckOptions::validate(const Model* model) const {
 }
 
 CheckResult check(const DataSource& source, const Model* model, const CheckOptions& options) {
-  if (model != nullptr) require_polynomial(*model, "check");
   options.validate(model);
   CheckResult result;
   result.data_name = source.name();
@@ -77,11 +76,13 @@ CheckResult check(const DataSource& source, const Model* model, const CheckOptio
   std::vector<Monomial> full_moments;  // over all the model's variables
   if (model != nullptr) {
     system = derive(*model);
+    // The identities hold polynomial moments only: a moment with abs(...) or sign(...) (a
+    // variable after the channels) is left out.
     for (const Monomial& m : moments_to_estimate(*system)) {
       Monomial over_kept;
       bool readable = true;
       for (std::size_t v = 0; v < m.size(); ++v) {
-        if (kept[v]) {
+        if (v < kept.size() && kept[v]) {
           over_kept.push_back(m[v]);
         } else if (m[v] != 0) {
           readable = false;

@@ -46,19 +46,4 @@ Parity parity(const Model& model, const Monomial& monomial) {
   return odd ? Parity::kOdd : Parity::kEven;
 }
 
-void require_polynomial(const Model& model, const std::string& command) {
-  if (model.functions().empty()) return;
-  for (const Equation& eq : model.equations()) {
-    for (const Term& t : eq.terms) {
-      for (std::size_t i = model.channel_count(); i < t.monomial.size(); ++i) {
-        if (t.monomial[i] == 0) continue;
-        throw ModelError(eq.where, "equation " + eq.name() + " holds " + model.variables()[i] +
-                                       ", which " + command +
-                                       " cannot take yet (momentid derive prints the zero-lag "
-                                       "moment equations of abs(...) and sign(...) terms)");
-      }
-    }
-  }
-}
-
 }  // namespace momentid

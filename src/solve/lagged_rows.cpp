@@ -111,8 +111,8 @@ LaggedRows lagged_rows(const LaggedSystem& system, double dt, const std::vector<
       const double scale = weight.to_double() / std::pow(dt, f.order);
       const auto instruments = corrected(remap(f.instrument), noise);
       // The instrument, at an earlier time, carries noise independent of the function's.
-      const Monomial function = remap(f.function);
-      const auto functions = corrected(function, correctable_noise(function, noise, from));
+      const Monomial read = remap(f.function);
+      const auto functions = corrected(read, correctable_noise(read, noise, from));
       for (int s = system.first_lag; s <= system.last_lag; ++s) {
         double ws = 0;
         for (int j = -reach; j <= reach; ++j) {
