@@ -2,6 +2,11 @@
 // Everything momentid offers, in one header: the model language, the moment equations, data
 // sources and files, the moment accumulator, the solver, the simulator, and the identify and
 // check calls that put them together.
+//
+// Threads: the model, the equations and the calls that make them use GiNaC, whose shared
+// reference counts are not thread-safe. Call the library from one thread at a time (each pass
+// reads on threads of its own, RecordOptions::control); a front end that runs calls from several
+// threads serialises them and may let others run while a pass reads (PassControl::around_pass).
 
 #include "momentid/accumulator.hpp"
 #include "momentid/check.hpp"

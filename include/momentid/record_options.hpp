@@ -33,6 +33,11 @@ struct PassControl {
   // Called a few times a second with the rows read so far and the fraction of the data read,
   // when known (e.g. to show progress); none: nothing is called.
   std::function<void(std::size_t rows, std::optional<double> fraction)> progress;
+  // Runs `read`, the reading of a pass, which touches only the data and the pass's own state;
+  // none: it is called directly. A front end that holds a lock the reading does not need
+  // releases it here (the Python module, its GIL: the rest of a call uses GiNaC, which other
+  // threads must not use meanwhile).
+  std::function<void(const std::function<void()>& read)> around_pass;
 };
 
 // Where a record's channels are, how it is laid out and sampled, and how a pass reads it: a

@@ -163,6 +163,12 @@ RecordOptions record_options(const py::dict& options) {
   out.layout = layout_of(options);
   out.hold = hold_of(options);
   if (auto threads = get<std::size_t>(options, "threads")) out.control.threads = *threads;
+  // Other Python threads run while the data are read; the rest of a call uses GiNaC, which is
+  // not thread-safe, and keeps the GIL so that no other call uses it meanwhile.
+  out.control.around_pass = [](const std::function<void()>& read) {
+    py::gil_scoped_release release;
+    read();
+  };
   return out;
 }
 
@@ -219,13 +225,6 @@ Derivation derive_equations(const Model& model, const py::dict& options) {
   if (auto degree = get<int>(options, "degree")) derive_options.degree = *degree;
   const MomentSystem system = derive(model, derive_options);
   return {format_text(system), format_latex(system), format_json(system), system.equations.size()};
-}
-
-// The result of `work`, run with the GIL released so that other Python threads run meanwhile.
-template <class Work>
-auto without_gil(Work&& work) {
-  py::gil_scoped_release release;
-  return work();
 }
 
 // --- identify -------------------------------------------------------------------------------
@@ -368,12 +367,8 @@ py::tuple simulate_record(const Model& model, const py::dict& options) {
   if (auto path = get<std::string>(options, "path")) {
     const WriterFormat format = parse_writer_format(
         get<std::string>(options, "format").value_or(to_string(WriterFormat::kCsv)), "format");
-    std::vector<std::string> warnings;
-    {
-      py::gil_scoped_release release;
-      warnings = simulate_to_file(model, simulation, *path, format);
-    }
-    return py::make_tuple(py::none(), py::none(), warnings);
+    return py::make_tuple(py::none(), py::none(),
+                          simulate_to_file(model, simulation, *path, format));
   }
   simulation.validate(model);
   const std::vector<std::string>& variables = model.variables();
@@ -395,15 +390,10 @@ py::tuple simulate_record(const Model& model, const py::dict& options) {
     out["run"] = runs;
   }
   ArraySink sink(columns, channels, time.mutable_data(), run, simulation.samples);
-  std::optional<std::string> warning;
-  std::vector<double> noise_sd;
-  {
-    py::gil_scoped_release release;
-    noise_sd = noise_standard_deviations(model, simulation);
-    StepCheck check(model, simulation, sink);
-    simulate(model, simulation, check, noise_sd);
-    warning = check.warning();
-  }
+  const std::vector<double> noise_sd = noise_standard_deviations(model, simulation);
+  StepCheck check(model, simulation, sink);
+  simulate(model, simulation, check, noise_sd);
+  const std::optional<std::string> warning = check.warning();
   std::vector<std::string> warnings;
   if (warning) warnings.push_back(*warning);
   py::dict metadata;
@@ -489,11 +479,7 @@ py::dict replay_columns(const Model& model, const Replay& done) {
 // The model's response to a record's inputs (replay_columns) and the metadata.
 py::tuple replay_record(const Model& model, const DataSource& source, const py::dict& options) {
   const ValidateOptions with = validate_options(model, options);
-  std::optional<Replay> done;
-  {
-    py::gil_scoped_release release;
-    done = replay(model, source, with.replay);
-  }
+  const std::optional<Replay> done = replay(model, source, with.replay);
   // What the record says of its sampling holds for the response too; its parameters do not.
   py::dict metadata;
   metadata["dt"] = py::str(py::repr(py::float_(done->record.dt)));
@@ -611,8 +597,7 @@ PYBIND11_MODULE(_momentid, m) {
                         const py::dict& options) {
     const IdentifyOptions identify_with = identify_options(model, options);
     const DataSource source = data_source(data, name, metadata);
-    const IdentifyResult result =
-        without_gil([&] { return identify(model, source, identify_with); });
+    const IdentifyResult result = identify(model, source, identify_with);
     return py::make_tuple(format_text(result), format_json(result), least_squares_errors(result));
   });
 
@@ -623,7 +608,7 @@ PYBIND11_MODULE(_momentid, m) {
     check_with.record = record_options(options);
     const Model* with = model.is_none() ? nullptr : &model.cast<const Model&>();
     const DataSource source = data_source(data, name, metadata);
-    const CheckResult result = without_gil([&] { return check(source, with, check_with); });
+    const CheckResult result = check(source, with, check_with);
     return py::make_tuple(format_text(result), check_dict(result));
   });
 
@@ -639,7 +624,7 @@ PYBIND11_MODULE(_momentid, m) {
                       const std::map<std::string, std::string>& metadata, const py::dict& options) {
         const ValidateOptions validate_with = validate_options(model, options);
         const DataSource source = data_source(data, name, metadata);
-        ValidateResult result = without_gil([&] { return validate(model, source, validate_with); });
+        ValidateResult result = validate(model, source, validate_with);
         result.parameters_from =
             get<std::string>(options, "parameters_from").value_or("the model's nominal values");
         if (auto plot = get<std::string>(options, "plot")) write_plot(result, *plot);

@@ -492,6 +492,36 @@ def test_gil_released_during_identify(duffing):
         f"the main thread stood still for {longest:.3f} s of a {duration:.3f} s call")
 
 
+def test_threads_calling_at_once_get_the_serial_results(duffing):
+    """Several Python threads calling identify and check at once, on records with a held input
+    (what simulate writes) and on one array they share: no crash, and every result is the one a
+    serial call gives."""
+    records = [momentid.simulate(duffing, samples=20_000, seed=seed, inputs={"x": INPUT})
+               for seed in range(1, 9)]
+    serial = [str(momentid.identify(duffing, record)) for record in records]
+    checked = str(momentid.check(records[0], model=duffing))
+    for count in (2, 8):
+        for _ in range(5):
+            results, errors = {}, []
+
+            def work(k):
+                try:
+                    results[k] = str(momentid.identify(duffing, records[k % len(records)]))
+                    results[-1 - k] = str(momentid.check(records[0], model=duffing))
+                except Exception as error:  # reported below, with the thread
+                    errors.append((k, error))
+
+            threads = [threading.Thread(target=work, args=(k,)) for k in range(count)]
+            for thread in threads:
+                thread.start()
+            for thread in threads:
+                thread.join()
+            assert not errors
+            for k in range(count):
+                assert results[k] == serial[k % len(records)]
+                assert results[-1 - k] == checked
+
+
 # --- 10. documentation ---------------------------------------------------------------------------
 
 def test_identify_has_help():

@@ -309,7 +309,13 @@ DataMoments moments_from_data(const DataSource& source, const std::vector<std::s
   const PassSetup setup{std::move(columns), states.size(), inputs.size(), std::move(layout),
                         out.hold,           shard_batches, collapse,      &options};
   const Pass pass{source, shards, request, setup, (shard_batches + 1) * shards.size()};
-  RangeResult result = read_all(pass, std::move(first), open_error, channels);
+  RangeResult result;
+  const auto read = [&] { result = read_all(pass, std::move(first), open_error, channels); };
+  if (options.record.control.around_pass) {
+    options.record.control.around_pass(read);
+  } else {
+    read();
+  }
   // Before the readers' errors: a file cut short mid-row reads as a malformed row.
   check_unchanged(source, paths, before);
   const std::optional<double> first_step = check_file_intervals(result, shards, paths, out);
