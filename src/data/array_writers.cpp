@@ -196,8 +196,9 @@ class MatWriter final : public ArrayWriter {
     for (std::size_t c = 0; c < data_.size() && ok; ++c) {
       matvar_t* v = Mat_VarRead(file, names_[c].c_str());
       ok = v != nullptr && v->data_type == MAT_T_DOUBLE && v->rank == 2 &&
-           v->dims[0] * v->dims[1] == rows_ && v->data != nullptr &&
-           (rows_ == 0 || std::memcmp(v->data, data_[c].data(), rows_ * sizeof(double)) == 0);
+           v->dims[0] * v->dims[1] == rows_ &&
+           (rows_ == 0 || (v->data != nullptr &&
+                           std::memcmp(v->data, data_[c].data(), rows_ * sizeof(double)) == 0));
       Mat_VarFree(v);
     }
     return Mat_Close(file) == 0 && ok;
