@@ -16,7 +16,7 @@ interrupt() {
   local pid=$!
   # Wait until the temporary file exists, so the signal arrives while it is being written.
   local seen=0
-  for _ in $(seq 400); do
+  for _ in $(seq 3000); do  # up to a minute: the .mat writers create it only once all rows are in
     if compgen -G "$dir/out/out.*.partial-*" >/dev/null; then
       seen=1
       break
