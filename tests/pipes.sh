@@ -24,6 +24,7 @@ timeout 120 "$momentid" identify "$model" "$dir/fifo" >"$dir/got.txt"
 compare "a FIFO"
 timeout 120 "$momentid" identify "$model" <(cat "$record") >"$dir/got.txt"
 compare "<(cat record)"
+# shellcheck disable=SC2002  # a pipe, not a redirection: /dev/stdin must not be a regular file
 cat "$record" | timeout 120 "$momentid" identify "$model" /dev/stdin >"$dir/got.txt"
 compare "/dev/stdin from a pipe"
 exit $failed
