@@ -169,8 +169,9 @@ struct Sensitivity {
 // distances (docs/cli/validate.md, "Statistics").
 struct StatisticCheck {
   std::string output;  // the state's name
-  std::string kind;    // "psd", "distribution" or "crossings"
-  // The statistic at `at` (frequencies in Hz, probabilities, or levels): the record's, and the
+  std::string kind;    // "psd", "distribution", "crossings" or "prediction"
+  // The statistic at `at` (frequencies in Hz, probabilities, levels, or for "prediction" the
+  // time ahead in s, where the statistic is the rms prediction error): the record's, and the
   // runs' mean, smallest and largest.
   std::vector<double> at, measured, mean, low, high;
   double distance = 0;

@@ -11,6 +11,7 @@ namespace {
 std::string kind_text(const std::string& kind) {
   if (kind == "psd") return "power spectral density";
   if (kind == "distribution") return "amplitude quantiles";
+  if (kind == "prediction") return "prediction error";
   return "up-crossing rates";
 }
 

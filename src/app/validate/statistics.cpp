@@ -159,6 +159,91 @@ void add_checks(const std::string& name, const Runs& measured, const std::vector
                          upcrossing_rates(measured, dt, levels, hysteresis), rate, true));
 }
 
+// The rows a prediction runs ahead: a quarter of the period at the peak of `psd`, from 2 rows
+// to kMaxHorizon.
+std::size_t prediction_horizon(const std::vector<double>& psd, double dt, std::size_t segment) {
+  constexpr std::size_t kMaxHorizon = 200;
+  const std::vector<double> frequencies = psd_frequencies(dt, segment);
+  std::size_t peak = 1;
+  for (std::size_t k = 1; k < psd.size(); ++k) {
+    if (psd[k] > psd[peak]) peak = k;
+  }
+  const double quarter = 0.25 / (frequencies[peak] * dt);
+  return std::clamp<std::size_t>(static_cast<std::size_t>(std::lround(quarter)), 2, kMaxHorizon);
+}
+
+// Per state, the rms difference between `states` (per state, run by run) and the model's
+// response started from them at every `horizon`-th row and run `horizon` rows ahead under the
+// record's input, in units of `spread` (per state).
+std::vector<double> prediction_errors(const Model& model, const RecordSimulator& simulator,
+                                      const Record& record, const std::vector<Runs>& states,
+                                      std::size_t horizon, const std::vector<double>& spread) {
+  // The interpolation of an input between samples reads up to 24 samples ahead.
+  constexpr std::size_t kLookahead = 25;
+  std::vector<double> squares(states.size(), 0.0);
+  double count = 0;
+  for (std::size_t r = 0; r < record.runs.size(); ++r) {
+    const RecordRun& run = record.runs[r];
+    const std::vector<std::vector<double>> inputs = run_inputs(model, record, run);
+    std::vector<std::vector<double>> stretch(inputs.size());
+    for (std::size_t start = 0; start + horizon < run.rows(); start += horizon) {
+      const std::size_t end = std::min(run.rows(), start + horizon + 1 + kLookahead);
+      for (std::size_t i = 0; i < inputs.size(); ++i) {
+        stretch[i].assign(inputs[i].begin() + static_cast<std::ptrdiff_t>(start),
+                          inputs[i].begin() + static_cast<std::ptrdiff_t>(end));
+      }
+      std::vector<double> initial;
+      for (const Runs& state : states) initial.push_back(state[r][start]);
+      const std::vector<std::vector<double>> predicted =
+          simulator.run(stretch, initial, run_start(run) + static_cast<double>(start) * record.dt,
+                        run_label(record, r), horizon + 1);
+      for (std::size_t j = 0; j < states.size(); ++j) {
+        for (std::size_t n = 1; n <= horizon; ++n) {
+          const double e = (predicted[j][n] - states[j][r][start + n]) / spread[j];
+          squares[j] += e * e;
+        }
+      }
+      count += static_cast<double>(horizon);
+    }
+  }
+  for (double& q : squares) q = std::sqrt(q / std::max(count, 1.0));
+  return squares;
+}
+
+// The prediction check of each state: the record's prediction error (prediction_errors)
+// against the runs' own, floored at kPredictionFloor: below it the difference is the
+// integrators', not the models'.
+void add_prediction_checks(const Model& model, const RecordSimulator& simulator,
+                           const Record& record, const std::vector<Runs>& measured,
+                           const std::vector<std::vector<Runs>>& runs, std::size_t segment,
+                           std::vector<StatisticCheck>& checks) {
+  constexpr double kPredictionFloor = 1e-3;
+  std::vector<double> spread;
+  for (const Runs& state : measured) spread.push_back(std::max(mean_and_spread(state).second, DBL_MIN));
+  const std::size_t horizon = prediction_horizon(welch_psd(measured.front(), record.dt, segment),
+                                                 record.dt, segment);
+  const std::vector<double> own =
+      prediction_errors(model, simulator, record, measured, horizon, spread);
+  std::vector<std::vector<double>> of_runs;
+  for (const std::vector<Runs>& run : runs) {
+    of_runs.push_back(prediction_errors(model, simulator, record, run, horizon, spread));
+  }
+  const double ahead = static_cast<double>(horizon) * record.dt;
+  for (std::size_t j = 0; j < measured.size(); ++j) {
+    StatisticCheck c{model.states()[j].name, "prediction", {ahead}, {own[j]}};
+    c.low = c.high = {of_runs.front()[j]};
+    c.mean = {0.0};
+    for (const std::vector<double>& run : of_runs) {
+      c.mean[0] += run[j] / static_cast<double>(of_runs.size());
+      c.low[0] = std::min(c.low[0], run[j]);
+      c.high[0] = std::max(c.high[0], run[j]);
+      c.run_distances.push_back(std::max(run[j], kPredictionFloor));
+    }
+    c.distance = std::max(own[j], kPredictionFloor);
+    checks.push_back(std::move(c));
+  }
+}
+
 }  // namespace
 
 StatisticalValidation compare_statistics(const Model& model, const RecordSimulator& simulator,
@@ -192,6 +277,14 @@ StatisticalValidation compare_statistics(const Model& model, const RecordSimulat
     for (const std::vector<Runs>& run : runs) of_output.push_back(run[o]);
     add_checks(model.states()[outputs[o]].name, measured[o], of_output, record.dt, out.segment,
                out.noise_sd[o], out.checks);
+  }
+  // With every state measured (and in order), the response predicted a short time ahead from the
+  // measured state: what a wrong parameter changes even where the trajectory cannot be
+  // reproduced.
+  bool every_state = outputs.size() == model.states().size();
+  for (std::size_t o = 0; o < outputs.size() && every_state; ++o) every_state = outputs[o] == o;
+  if (every_state) {
+    add_prediction_checks(model, simulator, record, measured, runs, out.segment, out.checks);
   }
   set_limits(out.checks, out.level);
   return out;
