@@ -295,7 +295,8 @@ TEST_SUITE("shards") {
     CHECK(changed_by([&] {
             fs::copy_file(copy, dir / "new.csv", fs::copy_options::overwrite_existing);
             fs::rename(dir / "new.csv", path);
-          }) == path + ": the file changed while it was read (it was replaced or removed): read "
-                       "it when it is complete");
+          }) == path +
+                    ": the file changed while it was read (it was replaced or removed): read "
+                    "it when it is complete");
   }
 }

@@ -619,17 +619,17 @@ PYBIND11_MODULE(_momentid, m) {
     return replay_record(model, data_source(data, name, metadata), options);
   });
 
-  m.def(
-      "_validate", [](const Model& model, const py::object& data, const std::string& name,
-                      const std::map<std::string, std::string>& metadata, const py::dict& options) {
-        const ValidateOptions validate_with = validate_options(model, options);
-        const DataSource source = data_source(data, name, metadata);
-        ValidateResult result = validate(model, source, validate_with);
-        result.parameters_from =
-            get<std::string>(options, "parameters_from").value_or("the model's nominal values");
-        if (auto plot = get<std::string>(options, "plot")) write_plot(result, *plot);
-        return py::make_tuple(format_text(result), format_json(result), validate_series(result));
-      });
+  m.def("_validate",
+        [](const Model& model, const py::object& data, const std::string& name,
+           const std::map<std::string, std::string>& metadata, const py::dict& options) {
+          const ValidateOptions validate_with = validate_options(model, options);
+          const DataSource source = data_source(data, name, metadata);
+          ValidateResult result = validate(model, source, validate_with);
+          result.parameters_from =
+              get<std::string>(options, "parameters_from").value_or("the model's nominal values");
+          if (auto plot = get<std::string>(options, "plot")) write_plot(result, *plot);
+          return py::make_tuple(format_text(result), format_json(result), validate_series(result));
+        });
 
   // Student's t law, as the library's intervals take it: the q-quantile and P(T > x).
   m.def("_t_quantile", [](double q, double dof) {

@@ -25,19 +25,22 @@ extern "C" const char* __lsan_default_options() { return "print_suppressions=0";
 
 namespace {
 
-// The message of an error as the command line shows it.
-std::string message_of(const std::exception& e) {
+// The message of an error as the command line shows it, from `who`: a located error begins with
+// its place, unless it is one process's of several.
+std::string message_of(const std::exception& e, const std::string& who = "momentid") {
+  const std::string lead = who + ": ";
   if (const auto* located = dynamic_cast<const momentid::LocatedError*>(&e)) {
-    return momentid::render_with_caret(*located, momentid::cli::flag_of);
+    return (who == "momentid" ? "" : lead) +
+           momentid::render_with_caret(*located, momentid::cli::flag_of);
   }
   if (const auto* usage = dynamic_cast<const momentid::UsageError*>(&e)) {
-    return "momentid: " + momentid::printable(usage->text(momentid::cli::flag_of));
+    return lead + momentid::printable(usage->text(momentid::cli::flag_of));
   }
   if (dynamic_cast<const momentid::Error*>(&e) != nullptr) {
-    return "momentid: " + momentid::printable(e.what());
+    return lead + momentid::printable(e.what());
   }
   // Everything momentid checks is reported above; this is a failure it did not foresee.
-  return "momentid: internal error: " + momentid::printable(e.what());
+  return lead + "internal error: " + momentid::printable(e.what());
 }
 
 int exit_code_of(const std::exception& e) {
@@ -117,10 +120,8 @@ int main(int argc, char** argv) {
       return exit_code_of(e);
     }
     // This process alone fails, and the others may wait for it: it says so, and ends them all.
-    const std::string prefix = "momentid: ";
-    const std::string alone = "momentid (process " + std::to_string(rank) + "): " +
-                              (text.starts_with(prefix) ? text.substr(prefix.size()) : text) +
-                              "\n";
+    const std::string alone =
+        message_of(e, "momentid (process " + std::to_string(rank) + ")") + "\n";
     if (write(errors_fd, alone.data(), alone.size()) < 0) {
       // Nowhere left to say it.
     }

@@ -95,8 +95,8 @@ std::vector<std::vector<std::uint8_t>> gather_in(MPI_Comm comm,
     total += static_cast<std::size_t>(counts[static_cast<std::size_t>(r)]);
   }
   std::vector<std::uint8_t> all(total);
-  MPI_Iallgatherv(bytes.data(), mine, MPI_BYTE, all.data(), counts.data(), offsets.data(),
-                  MPI_BYTE, comm, &request);
+  MPI_Iallgatherv(bytes.data(), mine, MPI_BYTE, all.data(), counts.data(), offsets.data(), MPI_BYTE,
+                  comm, &request);
   wait_for(request, deadline, patience);
   std::vector<std::vector<std::uint8_t>> out;
   for (int r = 0; r < n; ++r) {
@@ -127,9 +127,8 @@ std::optional<std::vector<std::string>> all_failed(const std::string& message,
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   }
   std::vector<std::string> out;
-  for (const auto& bytes : gather_in(errors,
-                                     std::vector<std::uint8_t>(message.begin(), message.end()),
-                                     wait)) {
+  for (const auto& bytes :
+       gather_in(errors, std::vector<std::uint8_t>(message.begin(), message.end()), wait)) {
     out.emplace_back(bytes.begin(), bytes.end());
   }
   return out;

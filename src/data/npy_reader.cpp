@@ -53,7 +53,6 @@ class NpyArray {
       cached_count_ = count;
     }
     const unsigned char* at = buffer_.data() + (contiguous ? 0 : column * width_);
-    if (contiguous) cached_count_ = 0;  // the buffer holds one column now
     if (width_ == 8 && little_ == (std::endian::native == std::endian::little)) {
       for (std::size_t i = 0; i < count; ++i, at += step * 8) std::memcpy(out + i, at, 8);
       return;
@@ -213,7 +212,8 @@ class NpyArray {
   File file_;
   std::size_t size_ = 0;
   std::size_t data_offset_ = 0;  // where the array's values begin
-  // The bytes last read, and for a C-order array the rows they are.
+  // The bytes last read, and for a C-order array of several columns (which always reads whole
+  // rows) the rows they are.
   std::vector<unsigned char> buffer_;
   std::size_t cached_first_ = 0, cached_count_ = 0;
   std::vector<std::size_t> shape_;

@@ -140,8 +140,7 @@ void check_same_files(const DataSource& source, const std::vector<std::string>& 
     const auto* p = reinterpret_cast<const std::uint8_t*>(&size);
     bytes.insert(bytes.end(), p, p + sizeof size);
   }
-  const std::vector<std::vector<std::uint8_t>> all =
-      cluster::all_gather(bytes, kMinimumPatience);
+  const std::vector<std::vector<std::uint8_t>> all = cluster::all_gather(bytes, kMinimumPatience);
   for (std::size_t f = 0; f < paths.size(); ++f) {
     std::vector<std::int64_t> sizes;
     for (const std::vector<std::uint8_t>& rank : all) {

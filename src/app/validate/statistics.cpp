@@ -159,16 +159,15 @@ void add_checks(const std::string& name, const Runs& measured, const std::vector
                          upcrossing_rates(measured, dt, levels, hysteresis), rate, true));
 }
 
-// The rows a prediction runs ahead: a quarter of the period at the peak of `psd`, from 2 rows
-// to kMaxHorizon.
-std::size_t prediction_horizon(const std::vector<double>& psd, double dt, std::size_t segment) {
+// The rows a prediction runs ahead: a quarter of the period at the peak of the spectrum `psd`
+// (a "psd" check), from 2 rows to kMaxHorizon.
+std::size_t prediction_horizon(const StatisticCheck& psd, double dt) {
   constexpr std::size_t kMaxHorizon = 200;
-  const std::vector<double> frequencies = psd_frequencies(dt, segment);
   std::size_t peak = 1;
-  for (std::size_t k = 1; k < psd.size(); ++k) {
-    if (psd[k] > psd[peak]) peak = k;
+  for (std::size_t k = 1; k < psd.measured.size(); ++k) {
+    if (psd.measured[k] > psd.measured[peak]) peak = k;
   }
-  const double quarter = 0.25 / (frequencies[peak] * dt);
+  const double quarter = 0.25 / (psd.at[peak] * dt);
   return std::clamp<std::size_t>(static_cast<std::size_t>(std::lround(quarter)), 2, kMaxHorizon);
 }
 
@@ -210,18 +209,19 @@ std::vector<double> prediction_errors(const Model& model, const RecordSimulator&
   return squares;
 }
 
-// The prediction check of each state: the record's prediction error (prediction_errors)
-// against the runs' own, floored at kPredictionFloor: below it the difference is the
-// integrators', not the models'.
+// The prediction check of each state: the record's prediction error (prediction_errors), the
+// runs' own as the distances that set the band, each floored at kPredictionFloor: below it the
+// difference is the integrators', not the models'. `psd`: the first state's spectrum check.
 void add_prediction_checks(const Model& model, const RecordSimulator& simulator,
                            const Record& record, const std::vector<Runs>& measured,
-                           const std::vector<std::vector<Runs>>& runs, std::size_t segment,
+                           const std::vector<std::vector<Runs>>& runs, const StatisticCheck& psd,
                            std::vector<StatisticCheck>& checks) {
   constexpr double kPredictionFloor = 1e-3;
   std::vector<double> spread;
-  for (const Runs& state : measured) spread.push_back(std::max(mean_and_spread(state).second, DBL_MIN));
-  const std::size_t horizon = prediction_horizon(welch_psd(measured.front(), record.dt, segment),
-                                                 record.dt, segment);
+  for (const Runs& state : measured) {
+    spread.push_back(std::max(mean_and_spread(state).second, DBL_MIN));
+  }
+  const std::size_t horizon = prediction_horizon(psd, record.dt);
   const std::vector<double> own =
       prediction_errors(model, simulator, record, measured, horizon, spread);
   std::vector<std::vector<double>> of_runs;
@@ -230,16 +230,15 @@ void add_prediction_checks(const Model& model, const RecordSimulator& simulator,
   }
   const double ahead = static_cast<double>(horizon) * record.dt;
   for (std::size_t j = 0; j < measured.size(); ++j) {
-    StatisticCheck c{model.states()[j].name, "prediction", {ahead}, {own[j]}};
-    c.low = c.high = {of_runs.front()[j]};
-    c.mean = {0.0};
-    for (const std::vector<double>& run : of_runs) {
-      c.mean[0] += run[j] / static_cast<double>(of_runs.size());
-      c.low[0] = std::min(c.low[0], run[j]);
-      c.high[0] = std::max(c.high[0], run[j]);
-      c.run_distances.push_back(std::max(run[j], kPredictionFloor));
-    }
+    std::vector<std::vector<double>> errors;
+    for (const std::vector<double>& run : of_runs) errors.push_back({run[j]});
+    StatisticCheck c =
+        check(model.states()[j].name, "prediction", {ahead}, {own[j]}, errors, false);
     c.distance = std::max(own[j], kPredictionFloor);
+    c.run_distances.clear();
+    for (const std::vector<double>& e : errors) {
+      c.run_distances.push_back(std::max(e[0], kPredictionFloor));
+    }
     checks.push_back(std::move(c));
   }
 }
@@ -284,7 +283,8 @@ StatisticalValidation compare_statistics(const Model& model, const RecordSimulat
   bool every_state = outputs.size() == model.states().size();
   for (std::size_t o = 0; o < outputs.size() && every_state; ++o) every_state = outputs[o] == o;
   if (every_state) {
-    add_prediction_checks(model, simulator, record, measured, runs, out.segment, out.checks);
+    const StatisticCheck psd = out.checks.front();  // a copy: the checks grow
+    add_prediction_checks(model, simulator, record, measured, runs, psd, out.checks);
   }
   set_limits(out.checks, out.level);
   return out;
