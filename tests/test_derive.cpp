@@ -154,7 +154,7 @@ TEST_SUITE("derive") {
     const ex c = sym(model, "c"), k = sym(model, "k"), eps = sym(model, "eps");
     // E[(g)'] over (y, v, x).
     const auto R = [&](const momentid::Monomial& g) {
-      return momentid::moment_as_ex(model, momentid::rate_key(g));
+      return momentid::moment_as_ex(model, g.as_rate());
     };
     // times y: E[y v'] = E[(y*v)'] - E[v^2] and E[y*v] = E[(y^2)']/2;
     check_equation(system, 0, k * E(pow(y, 2)) + eps * E(pow(y, 4)) + c * R({2, 0, 0}) / 2,
@@ -171,12 +171,18 @@ TEST_SUITE("derive") {
     // Rates are moments the equations need, written as derivatives.
     std::vector<std::string> rates;
     for (const auto& m : system.moments) {
-      if (momentid::rate_of(m, 3)) rates.push_back(momentid::format_moment(model, m));
+      if (m.rate()) rates.push_back(momentid::format_moment(model, m));
     }
     CHECK(std::find(rates.begin(), rates.end(), "E[(y^2)']") != rates.end());
     CHECK(std::find(rates.begin(), rates.end(), "E[(y*v)']") != rates.end());
-    CHECK(momentid::format_moment(model, momentid::rate_key({1, 0, 0})) == "E[y']");
-    CHECK(!momentid::rate_of({1, 0, 0}, 3));
+    const momentid::Monomial y_only{1, 0, 0};
+    CHECK(momentid::format_moment(model, y_only.as_rate()) == "E[y']");
+    CHECK(!y_only.rate());
+    CHECK(y_only.as_rate().without_rate() == y_only);
+    // A rate is listed among the moments of one degree more than its monomial (y^2, E[y'], v*x).
+    CHECK(momentid::MomentOrder{}(momentid::Monomial{2, 0, 0}, y_only.as_rate()));
+    CHECK(momentid::MomentOrder{}(y_only.as_rate(), momentid::Monomial{0, 1, 1}));
+    CHECK(momentid::MomentOrder{}(momentid::Monomial{0, 0, 1}, y_only.as_rate()));
   }
 
   TEST_CASE("derivative moments known only in sums are eliminated by adding equations") {
@@ -295,7 +301,7 @@ multipliers 1, y2
     const Model model = model_file("kozin_4_1b.mom");
     for (const auto& m : momentid::monomials_up_to(2, 2)) {
       momentid::Monomial full = m;
-      full.resize(3, 0);
+      full.resize(3);
       names.push_back(momentid::format_monomial(model, full));
     }
     CHECK(names == std::vector<std::string>{"y1", "y2", "y1^2", "y1*y2", "y2^2"});
@@ -355,6 +361,11 @@ multipliers 1, y2
         "v' = -c*abs(v)*v - f*sign(v) - k*y - a*abs(y - 1) - b*sign(y - 1) + x\n",
         "p.mom");
     REQUIRE(model.variables().size() == 7);
+    // A function knows its kind and its place among the model's functions.
+    CHECK(model.variables()[5] ==
+          momentid::Variable{"abs(y - 1)", momentid::VariableKind::kFunction, 2});
+    CHECK(!model.variables()[5].channel());
+    CHECK(model.channel_names() == std::vector<std::string>{"y", "v", "x"});
     using momentid::Parity;
     CHECK(momentid::parity(model, {0, 1, 0, 1, 0, 0, 0}) == Parity::kOdd);   // v*abs(v)
     CHECK(momentid::parity(model, {1, 0, 0, 0, 1, 0, 0}) == Parity::kEven);  // y*sign(v)
@@ -439,7 +450,7 @@ multipliers 1, y2
     for (const auto& [m, w] : c.second_derivative) {
       ex product = w;
       for (std::size_t i = 0; i < m.size(); ++i) {
-        product *= pow(sym(model, model.variables()[i]), m[i]);
+        product *= pow(sym(model, model.variables()[i].name), m[i]);
       }
       sum += product;
     }

@@ -659,7 +659,7 @@ input x
 state y, v
 )",
                                               "test.mom");
-    CHECK(model.variables() == std::vector<std::string>{"y", "v", "x"});
+    CHECK(model.channel_names() == std::vector<std::string>{"y", "v", "x"});
     REQUIRE(model.equations().size() == 2);
     CHECK(same(model.equations()[1].rhs,
                -model.parameter_symbol(0) * model.state_symbol(0) + model.input_symbol(0)));

@@ -27,7 +27,13 @@ TEST_SUITE("parser") {
     const momentid::Model& model = duffing();
     CHECK(model.name() == "duffing");
     CHECK(model.title() == "Forced Duffing oscillator");
-    CHECK(model.variables() == std::vector<std::string>{"y", "v", "x"});
+    using momentid::VariableKind;
+    CHECK(model.variables() == std::vector<momentid::Variable>{{"y", VariableKind::kState, 0},
+                                                               {"v", VariableKind::kState, 1},
+                                                               {"x", VariableKind::kInput, 0}});
+    CHECK(model.channel_names() == std::vector<std::string>{"y", "v", "x"});
+    CHECK(model.variable_index("x") == 2);
+    CHECK(model.variable_index("k") == -1);
     REQUIRE(model.parameters().size() == 3);
     CHECK(*model.parameters()[0].value == GiNaC::numeric(1, 2));
     CHECK(model.parameters()[2].where.line == 5);
@@ -80,7 +86,7 @@ TEST_SUITE("parser") {
     std::vector<std::string> names;
     for (const auto& m : model.multipliers()[0].monomials) {
       momentid::Monomial full = m;
-      full.resize(3, 0);
+      full.resize(3);
       names.push_back(momentid::format_monomial(model, full));
     }
     CHECK(names == std::vector<std::string>{"y", "v", "y^3", "y*v^2"});

@@ -27,10 +27,8 @@ struct MemoryRecord {
                const std::string& hold) {
     columns.push_back(recorder.column(0));
     data.columns.push_back({"t", nullptr, 1});
-    const auto& variables = model.variables();
     for (const std::string& name : names) {
-      const auto v = static_cast<std::size_t>(std::find(variables.begin(), variables.end(), name) -
-                                              variables.begin());
+      const auto v = static_cast<std::size_t>(model.variable_index(name));
       columns.push_back(recorder.column(v + 1));
       data.columns.push_back({name, nullptr, 1});
     }

@@ -60,7 +60,7 @@ struct SkippedMultiplier {
 // every parameter even for symmetric data, with equations to spare for the model's test (at
 // most kMaxAutomaticDegree; see derive()).
 //
-// `rates`: keep the record's rates of change (rate_key) where the stationarity identities
+// `rates`: keep the record's rates of change (Monomial::rate()) where the stationarity identities
 // would put 0, so that the equations hold exactly over a finite record, not only on average.
 struct DeriveOptions {
   std::optional<std::vector<Monomial>> multipliers;
@@ -72,11 +72,8 @@ struct DeriveOptions {
 // makes it 0, and the stationarity identities take it to be; over a record of length T it is
 // exactly (g(T) - g(0)) / T, so that a record that ends far from where it began leaves an
 // error of that size in every equation that used an identity. With DeriveOptions::rates the
-// equations keep these rates as terms of their MomentCombinations, under the key rate_key(g):
-// g's exponents followed by one more entry, 1. format_moment writes it E[(g)'].
-Monomial rate_key(const Monomial& g);
-// g for a rate key over `variables` variables (the states and inputs), else nullopt.
-std::optional<Monomial> rate_of(const Monomial& key, std::size_t variables);
+// equations keep these rates as terms of their MomentCombinations, under the key g.as_rate()
+// (Monomial::rate()). format_moment writes it E[(g)'].
 inline constexpr int kMaxAutomaticDegree = 3;
 // At most this many products of an equation and a multiplier; `--degree` beyond it is refused
 // (UsageError) and the automatic choice stops below it.

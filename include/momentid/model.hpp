@@ -44,6 +44,24 @@ struct VariableFunction {
   SourceLocation where;  // of its first use
 };
 
+// What a variable of the monomials is. A record has a column for each state and input
+// (Variable::channel()), while a function's values are computed from the columns its argument
+// holds.
+enum class VariableKind { kState, kInput, kFunction };
+
+// A variable of the monomials (Model::variables()): `index` is its position among the model's
+// states(), inputs() or functions(), by its kind.
+struct Variable {
+  std::string name;
+  VariableKind kind = VariableKind::kState;
+  int index = 0;
+
+  // A record has a column for it.
+  bool channel() const { return kind != VariableKind::kFunction; }
+
+  friend bool operator==(const Variable&, const Variable&) = default;
+};
+
 // One term of an equation moved to the form `lhs - rhs = 0` and expanded:
 // coefficient * parameter * monomial * derivative, where the parameter and the derivative factor
 // are optional. The model language guarantees at most one of each.
@@ -95,10 +113,12 @@ class Model {
   const std::vector<Declaration>& constants() const { return constants_; }
   // The functions of the states and inputs that the equations hold, in order of appearance.
   const std::vector<VariableFunction>& functions() const { return functions_; }
-  // The names that monomials are written in: states, then inputs, then functions.
-  const std::vector<std::string>& variables() const { return variables_; }
-  // The variables that a record has columns for: the states and inputs.
+  // The variables that monomials are written in: states, then inputs, then functions.
+  const std::vector<Variable>& variables() const { return variables_; }
+  // The variables that a record has columns for (Variable::channel()): the states and inputs.
   std::size_t channel_count() const { return states_.size() + inputs_.size(); }
+  // Their names, in the order of variables().
+  std::vector<std::string> channel_names() const;
 
   const std::vector<Equation>& equations() const { return equations_; }
   const std::vector<MultiplierSet>& multipliers() const { return multipliers_; }
@@ -111,21 +131,30 @@ class Model {
   const GiNaC::symbol& function_symbol(int i) const { return function_symbols_[i]; }
   // The symbol of variables()[v]: a state's, an input's or a function's.
   const GiNaC::symbol& variable_symbol(std::size_t v) const {
-    const std::size_t states = state_symbols_.size(), inputs = input_symbols_.size();
-    return v < states            ? state_symbols_[v]
-           : v < states + inputs ? input_symbols_[v - states]
-                                 : function_symbols_[v - states - inputs];
+    const Variable& variable = variables_[v];
+    const auto i = static_cast<std::size_t>(variable.index);
+    switch (variable.kind) {
+      case VariableKind::kState:
+        return state_symbols_[i];
+      case VariableKind::kInput:
+        return input_symbols_[i];
+      case VariableKind::kFunction:
+        break;
+    }
+    return function_symbols_[i];
   }
 
   // Index of a parameter by name, or -1.
   int parameter_index(std::string_view name) const;
+  // Index into variables() by name, or -1.
+  int variable_index(std::string_view name) const;
 
  private:
   friend class ModelBuilder;
   std::string name_, title_, file_;
   std::vector<Declaration> states_, inputs_, parameters_, constants_;
   std::vector<VariableFunction> functions_;
-  std::vector<std::string> variables_;
+  std::vector<Variable> variables_;
   std::vector<Equation> equations_;
   std::vector<MultiplierSet> multipliers_;
   std::vector<GiNaC::symbol> state_symbols_, derivative_symbols_, input_symbols_,

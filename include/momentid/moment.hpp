@@ -2,14 +2,69 @@
 
 #include <compare>
 #include <cstddef>
+#include <initializer_list>
+#include <iterator>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace momentid {
 
-// Exponents of a monomial over the model's variables: the states first, then the inputs, in
-// declaration order (see Model::variables()). `{2, 0, 1}` over (y, v, x) is y^2*x.
-using Monomial = std::vector<int>;
+// A monomial over a model's variables (Model::variables(), each of which knows its kind: a
+// state, an input or a function of them), as its exponents in the order of the variables:
+// `{2, 0, 1}` over (y, v, x) is y^2*x. The exponents are indexed and iterated like a vector.
+//
+// A monomial can also stand for the record's rate of change of itself, E[(g)'] (`rate()`): the
+// moment equations keep such rates where the stationarity identities would put 0
+// (DeriveOptions::rates). A rate compares after the monomial itself.
+//
+// Example:
+//   Monomial g{1, 1, 0};          // y*v over (y, v, x)
+//   Monomial r = g.as_rate();     // E[(y*v)']
+//   r.rate() && r.without_rate() == g;  // true
+class Monomial {
+ public:
+  Monomial() = default;
+  Monomial(std::initializer_list<int> exponents) : exponents_(exponents) {}
+  // `variables` exponents, each `exponent`.
+  explicit Monomial(std::size_t variables, int exponent = 0) : exponents_(variables, exponent) {}
+  explicit Monomial(std::vector<int> exponents) : exponents_(std::move(exponents)) {}
+  template <std::input_iterator Iterator>
+  Monomial(Iterator first, Iterator last) : exponents_(first, last) {}
+
+  const std::vector<int>& exponents() const { return exponents_; }
+  std::size_t size() const { return exponents_.size(); }
+  bool empty() const { return exponents_.empty(); }
+  int& operator[](std::size_t v) { return exponents_[v]; }
+  int operator[](std::size_t v) const { return exponents_[v]; }
+  std::vector<int>::iterator begin() { return exponents_.begin(); }
+  std::vector<int>::iterator end() { return exponents_.end(); }
+  std::vector<int>::const_iterator begin() const { return exponents_.begin(); }
+  std::vector<int>::const_iterator end() const { return exponents_.end(); }
+  // Exponents for `variables` variables, the new ones 0.
+  void resize(std::size_t variables) { exponents_.resize(variables, 0); }
+  // The sum of the exponents.
+  int degree() const;
+
+  bool rate() const { return rate_; }
+  Monomial as_rate() const {
+    Monomial out = *this;
+    out.rate_ = true;
+    return out;
+  }
+  Monomial without_rate() const {
+    Monomial out = *this;
+    out.rate_ = false;
+    return out;
+  }
+
+  friend auto operator<=>(const Monomial&, const Monomial&) = default;
+  friend bool operator==(const Monomial&, const Monomial&) = default;
+
+ private:
+  std::vector<int> exponents_;
+  bool rate_ = false;
+};
 
 // One factor of a moment: channel `channel` (an index into the variables, states then inputs)
 // to the power `power`, taken `lag` samples in the past, at t - lag*dt.

@@ -205,12 +205,10 @@ Derivation derive_equations(const Model& model, const py::dict& options) {
     if (auto measured = get<std::vector<std::string>>(options, "measured")) {
       std::vector<bool> flags(model.variables().size(), false);
       for (const std::string& name : *measured) {
-        const auto& v = model.variables();
-        const auto found = std::find(v.begin(), v.end(), name);
-        if (found == v.end()) {
+        const int v = model.variable_index(name);
+        if (v < 0)
           throw UsageError("measured: '" + name + "' is not a state or input of the model");
-        }
-        flags[static_cast<std::size_t>(found - v.begin())] = true;
+        flags[static_cast<std::size_t>(v)] = true;
       }
       lag_options.measured = flags;
     }
@@ -371,7 +369,6 @@ py::tuple simulate_record(const Model& model, const py::dict& options) {
                           simulate_to_file(model, simulation, *path, format));
   }
   simulation.validate(model);
-  const std::vector<std::string>& variables = model.variables();
   const std::vector<std::size_t> channels = observed_channels(model, simulation);
   const auto rows = static_cast<py::ssize_t>(simulation.samples * simulation.runs);
   py::dict out;
@@ -381,7 +378,7 @@ py::tuple simulate_record(const Model& model, const py::dict& options) {
   for (std::size_t c : channels) {
     py::array_t<double> column(rows);
     columns.push_back(column.mutable_data());
-    out[py::str(variables[c])] = column;
+    out[py::str(model.variables()[c].name)] = column;
   }
   double* run = nullptr;
   if (simulation.runs > 1) {
@@ -470,7 +467,7 @@ py::dict replay_columns(const Model& model, const Replay& done) {
   for (std::size_t j = 0; j < states; ++j)
     out[py::str(model.states()[j].name)] = simulated(done, j);
   for (std::size_t v = states; v < model.channel_count(); ++v) {
-    out[py::str(model.variables()[v])] = recorded(done.record, v);
+    out[py::str(model.variables()[v].name)] = recorded(done.record, v);
   }
   if (done.record.runs.size() > 1) out["run"] = run_numbers(done.record);
   return out;
@@ -501,7 +498,7 @@ py::dict validate_series(const ValidateResult& result) {
     measured[py::str(output.name)] = recorded(record, output.state);
   }
   for (std::size_t v = model.states().size(); v < model.channel_count(); ++v) {
-    inputs[py::str(model.variables()[v])] = recorded(record, v);
+    inputs[py::str(model.variables()[v].name)] = recorded(record, v);
   }
   std::size_t rows = 0;
   for (const RecordRun& run : record.runs) rows += run.rows();

@@ -36,24 +36,24 @@ CheckResult check(const DataSource& source, const Model* model, const CheckOptio
     // So are states the data show only as derivatives (v when y' = v and y is measured); any
     // other missing state is requested, and reported as a missing column.
     const bool derivable = derivable_from(*model, present);
-    const std::size_t state_count = model->states().size();
+    const auto is_state = [&](std::size_t v) {
+      return model->variables()[v].kind == VariableKind::kState;
+    };
     for (std::size_t v = 0; v < present.size(); ++v) {
-      const std::string& name = model->variables()[v];
-      if (v < state_count && !present[v] && derivable) {
+      const std::string& name = model->variables()[v].name;
+      if (is_state(v) && !present[v] && derivable) {
         result.missing_states.push_back(name);
         kept.push_back(false);
-      } else if (v >= state_count && !present[v]) {
+      } else if (!is_state(v) && !present[v]) {
         result.missing_inputs.push_back(name);
         kept.push_back(false);
       } else {
         kept.push_back(true);
       }
     }
-    for (std::size_t v = state_count; v < kept.size() && !result.missing_inputs.empty(); ++v) {
-      kept[v] = false;
-    }
     for (std::size_t v = 0; v < kept.size(); ++v) {
-      if (kept[v]) (v < state_count ? states : inputs).push_back(model->variables()[v]);
+      if (!is_state(v) && !result.missing_inputs.empty()) kept[v] = false;
+      if (kept[v]) (is_state(v) ? states : inputs).push_back(model->variables()[v].name);
     }
   } else {
     const std::unique_ptr<DataReader> reader = source.open({.names = {},
@@ -79,7 +79,7 @@ CheckResult check(const DataSource& source, const Model* model, const CheckOptio
     // The identities hold polynomial moments only: a moment with abs(...) or sign(...) (a
     // variable after the channels) is left out.
     for (const Monomial& m : moments_to_estimate(*system)) {
-      Monomial over_kept;
+      std::vector<int> over_kept;
       bool readable = true;
       for (std::size_t v = 0; v < m.size(); ++v) {
         if (v < kept.size() && kept[v]) {
@@ -90,7 +90,7 @@ CheckResult check(const DataSource& source, const Model* model, const CheckOptio
       }
       if (!readable) continue;
       full_moments.push_back(m);
-      moments.push_back(std::move(over_kept));
+      moments.emplace_back(std::move(over_kept));
     }
   }
   DataOptions data_options;

@@ -14,8 +14,7 @@ void RecordOptions::validate(const Model* model) const {
     throw UsageError("dt", "expected a positive number");
   }
   if (model == nullptr) return;
-  const auto& all = model->variables();
-  const auto variables = std::span(all).first(model->channel_count());
+  const std::vector<std::string> variables = model->channel_names();
   for (const auto& column : columns) {
     if (column.first == "t") continue;
     if (std::find(variables.begin(), variables.end(), column.first) == variables.end()) {

@@ -155,9 +155,8 @@ void judge(ValidateResult& result) {
 ValidateResult validate(const Model& model, const DataSource& source,
                         const ValidateOptions& options) {
   options.validate();
-  const std::vector<std::string>& variables = model.variables();
   for (const std::string& name : options.center) {
-    if (std::find(variables.begin(), variables.end(), name) == variables.end()) {
+    if (model.variable_index(name) < 0) {
       throw UsageError("center", "'" + name + "' is not a state or input of model " + model.name());
     }
   }

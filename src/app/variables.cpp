@@ -25,10 +25,10 @@ std::vector<bool> present_in(const Model& model, const DataReader& reader,
   std::vector<std::string> header = reader.columns();
   for (const auto& [name, why] : reader.unusable_columns()) header.push_back(name);
   std::vector<bool> present;
-  const auto& variables = model.variables();
-  for (const std::string& v : std::span(variables).first(model.channel_count())) {
-    const auto renamed = record.columns.find(v);
-    const std::string& column = renamed == record.columns.end() ? v : renamed->second;
+  for (const Variable& v : model.variables()) {
+    if (!v.channel()) continue;
+    const auto renamed = record.columns.find(v.name);
+    const std::string& column = renamed == record.columns.end() ? v.name : renamed->second;
     present.push_back(std::find(header.begin(), header.end(), column) != header.end());
   }
   return present;

@@ -63,8 +63,8 @@ std::map<std::string, std::string> column_map_of(const std::string& text, const 
 std::optional<InputHold> hold_option(const std::string& text);
 // `--lags 3..40`: the first and last lag.
 std::pair<int, int> lag_range(const std::string& text);
-// `--measured y,x`: flags over `variables` (a model's states, then inputs).
-std::vector<bool> variable_flags(const std::vector<std::string>& variables,
-                                 const std::vector<std::string>& names, const std::string& option);
+// `--measured y,x`: flags over the model's variables.
+std::vector<bool> variable_flags(const Model& model, const std::vector<std::string>& names,
+                                 const std::string& option);
 
 }  // namespace momentid::cli

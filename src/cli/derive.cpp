@@ -31,7 +31,7 @@ int run_lagged(const DeriveCommand& command, const Model& model) {
     options.instruments = parse_instrument_list(model, *command.instruments, "--instruments");
   }
   if (!command.measured.empty()) {
-    options.measured = variable_flags(model.variables(), command.measured, "--measured");
+    options.measured = variable_flags(model, command.measured, "--measured");
   }
   const LaggedSystem system = derive_lagged(model, options);
   write_whole_file("-", command.format == "latex"  ? format_latex(system)

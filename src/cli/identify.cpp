@@ -90,9 +90,7 @@ int run_identify(IdentifyCommand& command) {
     options.fixed[entry.first] = values[index].to_double();
   }
   if (command.center.size() == 1 && command.center[0] == "all") {
-    options.center.assign(
-        model.variables().begin(),
-        model.variables().begin() + static_cast<std::ptrdiff_t>(model.channel_count()));
+    options.center = model.channel_names();
   } else {
     options.center = command.center;
   }

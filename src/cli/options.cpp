@@ -208,15 +208,13 @@ std::pair<int, int> lag_range(const std::string& text) {
   return {first, last};
 }
 
-std::vector<bool> variable_flags(const std::vector<std::string>& variables,
-                                 const std::vector<std::string>& names, const std::string& option) {
-  std::vector<bool> out(variables.size(), false);
+std::vector<bool> variable_flags(const Model& model, const std::vector<std::string>& names,
+                                 const std::string& option) {
+  std::vector<bool> out(model.variables().size(), false);
   for (const std::string& name : names) {
-    const auto found = std::find(variables.begin(), variables.end(), name);
-    if (found == variables.end()) {
-      throw UsageError(option + ": '" + name + "' is not a state or input of the model");
-    }
-    out[static_cast<std::size_t>(found - variables.begin())] = true;
+    const int v = model.variable_index(name);
+    if (v < 0) throw UsageError(option + ": '" + name + "' is not a state or input of the model");
+    out[static_cast<std::size_t>(v)] = true;
   }
   return out;
 }

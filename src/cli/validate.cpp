@@ -63,10 +63,8 @@ int run_validate(ValidateCommand& command) {
   replay.record.dt = command.dt;
   replay.record.columns = column_map(command.columns);
   command.options.skip = command.skip;
-  const auto channels =
-      model.variables().begin() + static_cast<std::ptrdiff_t>(model.channel_count());
   command.options.center = command.center.size() == 1 && command.center[0] == "all"
-                               ? std::vector<std::string>(model.variables().begin(), channels)
+                               ? model.channel_names()
                                : command.center;
   std::optional<std::pair<double, double>> window;
   if (!command.window.empty()) window = window_option(command.window);

@@ -59,12 +59,6 @@ Monomial operator+(const Monomial& a, const Monomial& b) {
   return out;
 }
 
-int degree(const Monomial& m) {
-  int d = 0;
-  for (int e : m) d += e;
-  return d;
-}
-
 class Deriver {
  public:
   Deriver(const Model& model, bool rates)
@@ -155,7 +149,7 @@ class Deriver {
         dynamic_.push_back(static_cast<int>(e));
         continue;
       }
-      const bool explicit_in_one = derivative_terms == 1 && degree(lead->monomial) == 0;
+      const bool explicit_in_one = derivative_terms == 1 && lead->monomial.degree() == 0;
       if (explicit_in_one && kinematic_[lead->derivative]) {
         notes_.push_back("equation " + eqs[e].name() + " gives " +
                          model_.states()[lead->derivative].name + "' again (equation " +
@@ -183,7 +177,7 @@ class Deriver {
     row.sources.push_back({e, multiplier, 1});
     row.parts.resize(parameters_ + 1);
     Monomial m = multiplier;
-    m.resize(variables_, 0);
+    m.resize(static_cast<std::size_t>(variables_));
     for (const Term& t : model_.equations()[e].terms) {
       Linear& part = row.parts[t.parameter + 1];
       if (t.derivative >= 0) {
@@ -195,9 +189,10 @@ class Deriver {
     return row;
   }
 
+  // Whether `m` holds an input or a function.
   bool has_input(const Monomial& m) const {
-    for (int i = states_; i < variables_; ++i) {
-      if (m[i] != 0) return true;
+    for (std::size_t i = 0; i < m.size(); ++i) {
+      if (m[i] != 0 && model_.variables()[i].kind != VariableKind::kState) return true;
     }
     return false;
   }
@@ -243,7 +238,7 @@ class Deriver {
         }
         // beta_j * D_j = E[(y^beta)'] - (sum over the other states j' of beta_j' * D_j')
         const numeric scale = -c / beta[d.state];
-        if (rates_) add_to(part.moments, rate_key(beta), c / beta[d.state]);
+        if (rates_) add_to(part.moments, beta.as_rate(), c / beta[d.state]);
         for (int j = 0; j < states_; ++j) {
           if (j == d.state || beta[j] == 0) continue;
           Monomial alpha = beta;
@@ -370,7 +365,7 @@ class Deriver {
 
   // The relation `identity` = 0 of E[d/dt y^beta], less the record's rate with rates_.
   MomentCombination with_rate(MomentCombination identity, const Monomial& beta) const {
-    if (rates_) add_to(identity, rate_key(beta), numeric(-1));
+    if (rates_) add_to(identity, beta.as_rate(), numeric(-1));
     return identity;
   }
 
@@ -381,7 +376,7 @@ class Deriver {
     std::vector<Monomial> work;
     auto visit = [&](const MomentCombination& c) {
       for (const auto& [m, v] : c) {
-        if (!rate_of(m, variables_) && seen.insert(m).second) work.push_back(m);
+        if (!m.rate() && seen.insert(m).second) work.push_back(m);
       }
     };
     for (const Row& row : rows) {
@@ -391,7 +386,7 @@ class Deriver {
     // kinematic equation such as y' = 1 - y (or -y - y^3) each identity would otherwise bring in
     // moments of a higher degree without end.
     int top = 0;
-    for (const Monomial& m : seen) top = std::max(top, degree(m));
+    for (const Monomial& m : seen) top = std::max(top, m.degree());
     std::vector<MomentCombination> relations;
     // E[d/dt y] = 0 for every state given by a kinematic equation: E[f(y, u)] = 0. Its
     // constant part, if alone (y' = 1), says the model cannot be stationary at all.
@@ -428,7 +423,7 @@ class Deriver {
           std::optional<MomentCombination> identity = data_identity(beta);
           if (!identity || identity->empty()) continue;
           bool bounded = true;
-          for (const auto& [m, w] : *identity) bounded = bounded && degree(m) <= top;
+          for (const auto& [m, w] : *identity) bounded = bounded && m.degree() <= top;
           if (!bounded) continue;
           visit(*identity);
           relations.push_back(with_rate(std::move(*identity), beta));
@@ -445,13 +440,14 @@ class Deriver {
       substitute(relation, solved);
       std::optional<Monomial> pivot;
       for (const auto& [m, v] : relation) {
-        if (m == one || rate_of(m, variables_)) continue;
-        if (!pivot || degree(m) > degree(*pivot) || (degree(m) == degree(*pivot) && m < *pivot)) {
+        if (m == one || m.rate()) continue;
+        if (!pivot || m.degree() > pivot->degree() ||
+            (m.degree() == pivot->degree() && m < *pivot)) {
           pivot = m;
         }
       }
       if (!pivot) {
-        std::erase_if(relation, [&](const auto& term) { return rate_of(term.first, variables_); });
+        std::erase_if(relation, [](const auto& term) { return term.first.rate(); });
         if (relation.count(one) != 0) {
           system.notes.push_back(
               "the model cannot be stationary: a stationarity identity says "
@@ -478,7 +474,7 @@ class Deriver {
       for (Linear& part : row.parts) substitute(part.moments, solved);
     }
     for (auto& [m, value] : solved) {
-      std::erase_if(value, [&](const auto& term) { return rate_of(term.first, variables_); });
+      std::erase_if(value, [](const auto& term) { return term.first.rate(); });
       const bool even = std::all_of(m.begin(), m.end(), [](int e) { return e % 2 == 0; });
       if (value.empty() && even) {
         system.notes.push_back("stationarity requires " + format_moment(model_, m) +
@@ -512,8 +508,7 @@ class Deriver {
     std::map<Monomial, double> value;
     for (const Monomial& m : system.moments) {
       // A record's rate of change has expectation 0.
-      const bool zero = rate_of(m, static_cast<std::size_t>(variables_)) ||
-                        (symmetric && parity(model_, m) == Parity::kOdd);
+      const bool zero = m.rate() || (symmetric && parity(model_, m) == Parity::kOdd);
       value[m] = zero ? 0.0 : draw(engine);
     }
     value[Monomial(variables_, 0)] = 1.0;
@@ -551,7 +546,8 @@ class Deriver {
 }  // namespace
 
 bool MomentOrder::operator()(const Monomial& a, const Monomial& b) const {
-  const int da = degree(a), db = degree(b);
+  // A rate E[(g)'] is listed among the moments of one degree more than g.
+  const int da = a.degree() + a.rate(), db = b.degree() + b.rate();
   if (da != db) return da < db;
   return a > b;
 }
@@ -584,17 +580,6 @@ double count_monomials(int states, int degree) {
 }
 
 }  // namespace
-
-Monomial rate_key(const Monomial& g) {
-  Monomial key = g;
-  key.push_back(1);
-  return key;
-}
-
-std::optional<Monomial> rate_of(const Monomial& key, std::size_t variables) {
-  if (key.size() != variables + 1 || key.back() != 1) return std::nullopt;
-  return Monomial(key.begin(), key.end() - 1);
-}
 
 MomentSystem derive(const Model& model, const DeriveOptions& options) {
   Deriver deriver(model, options.rates);
@@ -662,7 +647,7 @@ MomentSystem derive(const Model& model, const DeriveOptions& options) {
     // square or nearly so, and its estimates are far poorer (docs/cli/derive.md).
     int model_degree = 1;
     for (const Equation& eq : equations) {
-      for (const Term& t : eq.terms) model_degree = std::max(model_degree, degree(t.monomial));
+      for (const Term& t : eq.terms) model_degree = std::max(model_degree, t.monomial.degree());
     }
     const int parameters = static_cast<int>(model.parameters().size());
     std::optional<MomentSystem> full, low, generic;  // full: at or above the model's degree

@@ -143,8 +143,9 @@ std::string latex_number(const numeric& q) {
 
 // variables()[v] in LaTeX: a state's or input's name, or |p| and sgn(p) for a function.
 std::string latex_variable(const Model& model, std::size_t v) {
-  if (v < model.channel_count()) return latex_name(model.variables()[v]);
-  const VariableFunction& f = model.functions()[v - model.channel_count()];
+  if (model.variables()[v].channel()) return latex_name(model.variables()[v].name);
+  const VariableFunction& f =
+      model.functions()[static_cast<std::size_t>(model.variables()[v].index)];
   std::string p;
   for (const auto& [coefficient, monomial] : f.argument) {
     const numeric size = abs(coefficient);
@@ -152,7 +153,7 @@ std::string latex_variable(const Model& model, std::size_t v) {
     for (std::size_t i = 0; i < monomial.size(); ++i) {
       if (monomial[i] == 0) continue;
       if (!term.empty()) term += "\\,";
-      term += latex_name(model.variables()[i]);
+      term += latex_name(model.variables()[i].name);
       if (monomial[i] > 1) term += "^{" + std::to_string(monomial[i]) + "}";
     }
     if (term.empty()) {
@@ -168,9 +169,7 @@ std::string latex_variable(const Model& model, std::size_t v) {
 
 const Notation& latex() {
   static const Notation n{[](const Model& model, const Monomial& key) {
-                            const std::optional<Monomial> g =
-                                rate_of(key, model.variables().size());
-                            const Monomial& m = g ? *g : key;
+                            const Monomial m = key.without_rate();
                             std::string inside;
                             int factors = 0;
                             for (std::size_t i = 0; i < m.size(); ++i) {
@@ -180,7 +179,8 @@ const Notation& latex() {
                               if (m[i] > 1) inside += "^{" + std::to_string(m[i]) + "}";
                               factors += m[i];
                             }
-                            if (g) inside = factors > 1 ? "(" + inside + ")'" : inside + "'";
+                            if (key.rate())
+                              inside = factors > 1 ? "(" + inside + ")'" : inside + "'";
                             return "\\operatorname{E}[" + inside + "]";
                           },
                           latex_name, latex_number, "\\,"};
@@ -198,9 +198,9 @@ std::string format_variable_latex(const Model& model, std::size_t v) {
 }
 
 std::string format_moment(const Model& model, const Monomial& moment) {
-  if (const std::optional<Monomial> g = rate_of(moment, model.variables().size())) {
-    const std::string inside = format_monomial(model, *g);
-    const bool single = std::accumulate(g->begin(), g->end(), 0) == 1;
+  if (moment.rate()) {
+    const std::string inside = format_monomial(model, moment.without_rate());
+    const bool single = moment.degree() == 1;
     return "E[" + (single ? inside : "(" + inside + ")") + "']";
   }
   return "E[" + format_monomial(model, moment) + "]";
@@ -336,11 +336,11 @@ std::string format_json(const MomentSystem& system) {
 }
 
 GiNaC::ex moment_as_ex(const Model& model, const Monomial& moment) {
-  const std::optional<Monomial> g = rate_of(moment, model.variables().size());
-  const Monomial& m = g ? *g : moment;
   GiNaC::ex product = 1;
-  for (std::size_t i = 0; i < m.size(); ++i) product *= GiNaC::pow(model.variable_symbol(i), m[i]);
-  return g ? expectation(rate(product)) : expectation_of(product);
+  for (std::size_t i = 0; i < moment.size(); ++i) {
+    product *= GiNaC::pow(model.variable_symbol(i), moment[i]);
+  }
+  return moment.rate() ? expectation(rate(product)) : expectation_of(product);
 }
 
 GiNaC::ex expectation_of(const GiNaC::ex& monomial) {

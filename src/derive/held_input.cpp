@@ -10,8 +10,8 @@ namespace {
 
 // The exponents of `term`, a product of numbers, parameters and variables, over `variables`.
 Monomial exponents_of(const GiNaC::ex& term, const std::vector<GiNaC::symbol>& variables) {
-  Monomial out;
-  for (const GiNaC::symbol& v : variables) out.push_back(term.degree(v));
+  Monomial out(variables.size());
+  for (std::size_t i = 0; i < variables.size(); ++i) out[i] = term.degree(variables[i]);
   return out;
 }
 

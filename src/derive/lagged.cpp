@@ -109,8 +109,10 @@ class LagDeriver {
                                      " needs " + observed_[v].reason);
     };
     // A function first: its message says which column the pass would compute it from.
-    for (int v = static_cast<int>(model_.channel_count()); v < variables_; ++v) {
-      if (t.monomial[v] != 0 && observed_[v].base < 0) unobservable(v);
+    for (int v = 0; v < variables_; ++v) {
+      if (!model_.variables()[v].channel() && t.monomial[v] != 0 && observed_[v].base < 0) {
+        unobservable(v);
+      }
     }
     for (int v = 0; v < variables_; ++v) {
       const int e = t.monomial[v];
@@ -147,7 +149,7 @@ class LagDeriver {
     std::string why = "channels the data lack: it is not a time derivative of measured channels";
     for (int v = 0; v < variables_; ++v) {
       if (t.monomial[v] > 0 && observed_[v].order > 0) {
-        why = "a column for " + model_.variables()[v] +
+        why = "a column for " + model_.variables()[v].name +
               ": it is not a time derivative of measured channels (" + definition(v) + ")";
         break;
       }
@@ -159,34 +161,39 @@ class LagDeriver {
   // "v = y'" for a state the data show as a derivative.
   std::string definition(int v) const {
     const Observation& o = observed_[v];
-    std::string out = model_.variables()[v] + " = ";
+    std::string out = model_.variables()[v].name + " = ";
     if (o.scale != 1) out += number_text(o.scale) + "*";
-    return out + model_.variables()[o.base] + primes(o.order);
+    return out + model_.variables()[o.base].name + primes(o.order);
   }
 
  private:
+  // "state " or "input ", for a message about a missing column.
+  std::string channel_kind(std::size_t v) const {
+    return model_.variables()[v].kind == VariableKind::kState ? "state " : "input ";
+  }
+
   // Fills observed_[v]; `depth` guards against kinematic cycles.
   const Observation& observe(int v, int depth) {
     Observation& o = observed_[v];
     if (o.base >= 0 || !o.reason.empty()) return o;
-    const std::string& name = model_.variables()[v];
+    const Variable& variable = model_.variables()[v];
+    const std::string& name = variable.name;
     if (measured_[v]) {
       o.base = v;
       return o;
     }
-    const auto channels = static_cast<int>(model_.channel_count());
-    if (v >= channels) {
-      const VariableFunction& f = model_.functions()[static_cast<std::size_t>(v - channels)];
+    if (!variable.channel()) {
+      const VariableFunction& f = model_.functions()[static_cast<std::size_t>(variable.index)];
       const int c = missing_argument(f, measured_);
-      o.reason = "a column for " + std::string(c < states_ ? "state " : "input ") +
-                 model_.variables()[static_cast<std::size_t>(c)] +
+      o.reason = "a column for " + channel_kind(static_cast<std::size_t>(c)) +
+                 model_.variables()[static_cast<std::size_t>(c)].name +
                  ": the lagged equations compute " + f.name +
                  " from the measured channels (give the record a column for " +
-                 model_.variables()[static_cast<std::size_t>(c)] + ")";
+                 model_.variables()[static_cast<std::size_t>(c)].name + ")";
       return o;
     }
-    o.reason = "a column for " + std::string(v < states_ ? "state " : "input ") + name;
-    if (v >= states_ || depth > states_) return o;
+    o.reason = "a column for " + channel_kind(v) + name;
+    if (variable.kind != VariableKind::kState || depth > states_) return o;
     // A kinematic equation c_d*a' + c_v*v = 0 (parameter-free, those two terms only) shows v as
     // a derivative of a.
     for (const Equation& eq : model_.equations()) {
@@ -271,9 +278,11 @@ std::vector<bool> needed_variables(const LaggedSystem& system) {
     for (const LagCombination& c : row.coefficients) mark(c);
     mark(row.rhs);
   }
-  for (std::size_t k = 0; k < model.functions().size(); ++k) {
-    if (!needed[model.channel_count() + k]) continue;
-    for (const auto& [coefficient, monomial] : model.functions()[k].argument) {
+  for (std::size_t v = 0; v < model.variables().size(); ++v) {
+    const Variable& variable = model.variables()[v];
+    if (variable.channel() || !needed[v]) continue;
+    const VariableFunction& f = model.functions()[static_cast<std::size_t>(variable.index)];
+    for (const auto& [coefficient, monomial] : f.argument) {
       for (std::size_t c = 0; c < monomial.size(); ++c) {
         if (monomial[c] != 0) needed[c] = true;
       }
@@ -321,7 +330,7 @@ void LagOptions::validate(const Model& model) const {
     for (std::size_t v = 0; v < m.size(); ++v) {
       if (m[v] != 0 && !measured.empty() && (v >= measured.size() || !measured[v])) {
         throw UsageError("instruments: " + format_monomial(model, m) + " uses " +
-                         model.variables()[v] + ", which the data do not have");
+                         model.variables()[v].name + ", which the data do not have");
       }
     }
   }
@@ -517,7 +526,7 @@ std::string left_text(const Model& model, const LaggedEquation& eq) {
 std::string channel_list(const Model& model, const std::vector<bool>& flags) {
   std::string out;
   for (std::size_t v = 0; v < model.channel_count(); ++v) {
-    if (flags[v]) out += (out.empty() ? "" : ", ") + model.variables()[v];
+    if (flags[v]) out += (out.empty() ? "" : ", ") + model.variables()[v].name;
   }
   return out.empty() ? "none" : out;
 }
@@ -526,8 +535,10 @@ std::string channel_list(const Model& model, const std::vector<bool>& flags) {
 std::vector<std::string> computed_functions(const LaggedSystem& system) {
   const Model& model = *system.model;
   std::vector<std::string> out;
-  for (std::size_t v = model.channel_count(); v < system.needed.size(); ++v) {
-    if (system.needed[v]) out.push_back(model.variables()[v]);
+  for (std::size_t v = 0; v < system.needed.size(); ++v) {
+    if (!model.variables()[v].channel() && system.needed[v]) {
+      out.push_back(model.variables()[v].name);
+    }
   }
   return out;
 }
@@ -535,15 +546,16 @@ std::vector<std::string> computed_functions(const LaggedSystem& system) {
 // A monomial of a lag function in LaTeX: as format_monomial writes it, with |p| and sgn(p) for
 // the functions.
 std::string latex_monomial(const Model& model, const Monomial& m) {
-  if (std::all_of(m.begin() + static_cast<long>(model.channel_count()), m.end(),
-                  [](int e) { return e == 0; })) {
-    return format_monomial(model, m);
-  }
+  bool functions = false;
+  for (std::size_t v = 0; v < m.size(); ++v)
+    functions |= m[v] != 0 && !model.variables()[v].channel();
+  if (!functions) return format_monomial(model, m);
   std::string out;
   for (std::size_t v = 0; v < m.size(); ++v) {
     if (m[v] == 0) continue;
     if (!out.empty()) out += "*";
-    out += v < model.channel_count() ? model.variables()[v] : format_variable_latex(model, v);
+    out += model.variables()[v].channel() ? model.variables()[v].name
+                                          : format_variable_latex(model, v);
     if (m[v] > 1) out += "^{" + std::to_string(m[v]) + "}";
   }
   return out;
@@ -673,7 +685,7 @@ std::string format_json(const LaggedSystem& system) {
   bool first = true;
   for (std::size_t v = 0; v < model.channel_count(); ++v) {
     if (!system.needed[v]) continue;
-    out << (first ? "" : ", ") << json_string(model.variables()[v]);
+    out << (first ? "" : ", ") << json_string(model.variables()[v].name);
     first = false;
   }
   out << "],\n";

@@ -93,12 +93,13 @@ void check_derivatives_determined(const Model& model) {
 // kinematic (y' = f(y, u)), whose right side the stationarity identities substitute, and they
 // need polynomials there.
 void check_functions_have_parameters(const Model& model) {
-  const std::size_t channels = model.channel_count();
-  std::vector<bool> held(model.variables().size() - channels, false);
+  std::vector<bool> held(model.functions().size(), false);
   for (const Equation& eq : model.equations()) {
     for (const Term& t : eq.terms) {
-      for (std::size_t i = channels; i < t.monomial.size(); ++i)
-        if (t.monomial[i] != 0) held[i - channels] = true;
+      for (std::size_t i = 0; i < t.monomial.size(); ++i) {
+        const Variable& variable = model.variables()[i];
+        if (!variable.channel() && t.monomial[i] != 0) held[variable.index] = true;
+      }
     }
   }
   // One that cancels (abs(v) - abs(v)) would still be a variable, and a data channel to compute.
@@ -114,9 +115,9 @@ void check_functions_have_parameters(const Model& model) {
                                            [](const Term& t) { return t.parameter >= 0; });
     if (has_parameter) continue;
     for (const Term& t : eq.terms) {
-      for (std::size_t i = channels; i < t.monomial.size(); ++i) {
-        if (t.monomial[i] == 0) continue;
-        throw ModelError(eq.where, "equation " + eq.name() + " holds " + model.variables()[i] +
+      for (std::size_t i = 0; i < t.monomial.size(); ++i) {
+        if (t.monomial[i] == 0 || model.variables()[i].channel()) continue;
+        throw ModelError(eq.where, "equation " + eq.name() + " holds " + model.variables()[i].name +
                                        " but no unknown parameter: abs(...) and sign(...) may "
                                        "only appear in equations with parameters");
       }

@@ -25,19 +25,18 @@ Parity parity_of(const std::vector<std::pair<GiNaC::numeric, Monomial>>& polynom
 }  // namespace
 
 Parity parity(const Model& model, const Monomial& monomial) {
-  const std::size_t channels = model.channel_count();
   bool odd = false;
-  // A rate key's last entry (rate_key) marks E[(g)'], whose parity is g's.
-  const std::size_t size = std::min(monomial.size(), model.variables().size());
-  for (std::size_t i = 0; i < size; ++i) {
+  // A rate E[(g)'] has g's parity.
+  for (std::size_t i = 0; i < monomial.size(); ++i) {
     if (monomial[i] == 0) continue;
     const bool odd_power = monomial[i] % 2 == 1;
-    if (i < channels) {
+    const Variable& variable = model.variables()[i];
+    if (variable.kind != VariableKind::kFunction) {
       if (odd_power) odd = !odd;
       continue;
     }
     // |p| is even when p has a parity; sign(p)^n as p^n, but sign(p)^2 is 1 whatever p.
-    const VariableFunction& f = model.functions()[i - channels];
+    const VariableFunction& f = model.functions()[static_cast<std::size_t>(variable.index)];
     const Parity p = parity_of(f.argument);
     const bool squared_sign = f.kind == FunctionKind::kSign && !odd_power;
     if (p == Parity::kNone && !squared_sign) return Parity::kNone;

@@ -27,7 +27,7 @@ Model ModelBuilder::build(const std::vector<SyntaxNode>& statements) {
   model_.function_symbols_ = symbols_.function_symbols();
   model_.variables_ = symbols_.variables();
   for (Equation& eq : model_.equations_) {
-    for (Term& t : eq.terms) t.monomial.resize(model_.variables_.size(), 0);
+    for (Term& t : eq.terms) t.monomial.resize(model_.variables_.size());
   }
   for (const SyntaxNode* m : multiplier_nodes_) add_multipliers(*m);
   check_model(model_, source_);

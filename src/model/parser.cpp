@@ -227,6 +227,21 @@ int Model::parameter_index(std::string_view name) const {
   return -1;
 }
 
+std::vector<std::string> Model::channel_names() const {
+  std::vector<std::string> out;
+  for (const Variable& v : variables_) {
+    if (v.channel()) out.push_back(v.name);
+  }
+  return out;
+}
+
+int Model::variable_index(std::string_view name) const {
+  for (std::size_t v = 0; v < variables_.size(); ++v) {
+    if (variables_[v].name == name) return static_cast<int>(v);
+  }
+  return -1;
+}
+
 Model parse_model(std::string_view text, const std::string& file) {
   // A UTF-8 byte order mark, as some editors write, is not part of the model.
   if (text.substr(0, 3) == "\xEF\xBB\xBF") text.remove_prefix(3);
@@ -284,7 +299,7 @@ std::string format_monomial(const Model& model, const Monomial& monomial) {
   for (std::size_t i = 0; i < monomial.size(); ++i) {
     if (monomial[i] == 0) continue;
     if (!out.empty()) out += "*";
-    out += model.variables()[i];
+    out += model.variables()[i].name;
     if (monomial[i] > 1) out.append("^").append(std::to_string(monomial[i]));
   }
   return out.empty() ? "1" : out;

@@ -101,11 +101,13 @@ void SymbolTable::make_symbols() {
   for (const Declaration& s : states_) {
     state_symbols_.emplace_back(s.name);
     derivative_symbols_.emplace_back(s.name + "'");
-    variables_.push_back(s.name);
+    variables_.push_back(
+        {s.name, VariableKind::kState, static_cast<int>(state_symbols_.size()) - 1});
   }
   for (const Declaration& u : inputs_) {
     input_symbols_.emplace_back(u.name);
-    variables_.push_back(u.name);
+    variables_.push_back(
+        {u.name, VariableKind::kInput, static_cast<int>(input_symbols_.size()) - 1});
   }
   for (const Declaration& p : parameters_) parameter_symbols_.emplace_back(p.name);
   index_symbols();
@@ -141,7 +143,8 @@ GiNaC::ex SymbolTable::function(const VariableFunction& f) {
   }
   functions_.push_back(f);
   function_symbols_.emplace_back(f.name);
-  variables_.push_back(f.name);
+  variables_.push_back(
+      {f.name, VariableKind::kFunction, static_cast<int>(function_symbols_.size()) - 1});
   const int index = static_cast<int>(variables_.size()) - 1;
   roles_.emplace(function_symbols_.back(), SymbolRole{SymbolRole::kVariable, index});
   return function_symbols_.back();

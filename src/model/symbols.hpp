@@ -57,7 +57,7 @@ class SymbolTable {
   const std::vector<Declaration>& parameters() const { return parameters_; }
   const std::vector<Declaration>& constants() const { return constants_; }
   const std::vector<VariableFunction>& functions() const { return functions_; }
-  const std::vector<std::string>& variables() const { return variables_; }
+  const std::vector<Variable>& variables() const { return variables_; }
   const std::vector<GiNaC::symbol>& state_symbols() const { return state_symbols_; }
   const std::vector<GiNaC::symbol>& derivative_symbols() const { return derivative_symbols_; }
   const std::vector<GiNaC::symbol>& input_symbols() const { return input_symbols_; }
@@ -80,7 +80,7 @@ class SymbolTable {
   const Source& source_;
   std::vector<Declaration> states_, inputs_, parameters_, constants_;
   std::vector<VariableFunction> functions_;
-  std::vector<std::string> variables_;
+  std::vector<Variable> variables_;
   std::vector<GiNaC::symbol> state_symbols_, derivative_symbols_, input_symbols_,
       parameter_symbols_, function_symbols_;
   std::map<std::string, const Declaration*> declared_;    // after all declarations are collected

@@ -132,14 +132,13 @@ void TermBuilder::add_monomial_checked(const SyntaxNode& n, std::vector<Monomial
     if (std::find(out.begin(), out.end(), m) == out.end()) out.push_back(m);
     return;
   }
-  const std::size_t states = symbols_.states().size();
-  for (std::size_t i = states; i < m.size(); ++i) {
-    if (m[i] != 0) {
-      source_.fail(n, "multiplier '" + text + "' contains input '" + symbols_.variables()[i] +
+  for (std::size_t i = 0; i < m.size(); ++i) {
+    if (m[i] != 0 && symbols_.variables()[i].kind != VariableKind::kState) {
+      source_.fail(n, "multiplier '" + text + "' contains input '" + symbols_.variables()[i].name +
                           "': multipliers are monomials in the states");
     }
   }
-  Monomial in_states(m.begin(), m.begin() + static_cast<std::ptrdiff_t>(states));
+  Monomial in_states(m.begin(), m.begin() + static_cast<std::ptrdiff_t>(symbols_.states().size()));
   if (std::find(out.begin(), out.end(), in_states) == out.end()) out.push_back(in_states);
 }
 
@@ -213,13 +212,13 @@ GiNaC::ex TermBuilder::eval_call(const SyntaxNode& n) const {
                        Monomial(t.variables.begin(), t.variables.begin() + channels));
   }
   const bool is_abs = name == "abs";
-  if (terms.size() <= 1 && (terms.empty() || total(terms[0].second) == 0)) {
+  if (terms.size() <= 1 && (terms.empty() || terms[0].second.degree() == 0)) {
     const GiNaC::numeric c = terms.empty() ? GiNaC::numeric(0) : terms[0].first;
     return is_abs ? GiNaC::abs(c) : GiNaC::numeric(c.csgn());
   }
   // Highest degree first, the first coefficient 1: abs(-2*v) is 2*abs(v), sign(-2*v) -sign(v).
   std::sort(terms.begin(), terms.end(), [](const auto& a, const auto& b) {
-    const int da = total(a.second), db = total(b.second);
+    const int da = a.second.degree(), db = b.second.degree();
     return da != db ? da > db : a.second > b.second;
   });
   const GiNaC::numeric lead = terms[0].first;
@@ -239,8 +238,12 @@ std::string TermBuilder::format_polynomial(
     std::string factors;
     for (std::size_t i = 0; i < monomial.size(); ++i) {
       if (monomial[i] == 0) continue;
-      factors += (factors.empty() ? "" : "*") + symbols_.variables()[i];
-      if (monomial[i] > 1) factors += "^" + std::to_string(monomial[i]);
+      if (!factors.empty()) factors += "*";
+      factors += symbols_.variables()[i].name;
+      if (monomial[i] > 1) {
+        factors += "^";
+        factors += std::to_string(monomial[i]);
+      }
     }
     const GiNaC::numeric size = GiNaC::abs(coefficient);
     std::ostringstream number;
@@ -258,9 +261,8 @@ std::string TermBuilder::format_polynomial(
 }
 
 bool TermBuilder::function_factor(const SplitTerm& t) const {
-  const std::size_t channels = symbols_.states().size() + symbols_.inputs().size();
-  for (std::size_t i = channels; i < t.variables.size(); ++i) {
-    if (t.variables[i] != 0) return true;
+  for (std::size_t i = 0; i < t.variables.size(); ++i) {
+    if (t.variables[i] != 0 && !symbols_.variables()[i].channel()) return true;
   }
   return false;
 }
@@ -360,8 +362,7 @@ void TermBuilder::check_size(const SyntaxNode& at, const GiNaC::ex& value) const
 
 TermBuilder::SplitTerm TermBuilder::split(const GiNaC::ex& term) const {
   SplitTerm t{1, std::vector<int>(symbols_.parameters().size()),
-              std::vector<int>(symbols_.variables().size()),
-              std::vector<int>(symbols_.states().size())};
+              Monomial(symbols_.variables().size()), std::vector<int>(symbols_.states().size())};
   auto add_factor = [&](const GiNaC::ex& f) {
     if (GiNaC::is_a<GiNaC::numeric>(f)) {
       t.coefficient *= GiNaC::ex_to<GiNaC::numeric>(f);
@@ -374,10 +375,11 @@ TermBuilder::SplitTerm TermBuilder::split(const GiNaC::ex& term) const {
       power = GiNaC::ex_to<GiNaC::numeric>(f.op(1)).to_int();
     }
     const SymbolRole role = symbols_.role(base);
-    auto& slot = role.kind == SymbolRole::kParameter  ? t.parameters
-                 : role.kind == SymbolRole::kVariable ? t.variables
-                                                      : t.derivatives;
-    slot[role.index] += power;
+    if (role.kind == SymbolRole::kVariable) {
+      t.variables[role.index] += power;
+    } else {
+      (role.kind == SymbolRole::kParameter ? t.parameters : t.derivatives)[role.index] += power;
+    }
   };
   if (GiNaC::is_a<GiNaC::mul>(term)) {
     for (const GiNaC::ex& f : term) add_factor(f);
@@ -411,7 +413,7 @@ std::string TermBuilder::format_term(const SplitTerm& t) const {
     factor(symbols_.parameters()[i].name, t.parameters[i]);
   }
   for (std::size_t i = 0; i < t.variables.size(); ++i) {
-    factor(symbols_.variables()[i], t.variables[i]);
+    factor(symbols_.variables()[i].name, t.variables[i]);
   }
   for (std::size_t i = 0; i < t.derivatives.size(); ++i) {
     factor(symbols_.states()[i].name + "'", t.derivatives[i]);

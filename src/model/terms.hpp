@@ -33,7 +33,9 @@ class TermBuilder {
   // An expanded term taken apart into its factors, exponents indexed like the declarations.
   struct SplitTerm {
     GiNaC::numeric coefficient;
-    std::vector<int> parameters, variables, derivatives;
+    std::vector<int> parameters;
+    Monomial variables;
+    std::vector<int> derivatives;
   };
 
   // equation() and add_monomial() without turning GiNaC's exceptions into located errors.

@@ -52,6 +52,12 @@ Moment Moment::increment_of(const Monomial& monomial) {
   return out;
 }
 
+int Monomial::degree() const {
+  int sum = 0;
+  for (const int e : exponents_) sum += e;
+  return sum;
+}
+
 int Moment::degree() const {
   int sum = 0;
   for (const MomentFactor& f : factors_) sum += f.power;

@@ -283,9 +283,7 @@ void SimulationOptions::validate(const Model& model) const {
   for (std::size_t i = 0; i < inputs.size(); ++i) {
     inputs[i].validate(UsageError::mention("inputs") + " " + model.inputs()[i].name, dt);
   }
-  const std::vector<std::string> channels(
-      model.variables().begin(),
-      model.variables().begin() + static_cast<long>(model.channel_count()));
+  const std::vector<std::string> channels = model.channel_names();
   // The index of channel `name`, or a UsageError from `option` listing the channels.
   const auto channel = [&](const std::string& name, const std::string& option) {
     const auto it = std::find(channels.begin(), channels.end(), name);
@@ -424,10 +422,8 @@ void simulate_clean(const Model& model, const SimulationOptions& options, Sample
 // The channel index of each noise entry.
 std::vector<std::size_t> noise_channels(const Model& model, const SimulationOptions& options) {
   std::vector<std::size_t> out;
-  const std::vector<std::string>& channels = model.variables();
   for (const ChannelNoise& n : options.noise) {
-    out.push_back(static_cast<std::size_t>(std::find(channels.begin(), channels.end(), n.channel) -
-                                           channels.begin()));
+    out.push_back(static_cast<std::size_t>(model.variable_index(n.channel)));
   }
   return out;
 }
@@ -572,14 +568,12 @@ DataMetadata simulation_metadata(const Model& model, const SimulationOptions& op
 }
 
 std::vector<std::size_t> observed_channels(const Model& model, const SimulationOptions& options) {
-  const std::vector<std::string>& variables = model.variables();
   std::vector<std::size_t> channels;
   if (options.observe.empty()) {
     for (std::size_t c = 0; c < model.channel_count(); ++c) channels.push_back(c);
   } else {
     for (const std::string& name : options.observe) {
-      channels.push_back(static_cast<std::size_t>(
-          std::find(variables.begin(), variables.end(), name) - variables.begin()));
+      channels.push_back(static_cast<std::size_t>(model.variable_index(name)));
     }
   }
   return channels;
@@ -589,10 +583,9 @@ std::vector<std::string> simulate_to_file(const Model& model, const SimulationOp
                                           const std::string& path, DataWriter::Format format) {
   options.validate(model);
   const std::vector<double> noise_sd = noise_standard_deviations(model, options);
-  const std::vector<std::string>& variables = model.variables();
   const std::vector<std::size_t> channels = observed_channels(model, options);
   std::vector<std::string> columns{"t"};
-  for (std::size_t c : channels) columns.push_back(variables[c]);
+  for (std::size_t c : channels) columns.push_back(model.variables()[c].name);
   const bool with_run = options.runs > 1;
   if (with_run) columns.push_back("run");
   DataWriter out(path, format, simulation_metadata(model, options, noise_sd), columns);

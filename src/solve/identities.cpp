@@ -18,28 +18,18 @@ std::vector<IdentityCheck> identity_checks(const MomentSystem& system,
                                            const MomentEstimates& estimates,
                                            const Eigen::MatrixXd& deviations) {
   const Model& model = *system.model;
-  const Monomial one(model.variables().size(), 0);
   const std::map<Monomial, std::size_t> index = positions(moments);
   std::vector<IdentityCheck> out;
   for (const DataIdentity& id : system.identities) {
     // Weights over the moments: +1 for E[m], minus the value's weights; E[1] is a constant.
+    const std::optional<MomentRows::Entry> value = entry_of(id.value, index);
+    if (index.count(id.moment) == 0 || !value) continue;
     VectorXd weights = VectorXd::Zero(deviations.cols());
-    double constant = 0;
-    bool available = index.count(id.moment) != 0;
-    if (available) weights(static_cast<Index>(index.at(id.moment))) += 1.0;
-    for (const auto& [m, w] : id.value) {
-      if (m == one) {
-        constant += w.to_double();
-      } else if (index.count(m) != 0) {
-        weights(static_cast<Index>(index.at(m))) -= w.to_double();
-      } else {
-        available = false;
-      }
-    }
-    if (!available) continue;
+    weights(static_cast<Index>(index.at(id.moment))) += 1.0;
+    for (const auto& [k, w] : value->moments) weights(static_cast<Index>(k)) -= w;
     IdentityCheck check;
     check.identity = format_moment(model, id.moment) + " = " + format_combination(model, id.value);
-    check.violation = -constant;
+    check.violation = -value->constant;
     for (Index i = 0; i < weights.size(); ++i) {
       check.violation += weights(i) * estimates.mean[static_cast<std::size_t>(i)];
     }

@@ -52,10 +52,12 @@ std::vector<std::vector<std::size_t>> computed_from(const Model& model,
                                                     const std::vector<int>& channel) {
   const int last = channel.empty() ? -1 : *std::max_element(channel.begin(), channel.end());
   std::vector<std::vector<std::size_t>> out(static_cast<std::size_t>(last + 1));
-  for (std::size_t k = 0; k < model.functions().size(); ++k) {
-    const int read = channel[model.channel_count() + k];
-    if (read < 0) continue;
-    for (const auto& [coefficient, monomial] : model.functions()[k].argument) {
+  for (std::size_t u = 0; u < model.variables().size(); ++u) {
+    const Variable& variable = model.variables()[u];
+    const int read = channel[u];
+    if (variable.channel() || read < 0) continue;
+    const VariableFunction& f = model.functions()[static_cast<std::size_t>(variable.index)];
+    for (const auto& [coefficient, monomial] : f.argument) {
       for (std::size_t v = 0; v < monomial.size(); ++v) {
         if (monomial[v] != 0 && channel[v] >= 0) {
           out[static_cast<std::size_t>(read)].push_back(static_cast<std::size_t>(channel[v]));

@@ -64,19 +64,24 @@ MomentEstimates estimates_of(const std::vector<Monomial>& wanted,
   return out;
 }
 
-MomentRows moment_rows(const MomentSystem& system, const std::map<Monomial, std::size_t>& index) {
-  const Monomial one(system.model->variables().size(), 0);
-  const auto entry = [&](const MomentCombination& c) {
-    MomentRows::Entry out;
-    for (const auto& [m, w] : c) {
-      if (m == one) {
-        out.constant += w.to_double();
-      } else {
-        out.moments.emplace_back(index.at(m), w.to_double());
-      }
+std::optional<MomentRows::Entry> entry_of(const MomentCombination& combination,
+                                          const std::map<Monomial, std::size_t>& index) {
+  MomentRows::Entry out;
+  for (const auto& [m, w] : combination) {
+    if (m.degree() == 0 && !m.rate()) {
+      out.constant += w.to_double();
+    } else if (const auto at = index.find(m); at != index.end()) {
+      out.moments.emplace_back(at->second, w.to_double());
+    } else {
+      return std::nullopt;
     }
-    return out;
-  };
+  }
+  return out;
+}
+
+MomentRows moment_rows(const MomentSystem& system, const std::map<Monomial, std::size_t>& index) {
+  // Every moment of the equations is at `index`.
+  const auto entry = [&](const MomentCombination& c) { return entry_of(c, index).value(); };
   MomentRows rows;
   for (const MomentEquation& eq : system.equations) {
     std::vector<MomentRows::Entry> a;

@@ -4,6 +4,7 @@
 // MomentRows over the moments of moments_to_estimate, and the estimates in that order.
 
 #include <map>
+#include <optional>
 #include <vector>
 
 #include "momentid/estimate.hpp"
@@ -20,6 +21,11 @@ std::map<Monomial, std::size_t> positions(const std::vector<Monomial>& moments);
 MomentEstimates estimates_of(const std::vector<Monomial>& wanted,
                              const std::vector<Monomial>& given, const MomentEstimates& estimates,
                              const Model& model, const char* caller);
+
+// A combination's weights over the moments at `index`, E[1] as the constant; nullopt when it
+// holds a moment that `index` lacks.
+std::optional<MomentRows::Entry> entry_of(const MomentCombination& combination,
+                                          const std::map<Monomial, std::size_t>& index);
 
 // The system's equations as MomentRows over the moments at `index` (every moment they use).
 MomentRows moment_rows(const MomentSystem& system, const std::map<Monomial, std::size_t>& index);

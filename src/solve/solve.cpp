@@ -175,13 +175,12 @@ Estimate solve_on(const MomentRows& rows, const std::vector<std::string>& names,
 
 // The estimates with the record's rates of change at their stationary value, 0, and the known
 // covariance of all the moments' means: options.rate_covariance over the rates, else 0.
-std::pair<MomentEstimates, KnownCovariance> at_rest(const Model& model,
-                                                    const std::vector<Monomial>& moments,
+std::pair<MomentEstimates, KnownCovariance> at_rest(const std::vector<Monomial>& moments,
                                                     MomentEstimates estimates,
                                                     const SolveOptions& options) {
   std::vector<std::size_t> rates;
   for (std::size_t k = 0; k < moments.size(); ++k) {
-    if (!rate_of(moments[k], model.variables().size())) continue;
+    if (!moments[k].rate()) continue;
     estimates.mean[k] = 0;
     rates.push_back(k);
   }
@@ -213,7 +212,7 @@ Estimate solve(const MomentSystem& system, const std::vector<Monomial>& moments,
   std::vector<std::string> names;
   for (const Declaration& p : model.parameters()) names.push_back(p.name);
   const MatrixXd deviations = batch_deviations(own);
-  const auto [rest, known] = at_rest(model, needed, own, options);
+  const auto [rest, known] = at_rest(needed, own, options);
   Estimate out = solve_on(rows, names, rest, options, {deviations, known});
   out.identities = identity_checks(system, needed, own, deviations);
   return out;

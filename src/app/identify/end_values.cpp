@@ -7,20 +7,20 @@
 
 namespace momentid {
 
-void increments_to_rates(const Model& model, const std::vector<Monomial>& moments,
-                         std::optional<double> interval, MomentEstimates& estimates) {
+void increments_to_rates(const std::vector<Monomial>& moments, std::optional<double> interval,
+                         MomentEstimates& estimates) {
   for (std::size_t k = 0; k < moments.size(); ++k) {
-    if (!rate_of(moments[k], model.variables().size())) continue;
+    if (!moments[k].rate()) continue;
     const double scale = interval ? 1 / *interval : 0.0;
     estimates.mean[k] *= scale;
     for (std::vector<double>& batch : estimates.batch_means) batch[k] *= scale;
   }
 }
 
-std::vector<Monomial> rate_monomials(const Model& model, const std::vector<Monomial>& moments) {
+std::vector<Monomial> rate_monomials(const std::vector<Monomial>& moments) {
   std::vector<Monomial> out;
   for (const Monomial& m : moments) {
-    if (const std::optional<Monomial> g = rate_of(m, model.variables().size())) out.push_back(*g);
+    if (m.rate()) out.push_back(m.without_rate());
   }
   return out;
 }

@@ -39,7 +39,7 @@ std::vector<int> term_order(const Model& model, const Monomial& m) {
   int degree = 0, input_degree = 0;
   for (std::size_t v = 0; v < m.size(); ++v) {
     degree += m[v];
-    if (v >= model.states().size()) input_degree += m[v];
+    if (model.variables()[v].kind != VariableKind::kState) input_degree += m[v];
   }
   const int group = degree == 0 ? 2 : input_degree > 0 ? 1 : 0;
   std::vector<int> key{group, degree};

@@ -73,7 +73,7 @@ void check_lagged_options(const Model& model, const IdentifyOptions& options,
   if (options.multipliers || options.degree > 0) {
     std::string missing;
     for (std::size_t v = 0; v < measured.size(); ++v) {
-      if (!measured[v]) missing += (missing.empty() ? "" : ", ") + model.variables()[v];
+      if (!measured[v]) missing += (missing.empty() ? "" : ", ") + model.variables()[v].name;
     }
     const std::string why = options.method == Method::kLagged     ? "the lagged ones were asked for"
                             : options.lags || options.instruments ? "lags or instruments were given"
@@ -93,21 +93,23 @@ struct LaggedChannels {
 
 LaggedChannels lagged_channels(const Model& model, const LaggedSystem& system) {
   LaggedChannels out;
-  const std::size_t state_count = model.states().size(), channels = model.channel_count();
   out.channel.assign(model.variables().size(), -1);
   std::size_t next = 0;
-  for (std::size_t v = 0; v < channels; ++v) {
-    if (!system.needed[v]) continue;
-    (v < state_count ? out.states : out.inputs).push_back(model.variables()[v]);
+  for (std::size_t v = 0; v < model.variables().size(); ++v) {
+    const Variable& variable = model.variables()[v];
+    if (!variable.channel() || !system.needed[v]) continue;
+    (variable.kind == VariableKind::kState ? out.states : out.inputs).push_back(variable.name);
     // States come first among the channels, and the variables are in that order too.
     out.channel[v] = static_cast<int>(next++);
   }
   if (model.functions().empty()) return out;
   const std::vector<ComputedChannel> all = computed_channels(model);
-  for (std::size_t k = 0; k < all.size(); ++k) {
-    if (!system.needed[channels + k]) continue;
-    ComputedChannel c{.sign = all[k].sign, .argument = {}};
-    for (const auto& [coefficient, monomial] : all[k].argument) {
+  for (std::size_t u = 0; u < model.variables().size(); ++u) {
+    const Variable& variable = model.variables()[u];
+    if (variable.channel() || !system.needed[u]) continue;
+    const ComputedChannel& function = all[static_cast<std::size_t>(variable.index)];
+    ComputedChannel c{.sign = function.sign, .argument = {}};
+    for (const auto& [coefficient, monomial] : function.argument) {
       Monomial read(next, 0);
       for (std::size_t v = 0; v < monomial.size(); ++v) {
         if (monomial[v] != 0) read[static_cast<std::size_t>(out.channel[v])] = monomial[v];
@@ -115,7 +117,7 @@ LaggedChannels lagged_channels(const Model& model, const LaggedSystem& system) {
       c.argument.emplace_back(coefficient, std::move(read));
     }
     out.computed.push_back(std::move(c));
-    out.channel[channels + k] = static_cast<int>(next + out.computed.size() - 1);
+    out.channel[u] = static_cast<int>(next + out.computed.size() - 1);
   }
   return out;
 }
@@ -126,9 +128,10 @@ std::vector<std::string> noisy_function_warnings(const IdentifyResult& result,
                                                  const LaggedChannels& c) {
   const Model& model = *result.model;
   std::vector<std::string> out;
-  for (std::size_t k = 0; k < model.functions().size(); ++k) {
-    if (c.channel[model.channel_count() + k] < 0) continue;
-    const VariableFunction& f = model.functions()[k];
+  for (std::size_t u = 0; u < model.variables().size(); ++u) {
+    const Variable& variable = model.variables()[u];
+    if (variable.channel() || c.channel[u] < 0) continue;
+    const VariableFunction& f = model.functions()[static_cast<std::size_t>(variable.index)];
     for (std::size_t v = 0; v < model.states().size(); ++v) {
       const int read = c.channel[v];
       if (read < 0 || !function_holds(f, v)) continue;
@@ -326,8 +329,11 @@ void identify_lagged(IdentifyResult& result, const DataSource& source,
   }
   result.lagged->noise = noise_variances(result, channels.states.size(), options);
   // The moments name the computed channels after the channels read (lagged_moment_text).
-  for (std::size_t v = result.model->channel_count(); v < channels.channel.size(); ++v) {
-    if (channels.channel[v] >= 0) result.lagged->channels.push_back(result.model->variables()[v]);
+  for (std::size_t v = 0; v < channels.channel.size(); ++v) {
+    const Variable& variable = result.model->variables()[v];
+    if (!variable.channel() && channels.channel[v] >= 0) {
+      result.lagged->channels.push_back(variable.name);
+    }
   }
   // Inputs held over each sample put kinks into the states at the samples, which only the
   // five-point stencils match; band-limited records take the wide ones.

@@ -8,17 +8,16 @@
 
 namespace momentid {
 
-std::vector<Moment> pass_moments_of(const Model& model, const std::vector<Monomial>& moments) {
+std::vector<Moment> pass_moments_of(const std::vector<Monomial>& moments) {
   std::vector<Moment> out;
   for (const Monomial& m : moments) {
-    const std::optional<Monomial> g = rate_of(m, model.variables().size());
-    out.push_back(g ? Moment::increment_of(*g) : Moment::from_monomial(m));
+    out.push_back(m.rate() ? Moment::increment_of(m.without_rate()) : Moment::from_monomial(m));
   }
   return out;
 }
 
-std::vector<Monomial> without_rates(const Model& model, std::vector<Monomial> moments) {
-  std::erase_if(moments, [&](const Monomial& m) { return rate_of(m, model.variables().size()); });
+std::vector<Monomial> without_rates(std::vector<Monomial> moments) {
+  std::erase_if(moments, [](const Monomial& m) { return m.rate(); });
   return moments;
 }
 

@@ -84,8 +84,7 @@ void IdentifyOptions::validate(const Model& model) const {
   if (method == Method::kZeroLag && (lags || instruments)) {
     throw UsageError("method", "the zero-lag equations take no lags or instruments");
   }
-  const auto& all = model.variables();
-  const auto variables = std::span(all).first(model.channel_count());
+  const std::vector<std::string> variables = model.channel_names();
   for (const auto& [name, value] : fixed) {
     if (model.parameter_index(name) < 0) {
       throw UsageError("fixed", "'" + name + "' is not a parameter of model " + model.name());

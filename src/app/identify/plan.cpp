@@ -54,20 +54,20 @@ std::vector<std::string> input_names(const Model& model) {
 
 std::vector<ComputedChannel> computed_channels(const Model& model) {
   std::vector<ComputedChannel> out;
-  const std::size_t states = model.states().size();
   for (const VariableFunction& f : model.functions()) {
     ComputedChannel c{.sign = f.kind == FunctionKind::kSign, .argument = {}};
     bool of_states = false, of_inputs = false;
     for (const auto& [coefficient, monomial] : f.argument) {
       c.argument.emplace_back(coefficient.to_double(), monomial);
       for (std::size_t i = 0; i < monomial.size(); ++i) {
-        if (monomial[i] != 0) (i < states ? of_states : of_inputs) = true;
+        if (monomial[i] == 0) continue;
+        (model.variables()[i].kind == VariableKind::kState ? of_states : of_inputs) = true;
       }
     }
     if (of_states && of_inputs) {
       // Some term holds it: check_model refuses a function that cancels.
       const Equation* holding = nullptr;
-      const std::size_t v = model.channel_count() + out.size();
+      const auto v = static_cast<std::size_t>(model.variable_index(f.name));
       for (const Equation& eq : model.equations()) {
         for (const Term& t : eq.terms) {
           if (!holding && t.monomial[v] != 0) holding = &eq;

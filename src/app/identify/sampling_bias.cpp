@@ -27,11 +27,10 @@ MomentEstimates every_other_sample(const IdentifyResult& result, const DataSourc
   MomentEstimates coarse;
   for (std::size_t phase = 0; phase < 2; ++phase) {
     data_options.phase = phase;
-    DataMoments pass =
-        moments_from_data(source, state_names(model), input_names(model),
-                          pass_moments_of(model, result.zero_lag->moments), data_options);
+    DataMoments pass = moments_from_data(source, state_names(model), input_names(model),
+                                         pass_moments_of(result.zero_lag->moments), data_options);
     MomentEstimates& half = pass.estimates;
-    increments_to_rates(model, result.zero_lag->moments, pass.time_step, half);  // at 2 dt
+    increments_to_rates(result.zero_lag->moments, pass.time_step, half);  // at 2 dt
     if (half.batch_means.size() != batches) {
       throw Error(source.name() + ": every other sample gives " +
                   std::to_string(half.batch_means.size()) + " batches, not " +

@@ -107,14 +107,14 @@ void identify_zero_lag(IdentifyResult& result, const DataSource& source,
 // ---- the record's ends (end_values.cpp) -------------------------------------------------------
 
 // The moments the pass reads for `moments` (over the model's variables): a rate of change
-// (rate_key) as the increment of its monomial.
-std::vector<Moment> pass_moments_of(const Model& model, const std::vector<Monomial>& moments);
+// (Monomial::rate()) as the increment of its monomial.
+std::vector<Moment> pass_moments_of(const std::vector<Monomial>& moments);
 
 // `moments` without the rates of change.
-std::vector<Monomial> without_rates(const Model& model, std::vector<Monomial> moments);
+std::vector<Monomial> without_rates(std::vector<Monomial> moments);
 
 // The monomials g of the rates of change E[(g)'] among `moments`, in their order.
-std::vector<Monomial> rate_monomials(const Model& model, const std::vector<Monomial>& moments);
+std::vector<Monomial> rate_monomials(const std::vector<Monomial>& moments);
 
 // The products g_i * g_j of the monomials `g` (i <= j), with the g themselves.
 std::vector<Monomial> with_products(const std::vector<Monomial>& g);
@@ -122,8 +122,8 @@ std::vector<Monomial> with_products(const std::vector<Monomial>& g);
 // Turns the averages of the increments among `moments` (pass_moments_of) into the record's rates
 // of change, dividing by the interval `interval` between the rows the pass read; without it, sets
 // them to 0 (their stationary value) in every batch.
-void increments_to_rates(const Model& model, const std::vector<Monomial>& moments,
-                         std::optional<double> interval, MomentEstimates& estimates);
+void increments_to_rates(const std::vector<Monomial>& moments, std::optional<double> interval,
+                         MomentEstimates& estimates);
 
 // The covariance of the record's rates of change (g(end) - g(start)) / T summed over its runs,
 // for the monomials `g` whose moments and products (with_products) are among `moments` with

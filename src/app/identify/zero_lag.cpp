@@ -18,11 +18,11 @@ ZeroLagPlan plan_zero_lag(const Model& model, const IdentifyOptions& options) {
   // holds it are then corrected, with E[g''] from moments the pass adds (unless the data are
   // known to be sampled).
   if (!model.inputs().empty() && options.record.hold != InputHold::kSample) {
-    plan.held = held_input_corrections(model, without_rates(model, plan.moments));
+    plan.held = held_input_corrections(model, without_rates(plan.moments));
   }
   // The ends of the record: the rates of change, with the products their covariance needs,
   // unless these would more than double the pass.
-  plan.rated = rate_monomials(model, plan.moments);
+  plan.rated = rate_monomials(plan.moments);
   plan.pass_moments = plan.moments;
   const std::vector<Monomial> means = not_among(
       plan.pass_moments, first_moments_of(model.channel_count(), model.variables().size()));
@@ -55,7 +55,7 @@ MomentEstimates read_zero_lag(IdentifyResult& result, ZeroLagPlan& plan, const D
   // The correction removes the trapezoidal rule's error on the held products too, which the
   // cubic rule only makes smaller.
   if (!plan.held.moments.empty()) data_options.held_rule = HeldRule::kTrapezoidal;
-  const std::vector<Moment> moments = pass_moments_of(model, plan.pass_moments);
+  const std::vector<Moment> moments = pass_moments_of(plan.pass_moments);
   result.data = moments_from_data(source, states, inputs, moments, data_options);
   if (result.data.hold == InputHold::kZeroOrderHold && !plan.held.moments.empty() &&
       !result.data.time_step) {
@@ -69,7 +69,7 @@ MomentEstimates read_zero_lag(IdentifyResult& result, ZeroLagPlan& plan, const D
   }
   // Without their covariance the rates stay out of the batches, whose series then holds the
   // ends.
-  increments_to_rates(model, plan.pass_moments,
+  increments_to_rates(plan.pass_moments,
                       plan.ends_unavailable.empty() ? result.data.time_step : std::nullopt,
                       result.data.estimates);
   MomentEstimates all = std::move(result.data.estimates);
@@ -100,10 +100,9 @@ void identify_zero_lag(IdentifyResult& result, const DataSource& source,
         static_cast<std::size_t>(std::find(plan.pass_moments.begin(), plan.pass_moments.end(), m) -
                                  plan.pass_moments.begin()));
   }
-  const std::vector<std::string>& variables = model.variables();
-  result.means = channel_means(
-      std::vector<std::string>(variables.begin(), variables.begin() + mean_index.size()), all,
-      mean_index);
+  std::vector<std::string> names;
+  for (std::size_t v = 0; v < mean_index.size(); ++v) names.push_back(model.variables()[v].name);
+  result.means = channel_means(names, all, mean_index);
 
   SolveOptions solve_options{.gmm = result.gmm, .fixed = fixed_values(model, options.fixed)};
   if (!plan.rated.empty()) {

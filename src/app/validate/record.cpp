@@ -28,7 +28,7 @@ Record read_record(const Model& model, const DataSource& source, const ReplayOpt
   for (std::size_t v = 0; v < present.size(); ++v) {
     if (v >= states || present[v]) {
       record.variables.push_back(v);
-      const std::string& name = model.variables()[v];
+      const std::string& name = model.variables()[v].name;
       names.push_back(name);
       const auto renamed = options.record.columns.find(name);
       record.columns.push_back(renamed == options.record.columns.end() ? name : renamed->second);
@@ -73,7 +73,7 @@ std::map<std::string, double> center_record(const Model& model, Record& record,
                                             const std::vector<std::string>& center) {
   std::map<std::string, double> centered;
   for (std::size_t c = 0; c < record.variables.size(); ++c) {
-    const std::string& name = model.variables()[record.variables[c]];
+    const std::string& name = model.variables()[record.variables[c]].name;
     if (std::find(center.begin(), center.end(), name) == center.end()) continue;
     double sum = 0;
     std::size_t count = 0;

@@ -63,11 +63,11 @@ std::vector<double> initial_state(const Model& model, const Record& record, cons
       if (const auto d = start_derivative(base, count, r.order, r.scale)) {
         out[j] = *d / std::pow(record.dt, r.order);
       }
-      std::string derivative = model.variables()[static_cast<std::size_t>(r.base)] +
+      std::string derivative = model.variables()[static_cast<std::size_t>(r.base)].name +
                                std::string(static_cast<std::size_t>(r.order), '\'');
       if (r.scale != 1) derivative = shortest_decimal(r.scale) + "*" + derivative;
       text = derivative + " at the start (a cubic fitted to the first " + std::to_string(count) +
-             " samples of " + model.variables()[static_cast<std::size_t>(r.base)] + ")";
+             " samples of " + model.variables()[static_cast<std::size_t>(r.base)].name + ")";
     } else {
       text = "0 (no column, and no kinematic equation defines it from one)";
     }
