@@ -15,6 +15,7 @@
 
 #include "momentid/check.hpp"
 #include "momentid/identify.hpp"
+#include "momentid/json.hpp"
 #include "momentid/simulate.hpp"
 #include "test_support.hpp"
 
@@ -110,7 +111,7 @@ TEST_SUITE("app") {
         CHECK(std::abs(p[i].estimate - f.estimate) < 3 * f.std_error);
       }
       CHECK(std::isnan(fixed.estimate.least_squares.correlation[1][0]));
-      CHECK(momentid::format_json(fixed).find("\"fixed\": true") != std::string::npos);
+      CHECK(momentid::json_value(fixed)["parameters"]["k"]["fixed"] == true);
       CHECK(momentid::format_text(fixed).find("fixed\n") != std::string::npos);
     }
   }
@@ -345,7 +346,39 @@ TEST_SUITE("app") {
     }
     CHECK(result->zero_lag->system.model == result->model.get());
     CHECK(momentid::format_text(*result).starts_with("model duffing, data "));
-    CHECK(momentid::format_json(*result).find("\"E[y^2]\"") != std::string::npos);
+    CHECK(momentid::json_value(*result)["moments"].contains("E[y^2]"));
+  }
+
+  TEST_CASE("the JSON text reads back as the value, with each fit's objective and covariance") {
+    const DuffingFile file(20000);
+    const auto source = momentid::DataSource::file(file.path.string());
+    const momentid::IdentifyResult r = momentid::identify(file.model, source, {.degree = 3});
+    REQUIRE(r.estimate.optimal);
+    const nlohmann::ordered_json value = momentid::json_value(r);
+    // Equal as values: every number the same double, every key in its place.
+    CHECK(nlohmann::ordered_json::parse(momentid::format_json(r)) == value);
+    const nlohmann::ordered_json& diagnostics = value["diagnostics"];
+    const auto check_fit = [](const momentid::Fit& fit, const nlohmann::ordered_json& json) {
+      CHECK(json["objective"].get<double>() == fit.objective);
+      CHECK(json["error_dof"].get<double>() == fit.dof);
+      const auto covariance = fit.covariance();
+      REQUIRE(json["covariance"].size() == covariance.size());
+      for (std::size_t i = 0; i < covariance.size(); ++i) {
+        for (std::size_t j = 0; j < covariance.size(); ++j) {
+          CHECK(json["covariance"][i][j].get<double>() == covariance[i][j]);
+        }
+      }
+    };
+    check_fit(*r.estimate.optimal, diagnostics);
+    check_fit(r.estimate.least_squares, diagnostics["least_squares"]);
+    CHECK(diagnostics["objective"].get<double>() > 0);
+    // Least squares as the main fit: its figures are the diagnostics' own.
+    const momentid::IdentifyResult ls = momentid::identify(
+        file.model, source, {.degree = 3, .weighting = momentid::Weighting::kLeastSquares});
+    const nlohmann::ordered_json ls_value = momentid::json_value(ls);
+    CHECK_FALSE(ls_value.contains("least_squares"));
+    CHECK_FALSE(ls_value["diagnostics"].contains("least_squares"));
+    check_fit(ls.estimate.least_squares, ls_value["diagnostics"]);
   }
 
   TEST_CASE("check without a model takes every column but t and run as a channel") {

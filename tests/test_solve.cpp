@@ -206,6 +206,22 @@ TEST_SUITE("solve") {
     CHECK(momentid::json_string("\xc3\xa9t\xff") == "\"\xc3\xa9t\\ufffd\"");
   }
 
+  TEST_CASE("a result's JSON text: numbers that read back to the same double, null, valid UTF-8") {
+    const double third = 1.0 / 3, tiny = 4.9406564584124654e-324;
+    const nlohmann::ordered_json value = {
+        {"numbers", momentid::json_value(
+                        std::vector<double>{third, tiny, 0.1, 1e300, std::nan(""), -HUGE_VAL})},
+        {"name", "\xc3\xa9t\xff"}};
+    const std::string text = momentid::json_text(value);
+    CHECK(text ==
+          "{\n  \"numbers\": [\n    0.3333333333333333,\n    5e-324,\n    0.1,\n    1e+300,\n"
+          "    null,\n    null\n  ],\n  \"name\": \"\xc3\xa9t\xef\xbf\xbd\"\n}\n");
+    const nlohmann::ordered_json back = nlohmann::ordered_json::parse(text);
+    CHECK(back["numbers"][0].get<double>() == third);
+    CHECK(back["numbers"][1].get<double>() == tiny);
+    CHECK(back["numbers"] == value["numbers"]);
+  }
+
   TEST_CASE("solve reads each moment by its key: in any order and with others, the same bits") {
     DuffingCase c;
     // The moments backwards, with three the system does not need among them.

@@ -16,6 +16,7 @@
 #include "momentid/estimate.hpp"
 #include "momentid/identify.hpp"
 #include "momentid/input.hpp"
+#include "momentid/json.hpp"
 #include "momentid/lagged.hpp"
 #include "momentid/metadata.hpp"
 #include "momentid/model.hpp"

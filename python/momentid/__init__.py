@@ -24,8 +24,8 @@ options, spelled as keyword arguments, give the same numbers.
 
 from __future__ import annotations
 
+import copy as _copy
 import functools as _functools
-import json as _json
 import os as _os
 import warnings as _warnings
 from typing import Any, Mapping, Optional, Sequence, Union
@@ -72,7 +72,7 @@ from . import _momentid  # noqa: E402  (the exceptions above must exist before i
 
 __version__: str = _momentid.__version__
 
-from ._results import CheckResult, Fit, IdentifyResult, ValidateResult  # noqa: E402
+from ._results import CheckResult, Fit, IdentifyResult, ValidateResult, _json_text  # noqa: E402
 
 PathLike = Union[str, "_os.PathLike[str]"]
 # Monomials: a list (["y", "y*v^2"]) or the command line's list in one string ("y, y*v^2").
@@ -168,10 +168,10 @@ class Model:
         the automatic choice. lags=(first, last): the lagged equations for records that lack
         some states, with `instruments` and the `measured` channels.
         """
-        text, latex, json_text, count = _momentid._derive(
+        text, latex, value, count = _momentid._derive(
             self._model, _options(multipliers=_monomials(multipliers), degree=degree, lags=lags,
                                   instruments=_monomials(instruments), measured=measured))
-        return Equations(text, latex, json_text, count)
+        return Equations(text, latex, value, count)
 
     def __repr__(self) -> str:
         parts = [f"states {', '.join(self.states)}"]
@@ -182,15 +182,21 @@ class Model:
 
 
 class Equations:
-    """Moment equations: `.text` (as the command prints them), `.latex`, `.json` (a string;
-    `.to_dict()` parses it) and `len()` the number of equations. Shown as LaTeX in a notebook."""
+    """Moment equations: `.text` (as the command prints them), `.latex`, `.to_dict()` (the JSON
+    of `derive --format json` as Python objects), `.json` (that JSON as text) and `len()` the
+    number of equations. Shown as LaTeX in a notebook."""
 
-    def __init__(self, text: str, latex: str, json_text: str, count: int) -> None:
-        self.text, self.latex, self.json = text, latex, json_text
+    def __init__(self, text: str, latex: str, value: dict, count: int) -> None:
+        self.text, self.latex = text, latex
+        self._dict = value
         self._count = count
 
+    @property
+    def json(self) -> str:
+        return _json_text(self._dict)
+
     def to_dict(self) -> dict:
-        return _json.loads(self.json)
+        return _copy.deepcopy(self._dict)
 
     def __len__(self) -> int:
         return self._count
@@ -274,10 +280,9 @@ def identify(model: Union[Model, PathLike], data: Any, *,
                        input_shift=input_shift, columns=columns, dt=dt, missing=missing,
                        skip_rows=skip_rows, decimal=decimal, names=names, dt_from=dt_from,
                        threads=threads, extrapolate="dt" if extrapolate else None)
-    text, json_text, least_squares = _momentid._identify(model._model, source, name, metadata,
-                                                         options)
+    text, value = _momentid._identify(model._model, source, name, metadata, options)
     del keep
-    return IdentifyResult(text, json_text, least_squares)
+    return IdentifyResult(text, value)
 
 
 @_older_keywords
@@ -385,9 +390,9 @@ def validate(model: Union[Model, PathLike], data: Any,
                        plot=None if plot is None else _os.fspath(plot), missing=missing,
                        skip_rows=skip_rows, decimal=decimal, names=names, dt_from=dt_from,
                        center=center)
-    text, json_text, series = _momentid._validate(model._model, source, name, metadata, options)
+    text, value, series = _momentid._validate(model._model, source, name, metadata, options)
     del keep
-    return ValidateResult(text, json_text, series)
+    return ValidateResult(text, value, series)
 
 
 # --- helpers ----------------------------------------------------------------------------------

@@ -1,7 +1,8 @@
 """The results of identify(), check() and validate(), as values to compute with.
 
-An identification is read from its JSON (the text of `momentid identify --format json`), never
-from the text report, so that the numbers are the program's to the last bit. The arrays follow
+An identification is read from its JSON value (what `momentid identify --format json` prints),
+which the binding converts into Python objects without writing or parsing text, never from the
+text report, so that the numbers are the program's to the last bit. The arrays follow
 statsmodels' results (params, bse, cov_params(), conf_int(), tvalues, pvalues, summary()) and
 are numpy arrays in the order of `param_names`: the module needs numpy only, and the same code
 gives the same types wherever it runs. pandas, when installed, gives the tables of to_frame().
@@ -9,8 +10,9 @@ gives the same types wherever it runs. pandas, when installed, gives the tables 
 
 from __future__ import annotations
 
+import copy as _copy
 import json as _json
-from typing import Optional
+from typing import Optional, Union
 
 import numpy as _np
 
@@ -20,6 +22,11 @@ from . import _momentid
 def _number(value) -> float:
     # The JSON writes what is not a finite number as null.
     return _np.nan if value is None else float(value)
+
+
+def _json_text(value: dict) -> str:
+    # Laid out as the program prints it: two spaces of indentation, a final newline.
+    return _json.dumps(value, indent=2, ensure_ascii=False) + "\n"
 
 
 def _read_only(values) -> _np.ndarray:
@@ -61,14 +68,17 @@ class Fit:
     tvalues, pvalues: params / bse and the two-sided p-value of the t test of "the parameter is
       0"; NaN for a parameter that is fixed or not identifiable.
     identifiable: a boolean array; fixed: the names of the fixed parameters.
+    objective: what the fit minimised, at its estimate (docs/json.md, "identify"): fits of the
+      same moments compare by it; NaN when nothing is identifiable.
     cov_params(), conf_int(alpha), to_frame(alpha): below.
     estimates, std_errors: {parameter: float}; ci95: {parameter: (low, high)}.
     """
 
     def __init__(self, section: dict) -> None:
         """section: {"parameters": the JSON's parameter entries, "error_dof": their degrees of
-        freedom, "correlation": their correlation matrix (rows of numbers or null; empty when
-        there are no errors)}."""
+        freedom, "covariance": their covariance matrix (rows of numbers or null), and optionally
+        "objective" and "correlation"}. Without "covariance" (a result saved by an older
+        release), cov_params() is NaN."""
         parameters = section["parameters"]
         self.param_names = list(parameters)
         self.params = _read_only([_number(p["estimate"]) for p in parameters.values()])
@@ -77,7 +87,11 @@ class Fit:
         self.identifiable.flags.writeable = False
         self._fixed = _np.array([p["fixed"] for p in parameters.values()], bool)
         self.df_resid = _number(section["error_dof"])
-        self._correlation = section["correlation"]
+        self.objective = _number(section.get("objective"))
+        count = len(self.param_names)
+        self._covariance = _read_only(
+            [[_number(c) for c in row] for row in section["covariance"]]
+            if section.get("covariance") else _np.full((count, count), _np.nan))
         self.estimates = {name: p["estimate"] for name, p in parameters.items()}
         self.std_errors = {name: p["std_error"] for name, p in parameters.items()}
         self.ci95 = {name: tuple(p["ci95"]) if p["ci95"] is not None else None
@@ -99,18 +113,10 @@ class Fit:
                           for t in self.tvalues])
 
     def cov_params(self) -> _np.ndarray:
-        """The covariance matrix of the estimates, from their standard errors and correlation:
-        rows and columns of a fixed parameter 0, of one not identifiable NaN."""
-        count = len(self.param_names)
-        correlation = (_np.array([[_number(c) for c in row] for row in self._correlation])
-                       if self._correlation else _np.full((count, count), _np.nan))
-        covariance = correlation * _np.outer(self.bse, self.bse)
-        # The variances are the squared errors themselves (a correlation of 1 could differ in
-        # the last bit).
-        _np.fill_diagonal(covariance, self.bse ** 2)
-        covariance[self._fixed, :] = 0
-        covariance[:, self._fixed] = 0
-        return covariance
+        """The covariance matrix of the estimates, as the program computes it from their
+        standard errors and correlation: the squared errors on the diagonal, rows and columns of
+        a fixed parameter 0, NaN where an error or a correlation is unknown."""
+        return self._covariance.copy()
 
     def conf_int(self, alpha: float = 0.05) -> _np.ndarray:
         """The (1 - alpha) confidence intervals, one row (low, high) per parameter: Student's t
@@ -154,28 +160,24 @@ class IdentifyResult(Fit):
       (estimate, standard error) rows; empty when there is none (engineering["unavailable"]
       says why); engineering: that section of the JSON, with the equilibrium.
     summary() and str(): the text report of `momentid identify`; to_dict(): the JSON of
-      `momentid identify --format json`.
+      `momentid identify --format json` as Python objects, `json` as text.
 
-    IdentifyResult(text, json_text) reads a saved result of the program as well (text may be
-    ""); beside an optimally weighted estimate, that JSON lacks the least-squares errors'
-    degrees of freedom and correlation, so .ls has NaN intervals and off-diagonal covariances.
+    IdentifyResult(text, value) reads a saved result of the program as well: `value` is its
+    JSON text or the dict json.load() made of it (text may be "").
     """
 
-    def __init__(self, text: str, json_text: str,
-                 least_squares_errors: Optional[dict] = None) -> None:
+    def __init__(self, text: str, value: Union[str, dict]) -> None:
         self.text = text
-        self.json = json_text
-        self._dict = _json.loads(json_text)
+        # A JSON text is a result saved by the user; the binding hands over the value itself.
+        self._dict = _json.loads(value) if isinstance(value, str) else value
         self.diagnostics = self._dict["diagnostics"]
-        main = {"parameters": self._dict["parameters"],
-                "error_dof": self.diagnostics["error_dof"],
-                "correlation": self.diagnostics["correlation"]}
+        main = {"parameters": self._dict["parameters"], **self.diagnostics}
         super().__init__(main)
         self.weighting = "gmm" if "least_squares" in self._dict else "ls"
         if self.weighting == "gmm":
-            # Without the binding's numbers the least-squares errors have no known degrees of
-            # freedom and correlation: their intervals and covariances are NaN, not guessed.
-            errors = least_squares_errors or {"error_dof": None, "correlation": []}
+            # A result saved by an older release lacks the least-squares errors: their intervals
+            # and covariances are NaN, not guessed.
+            errors = self.diagnostics.get("least_squares", {"error_dof": None})
             self.ls = Fit({"parameters": self._dict["least_squares"], **errors})
         else:
             self.ls = Fit(main)
@@ -189,6 +191,11 @@ class IdentifyResult(Fit):
             _read_only(_np.reshape([[_number(m["estimate"]), _number(m["std_error"])]
                                     for m in self.engineering.get(key, [])], (-1, 2)))
             for key in ("natural_frequencies_hz", "damping_ratios"))
+
+    @property
+    def json(self) -> str:
+        """The JSON of `momentid identify --format json`, as text."""
+        return _json_text(self._dict)
 
     def jtest(self) -> Optional[tuple]:
         """(J, p-value, degrees of freedom) of Hansen's test that the moment equations hold at
@@ -204,7 +211,7 @@ class IdentifyResult(Fit):
         return self.text
 
     def to_dict(self) -> dict:
-        return _json.loads(self.json)
+        return _copy.deepcopy(self._dict)
 
     def __str__(self) -> str:
         return self.text
@@ -259,10 +266,9 @@ class ValidateResult:
     m = measured[y][compared] and e = m - simulated[y][compared].
     """
 
-    def __init__(self, text: str, json_text: str, series: dict) -> None:
+    def __init__(self, text: str, value: dict, series: dict) -> None:
         self.text = text
-        self.json = json_text
-        self._dict = _json.loads(json_text)
+        self._dict = value
         outputs = self._dict["outputs"]
         self.fit = {name: o["fit_percent"] for name, o in outputs.items()}
         self.rms = {name: o["rms"] for name, o in outputs.items()}
@@ -280,8 +286,13 @@ class ValidateResult:
         self.inputs = dict(series["inputs"])
         self.compared = series["compared"]
 
+    @property
+    def json(self) -> str:
+        """The JSON of `momentid validate --format json`, as text."""
+        return _json_text(self._dict)
+
     def to_dict(self) -> dict:
-        return _json.loads(self.json)
+        return _copy.deepcopy(self._dict)
 
     def __str__(self) -> str:
         return self.text

@@ -15,6 +15,7 @@
 #include <type_traits>
 #include <vector>
 
+#include "json_value.hpp"
 #include "momentid/momentid.hpp"
 
 namespace py = pybind11;
@@ -190,7 +191,8 @@ std::vector<GiNaC::numeric> parameters_of(const Model& model, const py::dict& op
 // --- derive ---------------------------------------------------------------------------------
 
 struct Derivation {
-  std::string text, latex, json;
+  std::string text, latex;
+  py::object json;  // the JSON value, converted
   std::size_t equations = 0;
 };
 
@@ -213,7 +215,7 @@ Derivation derive_equations(const Model& model, const py::dict& options) {
       lag_options.measured = flags;
     }
     const LaggedSystem system = derive_lagged(model, lag_options);
-    return {format_text(system), format_latex(system), format_json(system),
+    return {format_text(system), format_latex(system), to_python(json_value(system)),
             system.equations.size()};
   }
   DeriveOptions derive_options;
@@ -222,7 +224,8 @@ Derivation derive_equations(const Model& model, const py::dict& options) {
   }
   if (auto degree = get<int>(options, "degree")) derive_options.degree = *degree;
   const MomentSystem system = derive(model, derive_options);
-  return {format_text(system), format_latex(system), format_json(system), system.equations.size()};
+  return {format_text(system), format_latex(system), to_python(json_value(system)),
+          system.equations.size()};
 }
 
 // --- identify -------------------------------------------------------------------------------
@@ -517,20 +520,6 @@ py::dict validate_series(const ValidateResult& result) {
   return out;
 }
 
-// --- the results of identify ----------------------------------------------------------------
-
-// What the JSON of an optimally weighted result leaves out of its least-squares section: the
-// degrees of freedom and correlation of its errors (the main result's are in "diagnostics").
-// None when the least-squares estimate is the main result.
-py::object least_squares_errors(const IdentifyResult& result) {
-  const Estimate& e = result.estimate;
-  if (!e.optimal) return py::none();
-  py::dict out;
-  out["error_dof"] = e.least_squares.dof;
-  out["correlation"] = e.least_squares.correlation;
-  return out;
-}
-
 }  // namespace
 }  // namespace momentid::python
 
@@ -589,14 +578,14 @@ PYBIND11_MODULE(_momentid, m) {
     return py::make_tuple(d.text, d.latex, d.json, d.equations);
   });
 
-  m.def("_identify", [](const Model& model, const py::object& data, const std::string& name,
-                        const std::map<std::string, std::string>& metadata,
-                        const py::dict& options) {
-    const IdentifyOptions identify_with = identify_options(model, options);
-    const DataSource source = data_source(data, name, metadata);
-    const IdentifyResult result = identify(model, source, identify_with);
-    return py::make_tuple(format_text(result), format_json(result), least_squares_errors(result));
-  });
+  m.def("_identify",
+        [](const Model& model, const py::object& data, const std::string& name,
+           const std::map<std::string, std::string>& metadata, const py::dict& options) {
+          const IdentifyOptions identify_with = identify_options(model, options);
+          const DataSource source = data_source(data, name, metadata);
+          const IdentifyResult result = identify(model, source, identify_with);
+          return py::make_tuple(format_text(result), to_python(json_value(result)));
+        });
 
   m.def("_check", [](const py::object& model, const py::object& data, const std::string& name,
                      const std::map<std::string, std::string>& metadata, const py::dict& options) {
@@ -625,7 +614,8 @@ PYBIND11_MODULE(_momentid, m) {
           result.parameters_from =
               get<std::string>(options, "parameters_from").value_or("the model's nominal values");
           if (auto plot = get<std::string>(options, "plot")) write_plot(result, *plot);
-          return py::make_tuple(format_text(result), format_json(result), validate_series(result));
+          return py::make_tuple(format_text(result), to_python(json_value(result)),
+                                validate_series(result));
         });
 
   // Student's t law, as the library's intervals take it: the q-quantile and P(T > x).

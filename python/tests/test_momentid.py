@@ -319,6 +319,7 @@ def test_derive_equals_cli(duffing, cli):
     assert equations._repr_latex_() == latex
     as_dict = json.loads(cli("derive", DUFFING, "--degree", 2, "--format", "json"))
     assert equations.to_dict() == as_dict
+    assert json.loads(equations.json) == as_dict
     assert len(equations) == len(as_dict["equations"]) > 0
 
 

@@ -1,9 +1,10 @@
 """Tests of the results as values to compute with, against the `momentid` program.
 
 What they cover:
-- IdentifyResult's params, bse, cov_params(), conf_int(), tvalues, pvalues, summary(),
-  to_frame(), nobs, df_resid and J test equal the JSON (and text) of `momentid identify` on the
-  same file, for the least-squares and the optimally weighted estimate and its `.ls` beside it;
+- IdentifyResult's params, bse, cov_params(), objective, conf_int(), tvalues, pvalues,
+  summary(), to_frame(), nobs, df_resid and J test equal the JSON (and text) of `momentid
+  identify` on the same file, for the least-squares and the optimally weighted estimate and its
+  `.ls` beside it;
 - the keywords renamed in this release (rename=, columns= as a list, extrapolate="dt") still
   work and warn; monomial lists are lists or strings alike;
 - validate's series: their lengths, the rows compared, and the fit and errors recomputed from
@@ -40,9 +41,14 @@ def parameters_of(section):
 
 
 def covariance_of(section, correlation):
-    """The covariance as the program's JSON gives it: errors and correlation."""
+    """The covariance from the errors and the correlation of the program's JSON."""
     _, _, errors, _ = parameters_of(section)
     return np.array(correlation, dtype=float) * np.outer(errors, errors)
+
+
+def matrix(rows):
+    """A matrix of the JSON, null as NaN."""
+    return np.array([[np.nan if x is None else x for x in row] for row in rows], dtype=float)
 
 
 @pytest.fixture(scope="session")
@@ -71,9 +77,16 @@ def test_params_bse_cov_and_intervals_equal_cli_json(request, weighting, ls_json
     assert result.param_names == names == ["c", "k", "eps"]
     np.testing.assert_allclose(result.params, values, rtol=REL, atol=0)
     np.testing.assert_allclose(result.bse, errors, rtol=REL, atol=0)
-    covariance = covariance_of(expected["parameters"], expected["diagnostics"]["correlation"])
+    # The program's covariance, to the last bit, and what its errors and correlation make.
+    diagnostics = expected["diagnostics"]
+    np.testing.assert_array_equal(result.cov_params(), matrix(diagnostics["covariance"]))
+    covariance = covariance_of(expected["parameters"], diagnostics["correlation"])
     np.testing.assert_allclose(result.cov_params(), covariance, rtol=REL, atol=0)
-    np.testing.assert_array_equal(result.cov_params(), result.cov_params().T)
+    # Symmetric to rounding: the program forms entry (i, j) as (r_ij s_i) s_j and (j, i) as
+    # (r_ji s_j) s_i, which may differ in the last bit (Fit::covariance).
+    np.testing.assert_allclose(result.cov_params(), result.cov_params().T,
+                               rtol=2 * np.finfo(float).eps, atol=0)
+    assert result.objective == diagnostics["objective"] > 0
     # At alpha = 0.05, Student's t at the result's degrees of freedom: the program's interval.
     np.testing.assert_allclose(result.conf_int(), intervals, rtol=REL, atol=0)
     assert result.df_resid == expected["diagnostics"]["error_dof"]
@@ -101,8 +114,16 @@ def test_least_squares_beside_the_optimally_weighted_estimate(gmm_result, gmm_js
     # The degrees of freedom the binding hands over are those of the program's intervals.
     np.testing.assert_allclose(ls.conf_int(), intervals, rtol=REL, atol=0)
     assert ls.df_resid != gmm_result.df_resid
-    # Its covariance: the squared errors on the diagonal, a correlation within [-1, 1].
+    # Its objective and covariance: the program's, the squared errors on the diagonal, a
+    # correlation within [-1, 1].
+    errors_json = gmm_json["diagnostics"]["least_squares"]
+    assert ls.objective == errors_json["objective"] > 0
+    assert ls.objective != gmm_result.objective
+    assert ls.df_resid == errors_json["error_dof"]
     covariance = ls.cov_params()
+    np.testing.assert_array_equal(covariance, matrix(errors_json["covariance"]))
+    np.testing.assert_allclose(covariance, covariance_of(gmm_json["least_squares"],
+                                                         errors_json["correlation"]), rtol=REL)
     np.testing.assert_allclose(np.diag(covariance), errors ** 2, rtol=REL, atol=0)
     correlation = covariance / np.outer(errors, errors)
     assert np.all(np.abs(correlation) <= 1 + 1e-12)
@@ -112,6 +133,7 @@ def test_least_squares_beside_the_optimally_weighted_estimate(gmm_result, gmm_js
 def test_least_squares_result_is_its_own_ls(ls_result):
     np.testing.assert_array_equal(ls_result.ls.params, ls_result.params)
     np.testing.assert_array_equal(ls_result.ls.cov_params(), ls_result.cov_params())
+    assert ls_result.ls.objective == ls_result.objective
     assert ls_result.jval is None and ls_result.jtest() is None
 
 
@@ -146,7 +168,8 @@ def test_tvalues_and_pvalues(ls_result):
     assert np.all(ls_result.pvalues < 1e-100)
     for dof in (12.5, 0.4):
         fit = momentid.Fit({"parameters": {"a": entry(1.0, 0.8), "b": entry(-0.1, 0.05)},
-                            "error_dof": dof, "correlation": [[1, 0.3], [0.3, 1]]})
+                            "error_dof": dof,
+                            "covariance": [[0.64, 0.3 * 0.8 * 0.05], [0.3 * 0.8 * 0.05, 0.0025]]})
         law = stats.t(max(1.0, dof))  # at least one degree of freedom, as the program's
         np.testing.assert_allclose(fit.pvalues, 2 * law.sf([1.25, 2.0]), rtol=1e-10)
         np.testing.assert_allclose(fit.conf_int(0.1)[:, 1] - fit.params,
@@ -305,11 +328,33 @@ def test_validate_series_are_the_record_and_the_replay(duffing, two_runs):
 
 
 def test_result_from_the_programs_json_alone(cli, cli_csv, gmm_json, gmm_result):
-    """A saved `momentid identify --format json` is a result too; the least-squares errors'
-    degrees of freedom and correlation, which that JSON lacks, are NaN rather than guessed."""
+    """A saved `momentid identify --format json` is a result too, the same to the last bit; one
+    saved by an older release, without the covariances and the least-squares errors, has NaN
+    there rather than guessed numbers."""
     text = cli("identify", DUFFING, cli_csv, "--weighting", "gmm")
-    saved = momentid.IdentifyResult(text, json.dumps(gmm_json))
+    for value in (cli("identify", DUFFING, cli_csv, "--weighting", "gmm", "--format", "json"),
+                  gmm_json):
+        saved = momentid.IdentifyResult(text, value)
+        for fit, expected in ((saved, gmm_result), (saved.ls, gmm_result.ls)):
+            np.testing.assert_array_equal(fit.conf_int(), expected.conf_int())
+            np.testing.assert_array_equal(fit.cov_params(), expected.cov_params())
+            assert fit.objective == expected.objective and fit.df_resid == expected.df_resid
+        assert saved.to_dict() == gmm_result.to_dict()
+    older = json.loads(json.dumps(gmm_json))
+    for key in ("objective", "covariance", "least_squares"):
+        del older["diagnostics"][key]
+    saved = momentid.IdentifyResult(text, json.dumps(older))
     np.testing.assert_array_equal(saved.conf_int(), gmm_result.conf_int())
-    np.testing.assert_array_equal(saved.cov_params(), gmm_result.cov_params())
     np.testing.assert_array_equal(saved.ls.params, gmm_result.ls.params)
+    assert np.isnan(saved.cov_params()).all() and np.isnan(saved.objective)
     assert np.isnan(saved.ls.conf_int()).all() and np.isnan(saved.ls.df_resid)
+
+
+def test_json_text_is_the_programs_value(cli, cli_csv, gmm_json, gmm_result):
+    """`.json` is the value as text: it reads back as the program's JSON, in the same order."""
+    assert json.loads(gmm_result.json) == gmm_json
+    assert list(json.loads(gmm_result.json)) == list(gmm_json)
+    assert list(gmm_result.to_dict()["diagnostics"]) == list(gmm_json["diagnostics"])
+    # to_dict() is a copy: changing it leaves the result as it was.
+    gmm_result.to_dict()["parameters"].clear()
+    assert gmm_result.to_dict()["parameters"] == gmm_json["parameters"]

@@ -66,17 +66,31 @@ std::string json_string(std::string_view s) {
   return out + "\"";
 }
 
-std::string json_strings(const std::vector<std::string>& items) {
-  std::string out = "[";
-  for (std::size_t i = 0; i < items.size(); ++i) out += (i ? ", " : "") + json_string(items[i]);
-  return out + "]";
-}
-
 std::string json_number(double x) {
   if (!std::isfinite(x)) return "null";
   char text[64];
   std::snprintf(text, sizeof text, "%.17g", x);
   return text;
+}
+
+nlohmann::ordered_json json_value(double x) {
+  return std::isfinite(x) ? nlohmann::ordered_json(x) : nlohmann::ordered_json(nullptr);
+}
+
+nlohmann::ordered_json json_value(const std::vector<double>& values) {
+  nlohmann::ordered_json out = nlohmann::ordered_json::array();
+  for (double x : values) out.push_back(json_value(x));
+  return out;
+}
+
+nlohmann::ordered_json json_value(const std::vector<std::vector<double>>& rows) {
+  nlohmann::ordered_json out = nlohmann::ordered_json::array();
+  for (const std::vector<double>& row : rows) out.push_back(json_value(row));
+  return out;
+}
+
+std::string json_text(const nlohmann::ordered_json& value) {
+  return value.dump(2, ' ', false, nlohmann::ordered_json::error_handler_t::replace) + "\n";
 }
 
 }  // namespace momentid

@@ -7,6 +7,7 @@
 
 #include "common/json.hpp"
 #include "momentid/derive.hpp"
+#include "momentid/json.hpp"
 
 namespace momentid {
 
@@ -187,8 +188,15 @@ const Notation& latex() {
   return n;
 }
 
-std::string json_equation_name(const Equation& eq) {
-  return eq.label.empty() ? std::to_string(eq.number) : json_string(eq.label);
+// An equation's label, or its number (from 1) when it has none.
+nlohmann::ordered_json json_equation_name(const Equation& eq) {
+  return eq.label.empty() ? nlohmann::ordered_json(eq.number) : nlohmann::ordered_json(eq.label);
+}
+
+// Where a row came from: an equation times a multiplier, with the row's factor when it has one.
+nlohmann::ordered_json json_source(const Model& model, int equation, const Monomial& multiplier) {
+  return {{"equation", json_equation_name(model.equations()[equation])},
+          {"multiplier", format_monomial(model, multiplier)}};
 }
 
 }  // namespace
@@ -277,63 +285,46 @@ std::string format_latex(const MomentSystem& system) {
   return out.str();
 }
 
-std::string format_json(const MomentSystem& system) {
+nlohmann::ordered_json json_value(const MomentSystem& system) {
   const Model& model = *system.model;
-  std::ostringstream out;
-  out << "{\n  \"model\": " << json_string(model.name()) << ",\n  \"parameters\": [";
-  for (std::size_t p = 0; p < model.parameters().size(); ++p) {
-    out << (p ? ", " : "") << json_string(model.parameters()[p].name);
-  }
-  out << "],\n  \"moments\": [";
-  for (std::size_t i = 0; i < system.moments.size(); ++i) {
-    out << (i ? ", " : "") << json_string(format_moment(model, system.moments[i]));
-  }
-  out << "],\n  \"equations\": [";
-  for (std::size_t i = 0; i < system.equations.size(); ++i) {
-    const MomentEquation& eq = system.equations[i];
+  nlohmann::ordered_json out = {{"model", model.name()}};
+  nlohmann::ordered_json& parameters = out["parameters"] = nlohmann::ordered_json::array();
+  for (const Declaration& p : model.parameters()) parameters.push_back(p.name);
+  nlohmann::ordered_json& moments = out["moments"] = nlohmann::ordered_json::array();
+  for (const Monomial& m : system.moments) moments.push_back(format_moment(model, m));
+  nlohmann::ordered_json& equations = out["equations"] = nlohmann::ordered_json::array();
+  for (const MomentEquation& eq : system.equations) {
     const RowSource& first = eq.sources.front();
-    out << (i ? "," : "")
-        << "\n    {\"equation\": " << json_equation_name(model.equations()[first.equation])
-        << ", \"multiplier\": " << json_string(format_monomial(model, first.multiplier))
-        << ",\n     \"coefficients\": {";
+    nlohmann::ordered_json row = json_source(model, first.equation, first.multiplier);
+    nlohmann::ordered_json& coefficients = row["coefficients"] = nlohmann::ordered_json::object();
     for (std::size_t p = 0; p < eq.coefficients.size(); ++p) {
-      out << (p ? ", " : "") << json_string(model.parameters()[p].name) << ": "
-          << json_string(format_combination(model, eq.coefficients[p]));
+      coefficients[model.parameters()[p].name] = format_combination(model, eq.coefficients[p]);
     }
-    out << "},\n     \"rhs\": " << json_string(format_combination(model, eq.rhs));
-    out << ",\n     \"sources\": [";
-    for (std::size_t s = 0; s < eq.sources.size(); ++s) {
-      const RowSource& src = eq.sources[s];
-      out << (s ? ", " : "")
-          << "{\"equation\": " << json_equation_name(model.equations()[src.equation])
-          << ", \"multiplier\": " << json_string(format_monomial(model, src.multiplier))
-          << ", \"factor\": " << json_string(number_text(src.factor)) << "}";
+    row["rhs"] = format_combination(model, eq.rhs);
+    nlohmann::ordered_json& sources = row["sources"] = nlohmann::ordered_json::array();
+    for (const RowSource& s : eq.sources) {
+      sources.push_back(json_source(model, s.equation, s.multiplier));
+      sources.back()["factor"] = number_text(s.factor);
     }
-    out << "]}";
+    equations.push_back(std::move(row));
   }
-  out << "\n  ],\n  \"independent\": " << system.generic_rank
-      << ",\n  \"independent_if_symmetric\": " << system.symmetric_rank << ",\n  \"identities\": [";
-  for (std::size_t i = 0; i < system.identities.size(); ++i) {
-    const DataIdentity& id = system.identities[i];
-    out << (i ? ", " : "")
-        << json_string(format_moment(model, id.moment) + " = " +
-                       format_combination(model, id.value));
+  out["independent"] = system.generic_rank;
+  out["independent_if_symmetric"] = system.symmetric_rank;
+  nlohmann::ordered_json& identities = out["identities"] = nlohmann::ordered_json::array();
+  for (const DataIdentity& id : system.identities) {
+    identities.push_back(format_moment(model, id.moment) + " = " +
+                         format_combination(model, id.value));
   }
-  out << "],\n  \"skipped\": [";
-  for (std::size_t i = 0; i < system.skipped.size(); ++i) {
-    const SkippedMultiplier& s = system.skipped[i];
-    out << (i ? "," : "")
-        << "\n    {\"equation\": " << json_equation_name(model.equations()[s.equation])
-        << ", \"multiplier\": " << json_string(format_monomial(model, s.multiplier))
-        << ", \"reason\": " << json_string(s.reason) << "}";
+  nlohmann::ordered_json& skipped = out["skipped"] = nlohmann::ordered_json::array();
+  for (const SkippedMultiplier& s : system.skipped) {
+    skipped.push_back(json_source(model, s.equation, s.multiplier));
+    skipped.back()["reason"] = s.reason;
   }
-  out << (system.skipped.empty() ? "" : "\n  ") << "],\n  \"notes\": [";
-  for (std::size_t i = 0; i < system.notes.size(); ++i) {
-    out << (i ? ", " : "") << json_string(system.notes[i]);
-  }
-  out << "]\n}\n";
-  return out.str();
+  out["notes"] = system.notes;
+  return out;
 }
+
+std::string format_json(const MomentSystem& system) { return json_text(json_value(system)); }
 
 GiNaC::ex moment_as_ex(const Model& model, const Monomial& moment) {
   GiNaC::ex product = 1;

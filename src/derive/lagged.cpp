@@ -11,9 +11,9 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "common/decimal.hpp"
 #include "common/json.hpp"
 #include "momentid/derive.hpp"
+#include "momentid/json.hpp"
 
 namespace momentid {
 namespace {
@@ -480,8 +480,8 @@ std::string format_lag_function(const Model& model, const LagFunction& f) {
   // Appended piece by piece: GCC 12 warns (-Wrestrict, wrongly) about "C" + a temporary.
   std::string out = "C";
   out += primes(f.order);
-  out += "[" + format_monomial(model, f.instrument) + ";" + format_monomial(model, f.function);
-  out += "](s)";
+  out.append("[").append(format_monomial(model, f.instrument));
+  out.append(";").append(format_monomial(model, f.function)).append("](s)");
   return out;
 }
 
@@ -638,62 +638,48 @@ std::string format_latex(const LaggedSystem& system) {
   return out.str();
 }
 
-std::string format_json(const LaggedSystem& system) {
+nlohmann::ordered_json json_value(const LaggedSystem& system) {
   const Model& model = *system.model;
   auto combination = [&](const LagCombination& c) {
-    std::string out = "[";
+    nlohmann::ordered_json out = nlohmann::ordered_json::array();
     for (const auto& [f, w] : c) {
-      out += (out.size() > 1 ? ", " : "") + std::string("{\"instrument\": ") +
-             json_string(format_monomial(model, f.instrument)) +
-             ", \"function\": " + json_string(format_monomial(model, f.function)) +
-             ", \"order\": " + std::to_string(f.order) +
-             ", \"weight\": " + json_string(number_text(w)) + "}";
+      out.push_back({{"instrument", format_monomial(model, f.instrument)},
+                     {"function", format_monomial(model, f.function)},
+                     {"order", f.order},
+                     {"weight", number_text(w)}});
     }
-    return out + "]";
+    return out;
   };
-  std::ostringstream out;
-  out << "{\n  \"model\": " << json_string(model.name()) << ",\n  \"lags\": [" << system.first_lag
-      << ", " << system.last_lag << "],\n  \"parameters\": [";
-  for (std::size_t p = 0; p < model.parameters().size(); ++p) {
-    out << (p ? ", " : "") << json_string(model.parameters()[p].name);
+  nlohmann::ordered_json out = {{"model", model.name()},
+                                {"lags", {system.first_lag, system.last_lag}}};
+  nlohmann::ordered_json& parameters = out["parameters"] = nlohmann::ordered_json::array();
+  for (const Declaration& p : model.parameters()) parameters.push_back(p.name);
+  nlohmann::ordered_json& instruments = out["instruments"] = nlohmann::ordered_json::array();
+  for (const Monomial& m : system.instruments) instruments.push_back(format_monomial(model, m));
+  nlohmann::ordered_json& tests = out["test_functions"] = nlohmann::ordered_json::array();
+  for (const LagTestFunction& f : system.test_functions) {
+    tests.push_back({{"centre", f.centre}, {"half_width", f.half_width}, {"power", f.power}});
   }
-  out << "],\n  \"instruments\": [";
-  for (std::size_t i = 0; i < system.instruments.size(); ++i) {
-    out << (i ? ", " : "") << json_string(format_monomial(model, system.instruments[i]));
-  }
-  out << "],\n  \"test_functions\": [";
-  for (std::size_t i = 0; i < system.test_functions.size(); ++i) {
-    const LagTestFunction& f = system.test_functions[i];
-    out << (i ? ", " : "") << "{\"centre\": " << shortest_decimal(f.centre)
-        << ", \"half_width\": " << shortest_decimal(f.half_width) << ", \"power\": " << f.power
-        << "}";
-  }
-  out << "],\n  \"equations\": [";
-  for (std::size_t i = 0; i < system.equations.size(); ++i) {
-    const LaggedEquation& eq = system.equations[i];
-    out << (i ? "," : "")
-        << "\n    {\"equation\": " << json_string(model.equations()[eq.equation].name())
-        << ", \"instrument\": " << json_string(format_monomial(model, eq.instrument))
-        << ",\n     \"coefficients\": {";
+  nlohmann::ordered_json& equations = out["equations"] = nlohmann::ordered_json::array();
+  for (const LaggedEquation& eq : system.equations) {
+    nlohmann::ordered_json coefficients = nlohmann::ordered_json::object();
     for (std::size_t p = 0; p < eq.coefficients.size(); ++p) {
-      out << (p ? ", " : "") << json_string(model.parameters()[p].name) << ": "
-          << combination(eq.coefficients[p]);
+      coefficients[model.parameters()[p].name] = combination(eq.coefficients[p]);
     }
-    out << "},\n     \"rhs\": " << combination(eq.rhs) << "}";
+    equations.push_back({{"equation", model.equations()[eq.equation].name()},
+                         {"instrument", format_monomial(model, eq.instrument)},
+                         {"coefficients", std::move(coefficients)},
+                         {"rhs", combination(eq.rhs)}});
   }
-  out << "\n  ],\n  \"channels\": [";
-  bool first = true;
+  nlohmann::ordered_json& channels = out["channels"] = nlohmann::ordered_json::array();
   for (std::size_t v = 0; v < model.channel_count(); ++v) {
-    if (!system.needed[v]) continue;
-    out << (first ? "" : ", ") << json_string(model.variables()[v].name);
-    first = false;
+    if (system.needed[v]) channels.push_back(model.variables()[v].name);
   }
-  out << "],\n";
-  if (!model.functions().empty()) {
-    out << "  \"computed\": " << json_strings(computed_functions(system)) << ",\n";
-  }
-  out << "  \"not_measured\": " << json_strings(system.derivatives) << "\n}\n";
-  return out.str();
+  if (!model.functions().empty()) out["computed"] = computed_functions(system);
+  out["not_measured"] = system.derivatives;
+  return out;
 }
+
+std::string format_json(const LaggedSystem& system) { return json_text(json_value(system)); }
 
 }  // namespace momentid

@@ -7,6 +7,7 @@
 #include "common/json.hpp"
 #include "common/number.hpp"
 #include "momentid/identify.hpp"
+#include "momentid/json.hpp"
 
 namespace momentid {
 namespace {
@@ -165,80 +166,6 @@ void diagnostics_text(std::ostringstream& out, const IdentifyResult& r) {
   }
 }
 
-void refinements_json(std::ostringstream& out, const IdentifyResult& r) {
-  if (!r.zero_lag) return;
-  if (const auto& s = r.zero_lag->sampling_bias) {
-    out << ",\n    \"sampling_bias\": {\"order\": " << IdentifyResult::ZeroLag::SamplingBias::kOrder
-        << ", \"applied\": " << (s->applied ? "true" : "false") << ", \"parameters\": {";
-    const auto& list = r.parameters();
-    for (std::size_t p = 0; p < list.size(); ++p) {
-      out << (p ? ", " : "") << json_string(list[p].name)
-          << ": {\"coarse\": " << json_number(s->coarse[p])
-          << ", \"bias\": " << json_number(s->bias[p])
-          << ", \"difference_error\": " << json_number(s->difference_error[p]) << "}";
-    }
-    out << "}}";
-  }
-  if (const auto& h = r.zero_lag->held_input) {
-    out << ",\n    \"held_input_correction\": {\"applied\": "
-        << (h->unavailable.empty() ? "true" : "false");
-    if (h->unavailable.empty()) {
-      out << ", \"shift\": {";
-      const auto& list = r.parameters();
-      for (std::size_t p = 0; p < list.size(); ++p) {
-        out << (p ? ", " : "") << json_string(list[p].name) << ": " << json_number(h->shift[p]);
-      }
-      out << "}";
-    } else {
-      out << ", \"reason\": " << json_string(h->unavailable);
-    }
-    out << "}";
-  }
-  if (const auto& v = r.zero_lag->end_values) {
-    out << ",\n    \"end_values\": {\"applied\": " << (v->unavailable.empty() ? "true" : "false");
-    if (!v->unavailable.empty()) out << ", \"reason\": " << json_string(v->unavailable);
-    out << "}";
-  }
-}
-
-void diagnostics_json(std::ostringstream& out, const IdentifyResult& r) {
-  const Estimate& e = r.estimate;
-  const DataMoments& d = r.data;
-  out << ",\n  \"diagnostics\": {\n    \"status\": " << json_string(to_string(status(r)))
-      << ",\n    \"rows\": " << e.rows << ",\n    \"rank\": " << e.rank
-      << ",\n    \"condition\": " << json_number(e.condition) << ",\n    \"batches\": " << e.batches
-      << ",\n    \"error_dof\": " << json_number(e.main().dof) << ",\n    \"samples\": " << d.rows
-      << ",\n    \"runs\": " << d.runs
-      << ",\n    \"input_hold\": " << json_string(to_string(d.hold))
-      << ",\n    \"j_statistic\": " << (e.j_statistic ? json_number(*e.j_statistic) : "null")
-      << ",\n    \"j_dof\": " << e.j_dof
-      << ",\n    \"j_pvalue\": " << (e.j_pvalue ? json_number(*e.j_pvalue) : "null");
-  refinements_json(out, r);
-  out << ",\n    \"taken_as_exact\": {";
-  const auto values = assumed(r);
-  for (std::size_t i = 0; i < values.size(); ++i) {
-    out << (i ? ", " : "") << json_string(values[i].first) << ": " << json_number(values[i].second);
-  }
-  out << "}";
-  out << ",\n    \"identities\": [";
-  for (std::size_t i = 0; i < e.identities.size(); ++i) {
-    const IdentityCheck& c = e.identities[i];
-    out << (i ? ", " : "") << "{\"identity\": " << json_string(c.identity)
-        << ", \"violation\": " << json_number(c.violation) << ", \"z\": " << json_number(c.z)
-        << "}";
-  }
-  out << "],\n    \"correlation\": [";
-  const auto& correlation = e.main().correlation;
-  for (std::size_t i = 0; i < correlation.size(); ++i) {
-    out << (i ? ", " : "") << "[";
-    for (std::size_t j = 0; j < correlation[i].size(); ++j) {
-      out << (j ? ", " : "") << json_number(correlation[i][j]);
-    }
-    out << "]";
-  }
-  out << "],\n    \"warnings\": " << json_strings(warnings(r)) << "\n  }\n}\n";
-}
-
 // The backbone's ends: the frequency at the smallest and at the largest amplitude.
 void backbone_text(std::ostringstream& out, const IdentifyResult& r) {
   const NonlinearCurves curves = nonlinear_curves(r);
@@ -271,39 +198,152 @@ void modes_text(std::ostringstream& out, const IdentifyResult& r) {
   backbone_text(out, r);
 }
 
-std::string json_numbers(const std::vector<double>& values) {
-  std::string out = "[";
-  for (std::size_t i = 0; i < values.size(); ++i) out += (i ? ", " : "") + json_number(values[i]);
-  return out + "]";
+using Json = nlohmann::ordered_json;
+
+// {name: {"estimate", "std_error", "ci95", "identifiable", "fixed"}} in the model's order.
+Json parameters_json(const std::vector<ParameterEstimate>& list) {
+  Json out = Json::object();
+  for (const ParameterEstimate& p : list) {
+    out[p.name] = {{"estimate", json_value(p.estimate)},
+                   {"std_error", json_value(p.std_error)},
+                   {"ci95", {json_value(p.ci_low), json_value(p.ci_high)}},
+                   {"identifiable", p.identifiable},
+                   {"fixed", p.fixed}};
+  }
+  return out;
 }
 
-// The "engineering" value of the JSON layout: the linearised modes, or why there are none.
-std::string modes_json(const IdentifyResult& r) {
+// What the parameters' table leaves out of a fit: its errors' degrees of freedom, its objective,
+// its correlation and covariance matrices.
+Json fit_json(const Fit& fit) {
+  return {{"error_dof", json_value(fit.dof)},
+          {"objective", json_value(fit.objective)},
+          {"correlation", json_value(fit.correlation)},
+          {"covariance", json_value(fit.covariance())}};
+}
+
+// {name: value} over the parameters of the main result.
+Json by_parameter(const IdentifyResult& r, const std::vector<double>& values) {
+  Json out = Json::object();
+  const auto& list = r.parameters();
+  for (std::size_t p = 0; p < list.size(); ++p) out[list[p].name] = json_value(values[p]);
+  return out;
+}
+
+Json method_json(const IdentifyResult& r) {
+  Json out = {{"name", r.lagged ? "lagged" : "zero-lag"}, {"why", r.why}};
+  if (!r.lagged) return out;
+  const LaggedSystem& system = r.lagged->system;
+  out["lags"] = {system.first_lag, system.last_lag};
+  out["stencil_points"] = 2 * r.lagged->stencil_reach + 1;
+  Json& instruments = out["instruments"] = Json::array();
+  for (const Monomial& m : system.instruments) instruments.push_back(format_monomial(*r.model, m));
+  out["cut"] = r.lagged->cut;
+  out["not_measured"] = system.derivatives;
+  Json& noise = out["noise_variance"] = Json::object();
+  for (std::size_t c = 0; c < r.lagged->noise.size(); ++c) {
+    noise[r.lagged->channels[c]] = json_value(r.lagged->noise[c]);
+  }
+  return out;
+}
+
+// The "engineering" value: the linearised modes, or why there are none, and for an oscillator
+// the restoring force and the backbone.
+Json engineering_json(const IdentifyResult& r) {
   const LinearisedModes linear = linearised_modes(r);
-  std::string out = "{\"equilibrium\": {";
+  Json out = {{"equilibrium", Json::object()},
+              {"natural_frequencies_hz", Json::array()},
+              {"damping_ratios", Json::array()},
+              {"unavailable", linear.unavailable}};
   for (std::size_t j = 0; j < linear.equilibrium.size(); ++j) {
-    out += (j ? ", " : "") + json_string(r.model->states()[j].name) + ": " +
-           json_number(linear.equilibrium[j]);
+    out["equilibrium"][r.model->states()[j].name] = json_value(linear.equilibrium[j]);
   }
-  std::string frequencies, damping;
-  for (std::size_t k = 0; k < linear.modes.size(); ++k) {
-    const LinearisedModes::Mode& m = linear.modes[k];
-    frequencies += (k ? ", " : "") + std::string("{\"estimate\": ") + json_number(m.frequency_hz) +
-                   ", \"std_error\": " + json_number(m.frequency_se) + "}";
-    damping += (k ? ", " : "") + std::string("{\"estimate\": ") + json_number(m.damping_ratio) +
-               ", \"std_error\": " + json_number(m.damping_se) + "}";
+  for (const LinearisedModes::Mode& m : linear.modes) {
+    out["natural_frequencies_hz"].push_back(
+        {{"estimate", json_value(m.frequency_hz)}, {"std_error", json_value(m.frequency_se)}});
+    out["damping_ratios"].push_back(
+        {{"estimate", json_value(m.damping_ratio)}, {"std_error", json_value(m.damping_se)}});
   }
-  out += "}, \"natural_frequencies_hz\": [" + frequencies + "], \"damping_ratios\": [" + damping +
-         "], \"unavailable\": " + json_string(linear.unavailable);
   const NonlinearCurves curves = nonlinear_curves(r);
-  if (curves.amplitude.empty()) return out + "}";
-  return out + ",\n    \"restoring_force\": {\"state\": " + json_string(curves.state) +
-         ", \"displacement\": " + json_numbers(curves.displacement) +
-         ", \"force\": " + json_numbers(curves.force) +
-         ", \"std_error\": " + json_numbers(curves.force_se) +
-         "},\n    \"backbone\": {\"amplitude\": " + json_numbers(curves.amplitude) +
-         ", \"frequency_hz\": " + json_numbers(curves.frequency_hz) +
-         ", \"std_error\": " + json_numbers(curves.frequency_se) + "}}";
+  if (curves.amplitude.empty()) return out;
+  out["restoring_force"] = {{"state", curves.state},
+                            {"displacement", json_value(curves.displacement)},
+                            {"force", json_value(curves.force)},
+                            {"std_error", json_value(curves.force_se)}};
+  out["backbone"] = {{"amplitude", json_value(curves.amplitude)},
+                     {"frequency_hz", json_value(curves.frequency_hz)},
+                     {"std_error", json_value(curves.frequency_se)}};
+  return out;
+}
+
+// The estimated moments by name, in the order of data.estimates.
+Json moments_json(const IdentifyResult& r) {
+  Json out = Json::object();
+  const std::vector<double>& mean = r.data.estimates.mean;
+  for (std::size_t k = 0; k < mean.size(); ++k) {
+    out[r.lagged ? lagged_moment_text(r.lagged->channels, r.lagged->moments[k])
+                 : format_moment(*r.model, r.zero_lag->moments[k])] = json_value(mean[k]);
+  }
+  return out;
+}
+
+// The refinements of a zero-lag estimate, into the diagnostics `out`.
+void refinements_json(Json& out, const IdentifyResult& r) {
+  if (!r.zero_lag) return;
+  if (const auto& s = r.zero_lag->sampling_bias) {
+    Json parameters = Json::object();
+    const auto& list = r.parameters();
+    for (std::size_t p = 0; p < list.size(); ++p) {
+      parameters[list[p].name] = {{"coarse", json_value(s->coarse[p])},
+                                  {"bias", json_value(s->bias[p])},
+                                  {"difference_error", json_value(s->difference_error[p])}};
+    }
+    out["sampling_bias"] = {{"order", IdentifyResult::ZeroLag::SamplingBias::kOrder},
+                            {"applied", s->applied},
+                            {"parameters", std::move(parameters)}};
+  }
+  if (const auto& h = r.zero_lag->held_input) {
+    Json& held = out["held_input_correction"] = {{"applied", h->unavailable.empty()}};
+    if (h->unavailable.empty()) {
+      held["shift"] = by_parameter(r, h->shift);
+    } else {
+      held["reason"] = h->unavailable;
+    }
+  }
+  if (const auto& v = r.zero_lag->end_values) {
+    Json& ends = out["end_values"] = {{"applied", v->unavailable.empty()}};
+    if (!v->unavailable.empty()) ends["reason"] = v->unavailable;
+  }
+}
+
+Json diagnostics_json(const IdentifyResult& r) {
+  const Estimate& e = r.estimate;
+  Json out = {{"status", to_string(status(r))},
+              {"rows", e.rows},
+              {"rank", e.rank},
+              {"condition", json_value(e.condition)},
+              {"batches", e.batches},
+              {"error_dof", json_value(e.main().dof)},
+              {"objective", json_value(e.main().objective)},
+              {"samples", r.data.rows},
+              {"runs", r.data.runs},
+              {"input_hold", to_string(r.data.hold)},
+              {"j_statistic", e.j_statistic ? json_value(*e.j_statistic) : Json()},
+              {"j_dof", e.j_dof},
+              {"j_pvalue", e.j_pvalue ? json_value(*e.j_pvalue) : Json()}};
+  refinements_json(out, r);
+  Json& exact = out["taken_as_exact"] = Json::object();
+  for (const auto& [name, value] : assumed(r)) exact[name] = json_value(value);
+  Json& identities = out["identities"] = Json::array();
+  for (const IdentityCheck& c : e.identities) {
+    identities.push_back(
+        {{"identity", c.identity}, {"violation", json_value(c.violation)}, {"z", json_value(c.z)}});
+  }
+  out["correlation"] = json_value(e.main().correlation);
+  out["covariance"] = json_value(e.main().covariance());
+  if (e.optimal) out["least_squares"] = fit_json(e.least_squares);
+  out["warnings"] = warnings(r);
+  return out;
 }
 
 }  // namespace
@@ -344,65 +384,24 @@ std::string format_text(const IdentifyResult& r) {
   return out.str();
 }
 
-std::string format_json(const IdentifyResult& r) {
-  const Estimate& e = r.estimate;
-  const DataMoments& d = r.data;
-  auto parameters = [](const std::vector<ParameterEstimate>& list) {
-    std::string out = "{";
-    for (std::size_t i = 0; i < list.size(); ++i) {
-      const ParameterEstimate& p = list[i];
-      out += (i ? ",\n    " : "\n    ") + json_string(p.name) +
-             ": {\"estimate\": " + json_number(p.estimate) +
-             ", \"std_error\": " + json_number(p.std_error) + ", \"ci95\": [" +
-             json_number(p.ci_low) + ", " + json_number(p.ci_high) +
-             "], \"identifiable\": " + (p.identifiable ? "true" : "false") +
-             ", \"fixed\": " + (p.fixed ? "true" : "false") + "}";
-    }
-    return out + "\n  }";
-  };
-  std::ostringstream out;
-  out << "{\n  \"model\": " << json_string(r.model->name())
-      << ",\n  \"data\": " << json_string(r.data_name)
-      << ",\n  \"parameters\": " << parameters(e.main().parameters);
-  if (e.optimal) out << ",\n  \"least_squares\": " << parameters(e.least_squares.parameters);
-  out << ",\n  \"method\": {\"name\": \"" << (r.lagged ? "lagged" : "zero-lag")
-      << "\", \"why\": " << json_string(r.why);
-  if (r.lagged) {
-    out << ", \"lags\": [" << r.lagged->system.first_lag << ", " << r.lagged->system.last_lag
-        << "], \"stencil_points\": " << 2 * r.lagged->stencil_reach + 1 << ", \"instruments\": [";
-    for (std::size_t i = 0; i < r.lagged->system.instruments.size(); ++i) {
-      out << (i ? ", " : "")
-          << json_string(format_monomial(*r.model, r.lagged->system.instruments[i]));
-    }
-    out << "], \"cut\": " << json_string(r.lagged->cut)
-        << ", \"not_measured\": " << json_strings(r.lagged->system.derivatives)
-        << ", \"noise_variance\": {";
-    for (std::size_t c = 0; c < r.lagged->noise.size(); ++c) {
-      out << (c ? ", " : "") << json_string(r.lagged->channels[c]) << ": "
-          << json_number(r.lagged->noise[c]);
-    }
-    out << "}";
-  }
-  out << "}";
+nlohmann::ordered_json json_value(const IdentifyResult& r) {
+  Json out = {{"model", r.model->name()},
+              {"data", r.data_name},
+              {"parameters", parameters_json(r.estimate.main().parameters)}};
+  if (r.estimate.optimal)
+    out["least_squares"] = parameters_json(r.estimate.least_squares.parameters);
+  out["method"] = method_json(r);
   if (!r.centered.empty()) {
-    out << ",\n  \"centered\": {";
-    std::size_t k = 0;
-    for (const auto& [name, mean] : r.centered) {
-      out << (k++ ? ", " : "") << json_string(name) << ": " << json_number(mean);
-    }
-    out << "}";
+    Json& centered = out["centered"] = Json::object();
+    for (const auto& [name, mean] : r.centered) centered[name] = json_value(mean);
   }
-  out << ",\n  \"equations\": " << json_strings(identified_equations(r));
-  out << ",\n  \"engineering\": " << modes_json(r);
-  out << ",\n  \"moments\": {";
-  for (std::size_t k = 0; k < d.estimates.mean.size(); ++k) {
-    const std::string name = r.lagged ? lagged_moment_text(r.lagged->channels, r.lagged->moments[k])
-                                      : format_moment(*r.model, r.zero_lag->moments[k]);
-    out << (k ? ", " : "") << json_string(name) << ": " << json_number(d.estimates.mean[k]);
-  }
-  out << "}";
-  diagnostics_json(out, r);
-  return out.str();
+  out["equations"] = identified_equations(r);
+  out["engineering"] = engineering_json(r);
+  out["moments"] = moments_json(r);
+  out["diagnostics"] = diagnostics_json(r);
+  return out;
 }
+
+std::string format_json(const IdentifyResult& r) { return json_text(json_value(r)); }
 
 }  // namespace momentid

@@ -3,13 +3,13 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <sstream>
 
 #include "app/validate/record.hpp"
 #include "app/validate/report_statistics.hpp"
 #include "common/decimal.hpp"
 #include "common/json.hpp"
 #include "common/number.hpp"
+#include "momentid/json.hpp"
 #include "momentid/validate.hpp"
 
 namespace momentid {
@@ -121,7 +121,8 @@ std::string format_text(const ValidateResult& r) {
       out += "  " + f.name + ": " + check_text(c, sensitive) + "\n";
     }
   }
-  out += "\n" + statistics_text(r);
+  out += "\n";
+  out += statistics_text(r);
   if (r.warnings.empty()) out += "warnings: none\n";
   for (const std::string& w : r.warnings) out += "warning: " + w + "\n";
   return out;
@@ -129,87 +130,78 @@ std::string format_text(const ValidateResult& r) {
 
 namespace {
 
-std::string json_array(const std::vector<double>& values) {
-  std::string out = "[";
-  for (std::size_t k = 0; k < values.size(); ++k) out += (k ? ", " : "") + json_number(values[k]);
-  return out + "]";
-}
+using Json = nlohmann::ordered_json;
 
-std::string json_check(const CorrelationCheck& c) {
-  std::vector<double> lags;
+Json check_json(const CorrelationCheck& c) {
+  Json lags = Json::array();
   for (std::size_t k = 0; k < c.values.size(); ++k) {
     lags.push_back(c.first_lag + static_cast<int>(k));
   }
-  return "{\"lags\": " + json_array(lags) + ", \"values\": " + json_array(c.values) +
-         ", \"band99\": " + json_number(c.band) + ", \"outside\": " + std::to_string(c.outside()) +
-         "}";
+  return {{"lags", std::move(lags)},
+          {"values", json_value(c.values)},
+          {"band99", json_value(c.band)},
+          {"outside", c.outside()}};
+}
+
+Json output_json(const OutputFit& f) {
+  Json cross = Json::object();
+  for (const CorrelationCheck& c : f.cross) cross[c.with] = check_json(c);
+  return {{"samples", f.samples},
+          {"rms", json_value(f.rms)},
+          {"fit_percent", json_value(f.fit)},
+          {"rms_first_10pct", json_value(f.rms_start)},
+          {"rms_rest", json_value(f.rms_rest)},
+          {"autocorrelation", f.autocorrelation ? check_json(*f.autocorrelation) : Json()},
+          {"cross_correlation", std::move(cross)}};
+}
+
+// {state: value} per run, and {state: how it was found}.
+void initial_state_json(Json& out, const ValidateResult& r) {
+  const auto& states = r.model->states();
+  Json& initial = out["initial_state"] = Json::array();
+  for (const std::vector<double>& run : r.replay.initial) {
+    Json values = Json::object();
+    for (std::size_t j = 0; j < states.size(); ++j) values[states[j].name] = json_value(run[j]);
+    initial.push_back(std::move(values));
+  }
+  Json& how = out["initial_how"] = Json::object();
+  for (std::size_t j = 0; j < states.size(); ++j) how[states[j].name] = r.replay.initial_how[j];
 }
 
 }  // namespace
 
-std::string format_json(const ValidateResult& r) {
+nlohmann::ordered_json json_value(const ValidateResult& r) {
   const Replay& replay = r.replay;
   const Record& record = replay.record;
   const Model& model = *r.model;
-  std::ostringstream out;
   std::size_t rows = 0;
   for (const RecordRun& run : record.runs) rows += run.rows();
-  out << "{\n  \"model\": " << json_string(model.name())
-      << ",\n  \"data\": " << json_string(record.name) << ",\n  \"rows\": " << rows
-      << ",\n  \"runs\": " << record.runs.size() << ",\n  \"dt\": " << json_number(record.dt)
-      << ",\n  \"parameters\": {";
+  Json out = {
+      {"model", model.name()},      {"data", record.name},         {"rows", rows},
+      {"runs", record.runs.size()}, {"dt", json_value(record.dt)}, {"parameters", Json::object()}};
   for (std::size_t p = 0; p < r.parameters.size(); ++p) {
-    out << (p ? ", " : "") << json_string(model.parameters()[p].name) << ": "
-        << json_number(r.parameters[p].to_double());
+    out["parameters"][model.parameters()[p].name] = json_value(r.parameters[p].to_double());
   }
-  out << "},\n  \"parameters_from\": " << json_string(r.parameters_from)
-      << ",\n  \"interpolation\": {";
+  out["parameters_from"] = r.parameters_from;
+  Json& interpolation = out["interpolation"] = Json::object();
   for (std::size_t i = 0; i < model.inputs().size(); ++i) {
-    out << (i ? ", " : "") << json_string(model.inputs()[i].name) << ": "
-        << json_string(to_string(replay.interpolation[i]));
+    interpolation[model.inputs()[i].name] = to_string(replay.interpolation[i]);
   }
-  out << "},\n  \"substeps\": " << replay.substeps << ",\n  \"initial_state\": [";
-  for (std::size_t r0 = 0; r0 < record.runs.size(); ++r0) {
-    out << (r0 ? ", " : "") << "{";
-    for (std::size_t j = 0; j < model.states().size(); ++j) {
-      out << (j ? ", " : "") << json_string(model.states()[j].name) << ": "
-          << json_number(replay.initial[r0][j]);
-    }
-    out << "}";
-  }
-  out << "],\n  \"initial_how\": {";
-  for (std::size_t j = 0; j < model.states().size(); ++j) {
-    out << (j ? ", " : "") << json_string(model.states()[j].name) << ": "
-        << json_string(replay.initial_how[j]);
-  }
-  out << "},\n  \"skip\": [";
-  for (std::size_t k = 0; k < r.skip.size(); ++k) out << (k ? ", " : "") << r.skip[k];
-  out << "],\n  \"skip_chosen\": " << (r.skip_chosen ? "true" : "false");
+  out["substeps"] = replay.substeps;
+  initial_state_json(out, r);
+  out["skip"] = r.skip;
+  out["skip_chosen"] = r.skip_chosen;
   if (!r.centered.empty()) {
-    out << ",\n  \"centered\": {";
-    for (auto c = r.centered.begin(); c != r.centered.end(); ++c) {
-      out << (c == r.centered.begin() ? "" : ", ") << json_string(c->first) << ": "
-          << json_number(c->second);
-    }
-    out << "}";
+    Json& centered = out["centered"] = Json::object();
+    for (const auto& [name, mean] : r.centered) centered[name] = json_value(mean);
   }
-  out << ",\n  \"outputs\": {";
-  for (std::size_t k = 0; k < r.outputs.size(); ++k) {
-    const OutputFit& f = r.outputs[k];
-    out << (k ? "," : "") << "\n    " << json_string(f.name) << ": {\"samples\": " << f.samples
-        << ", \"rms\": " << json_number(f.rms) << ", \"fit_percent\": " << json_number(f.fit)
-        << ", \"rms_first_10pct\": " << json_number(f.rms_start)
-        << ", \"rms_rest\": " << json_number(f.rms_rest) << ",\n      \"autocorrelation\": "
-        << (f.autocorrelation ? json_check(*f.autocorrelation) : "null")
-        << ",\n      \"cross_correlation\": {";
-    for (std::size_t c = 0; c < f.cross.size(); ++c) {
-      out << (c ? ", " : "") << json_string(f.cross[c].with) << ": " << json_check(f.cross[c]);
-    }
-    out << "}}";
-  }
-  out << "\n  }" << statistics_json(r) << ",\n  \"warnings\": " << json_strings(r.warnings)
-      << "\n}\n";
-  return out.str();
+  Json& outputs = out["outputs"] = Json::object();
+  for (const OutputFit& f : r.outputs) outputs[f.name] = output_json(f);
+  statistics_json(out, r);
+  out["warnings"] = r.warnings;
+  return out;
 }
+
+std::string format_json(const ValidateResult& r) { return json_text(json_value(r)); }
 
 }  // namespace momentid

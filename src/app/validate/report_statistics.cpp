@@ -28,30 +28,49 @@ std::string check_line(const StatisticCheck& c) {
   return out + "outside, " + number(c.distance / c.limit, "%.3g") + " times the limit\n";
 }
 
-std::string json_array(const std::vector<double>& values) {
-  std::string out = "[";
-  for (std::size_t k = 0; k < values.size(); ++k) out += (k ? ", " : "") + json_number(values[k]);
-  return out + "]";
+using Json = nlohmann::ordered_json;
+
+Json check_json(const StatisticCheck& c) {
+  return {{"output", c.output},
+          {"kind", c.kind},
+          {"distance", json_value(c.distance)},
+          {"limit", json_value(c.limit)},
+          {"inside", c.inside()},
+          {"run_distances", json_value(c.run_distances)},
+          {"at", json_value(c.at)},
+          {"measured", json_value(c.measured)},
+          {"mean", json_value(c.mean)},
+          {"low", json_value(c.low)},
+          {"high", json_value(c.high)}};
 }
 
-std::string check_json(const StatisticCheck& c) {
-  return "{\"output\": " + json_string(c.output) + ", \"kind\": " + json_string(c.kind) +
-         ", \"distance\": " + json_number(c.distance) + ", \"limit\": " + json_number(c.limit) +
-         ", \"inside\": " + (c.inside() ? "true" : "false") +
-         ", \"run_distances\": " + json_array(c.run_distances) +
-         ",\n       \"at\": " + json_array(c.at) +
-         ",\n       \"measured\": " + json_array(c.measured) +
-         ",\n       \"mean\": " + json_array(c.mean) + ",\n       \"low\": " + json_array(c.low) +
-         ",\n       \"high\": " + json_array(c.high) + "}";
+Json sensitivity_json(const Sensitivity& s) {
+  return {{"perturbation", json_value(Sensitivity::kPerturbation)},
+          {"spread_fraction", json_value(Sensitivity::kSpread)},
+          {"run", s.run},
+          {"separation", json_value(s.separation)},
+          {"final_separation", json_value(s.final_separation)},
+          {"time_to_spread", s.time_to_spread ? json_value(*s.time_to_spread) : Json()},
+          {"lyapunov", json_value(s.lyapunov)}};
 }
 
-std::string sensitivity_json(const Sensitivity& s) {
-  return "{\"perturbation\": " + json_number(Sensitivity::kPerturbation) +
-         ", \"spread_fraction\": " + json_number(Sensitivity::kSpread) +
-         ", \"run\": " + std::to_string(s.run) + ", \"separation\": " + json_number(s.separation) +
-         ", \"final_separation\": " + json_number(s.final_separation) +
-         ", \"time_to_spread\": " + (s.time_to_spread ? json_number(*s.time_to_spread) : "null") +
-         ", \"lyapunov\": " + json_number(s.lyapunov) + "}";
+// The statistics compared: null when they were not, or why not.
+Json compared_json(const ValidateResult& r) {
+  const StatisticalValidation& s = r.statistics;
+  if (!s.compared) return s.not_compared.empty() ? Json() : Json{{"not_compared", s.not_compared}};
+  Json out = {{"runs", s.runs},
+              {"segment", s.segment},
+              {"window", "hann"},
+              {"overlap", 0.5},
+              {"level", json_value(s.level)},
+              {"outside", s.outside()},
+              {"noise_sd", Json::object()}};
+  for (std::size_t o = 0; o < r.outputs.size(); ++o) {
+    out["noise_sd"][r.outputs[o].name] = json_value(s.noise_sd[o]);
+  }
+  Json& checks = out["checks"] = Json::array();
+  for (const StatisticCheck& c : s.checks) checks.push_back(check_json(c));
+  return out;
 }
 
 }  // namespace
@@ -95,29 +114,12 @@ std::string statistics_text(const ValidateResult& r) {
   return out + "verdict: " + r.verdict + "\n\n";
 }
 
-std::string statistics_json(const ValidateResult& r) {
-  const StatisticalValidation& s = r.statistics;
-  std::string out =
-      ",\n  \"sensitive\": " + std::string(r.sensitivity.sensitive ? "true" : "false") +
-      ",\n  \"consistent\": " + (r.consistent ? "true" : "false") +
-      ",\n  \"verdict\": " + json_string(r.verdict) +
-      ",\n  \"sensitivity\": " + sensitivity_json(r.sensitivity) + ",\n  \"statistics\": ";
-  if (!s.compared) {
-    return out + (s.not_compared.empty()
-                      ? "null"
-                      : "{\"not_compared\": " + json_string(s.not_compared) + "}");
-  }
-  out += "{\"runs\": " + std::to_string(s.runs) + ", \"segment\": " + std::to_string(s.segment) +
-         ", \"window\": \"hann\", \"overlap\": 0.5, \"level\": " + json_number(s.level) +
-         ", \"outside\": " + std::to_string(s.outside()) + ", \"noise_sd\": {";
-  for (std::size_t o = 0; o < r.outputs.size(); ++o) {
-    out += (o ? ", " : "") + json_string(r.outputs[o].name) + ": " + json_number(s.noise_sd[o]);
-  }
-  out += "},\n    \"checks\": [";
-  for (std::size_t k = 0; k < s.checks.size(); ++k) {
-    out += std::string(k ? "," : "") + "\n      " + check_json(s.checks[k]);
-  }
-  return out + "]}";
+void statistics_json(nlohmann::ordered_json& out, const ValidateResult& r) {
+  out["sensitive"] = r.sensitivity.sensitive;
+  out["consistent"] = r.consistent;
+  out["verdict"] = r.verdict;
+  out["sensitivity"] = sensitivity_json(r.sensitivity);
+  out["statistics"] = compared_json(r);
 }
 
 }  // namespace momentid

@@ -1,6 +1,7 @@
 #pragma once
 // The parts of validate's reports about sensitivity, the response's statistics and the verdict.
 
+#include <nlohmann/json.hpp>
 #include <string>
 
 #include "momentid/validate.hpp"
@@ -11,8 +12,8 @@ namespace momentid {
 std::string sensitivity_text(const ValidateResult& result);
 // The statistics block (empty when the statistics were not compared), then the verdict line.
 std::string statistics_text(const ValidateResult& result);
-// The JSON members "sensitive", "consistent", "verdict", "sensitivity" and "statistics", each
-// on its own line after ",\n".
-std::string statistics_json(const ValidateResult& result);
+// Adds the JSON members "sensitive", "consistent", "verdict", "sensitivity" and "statistics" to
+// `out`.
+void statistics_json(nlohmann::ordered_json& out, const ValidateResult& result);
 
 }  // namespace momentid
