@@ -343,7 +343,7 @@ TEST_SUITE("app") {
       const momentid::Model copy = file.model;
       result = momentid::identify(copy, momentid::DataSource::file(file.path.string()));
     }
-    CHECK(result->zero_lag->system.model == result->model.get());
+    CHECK(result->zero_lag->system->model == result->model.get());
     CHECK(momentid::format_text(*result).starts_with("model duffing, data "));
     CHECK(momentid::format_json(*result).find("\"E[y^2]\"") != std::string::npos);
   }

@@ -6,7 +6,9 @@
 
 #include "common/json.hpp"
 #include "common/number.hpp"
+#include "momentid/derive.hpp"
 #include "momentid/identify.hpp"
+#include "momentid/lagged.hpp"
 
 namespace momentid {
 namespace {
@@ -34,13 +36,13 @@ void table(std::ostringstream& out, const std::vector<ParameterEstimate>& parame
 // 5-point lag stencils".
 std::string method_text(const IdentifyResult& r) {
   std::string out = "lagged moment equations at lags " +
-                    std::to_string(r.lagged->system.first_lag) + ".." +
-                    std::to_string(r.lagged->system.last_lag) + " samples, instruments ";
-  for (std::size_t i = 0; i < r.lagged->system.instruments.size(); ++i) {
-    out += (i ? ", " : "") + format_monomial(*r.model, r.lagged->system.instruments[i]);
+                    std::to_string(r.lagged->system->first_lag) + ".." +
+                    std::to_string(r.lagged->system->last_lag) + " samples, instruments ";
+  for (std::size_t i = 0; i < r.lagged->system->instruments.size(); ++i) {
+    out += (i ? ", " : "") + format_monomial(*r.model, r.lagged->system->instruments[i]);
   }
-  for (std::size_t i = 0; i < r.lagged->system.derivatives.size(); ++i) {
-    out += (i ? ", " : "; not measured: ") + r.lagged->system.derivatives[i];
+  for (std::size_t i = 0; i < r.lagged->system->derivatives.size(); ++i) {
+    out += (i ? ", " : "; not measured: ") + r.lagged->system->derivatives[i];
   }
   out += "; " + std::to_string(2 * r.lagged->stencil_reach + 1) + "-point lag stencils";
   return out;
@@ -368,14 +370,14 @@ std::string format_json(const IdentifyResult& r) {
   out << ",\n  \"method\": {\"name\": \"" << (r.lagged ? "lagged" : "zero-lag")
       << "\", \"why\": " << json_string(r.why);
   if (r.lagged) {
-    out << ", \"lags\": [" << r.lagged->system.first_lag << ", " << r.lagged->system.last_lag
+    out << ", \"lags\": [" << r.lagged->system->first_lag << ", " << r.lagged->system->last_lag
         << "], \"stencil_points\": " << 2 * r.lagged->stencil_reach + 1 << ", \"instruments\": [";
-    for (std::size_t i = 0; i < r.lagged->system.instruments.size(); ++i) {
+    for (std::size_t i = 0; i < r.lagged->system->instruments.size(); ++i) {
       out << (i ? ", " : "")
-          << json_string(format_monomial(*r.model, r.lagged->system.instruments[i]));
+          << json_string(format_monomial(*r.model, r.lagged->system->instruments[i]));
     }
     out << "], \"cut\": " << json_string(r.lagged->cut)
-        << ", \"not_measured\": " << json_strings(r.lagged->system.derivatives)
+        << ", \"not_measured\": " << json_strings(r.lagged->system->derivatives)
         << ", \"noise_variance\": {";
     for (std::size_t c = 0; c < r.lagged->noise.size(); ++c) {
       out << (c ? ", " : "") << json_string(r.lagged->channels[c]) << ": "
