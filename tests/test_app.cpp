@@ -280,7 +280,7 @@ TEST_SUITE("app") {
     const auto e = error_from<momentid::DataError>(
         [&] { momentid::identify(model, momentid::DataSource::memory(data), {.batches = 2}); });
     CHECK(std::string(e.what()) ==
-          "arrays:3:2: column 'y': expected a number (a missing value? --missing drop-row or "
+          "arrays:3:2: column 'y': expected a number (a missing value? missing drop-row or "
           "split-run passes over it), found 'nan'");
   }
 

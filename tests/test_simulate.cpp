@@ -238,9 +238,10 @@ TEST_SUITE("simulate") {
       momentid::parameter_values(model, {});
       FAIL("no error");
     } catch (const momentid::ModelError& e) {
-      CHECK(std::string(e.what()) ==
-            "m.mom:3:14: parameter 'b' has no value: give a nominal value in the model or --set "
-            "b=VALUE");
+      CHECK(
+          std::string(e.what()) ==
+          "m.mom:3:14: parameter 'b' has no value: give a nominal value in the model or parameters "
+          "b=VALUE");
     }
     CHECK_THROWS_WITH_AS(momentid::parameter_values(model, {"c=1"}),
                          "parameters: 'c' is not a parameter of model m (parameters: a, b)",

@@ -39,8 +39,10 @@ void raise(const char* kind, const std::string& message, const SourceLocation* w
 // The keyword argument that sets the options field `field` (UsageError::option()): "fixed" is
 // `fix`; a field without its own entry is its own keyword ("dt").
 std::string keyword_of(const std::string& field) {
-  static const std::map<std::string, std::string> kKeywords = {
-      {"fixed", "fix"}, {"parameters", "params"}, {"hold", "input_hold"}};
+  static const std::map<std::string, std::string> kKeywords = {{"fixed", "fix"},
+                                                               {"parameters", "params"},
+                                                               {"hold", "input_hold"},
+                                                               {"column_names", "names"}};
   const auto found = kKeywords.find(field);
   return found != kKeywords.end() ? found->second : field;
 }
@@ -51,7 +53,7 @@ void translate(std::exception_ptr thrown) {
   } catch (const DataError& e) {
     raise("DataError", e.text(keyword_of), &e.location());
   } catch (const LocatedError& e) {  // ParseError, ModelError
-    raise("ModelError", e.what(), &e.location());
+    raise("ModelError", e.text(keyword_of), &e.location());
   } catch (const UsageError& e) {
     raise("UsageError", e.text(keyword_of));
   } catch (const Error& e) {
