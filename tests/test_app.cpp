@@ -30,7 +30,6 @@ struct DuffingFile {
                                ("momentid_test_app_" + std::to_string(::getpid()) + ".csv");
   explicit DuffingFile(std::size_t samples, std::size_t runs = 1) {
     momentid::SimulationOptions options;
-    options.parameters = momentid::parameter_values(model, {});
     options.inputs = {momentid::InputSpec::parse("ma:K=10,w=0.1,sigma=20", "test")};
     options.samples = samples;
     options.runs = runs;
@@ -320,7 +319,6 @@ TEST_SUITE("app") {
                       }).what()) == "lags: expected a number from 1 to 1000, found 0");
 
     momentid::SimulationOptions simulation;
-    simulation.parameters = momentid::parameter_values(model, {});
     simulation.inputs.resize(1);
     simulation.dt = 0;
     CHECK(std::string(error_from<momentid::UsageError>([&] {

@@ -54,7 +54,6 @@ struct Case {
 Estimate identify(const Model& truth, const Case& c, const Model* fitted = nullptr) {
   const Model& model = fitted ? *fitted : truth;
   momentid::SimulationOptions options;
-  options.parameters = momentid::parameter_values(truth, {});
   options.inputs.assign(truth.inputs().size(), momentid::InputSpec::parse(c.input, "test"));
   options.samples = c.samples;
   options.dt = c.dt;
@@ -83,7 +82,6 @@ momentid::IdentifyResult identify_from_displacement(
     const Model& model, double noise, double dt = 0.01, std::size_t samples = 1000000,
     const momentid::IdentifyOptions& o = {}, const std::string& input = "ma:K=10,w=0.1,sigma=20") {
   momentid::SimulationOptions options;
-  options.parameters = momentid::parameter_values(model, {});
   options.inputs = {momentid::InputSpec::parse(input, "test")};
   options.samples = samples;
   options.dt = dt;
@@ -107,7 +105,6 @@ momentid::IdentifyResult identify_held(const Model& model, const std::string& in
                                        std::size_t samples, std::optional<double> dt,
                                        std::uint64_t seed, const momentid::IdentifyOptions& o) {
   momentid::SimulationOptions options;
-  options.parameters = momentid::parameter_values(model, {});
   options.inputs = {momentid::InputSpec::parse(input, "test")};
   options.samples = samples;
   options.dt = dt.value_or(0.01);
@@ -387,7 +384,6 @@ TEST_SUITE("identify") {
     const Model model = model_file("kozin_4_1a.mom");
     const auto path = std::filesystem::temp_directory_path() / "momentid_shift_test.csv";
     momentid::SimulationOptions options;
-    options.parameters = momentid::parameter_values(model, {});
     options.inputs = {momentid::InputSpec{}};
     options.samples = 200000;
     momentid::simulate_to_file(model, options, path.string(), momentid::DataWriter::Format::kCsv);

@@ -183,10 +183,10 @@ std::vector<std::string> assignments(const std::map<std::string, py::object>& va
   return out;
 }
 
-std::vector<GiNaC::numeric> parameters_of(const Model& model, const py::dict& options,
-                                          const char* key) {
+// The values of `options[key]` by name, each number kept as the decimal Python writes for it.
+ParameterValues parameters_of(const Model& model, const py::dict& options, const char* key) {
   const auto values = get<std::map<std::string, py::object>>(options, key);
-  return parameter_values(model, values ? assignments(*values) : std::vector<std::string>{});
+  return parse_parameter_values(model, values ? assignments(*values) : std::vector<std::string>{});
 }
 
 // --- derive ---------------------------------------------------------------------------------
@@ -410,9 +410,7 @@ py::tuple simulate_record(const Model& model, const py::dict& options) {
 
 ValidateOptions validate_options(const Model& model, const py::dict& options) {
   ValidateOptions out;
-  const auto values = get<std::map<std::string, py::object>>(options, "params");
-  out.replay.parameters =
-      parse_parameter_values(model, values ? assignments(*values) : std::vector<std::string>{});
+  out.replay.parameters = parameters_of(model, options, "params");
   out.replay.record = record_options(options);
   if (auto substeps = get<int>(options, "substeps")) out.replay.substeps = *substeps;
   if (auto method = get<std::string>(options, "interpolation")) {

@@ -117,9 +117,4 @@ std::vector<numeric> parameter_vector(const Model& model, const ParameterValues&
   return out;
 }
 
-std::vector<numeric> parameter_values(const Model& model,
-                                      const std::vector<std::string>& assignments) {
-  return parameter_vector(model, parse_parameter_values(model, assignments));
-}
-
 }  // namespace momentid

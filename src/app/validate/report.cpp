@@ -17,9 +17,10 @@ namespace {
 
 std::string parameters_text(const ValidateResult& r) {
   std::string out;
-  for (std::size_t p = 0; p < r.parameters.size(); ++p) {
-    out += (p ? ", " : "") + r.model->parameters()[p].name + "=" +
-           shortest_decimal(r.parameters[p].to_double());
+  for (std::size_t p = 0; p < r.model->parameters().size(); ++p) {
+    const std::string& name = r.model->parameters()[p].name;
+    if (p > 0) out += ", ";
+    out += name + "=" + shortest_decimal(r.parameters.at(name).value);
   }
   return out;
 }
@@ -121,7 +122,8 @@ std::string format_text(const ValidateResult& r) {
       out += "  " + f.name + ": " + check_text(c, sensitive) + "\n";
     }
   }
-  out += "\n" + statistics_text(r);
+  out += '\n';
+  out += statistics_text(r);
   if (r.warnings.empty()) out += "warnings: none\n";
   for (const std::string& w : r.warnings) out += "warning: " + w + "\n";
   return out;
@@ -158,9 +160,9 @@ std::string format_json(const ValidateResult& r) {
       << ",\n  \"data\": " << json_string(record.name) << ",\n  \"rows\": " << rows
       << ",\n  \"runs\": " << record.runs.size() << ",\n  \"dt\": " << json_number(record.dt)
       << ",\n  \"parameters\": {";
-  for (std::size_t p = 0; p < r.parameters.size(); ++p) {
-    out << (p ? ", " : "") << json_string(model.parameters()[p].name) << ": "
-        << json_number(r.parameters[p].to_double());
+  for (std::size_t p = 0; p < model.parameters().size(); ++p) {
+    const std::string& name = model.parameters()[p].name;
+    out << (p ? ", " : "") << json_string(name) << ": " << json_number(r.parameters.at(name).value);
   }
   out << "},\n  \"parameters_from\": " << json_string(r.parameters_from)
       << ",\n  \"interpolation\": {";
