@@ -199,6 +199,18 @@ def test_model_errors_name_keywords_not_flags():
                                  "in the model or params a=VALUE")
 
 
+def test_data_errors_name_keywords_not_flags(duffing, tmp_path):
+    path = tmp_path / "a.npy"
+    np.save(path, np.zeros((10, 4)))
+    with pytest.raises(momentid.DataError) as raised:
+        momentid.identify(duffing, str(path), names=["t", "y", "v"])
+    assert str(raised.value) == f"{path}:1:1: names gives 3 names for 4 columns"
+    units = tmp_path / "units.csv"
+    units.write_text("t,y,v,x\ns,m,m/s,N\n0,1,2,3\n")
+    with pytest.raises(momentid.DataError, match=r"\(a units row\? give skip_rows 1\)"):
+        momentid.identify(duffing, str(units))
+
+
 def test_nan_is_a_data_error_at_its_row(duffing, record):
     y = record["y"].copy()
     y[100] = np.nan
