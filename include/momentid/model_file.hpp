@@ -1,6 +1,6 @@
 #pragma once
-// A model read from its file, for a program that hands it on (to identify, validate) without
-// looking into its equations: this header does not include GiNaC, and the Model stays an
+// A model read from its file, for a program that hands it on (to identify) without looking into
+// its equations: this header does not include GiNaC, and the Model stays an
 // incomplete type (model.hpp defines it).
 
 #include <memory>
@@ -11,8 +11,8 @@ namespace momentid {
 class Model;
 
 // Reads and checks a model file, as parse_model_file does: throws ParseError or ModelError naming
-// file, line and column, or Error when the file cannot be read. Shared, so that results which
-// keep a copy of their model (IdentifyResult::model) can hold this one.
+// file, line and column, or Error when the file cannot be read. Behind a pointer, because a
+// program that includes only this header cannot hold a Model by value.
 //
 // Example:
 //   std::shared_ptr<const Model> model = load_model("models/duffing.mom");

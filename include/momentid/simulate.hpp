@@ -241,11 +241,10 @@ struct SimulationOptions {
 
   // Throws UsageError naming the first option that `model` cannot be simulated with: a parameter
   // value for a name the model does not have, a count of input processes that differs from the
-  // model's, a dt outside
-  // [kMinStep, kMaxStep] or not finite, no samples or no runs, an input process that is not
-  // valid at this dt (InputSpec::validate), an unknown or repeated channel in `noise` or
-  // `observe`, a noise level that is negative or not finite, noise on a channel not observed;
-  // ModelError naming a parameter that has a value neither here nor in the model.
+  // model's, a dt outside [kMinStep, kMaxStep] or not finite, no samples or no runs, an input
+  // process that is not valid at this dt (InputSpec::validate), an unknown or repeated channel in
+  // `noise` or `observe`, a noise level that is negative or not finite, noise on a channel not
+  // observed; ModelError naming a parameter that has a value neither here nor in the model.
   void validate(const Model& model) const;
   static constexpr double kMinStep = 1e-9;
   static constexpr double kMaxStep = 1e6;
