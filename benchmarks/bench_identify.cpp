@@ -41,7 +41,6 @@ std::vector<momentid::Monomial> moments(const momentid::Model& model) {
 void write_data(const momentid::Model& model, const std::string& path, std::size_t rows,
                 std::vector<std::string> observe = {}) {
   momentid::SimulationOptions options;
-  options.parameters = momentid::parameter_values(model, {});
   options.inputs = {momentid::InputSpec::parse("ma:K=10,w=0.1,sigma=20", "bench")};
   options.samples = rows;
   options.observe = std::move(observe);

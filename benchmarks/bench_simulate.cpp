@@ -61,7 +61,6 @@ v' = -c*v - k*y - eps*y^3 + x
 )",
                                                       "duffing.mom");
   momentid::SimulationOptions options;
-  options.parameters = momentid::parameter_values(model, {});
   options.inputs = {momentid::InputSpec{}};
   options.samples = steps;
   options.burn_in = 0;

@@ -25,7 +25,6 @@ int main(int argc, char** argv) {
   const momentid::Model model =
       momentid::parse_model_file(MOMENTID_SOURCE_DIR "/models/duffing.mom");
   momentid::SimulationOptions simulation;
-  simulation.parameters = momentid::parameter_values(model, {});
   simulation.inputs = {momentid::InputSpec::parse("ma:K=10,w=0.1,sigma=20", "input")};
   simulation.samples = rows;
   simulation.burn_in = 2000;

@@ -31,7 +31,6 @@ struct DuffingFile {
                                ("momentid_test_app_" + std::to_string(::getpid()) + ".csv");
   explicit DuffingFile(std::size_t samples, std::size_t runs = 1) {
     momentid::SimulationOptions options;
-    options.parameters = momentid::parameter_values(model, {});
     options.inputs = {momentid::InputSpec::parse("ma:K=10,w=0.1,sigma=20", "test")};
     options.samples = samples;
     options.runs = runs;
@@ -281,7 +280,7 @@ TEST_SUITE("app") {
     const auto e = error_from<momentid::DataError>(
         [&] { momentid::identify(model, momentid::DataSource::memory(data), {.batches = 2}); });
     CHECK(std::string(e.what()) ==
-          "arrays:3:2: column 'y': expected a number (a missing value? --missing drop-row or "
+          "arrays:3:2: column 'y': expected a number (a missing value? missing drop-row or "
           "split-run passes over it), found 'nan'");
   }
 
@@ -321,7 +320,6 @@ TEST_SUITE("app") {
                       }).what()) == "lags: expected a number from 1 to 1000, found 0");
 
     momentid::SimulationOptions simulation;
-    simulation.parameters = momentid::parameter_values(model, {});
     simulation.inputs.resize(1);
     simulation.dt = 0;
     CHECK(std::string(error_from<momentid::UsageError>([&] {
@@ -344,7 +342,7 @@ TEST_SUITE("app") {
       const momentid::Model copy = file.model;
       result = momentid::identify(copy, momentid::DataSource::file(file.path.string()));
     }
-    CHECK(result->zero_lag->system.model == result->model.get());
+    CHECK(result->zero_lag->system->model == result->model.get());
     CHECK(momentid::format_text(*result).starts_with("model duffing, data "));
     CHECK(momentid::json_value(*result)["moments"].contains("E[y^2]"));
   }

@@ -386,14 +386,37 @@ TEST_SUITE("data reader") {
                      "missing column 'tick' for 't' (the header has: clock, y)", 1, 1, "clock,y");
   }
 
+  TEST_CASE("the hints of a bad field name the options fields, which a front end spells") {
+    const auto flag = [](const std::string& field) {
+      std::string out = "--" + field;
+      std::replace(out.begin(), out.end(), '_', '-');
+      return out;
+    };
+    const auto text_of = [&](std::string_view text, const ColumnRequest& request) {
+      const TempFile file(text);
+      const DataError e = error_from<DataError>([&] { read_file(file.path(), request); });
+      const std::string place = file.path() + ":";
+      std::string out = e.text(flag);
+      return out.starts_with(place) ? out.substr(place.size()) : out;
+    };
+    CHECK(text_of("t;y\ns;m\n0;1\n", columns({"y"})) ==
+          "2:1: column 't': expected a number (a units row? give --skip-rows 1), found 's'");
+    CHECK(text_of("t;y\n0;1,5\n", columns({"y"})) ==
+          "2:3: column 'y': expected a number (with a decimal comma? give --decimal ,), found "
+          "'1,5'");
+    CHECK(text_of("t,y\n0,nan\n", columns({"y"})) ==
+          "2:3: column 'y': expected a number (a missing value? --missing drop-row or split-run "
+          "passes over it), found 'nan'");
+  }
+
   TEST_CASE("reads a units row and decimal commas when told to, and suggests both") {
     ColumnRequest request = columns({"y", "x"});
     check_read_error("t;y;x\ns;m;N\n0;1,5;2\n0,5;1,25;1\n", request,
-                     "column 't': expected a number (a units row? give --skip-rows 1), found 's'",
-                     2, 1, "s;m;N");
+                     "column 't': expected a number (a units row? give skip_rows 1), found 's'", 2,
+                     1, "s;m;N");
     request.layout.skip_rows = 1;
     check_read_error("t;y;x\ns;m;N\n0;1,5;2\n0,5;1,25;1\n", request,
-                     "column 'y': expected a number (with a decimal comma? give --decimal ,), "
+                     "column 'y': expected a number (with a decimal comma? give decimal ,), "
                      "found '1,5'",
                      3, 3, "0;1,5;2");
     request.layout.decimal = ',';
@@ -691,7 +714,7 @@ TEST_SUITE("data reader") {
 
   TEST_CASE("a missing value (empty, nan, NA, N/A) is an error that names the --missing rules") {
     const std::string hint =
-        "expected a number (a missing value? --missing drop-row or split-run passes over it)";
+        "expected a number (a missing value? missing drop-row or split-run passes over it)";
     check_read_error("t,y,v\n0.1,,3\n", columns({"y", "v"}),
                      "column 'y': " + hint + ", found an empty field", 2, 5, "0.1,,3");
     check_read_error("t,y,v\n0.1,2, \t\n", columns({"y", "v"}),
@@ -832,7 +855,7 @@ TEST_SUITE("data reader") {
     // Early in the line: the first 200 bytes.
     const std::string early = "nan" + row.substr(1);
     check_read_error(header + "\n" + early + "\n", columns({"y"}),
-                     "column 'y': expected a number (a missing value? --missing drop-row or "
+                     "column 'y': expected a number (a missing value? missing drop-row or "
                      "split-run passes over it), found 'nan'",
                      2, 1, early.substr(0, 200) + "...");
     // Far into the line: up to 40 bytes after the field, so that a caret can point at it.
@@ -886,7 +909,7 @@ TEST_SUITE("data reader") {
 
   TEST_CASE("a non-finite value of a binary file is reported by row and column number") {
     check_read_error(binary_file("t,y,v\n", {0, 1, 2, 0.1, kNaN, 2}), columns({"y"}),
-                     "column 'y': expected a number (a missing value? --missing drop-row or "
+                     "column 'y': expected a number (a missing value? missing drop-row or "
                      "split-run passes over it), found 'nan'",
                      2, 2, "");
     check_read_error(binary_file("t,y,v\n", {0, 1, -kInf}), columns({"y", "v"}),

@@ -75,7 +75,13 @@ TEST_SUITE("options") {
         momentid::parse_model("model bare\nstate y\nparam a\ny' = -a*y\n", "bare.mom");
     const momentid::ModelError missing =
         error_from<momentid::ModelError>([&] { momentid::parameter_vector(bare, {}); });
-    CHECK(missing.message() ==
-          "parameter 'a' has no value: give a nominal value in the model or --set a=VALUE");
+    CHECK(std::string(missing.what()) ==
+          "bare.mom:3:7: parameter 'a' has no value: give a nominal value in the model or "
+          "parameters a=VALUE");
+    // A front end spells the field its own way: the command line's flag is --set.
+    CHECK(missing.text([](const std::string& field) {
+      return field == "parameters" ? "--set" : "--" + field;
+    }) == "bare.mom:3:7: parameter 'a' has no value: give a nominal value in the model or --set "
+          "a=VALUE");
   }
 }

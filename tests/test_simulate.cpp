@@ -231,25 +231,30 @@ TEST_SUITE("simulate") {
   TEST_CASE("parameter values: nominal values, --set overrides, missing values are errors") {
     const Model model =
         momentid::parse_model("state y\ninput x\nparam a = 1, b\ny' = -a*y - b*y^3 + x\n", "m.mom");
-    const auto values = momentid::parameter_values(model, {"b=-2.5e-1", "a=+3"});
+    const auto values_of = [&](const std::vector<std::string>& assignments) {
+      return momentid::parameter_vector(model,
+                                        momentid::parse_parameter_values(model, assignments));
+    };
+    const auto values = values_of({"b=-2.5e-1", "a=+3"});
     CHECK(values[0] == 3);
     CHECK(values[1] == GiNaC::numeric(-1, 4));
     try {
-      momentid::parameter_values(model, {});
+      values_of({});
       FAIL("no error");
     } catch (const momentid::ModelError& e) {
-      CHECK(std::string(e.what()) ==
-            "m.mom:3:14: parameter 'b' has no value: give a nominal value in the model or --set "
-            "b=VALUE");
+      CHECK(
+          std::string(e.what()) ==
+          "m.mom:3:14: parameter 'b' has no value: give a nominal value in the model or parameters "
+          "b=VALUE");
     }
-    CHECK_THROWS_WITH_AS(momentid::parameter_values(model, {"c=1"}),
+    CHECK_THROWS_WITH_AS(values_of({"c=1"}),
                          "parameters: 'c' is not a parameter of model m (parameters: a, b)",
                          momentid::UsageError);
-    CHECK_THROWS_WITH_AS(momentid::parameter_values(model, {"a=1x"}),
+    CHECK_THROWS_WITH_AS(values_of({"a=1x"}),
                          "parameters: the value of 'a' must be a number, found '1x'",
                          momentid::UsageError);
-    CHECK_THROWS_WITH_AS(momentid::parameter_values(model, {"a"}),
-                         "parameters: expected NAME=VALUE, found 'a'", momentid::UsageError);
+    CHECK_THROWS_WITH_AS(values_of({"a"}), "parameters: expected NAME=VALUE, found 'a'",
+                         momentid::UsageError);
   }
 
   TEST_CASE("input specifications are parsed, checked and written back") {
@@ -279,12 +284,33 @@ TEST_SUITE("simulate") {
                          momentid::UsageError);
   }
 
+  TEST_CASE("simulation parameters are given by name, the others at their nominal values") {
+    const Model duffing = model_file("duffing.mom");
+    SimulationOptions options = options_for(duffing, 10, 3);
+    options.parameters = {{"k", momentid::ParameterValue::exact("4.5")}, {"eps", 0.25}};
+    CHECK(momentid::simulation_metadata(duffing, options).get("param.c") == "0.5");
+    CHECK(momentid::simulation_metadata(duffing, options).get("param.k") == "4.5");
+    CHECK(momentid::simulation_metadata(duffing, options).get("param.eps") == "0.25");
+    options.parameters = {{"zz", 1.0}};
+    CHECK_THROWS_WITH_AS(options.validate(duffing),
+                         "parameters: 'zz' is not a parameter of model duffing (parameters: c, k, "
+                         "eps)",
+                         momentid::UsageError);
+    const Model bare = momentid::parse_model("state y\nparam a\ny' = -a*y\n", "bare.mom");
+    SimulationOptions none = options_for(bare, 10, 1);
+    CHECK_THROWS_AS(none.validate(bare), momentid::ModelError);
+    none.parameters = {{"a", 2.0}};
+    Recorder rows(1);
+    momentid::simulate(bare, none, rows);
+    CHECK(rows.rows.size() == 10);
+  }
+
   TEST_CASE("the step check finds the linear oscillator's eigenvalues and a hardening spring's") {
     // y'' + c y' + k y = x: eigenvalues -c/2 +- i sqrt(k - c^2/4), of modulus sqrt(k) = 2.
     const Model duffing = model_file("duffing.mom");
     for (const double dt : {0.2, 0.3}) {
       SimulationOptions options = options_for(duffing, 2000, 3);
-      options.parameters = momentid::parameter_values(duffing, {"eps=0"});
+      options.parameters = {{"eps", momentid::ParameterValue::exact("0")}};
       options.dt = dt;
       Recorder rows(3);
       momentid::StepCheck check(duffing, options, rows);

@@ -52,7 +52,6 @@ struct Directory {
 // Nominal parameters, the default input process for every input, 2000 steps of burn-in.
 inline SimulationOptions options_for(const Model& model, std::size_t samples, std::uint64_t seed) {
   SimulationOptions options;
-  options.parameters = parameter_values(model, {});
   options.inputs.assign(model.inputs().size(), InputSpec{});
   options.samples = samples;
   options.burn_in = 2000;

@@ -29,7 +29,6 @@ Model friction(double force) {
 
 SimulationOptions quiet(const Model& model, std::size_t samples) {
   SimulationOptions options;
-  options.parameters = momentid::parameter_values(model, {});
   options.inputs.assign(1, InputSpec{});
   options.inputs[0] = InputSpec::parse("ma:K=10,w=0.1,sigma=0", "input");
   options.samples = samples;
@@ -106,8 +105,7 @@ TEST_SUITE("switching") {
     // stays 4 / 3; each crossing of y = 0 is located, so that the step keeps its order there.
     const Model model =
         parse_model("state y, v\ninput x\nparam k = 4\ny' = v\nv' = -k*abs(y)*y + x\n", "abs.mom");
-    const momentid::RecordSimulator sim(model, momentid::parameter_values(model, {}),
-                                        {momentid::Interpolation::kHold}, 0.01, 1);
+    const momentid::RecordSimulator sim(model, {}, {momentid::Interpolation::kHold}, 0.01, 1);
     const auto states = sim.run({std::vector<double>(5000, 0.0)}, {1.0, 0.0}, 0.0, 1, 5000);
     double worst = 0;
     for (std::size_t n = 0; n < 5000; ++n) {

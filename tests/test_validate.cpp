@@ -243,12 +243,17 @@ TEST_SUITE("validate") {
     // c = 0.5, m = 1: the envelope decays as exp(-c t / 2), to 1% after 2 ln(100) / c s.
     const Model model = model_file("duffing.mom");
     SimulationOptions options = duffing_options(model, 20000);
-    options.parameters = parameter_values(model, {"eps=0"});
+    options.parameters = {{"eps", momentid::ParameterValue::exact("0")}};
     const Recorder recorder = simulated(model, options);
     const MemoryRecord record(model, recorder, {"y", "v", "x"}, "zoh");
     const ValidateResult result =
         validate(model, record.source(), with_parameters(model, {"eps=0"}));
     const double expected = 2 * std::log(100.0) / 0.5 / options.dt;
+    // Every parameter by name: eps as given, c and k at their nominal values.
+    CHECK(result.parameters.at("eps").value == 0);
+    CHECK(result.parameters.at("eps").decimal == "0");
+    CHECK(result.parameters.at("c").value == 0.5);
+    CHECK(result.parameters.at("k").value == 4);
     MESSAGE("skip " << result.skip[0] << " rows, envelope " << expected);
     CHECK(std::abs(result.skip[0] / expected - 1) < 0.1);
     CHECK(result.skip_chosen);

@@ -9,14 +9,20 @@
 
 #include "momentid/accumulator.hpp"
 #include "momentid/data_pass.hpp"
-#include "momentid/derive.hpp"
-#include "momentid/estimate.hpp"
-#include "momentid/lagged.hpp"
-#include "momentid/model.hpp"
+#include "momentid/fit.hpp"
+#include "momentid/moment.hpp"
 #include "momentid/reader.hpp"
 #include "momentid/record_options.hpp"
+#include "momentid/types.hpp"
 
+// This header, and those it includes, do not include GiNaC (the test library.ginac_free
+// checks it): a program that identifies a record needs no computer algebra. The model and the
+// moment equations stay incomplete types here; model.hpp, derive.hpp and lagged.hpp define them.
 namespace momentid {
+
+class Model;
+struct MomentSystem;
+struct LaggedSystem;
 
 // How to identify (docs/cli/identify.md, "momentid identify"). The defaults are the command line's.
 struct IdentifyOptions {
@@ -92,8 +98,8 @@ struct ChannelMean {
 struct IdentifyResult {
   // The zero-lag moment equations and what refined their estimate.
   struct ZeroLag {
-    MomentSystem system;            // refers to *model
-    std::vector<Monomial> moments;  // the moments of data.estimates, in that order
+    std::shared_ptr<const MomentSystem> system;  // derive.hpp; refers to *model
+    std::vector<Monomial> moments;               // the moments of data.estimates, in that order
     // IdentifyOptions::extrapolate: per parameter of the main result, the estimate from every
     // other sample, the bias of the estimate at dt, (fine - coarse) / (2^order - 1), and the
     // standard error of fine - coarse. `applied`: the difference exceeds its standard error for
@@ -129,8 +135,8 @@ struct IdentifyResult {
   };
   // The lagged moment equations and their moments, over `channels` (data columns, by model name).
   struct Lagged {
-    LaggedSystem system;          // refers to *model
-    std::vector<Moment> moments;  // the moments of data.estimates, in that order
+    std::shared_ptr<const LaggedSystem> system;  // lagged.hpp; refers to *model
+    std::vector<Moment> moments;                 // the moments of data.estimates, in that order
     std::vector<std::string> channels;
     std::vector<double> noise;  // the noise variance used per channel
     int stencil_reach = 0;      // of the lag-derivative stencils
@@ -169,9 +175,9 @@ struct IdentifyResult {
 // DataError or Error for a model or data that cannot be used. Poor or impossible answers are
 // results: see Estimate::status.
 //
-// Example:
-//   Model model = parse_model_file("models/duffing.mom");
-//   IdentifyResult r = identify(model, DataSource::file("duffing.csv"), {.degree = 3});
+// Example (model_file.hpp):
+//   std::shared_ptr<const Model> model = load_model("models/duffing.mom");
+//   IdentifyResult r = identify(*model, DataSource::file("duffing.csv"), {.degree = 3});
 //   std::cout << format_text(r);
 IdentifyResult identify(const Model& model, const DataSource& source,
                         const IdentifyOptions& options = {});

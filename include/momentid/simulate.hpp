@@ -218,8 +218,9 @@ struct ChannelNoise {
 
 // How to simulate (docs/cli/simulate.md, "momentid simulate").
 struct SimulationOptions {
-  std::vector<GiNaC::numeric> parameters;  // one per model parameter
-  std::vector<InputSpec> inputs;           // one per model input
+  // By name; a parameter absent takes its nominal value (`param k = 4` in the model file).
+  ParameterValues parameters;
+  std::vector<InputSpec> inputs;  // one per model input
   double dt = 0.01;
   std::size_t samples = 10000;  // per run
   std::size_t burn_in =
@@ -238,11 +239,12 @@ struct SimulationOptions {
   // A SampleSink always receives every channel.
   std::vector<std::string> observe;
 
-  // Throws UsageError naming the first option that `model` cannot be simulated with: a count of
-  // parameter values or input processes that differs from the model's, a dt outside
-  // [kMinStep, kMaxStep] or not finite, no samples or no runs, an input process that is not
-  // valid at this dt (InputSpec::validate), an unknown or repeated channel in `noise` or
-  // `observe`, a noise level that is negative or not finite, noise on a channel not observed.
+  // Throws UsageError naming the first option that `model` cannot be simulated with: a parameter
+  // value for a name the model does not have, a count of input processes that differs from the
+  // model's, a dt outside [kMinStep, kMaxStep] or not finite, no samples or no runs, an input
+  // process that is not valid at this dt (InputSpec::validate), an unknown or repeated channel in
+  // `noise` or `observe`, a noise level that is negative or not finite, noise on a channel not
+  // observed; ModelError naming a parameter that has a value neither here nor in the model.
   void validate(const Model& model) const;
   static constexpr double kMinStep = 1e-9;
   static constexpr double kMaxStep = 1e6;
@@ -352,13 +354,14 @@ class Interpolator {
 // in `substeps` equal steps per sample interval, one run at a time from a given initial state.
 //
 // Example:
-//   RecordSimulator sim(model, parameter_values(model, {}), {Interpolation::kSinc}, 0.01, 2);
+//   RecordSimulator sim(model, {{"k", 4.1}}, {Interpolation::kSinc}, 0.01, 2);
 //   auto states = sim.run({x}, {y0, v0}, 0.0, 1, x.size());  // states[j][n]: state j at row n
 class RecordSimulator {
  public:
-  // One interpolation method per model input; `substeps` from 1 to kMaxSubsteps. Throws
-  // ModelError as CompiledModel does.
-  RecordSimulator(const Model& model, std::vector<GiNaC::numeric> parameters,
+  // `parameters` by name, the others at their nominal values; one interpolation method per model
+  // input; `substeps` from 1 to kMaxSubsteps. Throws UsageError and ModelError as
+  // parameter_vector does, and ModelError as CompiledModel does.
+  RecordSimulator(const Model& model, const ParameterValues& parameters,
                   std::vector<Interpolation> methods, double dt, int substeps = 1);
   // `inputs[i][n]`: input i at row n, at least `rows` of them; `initial`: one value per state.
   // Returns states[j][n], the state j at row n, for `rows` rows. Throws Error naming the time
@@ -393,9 +396,5 @@ ParameterValues parse_parameter_values(const Model& model,
 // that has no value either way.
 std::vector<GiNaC::numeric> parameter_vector(const Model& model, const ParameterValues& values,
                                              const std::string& option = "parameters");
-// The nominal values overridden by `assignments`: parameter_vector(model,
-// parse_parameter_values(model, assignments)).
-std::vector<GiNaC::numeric> parameter_values(const Model& model,
-                                             const std::vector<std::string>& assignments);
 
 }  // namespace momentid

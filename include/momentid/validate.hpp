@@ -200,7 +200,9 @@ struct StatisticalValidation {
 
 struct ValidateResult {
   std::shared_ptr<const Model> model;
-  std::vector<GiNaC::numeric> parameters;
+  // Every parameter's value, by name: `value` the double nearest to the one simulated with (the
+  // given one, else the nominal one), `decimal` the decimal given, if one was.
+  ParameterValues parameters;
   std::string parameters_from;  // "the model's nominal values", a file name, ...
   Replay replay;
   // Rows left out at the start of each run. Chosen (skip_chosen): the first row after which a

@@ -40,8 +40,10 @@ void raise(const char* kind, const std::string& message, const SourceLocation* w
 // The keyword argument that sets the options field `field` (UsageError::option()): "fixed" is
 // `fix`; a field without its own entry is its own keyword ("dt").
 std::string keyword_of(const std::string& field) {
-  static const std::map<std::string, std::string> kKeywords = {
-      {"fixed", "fix"}, {"parameters", "params"}, {"hold", "input_hold"}};
+  static const std::map<std::string, std::string> kKeywords = {{"fixed", "fix"},
+                                                               {"parameters", "params"},
+                                                               {"hold", "input_hold"},
+                                                               {"column_names", "names"}};
   const auto found = kKeywords.find(field);
   return found != kKeywords.end() ? found->second : field;
 }
@@ -52,7 +54,7 @@ void translate(std::exception_ptr thrown) {
   } catch (const DataError& e) {
     raise("DataError", e.text(keyword_of), &e.location());
   } catch (const LocatedError& e) {  // ParseError, ModelError
-    raise("ModelError", e.what(), &e.location());
+    raise("ModelError", e.text(keyword_of), &e.location());
   } catch (const UsageError& e) {
     raise("UsageError", e.text(keyword_of));
   } catch (const Error& e) {
@@ -182,10 +184,10 @@ std::vector<std::string> assignments(const std::map<std::string, py::object>& va
   return out;
 }
 
-std::vector<GiNaC::numeric> parameters_of(const Model& model, const py::dict& options,
-                                          const char* key) {
+// The values of `options[key]` by name, each number kept as the decimal Python writes for it.
+ParameterValues parameters_of(const Model& model, const py::dict& options, const char* key) {
   const auto values = get<std::map<std::string, py::object>>(options, key);
-  return parameter_values(model, values ? assignments(*values) : std::vector<std::string>{});
+  return parse_parameter_values(model, values ? assignments(*values) : std::vector<std::string>{});
 }
 
 // --- derive ---------------------------------------------------------------------------------
@@ -408,9 +410,7 @@ py::tuple simulate_record(const Model& model, const py::dict& options) {
 
 ValidateOptions validate_options(const Model& model, const py::dict& options) {
   ValidateOptions out;
-  const auto values = get<std::map<std::string, py::object>>(options, "params");
-  out.replay.parameters =
-      parse_parameter_values(model, values ? assignments(*values) : std::vector<std::string>{});
+  out.replay.parameters = parameters_of(model, options, "params");
   out.replay.record = record_options(options);
   if (auto substeps = get<int>(options, "substeps")) out.replay.substeps = *substeps;
   if (auto method = get<std::string>(options, "interpolation")) {

@@ -192,6 +192,25 @@ def test_model_error_is_located():
     assert isinstance(error, ValueError) and isinstance(error, momentid.Error)
 
 
+def test_model_errors_name_keywords_not_flags():
+    with pytest.raises(momentid.ModelError) as raised:
+        momentid.simulate(momentid.Model("state y\nparam a\ny' = -a*y\n"), samples=10)
+    assert str(raised.value) == ("<string>:2:7: parameter 'a' has no value: give a nominal value "
+                                 "in the model or params a=VALUE")
+
+
+def test_data_errors_name_keywords_not_flags(duffing, tmp_path):
+    path = tmp_path / "a.npy"
+    np.save(path, np.zeros((10, 4)))
+    with pytest.raises(momentid.DataError) as raised:
+        momentid.identify(duffing, str(path), names=["t", "y", "v"])
+    assert str(raised.value) == f"{path}:1:1: names gives 3 names for 4 columns"
+    units = tmp_path / "units.csv"
+    units.write_text("t,y,v,x\ns,m,m/s,N\n0,1,2,3\n")
+    with pytest.raises(momentid.DataError, match=r"\(a units row\? give skip_rows 1\)"):
+        momentid.identify(duffing, str(units))
+
+
 def test_nan_is_a_data_error_at_its_row(duffing, record):
     y = record["y"].copy()
     y[100] = np.nan
@@ -200,6 +219,8 @@ def test_nan_is_a_data_error_at_its_row(duffing, record):
         momentid.identify(duffing, data, input_hold="zoh")
     # Row 100 counted from 0 is line 101; y is the second column.
     assert (raised.value.line, raised.value.column) == (101, 2)
+    # The hint names the keyword that passes over the row, as the command line names its flag.
+    assert "(a missing value? missing drop-row or split-run passes over it)" in str(raised.value)
     assert isinstance(raised.value, ValueError)
 
     result = momentid.identify(duffing, data, input_hold="zoh", missing="split-run")

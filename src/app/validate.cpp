@@ -150,6 +150,22 @@ void judge(ValidateResult& result) {
                             " statistics of the response are outside their bands: " + why);
 }
 
+// Every parameter's value by name, as ValidateResult::parameters holds them: the double nearest
+// to the value simulated with, and the decimal given.
+ParameterValues every_value(const Model& model, const ParameterValues& given) {
+  const std::vector<GiNaC::numeric> values = parameter_vector(model, given);
+  ParameterValues out;
+  for (std::size_t p = 0; p < values.size(); ++p) {
+    const std::string& name = model.parameters()[p].name;
+    ParameterValue value(values[p].to_double());
+    if (const auto found = given.find(name); found != given.end()) {
+      value.decimal = found->second.decimal;
+    }
+    out.emplace(name, std::move(value));
+  }
+  return out;
+}
+
 }  // namespace
 
 ValidateResult validate(const Model& model, const DataSource& source,
@@ -163,7 +179,7 @@ ValidateResult validate(const Model& model, const DataSource& source,
   options.replay.record.validate(&model);
   ValidateResult result;
   result.model = std::make_shared<const Model>(model);
-  result.parameters = parameter_vector(model, options.replay.parameters);
+  result.parameters = every_value(model, options.replay.parameters);
   Record record = read_record(model, source, options.replay);
   result.centered = center_record(model, record, options.center);
   result.replay = replay_record(*result.model, std::move(record), options.replay);
@@ -175,8 +191,8 @@ ValidateResult validate(const Model& model, const DataSource& source,
   if (replay.substep_change >= ReplayOptions::kSubstepTolerance) {
     result.warnings.push_back(substep_warning(replay));
   }
-  const RecordSimulator simulator(model, result.parameters, replay.interpolation, replay.record.dt,
-                                  replay.substeps);
+  const RecordSimulator simulator(model, options.replay.parameters, replay.interpolation,
+                                  replay.record.dt, replay.substeps);
   result.sensitivity = measure_sensitivity(model, simulator, replay);
   choose_skips(model, simulator, options, result);
   for (std::size_t j : outputs) {

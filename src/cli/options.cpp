@@ -15,6 +15,7 @@ namespace momentid::cli {
 std::string flag_of(const std::string& field) {
   // The fields whose option has another name; one table for every command.
   static const std::map<std::string, std::string> kFlags = {
+      {"column_names", "--names"},
       {"fixed", "--fix"},
       {"hold", "--input-hold"},
       {"inputs", "--input"},

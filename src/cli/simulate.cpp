@@ -75,7 +75,7 @@ int run_simulate(SimulateCommand& command) {
                  command.output, format);
     return 0;
   }
-  command.options.parameters = parameter_values(model, command.set);
+  command.options.parameters = parse_parameter_values(model, command.set);
   command.options.inputs = input_specs(model, command.inputs);
   command.options.noise = parse_noise(command.noise);
   for (const std::string& warning :

@@ -154,7 +154,7 @@ class CsvReader final : public StreamReader {
     const char* const stop = field_end(start, end);
     if (is_missing_value(trim(std::string_view(start, static_cast<std::size_t>(stop - start))))) {
       if (!pass_over_missing(keys, field))
-        bad_field(field, p, std::string("expected a number (") + kMissingHint + ")");
+        bad_field(field, p, "expected a number (" + missing_value_hint() + ")");
       field_starts_[field] = start;
       return stop;
     }
@@ -170,9 +170,11 @@ class CsvReader final : public StreamReader {
                            return c >= '0' && c <= '9';
                          });
       bad_field(field, p,
-                comma   ? "expected a number (with a decimal comma? give --decimal ,)"
-                : units ? "expected a number (a units row? give --skip-rows 1)"
-                        : "expected a number");
+                comma ? "expected a number (with a decimal comma? give " +
+                            UsageError::mention("decimal") + " ,)"
+                : units ? "expected a number (a units row? give " +
+                              UsageError::mention("skip_rows") + " 1)"
+                        : std::string("expected a number"));
     }
     if (!std::isfinite(value)) bad_field(field, p, "expected a finite number");
     if (map_.output[field] >= 0) row[map_.output[field]] = value;

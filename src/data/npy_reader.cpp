@@ -229,8 +229,9 @@ class NpyStore final : public ColumnStore {
     const std::string stem = std::filesystem::path(path).stem().string();
     if (!request.layout.column_names.empty() &&
         request.layout.column_names.size() != main.columns()) {
-      fail({path, 1, 1, ""}, "--names gives " + plural(request.layout.column_names.size(), "name") +
-                                 " for " + plural(main.columns(), "column"));
+      fail({path, 1, 1, ""}, UsageError::mention("column_names") + " gives " +
+                                 plural(request.layout.column_names.size(), "name") + " for " +
+                                 plural(main.columns(), "column"));
     }
     for (std::size_t k = 0; k < main.columns(); ++k) {
       names_.push_back(!request.layout.column_names.empty() ? request.layout.column_names[k]

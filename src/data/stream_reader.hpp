@@ -24,9 +24,12 @@ struct RowKeys {
   int missing_field = -1;
 };
 
-// The hint of an error at a missing value.
-inline constexpr const char* kMissingHint =
-    "a missing value? --missing drop-row or split-run passes over it";
+// The hint of an error at a missing value, naming the option (FileLayout::missing) that passes
+// over it.
+inline std::string missing_value_hint() {
+  return "a missing value? " + UsageError::mention("missing") +
+         " drop-row or split-run passes over it";
+}
 
 // The reading both layouts share: blocks, runs and the time-step checks. A layout delivers rows
 // through read_row() and says where a field is for errors.
@@ -82,7 +85,7 @@ class StreamReader : public DataReader {
                            std::uint64_t& first);
 
   // Marks field `field` of the row as missing when the rule passes over missing values; false
-  // when it is an error, which the layout reports with kMissingHint.
+  // when it is an error, which the layout reports with missing_value_hint().
   bool pass_over_missing(RowKeys& keys, std::size_t field) const {
     if (request_.layout.missing == MissingValues::kError) return false;
     if (keys.missing_field < 0) keys.missing_field = static_cast<int>(field);
@@ -96,7 +99,7 @@ class StreamReader : public DataReader {
   void take_value(std::size_t field, double value, double* row, RowKeys& keys, Bad&& bad) {
     if (std::isnan(value)) {
       if (!pass_over_missing(keys, field)) {
-        bad(std::string("expected a number (") + kMissingHint + ")");
+        bad("expected a number (" + missing_value_hint() + ")");
       }
       return;
     }

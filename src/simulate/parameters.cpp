@@ -102,8 +102,8 @@ std::vector<numeric> parameter_vector(const Model& model, const ParameterValues&
     const auto given = values.find(p.name);
     if (given == values.end() && !p.value) {
       throw ModelError(p.where, "parameter '" + p.name +
-                                    "' has no value: give a nominal value in the model or --set " +
-                                    p.name + "=VALUE");
+                                    "' has no value: give a nominal value in the model or " +
+                                    UsageError::mention("parameters") + " " + p.name + "=VALUE");
     }
     if (given == values.end()) {
       out.push_back(*p.value);
@@ -115,11 +115,6 @@ std::vector<numeric> parameter_vector(const Model& model, const ParameterValues&
     }
   }
   return out;
-}
-
-std::vector<numeric> parameter_values(const Model& model,
-                                      const std::vector<std::string>& assignments) {
-  return parameter_vector(model, parse_parameter_values(model, assignments));
 }
 
 }  // namespace momentid

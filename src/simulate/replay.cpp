@@ -71,10 +71,10 @@ double Interpolator::operator()(const std::vector<double>& u, std::size_t n, std
   return (1 - f) * u[n] + f * u[n + 1];
 }
 
-RecordSimulator::RecordSimulator(const Model& model, std::vector<GiNaC::numeric> parameters,
+RecordSimulator::RecordSimulator(const Model& model, const ParameterValues& parameters,
                                  std::vector<Interpolation> methods, double dt, int substeps)
     : model_(model),
-      parameters_(std::move(parameters)),
+      parameters_(parameter_vector(model, parameters)),
       f_(model, parameters_),
       methods_(std::move(methods)),
       dt_(dt),

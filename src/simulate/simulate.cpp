@@ -273,7 +273,7 @@ void SimulationOptions::validate(const Model& model) const {
                                   what + ", found " + std::to_string(found));
     }
   };
-  count(parameters.size(), model.parameters().size(), "parameters", "parameter values");
+  parameter_vector(model, parameters);  // every name the model's, every parameter with a value
   count(inputs.size(), model.inputs().size(), "inputs", "input processes");
   if (!(std::isfinite(dt) && dt >= kMinStep && dt <= kMaxStep)) {
     throw UsageError("dt", "expected a number from 1e-9 to 1e6, found " + shortest_decimal(dt));
@@ -341,7 +341,8 @@ namespace {
 
 // The clean simulation: every channel as the model produces it.
 void simulate_clean(const Model& model, const SimulationOptions& options, SampleSink& sink) {
-  const CompiledModel f(model, options.parameters);
+  const std::vector<numeric> parameters = parameter_vector(model, options.parameters);
+  const CompiledModel f(model, parameters);
   const std::size_t n = static_cast<std::size_t>(f.states());
   const std::size_t m = static_cast<std::size_t>(f.inputs());
   std::vector<InputProcess> inputs;
@@ -368,7 +369,7 @@ void simulate_clean(const Model& model, const SimulationOptions& options, Sample
         burning_in ? "during the burn-in of run " + std::to_string(run + 1)
                    : "at t = " + shortest_decimal(t) + " in run " + std::to_string(run + 1);
     throw Error("the simulation " + what + " " + when + " with " +
-                parameter_list(model, options.parameters) +
+                parameter_list(model, parameters) +
                 ": the model is unstable for these values, or the step dt is too large");
   };
   // One Runge-Kutta step from t to t + h.
@@ -541,9 +542,10 @@ DataMetadata simulation_metadata(const Model& model, const SimulationOptions& op
   DataMetadata metadata;
   metadata.add_line(std::move(first));
   DataMetadata::Line parameters;
-  for (std::size_t p = 0; p < options.parameters.size(); ++p) {
+  const std::vector<numeric> values = parameter_vector(model, options.parameters);
+  for (std::size_t p = 0; p < values.size(); ++p) {
     parameters.emplace_back("param." + model.parameters()[p].name,
-                            shortest_decimal(options.parameters[p].to_double()));
+                            shortest_decimal(values[p].to_double()));
   }
   metadata.add_line(std::move(parameters));
   for (std::size_t i = 0; i < options.inputs.size(); ++i) {
@@ -600,7 +602,7 @@ std::vector<std::string> simulate_to_file(const Model& model, const SimulationOp
 
 StepCheck::StepCheck(const Model& model, const SimulationOptions& options, SampleSink& next)
     : model_(model),
-      f_(model, options.parameters),
+      f_(model, parameter_vector(model, options.parameters)),
       next_(next),
       dt_(options.dt),
       stride_(std::max<std::size_t>(1, options.samples * options.runs / kPoints)) {}

@@ -6,6 +6,7 @@
 
 #include "common/number.hpp"
 #include "momentid/identify.hpp"
+#include "momentid/lagged.hpp"
 
 namespace momentid {
 namespace {
@@ -186,8 +187,8 @@ std::vector<std::string> warnings(const IdentifyResult& r) {
     for (const auto& [name, tau] : r.lagged->correlation_lags) {
       if (tau > 0) continue;
       rest.push_back("'" + name + "' stays correlated across lags " +
-                     std::to_string(r.lagged->system.first_lag) + ".." +
-                     std::to_string(r.lagged->system.last_lag) +
+                     std::to_string(r.lagged->system->first_lag) + ".." +
+                     std::to_string(r.lagged->system->last_lag) +
                      " (its autocorrelation stays above 1/e): the lagged equations see less than a "
                      "correlation time of it; give --lags a longer window (with fewer instruments "
                      "if the moments run out) or keep every n-th sample of the record");

@@ -5,6 +5,7 @@
 
 #include "common/number.hpp"
 #include "momentid/identify.hpp"
+#include "momentid/model.hpp"
 
 namespace momentid {
 namespace {

@@ -105,7 +105,7 @@ void correct_for_held_input(IdentifyResult& result, const HeldInputCorrections& 
         corrected_moments(model, held, index, all, result.zero_lag->moments.size(), theta, scale);
     if (!corrected) return give_up("its weights cannot be evaluated at the estimated parameters");
     result.estimate =
-        solve(result.zero_lag->system, result.zero_lag->moments, *corrected, solve_options);
+        solve(*result.zero_lag->system, result.zero_lag->moments, *corrected, solve_options);
     result.data.estimates = std::move(*corrected);
     theta.clear();
     for (const ParameterEstimate& p : result.parameters()) theta.push_back(p.estimate);

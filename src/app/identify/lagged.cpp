@@ -28,7 +28,7 @@ bool function_holds(const VariableFunction& f, std::size_t c) {
 // the window.
 std::map<std::string, int> correlation_lags(const IdentifyResult& r,
                                             const std::vector<int>& channel) {
-  const LaggedSystem& system = r.lagged->system;
+  const LaggedSystem& system = *r.lagged->system;
   std::map<Moment, std::size_t> index;
   for (std::size_t k = 0; k < r.lagged->moments.size(); ++k) index.emplace(r.lagged->moments[k], k);
   std::map<std::string, int> out;
@@ -53,7 +53,7 @@ std::map<std::string, int> correlation_lags(const IdentifyResult& r,
 // The last lag that spans five correlation times of the slowest measured state; four times the
 // window when a state stays correlated across it. Kept within the bounds of the lag options.
 int lag_window(const IdentifyResult& r) {
-  const LaggedSystem& system = r.lagged->system;
+  const LaggedSystem& system = *r.lagged->system;
   int wanted = 0;
   for (const auto& [name, tau] : r.lagged->correlation_lags) {
     wanted = std::max(wanted, tau > 0 ? 5 * tau : 4 * system.last_lag);
@@ -237,12 +237,13 @@ std::string fit_to_budget(const Model& model, LagOptions& lag_options,
 LaggedChannels read_lagged(IdentifyResult& result, const LagOptions& lag_options,
                            const DataSource& source, const IdentifyOptions& options) {
   result.lagged = IdentifyResult::Lagged{};
-  result.lagged->system = derive_lagged(*result.model, lag_options);
-  LaggedChannels c = lagged_channels(*result.model, result.lagged->system);
+  result.lagged->system =
+      std::make_shared<const LaggedSystem>(derive_lagged(*result.model, lag_options));
+  LaggedChannels c = lagged_channels(*result.model, *result.lagged->system);
   result.lagged->channels = c.states;
   result.lagged->channels.insert(result.lagged->channels.end(), c.inputs.begin(), c.inputs.end());
   // The rows need the sample interval, which the data give: accumulate, then build rows.
-  const LaggedRows probe = lagged_rows(result.lagged->system, 1.0, c.channel, {});
+  const LaggedRows probe = lagged_rows(*result.lagged->system, 1.0, c.channel, {});
   result.lagged->moments = probe.moments;
   // The channels' means come with the pass.
   std::vector<Moment> moments = probe.moments;
@@ -304,7 +305,7 @@ void identify_lagged(IdentifyResult& result, const DataSource& source,
   // second pass takes the lags the data call for, as far as the budget allows.
   std::string window_cut;
   if (!options.lags) {
-    const LaggedSystem& system = result.lagged->system;
+    const LaggedSystem& system = *result.lagged->system;
     const int wanted = lag_window(result);
     const int most =
         last_lag_within_budget(system.first_lag, system.last_lag, result.lagged->moments.size());
@@ -315,9 +316,9 @@ void identify_lagged(IdentifyResult& result, const DataSource& source,
       lag_options.last_lag = granted;
       channels = read_lagged(result, lag_options, source, options);
     }
-    if (wanted > 3 * result.lagged->system.last_lag / 2) {
-      window_cut = "lags " + std::to_string(result.lagged->system.first_lag) + ".." +
-                   std::to_string(result.lagged->system.last_lag) +
+    if (wanted > 3 * result.lagged->system->last_lag / 2) {
+      window_cut = "lags " + std::to_string(result.lagged->system->first_lag) + ".." +
+                   std::to_string(result.lagged->system->last_lag) +
                    " (the correlation times call for .." + std::to_string(wanted) + ")";
     }
   }
@@ -340,7 +341,7 @@ void identify_lagged(IdentifyResult& result, const DataSource& source,
   result.lagged->stencil_reach =
       result.data.hold == InputHold::kSample ? kWideStencilReach : kStencilReach;
   const LaggedRows rows =
-      lagged_rows(result.lagged->system, *result.data.time_step, channels.channel,
+      lagged_rows(*result.lagged->system, *result.data.time_step, channels.channel,
                   result.lagged->noise, result.lagged->stencil_reach);
   std::vector<std::string> names;
   for (const Declaration& p : model.parameters()) names.push_back(p.name);

@@ -8,6 +8,7 @@
 
 #include "momentid/error.hpp"
 #include "momentid/identify.hpp"
+#include "momentid/model.hpp"
 
 namespace momentid {
 

@@ -6,8 +6,10 @@
 
 #include "common/json.hpp"
 #include "common/number.hpp"
+#include "momentid/derive.hpp"
 #include "momentid/identify.hpp"
 #include "momentid/json.hpp"
+#include "momentid/lagged.hpp"
 
 namespace momentid {
 namespace {
@@ -35,13 +37,13 @@ void table(std::ostringstream& out, const std::vector<ParameterEstimate>& parame
 // 5-point lag stencils".
 std::string method_text(const IdentifyResult& r) {
   std::string out = "lagged moment equations at lags " +
-                    std::to_string(r.lagged->system.first_lag) + ".." +
-                    std::to_string(r.lagged->system.last_lag) + " samples, instruments ";
-  for (std::size_t i = 0; i < r.lagged->system.instruments.size(); ++i) {
-    out += (i ? ", " : "") + format_monomial(*r.model, r.lagged->system.instruments[i]);
+                    std::to_string(r.lagged->system->first_lag) + ".." +
+                    std::to_string(r.lagged->system->last_lag) + " samples, instruments ";
+  for (std::size_t i = 0; i < r.lagged->system->instruments.size(); ++i) {
+    out += (i ? ", " : "") + format_monomial(*r.model, r.lagged->system->instruments[i]);
   }
-  for (std::size_t i = 0; i < r.lagged->system.derivatives.size(); ++i) {
-    out += (i ? ", " : "; not measured: ") + r.lagged->system.derivatives[i];
+  for (std::size_t i = 0; i < r.lagged->system->derivatives.size(); ++i) {
+    out += (i ? ", " : "; not measured: ") + r.lagged->system->derivatives[i];
   }
   out += "; " + std::to_string(2 * r.lagged->stencil_reach + 1) + "-point lag stencils";
   return out;
@@ -233,7 +235,7 @@ Json by_parameter(const IdentifyResult& r, const std::vector<double>& values) {
 Json method_json(const IdentifyResult& r) {
   Json out = {{"name", r.lagged ? "lagged" : "zero-lag"}, {"why", r.why}};
   if (!r.lagged) return out;
-  const LaggedSystem& system = r.lagged->system;
+  const LaggedSystem& system = *r.lagged->system;
   out["lags"] = {system.first_lag, system.last_lag};
   out["stencil_points"] = 2 * r.lagged->stencil_reach + 1;
   Json& instruments = out["instruments"] = Json::array();

@@ -69,7 +69,7 @@ void estimate_sampling_bias(IdentifyResult& result, const DataSource& source,
   if (fine_errors.empty() || fine.status != Status::kOk) return;
   const MomentEstimates coarse = every_other_sample(result, source, data_options, fine.batches);
   const Estimate c =
-      solve(result.zero_lag->system, result.zero_lag->moments, coarse,
+      solve(*result.zero_lag->system, result.zero_lag->moments, coarse,
             {.gmm = result.gmm, .fixed = fixed_values(*result.model, options.fixed)});
   const std::vector<std::vector<double>>& coarse_errors = c.error_batches;
   Fit& fine_fit = fine.main();

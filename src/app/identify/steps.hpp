@@ -9,7 +9,11 @@
 #include <vector>
 
 #include "app/variables.hpp"
+#include "momentid/derive.hpp"
+#include "momentid/estimate.hpp"
 #include "momentid/identify.hpp"
+#include "momentid/lagged.hpp"
+#include "momentid/model.hpp"
 
 namespace momentid {
 

@@ -84,13 +84,14 @@ void identify_zero_lag(IdentifyResult& result, const DataSource& source,
   const Model& model = *result.model;
   ZeroLagPlan plan = plan_zero_lag(model, options);
   IdentifyResult::ZeroLag& zero_lag = result.zero_lag.emplace();
-  zero_lag.system = plan.system;
+  zero_lag.system = std::make_shared<const MomentSystem>(plan.system);
   zero_lag.moments = plan.moments;
-  result.gmm = optimal_weighting(model, options, zero_lag.system.equations.size());
+  result.gmm = optimal_weighting(model, options, zero_lag.system->equations.size());
   DataOptions data_options = pass_options(options);
   data_options.computed = computed_channels(model);
   // The optimal weighting estimates the equations' covariance from the batches.
-  if (result.gmm) data_options.min_batches = kBatchesPerEquation * zero_lag.system.equations.size();
+  if (result.gmm)
+    data_options.min_batches = kBatchesPerEquation * zero_lag.system->equations.size();
   data_options.offsets = channel_offsets(source, state_names(model), input_names(model),
                                          data_options, options.center, result.centered);
   const MomentEstimates all = read_zero_lag(result, plan, source, data_options);
@@ -113,7 +114,7 @@ void identify_zero_lag(IdentifyResult& result, const DataSource& source,
           static_cast<double>(result.data.estimates.intervals) * *result.data.time_step);
     }
   }
-  result.estimate = solve(zero_lag.system, zero_lag.moments, result.data.estimates, solve_options);
+  result.estimate = solve(*zero_lag.system, zero_lag.moments, result.data.estimates, solve_options);
   if (result.data.hold == InputHold::kZeroOrderHold) {
     correct_for_held_input(result, plan.held, plan.pass_moments, all, solve_options);
   }

@@ -94,8 +94,7 @@ std::vector<Interpolation> interpolation_methods(const Model& model, const Recor
 // first rows of the first run by less than ReplayOptions::kSubstepTolerance of each state's
 // spread. Also returns that change, which is above the tolerance when even kMaxSubsteps do not
 // reach it.
-std::pair<int, double> chosen_substeps(const Model& model,
-                                       const std::vector<GiNaC::numeric>& parameters,
+std::pair<int, double> chosen_substeps(const Model& model, const ParameterValues& parameters,
                                        const Replay& replay) {
   const Record& record = replay.record;
   const RecordRun& run = record.runs.front();
@@ -145,7 +144,9 @@ Replay replay(const Model& model, const DataSource& source, const ReplayOptions&
 }
 
 Replay replay_record(const Model& model, Record read, const ReplayOptions& options) {
-  const std::vector<GiNaC::numeric> parameters = parameter_vector(model, options.parameters);
+  // Unknown names and parameters without a value are refused before any work.
+  parameter_vector(model, options.parameters);
+  const ParameterValues& parameters = options.parameters;
   Replay out;
   out.record = std::move(read);
   const Record& record = out.record;

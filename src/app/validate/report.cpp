@@ -17,9 +17,10 @@ namespace {
 
 std::string parameters_text(const ValidateResult& r) {
   std::string out;
-  for (std::size_t p = 0; p < r.parameters.size(); ++p) {
-    out += (p ? ", " : "") + r.model->parameters()[p].name + "=" +
-           shortest_decimal(r.parameters[p].to_double());
+  for (std::size_t p = 0; p < r.model->parameters().size(); ++p) {
+    const std::string& name = r.model->parameters()[p].name;
+    if (p > 0) out += ", ";
+    out += name + "=" + shortest_decimal(r.parameters.at(name).value);
   }
   return out;
 }
@@ -179,8 +180,8 @@ nlohmann::ordered_json json_value(const ValidateResult& r) {
   Json out = {
       {"model", model.name()},      {"data", record.name},         {"rows", rows},
       {"runs", record.runs.size()}, {"dt", json_value(record.dt)}, {"parameters", Json::object()}};
-  for (std::size_t p = 0; p < r.parameters.size(); ++p) {
-    out["parameters"][model.parameters()[p].name] = json_value(r.parameters[p].to_double());
+  for (const Declaration& p : model.parameters()) {
+    out["parameters"][p.name] = json_value(r.parameters.at(p.name).value);
   }
   out["parameters_from"] = r.parameters_from;
   Json& interpolation = out["interpolation"] = Json::object();

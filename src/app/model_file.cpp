@@ -1,0 +1,11 @@
+#include "momentid/model_file.hpp"
+
+#include "momentid/model.hpp"
+
+namespace momentid {
+
+std::shared_ptr<const Model> load_model(const std::string& path) {
+  return std::make_shared<const Model>(parse_model_file(path));
+}
+
+}  // namespace momentid
