@@ -177,6 +177,9 @@ struct StatisticCheck {
   double distance = 0;
   std::vector<double> run_distances;
   double limit = 0;
+  // "prediction": the constant sensor offset taken from the record's state before its prediction
+  // error is measured (the runs' own are fitted alike), in units of the state's spread.
+  double offset = 0;
   bool inside() const { return distance <= limit; }
 };
 

@@ -128,22 +128,7 @@ void judge(ValidateResult& result) {
                      " are inside their bands: the model is consistent with the record";
     return;
   }
-  // A prediction starts from the measured state, so a sensor offset moves it as a wrong
-  // parameter does (0.02 standard deviations on y put the SDOF record of docs/cli/validate.md
-  // outside).
-  std::string predicted;
-  for (const StatisticCheck& c : s.checks) {
-    if (c.kind == "prediction" && !c.inside()) {
-      predicted += (predicted.empty() ? "" : ",") + c.output;
-    }
-  }
-  const std::string why =
-      "the model or its parameters are wrong" +
-      (predicted.empty() ? std::string()
-                         : ", or a sensor offset moves the measured states that the predictions "
-                           "start from (if the true states have zero mean, validate with "
-                           "--center " +
-                               predicted + ")");
+  const std::string why = "the model or its parameters are wrong";
   result.verdict = cannot + "its statistics judge it, and " + std::to_string(s.outside()) + " of " +
                    count + " are outside their bands: " + why;
   result.warnings.push_back(std::to_string(s.outside()) + " of " + count +

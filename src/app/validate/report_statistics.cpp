@@ -21,9 +21,11 @@ std::string check_line(const StatisticCheck& c) {
     low = std::min(low, d);
     high = std::max(high, d);
   }
-  std::string out = "  " + c.output + ": " + kind_text(c.kind) + ": distance " +
-                    number(c.distance, "%.3g") + " (runs " + number(low, "%.3g") + ".." +
-                    number(high, "%.3g") + ", limit " + number(c.limit, "%.3g") + "): ";
+  std::string out = "  " + c.output + ": " + kind_text(c.kind) +
+                    (c.kind == "prediction" ? " (offset " + number(c.offset, "%.3g") + " fitted)"
+                                            : std::string()) +
+                    ": distance " + number(c.distance, "%.3g") + " (runs " + number(low, "%.3g") +
+                    ".." + number(high, "%.3g") + ", limit " + number(c.limit, "%.3g") + "): ";
   if (c.inside()) return out + "inside\n";
   return out + "outside, " + number(c.distance / c.limit, "%.3g") + " times the limit\n";
 }
@@ -31,17 +33,19 @@ std::string check_line(const StatisticCheck& c) {
 using Json = nlohmann::ordered_json;
 
 Json check_json(const StatisticCheck& c) {
-  return {{"output", c.output},
-          {"kind", c.kind},
-          {"distance", json_value(c.distance)},
-          {"limit", json_value(c.limit)},
-          {"inside", c.inside()},
-          {"run_distances", json_value(c.run_distances)},
-          {"at", json_value(c.at)},
-          {"measured", json_value(c.measured)},
-          {"mean", json_value(c.mean)},
-          {"low", json_value(c.low)},
-          {"high", json_value(c.high)}};
+  Json out = {{"output", c.output},
+              {"kind", c.kind},
+              {"distance", json_value(c.distance)},
+              {"limit", json_value(c.limit)},
+              {"inside", c.inside()},
+              {"run_distances", json_value(c.run_distances)},
+              {"at", json_value(c.at)},
+              {"measured", json_value(c.measured)},
+              {"mean", json_value(c.mean)},
+              {"low", json_value(c.low)},
+              {"high", json_value(c.high)}};
+  if (c.kind == "prediction") out["offset"] = json_value(c.offset);
+  return out;
 }
 
 Json sensitivity_json(const Sensitivity& s) {

@@ -1,5 +1,6 @@
 #include "app/validate/statistics.hpp"
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <cfloat>
 #include <cmath>
@@ -171,15 +172,31 @@ std::size_t prediction_horizon(const StatisticCheck& psd, double dt) {
   return std::clamp<std::size_t>(static_cast<std::size_t>(std::lround(quarter)), 2, kMaxHorizon);
 }
 
-// Per state, the rms difference between `states` (per state, run by run) and the model's
-// response started from them at every `horizon`-th row and run `horizon` rows ahead under the
-// record's input, in units of `spread` (per state).
-std::vector<double> prediction_errors(const Model& model, const RecordSimulator& simulator,
-                                      const Record& record, const std::vector<Runs>& states,
-                                      std::size_t horizon, const std::vector<double>& spread) {
+// The prediction errors of one series of states (prediction_fit), each state's rms in units of
+// its spread, and the sensor offsets fitted, in the same units.
+struct PredictionFit {
+  std::vector<double> errors, offsets;
+};
+
+// The model's response started from `states` (per state, run by run) at every `horizon`-th row
+// and run `horizon` rows ahead under the record's input, against `states` there. With
+// `fit_offsets`, after one constant offset b per state is taken from the states (a sensor offset
+// moves both the state a prediction starts from and the states it is compared with): b
+// minimises the sum of the states' mean square errors in units of their `spread`. The errors are
+// linear in b through r(b) = r + (I - S) b, with S the response's sensitivity to its initial
+// state (finite differences), so one least-squares step finds b.
+PredictionFit prediction_fit(const Model& model, const RecordSimulator& simulator,
+                             const Record& record, const std::vector<Runs>& states,
+                             std::size_t horizon, const std::vector<double>& spread,
+                             bool fit_offsets) {
   // The interpolation of an input between samples reads up to 24 samples ahead.
   constexpr std::size_t kLookahead = 25;
-  std::vector<double> squares(states.size(), 0.0);
+  constexpr double kStep = 1e-4;  // of a state's spread, for the sensitivities
+  const auto k = static_cast<Eigen::Index>(states.size());
+  // Per state j, the sums of r_j^2, r_j * m_j and m_j * m_j', m_j the row j of I - S.
+  std::vector<double> q(states.size(), 0.0);
+  std::vector<Eigen::VectorXd> u(states.size(), Eigen::VectorXd::Zero(k));
+  std::vector<Eigen::MatrixXd> p(states.size(), Eigen::MatrixXd::Zero(k, k));
   double count = 0;
   for (std::size_t r = 0; r < record.runs.size(); ++r) {
     const RecordRun& run = record.runs[r];
@@ -193,23 +210,54 @@ std::vector<double> prediction_errors(const Model& model, const RecordSimulator&
       }
       std::vector<double> initial;
       for (const Runs& state : states) initial.push_back(state[r][start]);
-      const std::vector<std::vector<double>> predicted =
-          simulator.run(stretch, initial, run_start(run) + static_cast<double>(start) * record.dt,
-                        run_label(record, r), horizon + 1);
-      for (std::size_t j = 0; j < states.size(); ++j) {
-        for (std::size_t n = 1; n <= horizon; ++n) {
-          const double e = (predicted[j][n] - states[j][r][start + n]) / spread[j];
-          squares[j] += e * e;
+      const auto predict = [&](const std::vector<double>& from) {
+        return simulator.run(stretch, from, run_start(run) + static_cast<double>(start) * record.dt,
+                             run_label(record, r), horizon + 1);
+      };
+      const std::vector<std::vector<double>> predicted = predict(initial);
+      std::vector<std::vector<std::vector<double>>> moved;
+      for (std::size_t i = 0; i < states.size() && fit_offsets; ++i) {
+        std::vector<double> from = initial;
+        from[i] += kStep * spread[i];
+        moved.push_back(predict(from));
+      }
+      for (std::size_t n = 1; n <= horizon; ++n) {
+        for (std::size_t j = 0; j < states.size(); ++j) {
+          const double e = predicted[j][n] - states[j][r][start + n];
+          q[j] += e * e;
+          if (!fit_offsets) continue;
+          Eigen::VectorXd m(k);
+          for (std::size_t i = 0; i < moved.size(); ++i) {
+            const double sensitivity = (moved[i][j][n] - predicted[j][n]) / (kStep * spread[i]);
+            m(static_cast<Eigen::Index>(i)) = (i == j ? 1.0 : 0.0) - sensitivity;
+          }
+          u[j] += e * m;
+          p[j] += m * m.transpose();
         }
       }
       count += static_cast<double>(horizon);
     }
   }
-  for (double& q : squares) q = std::sqrt(q / std::max(count, 1.0));
-  return squares;
+  Eigen::MatrixXd a = Eigen::MatrixXd::Zero(k, k);
+  Eigen::VectorXd g = Eigen::VectorXd::Zero(k);
+  for (std::size_t j = 0; j < states.size(); ++j) {
+    const double w = 1 / (spread[j] * spread[j]);
+    a += w * p[j];
+    g += w * u[j];
+  }
+  Eigen::VectorXd b = Eigen::VectorXd::Zero(k);
+  if (fit_offsets) b = a.completeOrthogonalDecomposition().solve(-g);
+  if (!b.allFinite()) b.setZero();
+  PredictionFit out;
+  for (std::size_t j = 0; j < states.size(); ++j) {
+    const double square = q[j] + 2 * b.dot(u[j]) + b.dot(p[j] * b);
+    out.errors.push_back(std::sqrt(std::max(square, 0.0) / std::max(count, 1.0)) / spread[j]);
+    out.offsets.push_back(b(static_cast<Eigen::Index>(j)) / spread[j]);
+  }
+  return out;
 }
 
-// The prediction check of each state: the record's prediction error (prediction_errors), the
+// The prediction check of each state: the record's prediction error (prediction_fit), the
 // runs' own as the distances that set the band, each floored at kPredictionFloor: below it the
 // difference is the integrators', not the models'. `psd`: the first state's spectrum check.
 void add_prediction_checks(const Model& model, const RecordSimulator& simulator,
@@ -222,11 +270,15 @@ void add_prediction_checks(const Model& model, const RecordSimulator& simulator,
     spread.push_back(std::max(mean_and_spread(state).second, DBL_MIN));
   }
   const std::size_t horizon = prediction_horizon(psd, record.dt);
-  const std::vector<double> own =
-      prediction_errors(model, simulator, record, measured, horizon, spread);
+  const PredictionFit fit =
+      prediction_fit(model, simulator, record, measured, horizon, spread, true);
+  const std::vector<double>& own = fit.errors;
+  // The runs have no offset. Fitting the record's few constants over its many predicted rows
+  // lowers its mean square error by only about (states / rows) of it, so the runs' errors,
+  // unfitted, set the band at a fraction of the cost.
   std::vector<std::vector<double>> of_runs;
   for (const std::vector<Runs>& run : runs) {
-    of_runs.push_back(prediction_errors(model, simulator, record, run, horizon, spread));
+    of_runs.push_back(prediction_fit(model, simulator, record, run, horizon, spread, false).errors);
   }
   const double ahead = static_cast<double>(horizon) * record.dt;
   for (std::size_t j = 0; j < measured.size(); ++j) {
@@ -235,6 +287,7 @@ void add_prediction_checks(const Model& model, const RecordSimulator& simulator,
     StatisticCheck c =
         check(model.states()[j].name, "prediction", {ahead}, {own[j]}, errors, false);
     c.distance = std::max(own[j], kPredictionFloor);
+    c.offset = fit.offsets[j];
     c.run_distances.clear();
     for (const std::vector<double>& e : errors) {
       c.run_distances.push_back(std::max(e[0], kPredictionFloor));
