@@ -130,6 +130,28 @@ TEST_SUITE("formats") {
     }
   }
 
+  TEST_CASE("an HDF5 file is read back against the hashes of what was written") {
+    const Directory dir;
+    const std::string csv = write_record(dir);
+    const Table original = read_all(csv);
+    momentid::convert(momentid::DataSource::file(csv), dir / "r.h5", FileFormat::kHdf5);
+    const std::vector<std::string> names{"t", "y", "x"};
+    std::vector<std::uint64_t> hashes;
+    for (const std::string& name : names) {
+      momentid::data::ColumnHash hash;
+      hash.add(column(original, name).data(), column(original, name).size());
+      hashes.push_back(hash.value());
+    }
+    const std::size_t rows = column(original, "t").size();
+    CHECK(momentid::data::hdf5_holds(dir / "r.h5", names, rows, hashes));
+    std::vector<std::uint64_t> changed = hashes;
+    ++changed[1];
+    CHECK(!momentid::data::hdf5_holds(dir / "r.h5", names, rows, changed));
+    CHECK(!momentid::data::hdf5_holds(dir / "r.h5", names, rows + 1, hashes));
+    CHECK(!momentid::data::hdf5_holds(dir / "r.h5", {"t", "y", "z"}, rows, hashes));
+    CHECK(!momentid::data::hdf5_holds(dir / "missing.h5", names, rows, hashes));
+  }
+
   TEST_CASE("a file that cannot be written leaves nothing behind") {
     const Directory dir;
     const std::string csv = write_record(dir);

@@ -235,9 +235,10 @@ class Hdf5Writer final : public ArrayWriter {
     for (const std::string& column : columns) {
       std::string name = column;
       std::replace(name.begin(), name.end(), '/', '_');
-      if (name.empty() || name == ".") name = "_";
+      if (name.empty() || name == ".") name.assign(1, '_');
       for (int k = 2; used.count(name) != 0; ++k) name = column + "_" + std::to_string(k);
       used.insert(name);
+      names_.push_back(name);
       datasets_.push_back(H5Dcreate2(file_, name.c_str(), H5T_IEEE_F64LE, space_, H5P_DEFAULT,
                                      properties, H5P_DEFAULT));
       ok_ = ok_ && datasets_.back() >= 0;
@@ -262,8 +263,10 @@ class Hdf5Writer final : public ArrayWriter {
     const hid_t memory = H5Screate_simple(1, &length, nullptr);
     ok_ =
         ok_ && H5Sselect_hyperslab(space_, H5S_SELECT_SET, &start, nullptr, &length, nullptr) >= 0;
+    hashes_.resize(width);
     for (std::size_t c = 0; c < width && ok_; ++c) {
       for (std::size_t r = 0; r < count; ++r) column_[r] = values[r * width + c];
+      hashes_[c].add(column_.data(), count);
       ok_ = H5Dwrite(datasets_[c], H5T_NATIVE_DOUBLE, memory, space_, H5P_DEFAULT,
                      column_.data()) >= 0;
     }
@@ -271,9 +274,15 @@ class Hdf5Writer final : public ArrayWriter {
     written_ += count;
   }
 
+  // The file is read back before it takes the target's name: HDF5's return codes catch a full
+  // disk, and the read-back whatever they might not.
   void commit() override {
     ok_ = close() && ok_ && written_ == rows_;
-    if (!ok_) throw Error(target_ + ": cannot write the HDF5 file");
+    std::vector<std::uint64_t> expected(names_.size(), ColumnHash().value());
+    for (std::size_t c = 0; c < hashes_.size(); ++c) expected[c] = hashes_[c].value();
+    if (!ok_ || !hdf5_holds(temporary_.path(), names_, rows_, expected)) {
+      throw Error(target_ + ": cannot write the HDF5 file");
+    }
     temporary_.commit();
   }
 
@@ -313,14 +322,60 @@ class Hdf5Writer final : public ArrayWriter {
   TemporaryPath temporary_;
   std::size_t rows_, written_ = 0;
   hid_t file_ = -1, space_ = -1;
+  std::vector<std::string> names_;
   std::vector<hid_t> datasets_;
   std::vector<double> column_;
+  std::vector<ColumnHash> hashes_;
   bool ok_ = true;
 };
+
+// Whether dataset `name` of `file` holds `rows` float64 values that hash to `hash`, read in
+// chunks.
+bool dataset_holds(hid_t file, const std::string& name, std::size_t rows, std::uint64_t hash) {
+  const hid_t dataset = H5Dopen2(file, name.c_str(), H5P_DEFAULT);
+  if (dataset < 0) return false;
+  const hid_t space = H5Dget_space(dataset);
+  hsize_t extent = 0;
+  bool ok = space >= 0 && H5Sget_simple_extent_ndims(space) == 1 &&
+            H5Sget_simple_extent_dims(space, &extent, nullptr) == 1 && extent == rows;
+  constexpr hsize_t kChunk = 1 << 16;
+  std::vector<double> values(std::min<hsize_t>(std::max<hsize_t>(rows, 1), kChunk));
+  ColumnHash read;
+  for (hsize_t start = 0; ok && start < rows; start += kChunk) {
+    const hsize_t length = std::min<hsize_t>(kChunk, rows - start);
+    const hid_t memory = H5Screate_simple(1, &length, nullptr);
+    ok = H5Sselect_hyperslab(space, H5S_SELECT_SET, &start, nullptr, &length, nullptr) >= 0 &&
+         H5Dread(dataset, H5T_NATIVE_DOUBLE, memory, space, H5P_DEFAULT, values.data()) >= 0;
+    H5Sclose(memory);
+    read.add(values.data(), length);
+  }
+  if (space >= 0) H5Sclose(space);
+  H5Dclose(dataset);
+  return ok && read.value() == hash;
+}
 
 #endif
 
 }  // namespace
+
+void ColumnHash::add(const double* values, std::size_t count) {
+  for (std::size_t i = 0; i < count; ++i) {
+    hash_ = (hash_ ^ std::bit_cast<std::uint64_t>(values[i])) * 1099511628211ULL;
+  }
+}
+
+#ifdef MOMENTID_WITH_HDF5
+bool hdf5_holds(const std::string& path, const std::vector<std::string>& names, std::size_t rows,
+                const std::vector<std::uint64_t>& hashes) {
+  const hid_t file = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  if (file < 0) return false;
+  bool ok = names.size() == hashes.size();
+  for (std::size_t c = 0; c < names.size() && ok; ++c) {
+    ok = dataset_holds(file, names[c], rows, hashes[c]);
+  }
+  return H5Fclose(file) >= 0 && ok;
+}
+#endif
 
 std::string matlab_name(const std::string& name) {
   std::string out;

@@ -4,6 +4,7 @@
 // filled under a temporary name beside the target and renamed into place by commit().
 
 #include <cstddef>
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
@@ -36,6 +37,23 @@ std::unique_ptr<ArrayWriter> open_mat_writer(const std::string& path,
 std::unique_ptr<ArrayWriter> open_hdf5_writer(const std::string& path,
                                               const std::vector<std::string>& columns,
                                               const DataMetadata& metadata, std::size_t rows);
+
+// A fingerprint of a column's values (FNV-1a over their 64-bit patterns), taken as they are
+// written and again as they are read back.
+class ColumnHash {
+ public:
+  void add(const double* values, std::size_t count);
+  std::uint64_t value() const { return hash_; }
+
+ private:
+  std::uint64_t hash_ = 14695981039346656037ULL;
+};
+
+// Whether the HDF5 file at `path` holds a float64 dataset of `rows` values under each of `names`
+// whose values hash to `hashes` (one per name): what the HDF5 writer checks before its file
+// takes the target's name.
+bool hdf5_holds(const std::string& path, const std::vector<std::string>& names, std::size_t rows,
+                const std::vector<std::uint64_t>& hashes);
 
 // For a program (the command line) that reports every error itself, once at its start: HDF5
 // (also under .mat level 7.3) prints no diagnostic stack of its own, and skips its clean-up at
