@@ -113,6 +113,10 @@ class Model {
   const std::vector<Declaration>& constants() const { return constants_; }
   // The functions of the states and inputs that the equations hold, in order of appearance.
   const std::vector<VariableFunction>& functions() const { return functions_; }
+  // The function that a variable of kind kFunction is.
+  const VariableFunction& function_of(const Variable& variable) const {
+    return functions_[static_cast<std::size_t>(variable.index)];
+  }
   // The variables that monomials are written in: states, then inputs, then functions.
   const std::vector<Variable>& variables() const { return variables_; }
   // The variables that a record has columns for (Variable::channel()): the states and inputs.

@@ -145,8 +145,7 @@ std::string latex_number(const numeric& q) {
 // variables()[v] in LaTeX: a state's or input's name, or |p| and sgn(p) for a function.
 std::string latex_variable(const Model& model, std::size_t v) {
   if (model.variables()[v].channel()) return latex_name(model.variables()[v].name);
-  const VariableFunction& f =
-      model.functions()[static_cast<std::size_t>(model.variables()[v].index)];
+  const VariableFunction& f = model.function_of(model.variables()[v]);
   std::string p;
   for (const auto& [coefficient, monomial] : f.argument) {
     const numeric size = abs(coefficient);

@@ -183,7 +183,7 @@ class LagDeriver {
       return o;
     }
     if (!variable.channel()) {
-      const VariableFunction& f = model_.functions()[static_cast<std::size_t>(variable.index)];
+      const VariableFunction& f = model_.function_of(variable);
       const int c = missing_argument(f, measured_);
       o.reason = "a column for " + channel_kind(static_cast<std::size_t>(c)) +
                  model_.variables()[static_cast<std::size_t>(c)].name +
@@ -281,7 +281,7 @@ std::vector<bool> needed_variables(const LaggedSystem& system) {
   for (std::size_t v = 0; v < model.variables().size(); ++v) {
     const Variable& variable = model.variables()[v];
     if (variable.channel() || !needed[v]) continue;
-    const VariableFunction& f = model.functions()[static_cast<std::size_t>(variable.index)];
+    const VariableFunction& f = model.function_of(variable);
     for (const auto& [coefficient, monomial] : f.argument) {
       for (std::size_t c = 0; c < monomial.size(); ++c) {
         if (monomial[c] != 0) needed[c] = true;

@@ -36,7 +36,7 @@ Parity parity(const Model& model, const Monomial& monomial) {
       continue;
     }
     // |p| is even when p has a parity; sign(p)^n as p^n, but sign(p)^2 is 1 whatever p.
-    const VariableFunction& f = model.functions()[static_cast<std::size_t>(variable.index)];
+    const VariableFunction& f = model.function_of(variable);
     const Parity p = parity_of(f.argument);
     const bool squared_sign = f.kind == FunctionKind::kSign && !odd_power;
     if (p == Parity::kNone && !squared_sign) return Parity::kNone;

@@ -56,7 +56,7 @@ std::vector<std::vector<std::size_t>> computed_from(const Model& model,
     const Variable& variable = model.variables()[u];
     const int read = channel[u];
     if (variable.channel() || read < 0) continue;
-    const VariableFunction& f = model.functions()[static_cast<std::size_t>(variable.index)];
+    const VariableFunction& f = model.function_of(variable);
     for (const auto& [coefficient, monomial] : f.argument) {
       for (std::size_t v = 0; v < monomial.size(); ++v) {
         if (monomial[v] != 0 && channel[v] >= 0) {

@@ -131,7 +131,7 @@ std::vector<std::string> noisy_function_warnings(const IdentifyResult& result,
   for (std::size_t u = 0; u < model.variables().size(); ++u) {
     const Variable& variable = model.variables()[u];
     if (variable.channel() || c.channel[u] < 0) continue;
-    const VariableFunction& f = model.functions()[static_cast<std::size_t>(variable.index)];
+    const VariableFunction& f = model.function_of(variable);
     for (std::size_t v = 0; v < model.states().size(); ++v) {
       const int read = c.channel[v];
       if (read < 0 || !function_holds(f, v)) continue;
