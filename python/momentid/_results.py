@@ -161,6 +161,7 @@ class IdentifyResult(Fit):
       says why); engineering: that section of the JSON, with the equilibrium.
     summary() and str(): the text report of `momentid identify`; to_dict(): the JSON of
       `momentid identify --format json` as Python objects, `json` as text.
+    plot_engineering(): the restoring force and the backbone drawn (momentid.plots).
 
     IdentifyResult(text, value) reads a saved result of the program as well: `value` is its
     JSON text or the dict json.load() made of it (text may be "").
@@ -213,6 +214,12 @@ class IdentifyResult(Fit):
     def to_dict(self) -> dict:
         return _copy.deepcopy(self._dict)
 
+    def plot_engineering(self, fig=None):
+        """momentid.plots.plot_engineering(self, fig): the restoring force and the backbone
+        with their 95% bands, as a matplotlib Figure."""
+        from .plots import plot_engineering
+        return plot_engineering(self, fig)
+
     def __str__(self) -> str:
         return self.text
 
@@ -263,7 +270,8 @@ class ValidateResult:
     limit, inside and the arrays at, measured, mean, low, high).
 
     The fit of output y is 100 (1 - |e| / |m - mean(m)|) over the compared rows, with
-    m = measured[y][compared] and e = m - simulated[y][compared].
+    m = measured[y][compared] and e = m - simulated[y][compared]. plot() draws the series and
+    the statistics (momentid.plots).
     """
 
     def __init__(self, text: str, value: dict, series: dict) -> None:
@@ -293,6 +301,12 @@ class ValidateResult:
 
     def to_dict(self) -> dict:
         return _copy.deepcopy(self._dict)
+
+    def plot(self, fig=None, statistics: Optional[bool] = None):
+        """momentid.plots.plot_validation(self, fig, statistics): the series compared and the
+        statistics, as a matplotlib Figure."""
+        from .plots import plot_validation
+        return plot_validation(self, fig, statistics)
 
     def __str__(self) -> str:
         return self.text

@@ -1,6 +1,13 @@
 // `validate --plot`: the comparison drawn as SVG, with no plotting library. Every panel is a
 // <g class="panel"> whose data-* attributes give its data ranges and its place on the page, so
 // that a reader (and the tests) can map the drawn points back to values.
+//
+// Why not a library: Debian's PLplot 5.15 has an SVG device, but loads it at run time from the
+// directory fixed at its build and reads fonts from libplplot-data; when either is missing it
+// ends the process from inside the library (status 1), once after writing part of the file. The
+// plot must be written whole or not at all, its errors must be momentid's, and its panels must
+// carry their data ranges. Plots to adjust (the statistics, the engineering curves) are drawn
+// with matplotlib by the Python module (python/momentid/plots.py; docs/cli/validate.md, "Plot").
 
 #include <algorithm>
 #include <cmath>
