@@ -101,9 +101,7 @@ void identify_zero_lag(IdentifyResult& result, const DataSource& source,
         static_cast<std::size_t>(std::find(plan.pass_moments.begin(), plan.pass_moments.end(), m) -
                                  plan.pass_moments.begin()));
   }
-  std::vector<std::string> names;
-  for (std::size_t v = 0; v < mean_index.size(); ++v) names.push_back(model.variables()[v].name);
-  result.means = channel_means(names, all, mean_index);
+  result.means = channel_means(model.channel_names(), all, mean_index);
 
   SolveOptions solve_options{.gmm = result.gmm, .fixed = fixed_values(model, options.fixed)};
   if (!plan.rated.empty()) {
