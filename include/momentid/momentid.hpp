@@ -9,6 +9,7 @@
 // threads serialises them and may let others run while a pass reads (PassControl::around_pass).
 
 #include "momentid/accumulator.hpp"
+#include "momentid/algebra_lock.hpp"
 #include "momentid/check.hpp"
 #include "momentid/data_pass.hpp"
 #include "momentid/derive.hpp"
