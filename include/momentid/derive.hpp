@@ -87,6 +87,7 @@ inline constexpr long kMaxProducts = 20000;
 //   MomentSystem system = derive(model, {.degree = 3});
 //   std::cout << format_text(system);
 struct MomentSystem {
+  detail::AlgebraSpanStart algebra_start;  // copies and destruction hold the AlgebraLock
   const Model* model = nullptr;
   std::vector<MomentEquation> equations;
   std::vector<Monomial> moments;  // every moment the equations need, in MomentOrder
@@ -102,6 +103,7 @@ struct MomentSystem {
   // The same with the right-hand sides as one more column: above the number of parameters, the
   // equations that survive symmetric data have some to spare, which test the model.
   int symmetric_rank_with_rhs = 0;
+  detail::AlgebraSpanEnd algebra_end;
 };
 
 // Derives the moment equations. Throws UsageError when `degree` would build more than
@@ -133,8 +135,10 @@ struct HeldInputCorrection {
   std::vector<std::pair<Monomial, GiNaC::ex>> second_derivative;
 };
 struct HeldInputCorrections {
+  detail::AlgebraSpanStart algebra_start;    // copies and destruction hold the AlgebraLock
   std::vector<HeldInputCorrection> moments;  // those of `moments` whose derivative jumps
   std::string unavailable;  // why there are none although some might be needed, or empty
+  detail::AlgebraSpanEnd algebra_end;
 };
 // Among `moments`, those whose derivative jumps; none, with `unavailable` saying why, when the
 // equations do not give the derivatives of the states as polynomials in the states and inputs.

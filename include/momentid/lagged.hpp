@@ -83,7 +83,8 @@ struct LagOptions {
 //   LaggedSystem system = derive_lagged(model, {.measured = {true, false, true}});
 //   std::cout << format_text(system);  // c*C'[y;y](s) + k*C[y;y](s) + eps*C[y;y^3](s) = ...
 struct LaggedSystem {
-  const Model* model = nullptr;  // the model derived from, which must outlive the system
+  detail::AlgebraSpanStart algebra_start;  // copies and destruction hold the AlgebraLock
+  const Model* model = nullptr;            // the model derived from, which must outlive the system
   int first_lag = 0, last_lag = 0;
   std::vector<LagTestFunction> test_functions;  // each equation is taken with each of them
   std::vector<Monomial> instruments;
@@ -93,6 +94,7 @@ struct LaggedSystem {
   // channels are then read too).
   std::vector<bool> needed;
   std::vector<std::string> derivatives;  // how unmeasured states are read, e.g. "v = y'"
+  detail::AlgebraSpanEnd algebra_end;
 };
 
 // Whether the data, having the variables flagged in `measured`, show every variable of `model`:

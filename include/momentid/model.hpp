@@ -7,6 +7,7 @@
 #include <string_view>
 #include <vector>
 
+#include "momentid/algebra_lock.hpp"
 #include "momentid/error.hpp"
 #include "momentid/moment.hpp"
 
@@ -155,6 +156,7 @@ class Model {
 
  private:
   friend class ModelBuilder;
+  detail::AlgebraSpanStart algebra_start_;  // copies and destruction hold the AlgebraLock
   std::string name_, title_, file_;
   std::vector<Declaration> states_, inputs_, parameters_, constants_;
   std::vector<VariableFunction> functions_;
@@ -163,6 +165,7 @@ class Model {
   std::vector<MultiplierSet> multipliers_;
   std::vector<GiNaC::symbol> state_symbols_, derivative_symbols_, input_symbols_,
       parameter_symbols_, function_symbols_;
+  detail::AlgebraSpanEnd algebra_end_;
 };
 
 // How a monomial over Model::variables() changes when every state and input changes sign:

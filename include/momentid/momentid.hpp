@@ -3,12 +3,17 @@
 // sources and files, the moment accumulator, the solver, the simulator, and the identify and
 // check calls that put them together.
 //
-// Threads: the model, the equations and the calls that make them use GiNaC, whose shared
-// reference counts are not thread-safe. Call the library from one thread at a time (each pass
-// reads on threads of its own, RecordOptions::control); a front end that runs calls from several
-// threads serialises them and may let others run while a pass reads (PassControl::around_pass).
+// Threads: the library may be called from several threads at once. The model, the equations and
+// the calls that make them use GiNaC, whose shared reference counts are not thread-safe, so those
+// calls hold one process-wide lock (algebra_lock.hpp) and run their symbolic parts one at a time;
+// identify and check let go of it while their data pass reads, which then overlaps with other
+// calls. Copying or destroying a Model, MomentSystem, LaggedSystem or HeldInputCorrections takes
+// the lock too, so each thread may hold its own and share results; one object read by a thread
+// while another changes it needs the caller's own synchronisation, as any C++ value does. A
+// program that uses GiNaC objects itself beside such calls holds an AlgebraLock meanwhile.
 
 #include "momentid/accumulator.hpp"
+#include "momentid/algebra_lock.hpp"
 #include "momentid/check.hpp"
 #include "momentid/data_pass.hpp"
 #include "momentid/derive.hpp"

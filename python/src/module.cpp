@@ -166,8 +166,9 @@ RecordOptions record_options(const py::dict& options) {
   out.layout = layout_of(options);
   out.hold = hold_of(options);
   if (auto threads = get<std::size_t>(options, "threads")) out.control.threads = *threads;
-  // Other Python threads run while the data are read; the rest of a call uses GiNaC, which is
-  // not thread-safe, and keeps the GIL so that no other call uses it meanwhile.
+  // Other Python threads run while the data are read; the rest of a call keeps the GIL. The
+  // library lets go of its algebra lock before this and takes it back after, so the GIL is
+  // always taken first.
   out.control.around_pass = [](const std::function<void()>& read) {
     py::gil_scoped_release release;
     read();

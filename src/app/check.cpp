@@ -7,6 +7,7 @@
 
 #include "app/variables.hpp"
 #include "data/header.hpp"
+#include "momentid/algebra_lock.hpp"
 #include "momentid/derive.hpp"
 #include "momentid/lagged.hpp"
 
@@ -21,6 +22,7 @@ void CheckOptions::validate(const Model* model) const {
 }
 
 CheckResult check(const DataSource& source, const Model* model, const CheckOptions& options) {
+  const AlgebraLock lock;
   options.validate(model);
   CheckResult result;
   result.data_name = source.name();

@@ -10,6 +10,7 @@
 #include "app/validate/residuals.hpp"
 #include "app/validate/sensitivity.hpp"
 #include "app/validate/statistics.hpp"
+#include "momentid/algebra_lock.hpp"
 #include "momentid/data_pass.hpp"
 #include "momentid/error.hpp"
 
@@ -155,6 +156,7 @@ ParameterValues every_value(const Model& model, const ParameterValues& given) {
 
 ValidateResult validate(const Model& model, const DataSource& source,
                         const ValidateOptions& options) {
+  const AlgebraLock lock;
   options.validate();
   for (const std::string& name : options.center) {
     if (model.variable_index(name) < 0) {

@@ -10,6 +10,8 @@
 #include <random>
 #include <set>
 
+#include "momentid/algebra_lock.hpp"
+
 namespace momentid {
 namespace {
 
@@ -582,6 +584,7 @@ double count_monomials(int states, int degree) {
 }  // namespace
 
 MomentSystem derive(const Model& model, const DeriveOptions& options) {
+  const AlgebraLock lock;
   Deriver deriver(model, options.rates);
   const int states = static_cast<int>(model.states().size());
   const auto& equations = model.equations();

@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "common/json.hpp"
+#include "momentid/algebra_lock.hpp"
 #include "momentid/derive.hpp"
 #include "momentid/json.hpp"
 
@@ -205,6 +206,7 @@ std::string format_variable_latex(const Model& model, std::size_t v) {
 }
 
 std::string format_moment(const Model& model, const Monomial& moment) {
+  const AlgebraLock lock;
   if (moment.rate()) {
     const std::string inside = format_monomial(model, moment.without_rate());
     const bool single = moment.degree() == 1;
@@ -214,10 +216,12 @@ std::string format_moment(const Model& model, const Monomial& moment) {
 }
 
 std::string format_combination(const Model& model, const MomentCombination& c) {
+  const AlgebraLock lock;
   return combination(plain(), model, c);
 }
 
 std::string format_text(const MomentSystem& system) {
+  const AlgebraLock lock;
   const Model& model = *system.model;
   std::ostringstream out;
   out << "moment equations of " << model.name();
@@ -271,6 +275,7 @@ std::string format_text(const MomentSystem& system) {
 }
 
 std::string format_latex(const MomentSystem& system) {
+  const AlgebraLock lock;
   const Model& model = *system.model;
   std::ostringstream out;
   out << "% moment equations of " << model.name() << "; needs \\usepackage{amsmath}\n";
@@ -285,6 +290,7 @@ std::string format_latex(const MomentSystem& system) {
 }
 
 nlohmann::ordered_json json_value(const MomentSystem& system) {
+  const AlgebraLock lock;
   const Model& model = *system.model;
   nlohmann::ordered_json out = {{"model", model.name()}};
   nlohmann::ordered_json& parameters = out["parameters"] = nlohmann::ordered_json::array();

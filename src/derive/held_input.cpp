@@ -3,6 +3,7 @@
 
 #include <map>
 
+#include "momentid/algebra_lock.hpp"
 #include "momentid/derive.hpp"
 
 namespace momentid {
@@ -19,6 +20,7 @@ Monomial exponents_of(const GiNaC::ex& term, const std::vector<GiNaC::symbol>& v
 
 HeldInputCorrections held_input_corrections(const Model& model,
                                             const std::vector<Monomial>& moments) {
+  const AlgebraLock lock;
   HeldInputCorrections out;
   if (!model.functions().empty()) {
     out.unavailable = "abs(...) and sign(...) have no second derivative at their switches";

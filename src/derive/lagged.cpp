@@ -12,6 +12,7 @@
 #include <stdexcept>
 
 #include "common/json.hpp"
+#include "momentid/algebra_lock.hpp"
 #include "momentid/derive.hpp"
 #include "momentid/json.hpp"
 
@@ -337,6 +338,7 @@ void LagOptions::validate(const Model& model) const {
 }
 
 LaggedSystem derive_lagged(const Model& model, const LagOptions& options) {
+  const AlgebraLock lock;
   const std::size_t variables = model.variables().size();
   const std::vector<bool> measured = measured_variables(
       model, options.measured.empty() ? std::vector<bool>(variables, true) : options.measured);
@@ -564,6 +566,7 @@ std::string latex_monomial(const Model& model, const Monomial& m) {
 }  // namespace
 
 std::string format_text(const LaggedSystem& system) {
+  const AlgebraLock lock;
   const Model& model = *system.model;
   std::ostringstream out;
   out << "lagged moment equations of " << model.name();
@@ -604,6 +607,7 @@ std::string format_text(const LaggedSystem& system) {
 }
 
 std::string format_latex(const LaggedSystem& system) {
+  const AlgebraLock lock;
   const Model& model = *system.model;
   auto lag = [&](const LagFunction& f) {
     return std::string("C") + (f.order == 0 ? "" : "^{(" + std::to_string(f.order) + ")}") + "_{" +
@@ -639,6 +643,7 @@ std::string format_latex(const LaggedSystem& system) {
 }
 
 nlohmann::ordered_json json_value(const LaggedSystem& system) {
+  const AlgebraLock lock;
   const Model& model = *system.model;
   auto combination = [&](const LagCombination& c) {
     nlohmann::ordered_json out = nlohmann::ordered_json::array();

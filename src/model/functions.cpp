@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <optional>
 
+#include "momentid/algebra_lock.hpp"
 #include "momentid/model.hpp"
 
 namespace momentid {
@@ -25,6 +26,7 @@ Parity parity_of(const std::vector<std::pair<GiNaC::numeric, Monomial>>& polynom
 }  // namespace
 
 Parity parity(const Model& model, const Monomial& monomial) {
+  const AlgebraLock lock;
   bool odd = false;
   // A rate E[(g)'] has g's parity.
   for (std::size_t i = 0; i < monomial.size(); ++i) {

@@ -20,6 +20,7 @@
 #include "model/syntax.hpp"
 #include "model/terms.hpp"
 #include "model_grammar.hpp"
+#include "momentid/algebra_lock.hpp"
 #include "momentid/model.hpp"
 #include "tao/pegtl/contrib/parse_tree.hpp"
 
@@ -243,6 +244,7 @@ int Model::variable_index(std::string_view name) const {
 }
 
 Model parse_model(std::string_view text, const std::string& file) {
+  const AlgebraLock lock;
   // A UTF-8 byte order mark, as some editors write, is not part of the model.
   if (text.substr(0, 3) == "\xEF\xBB\xBF") text.remove_prefix(3);
   // The parse tree's positions refer to the input's source name: it must outlive the tree.
@@ -253,6 +255,7 @@ Model parse_model(std::string_view text, const std::string& file) {
 }
 
 Model parse_model_file(const std::string& path) {
+  const AlgebraLock lock;
   std::error_code ignored;
   if (std::filesystem::is_directory(path, ignored)) {
     throw Error(path + ": cannot read the model file: it is a directory");
@@ -286,15 +289,18 @@ std::vector<Monomial> parse_monomial_list(const Model& model, std::string_view t
 
 std::vector<Monomial> parse_multiplier_list(const Model& model, std::string_view text,
                                             const std::string& source) {
+  const AlgebraLock lock;
   return parse_monomial_list(model, text, source, /*inputs=*/false);
 }
 
 std::vector<Monomial> parse_instrument_list(const Model& model, std::string_view text,
                                             const std::string& source) {
+  const AlgebraLock lock;
   return parse_monomial_list(model, text, source, /*inputs=*/true);
 }
 
 std::string format_monomial(const Model& model, const Monomial& monomial) {
+  const AlgebraLock lock;
   std::string out;
   for (std::size_t i = 0; i < monomial.size(); ++i) {
     if (monomial[i] == 0) continue;

@@ -13,6 +13,7 @@
 #include "common/cluster.hpp"
 #include "data/formats.hpp"
 #include "data/text.hpp"
+#include "momentid/algebra_lock.hpp"
 #include "moments/range.hpp"
 
 // The pass: cut the source into shards, read a range of them on this process's threads
@@ -310,10 +311,16 @@ DataMoments moments_from_data(const DataSource& source, const std::vector<std::s
   const Pass pass{source, shards, request, setup, (shard_batches + 1) * shards.size()};
   RangeResult result;
   const auto read = [&] { result = read_all(pass, std::move(first), open_error, channels); };
-  if (options.record.control.around_pass) {
-    options.record.control.around_pass(read);
-  } else {
-    read();
+  {
+    // The reading touches no GiNaC object: calls on other threads use the algebra meanwhile. The
+    // lock is let go outside around_pass, so that a front end's lock (Python's GIL) is always
+    // taken before it, never while it is held.
+    const AlgebraUnlock unlock;
+    if (options.record.control.around_pass) {
+      options.record.control.around_pass(read);
+    } else {
+      read();
+    }
   }
   // Before the readers' errors: a file cut short mid-row reads as a malformed row.
   check_unchanged(source, paths, before);

@@ -8,6 +8,7 @@
 #include <stdexcept>
 #include <string_view>
 
+#include "momentid/algebra_lock.hpp"
 #include "momentid/error.hpp"
 #include "momentid/simulate.hpp"
 
@@ -80,6 +81,7 @@ ParameterValue ParameterValue::exact(std::string text) {
 ParameterValues parse_parameter_values(const Model& model,
                                        const std::vector<std::string>& assignments,
                                        const std::string& option) {
+  const AlgebraLock lock;
   ParameterValues out;
   for (const std::string& a : assignments) {
     const std::size_t eq = a.find('=');
@@ -96,6 +98,7 @@ ParameterValues parse_parameter_values(const Model& model,
 
 std::vector<numeric> parameter_vector(const Model& model, const ParameterValues& values,
                                       const std::string& option) {
+  const AlgebraLock lock;
   for (const auto& entry : values) require_parameter(model, entry.first, option);
   std::vector<numeric> out;
   for (const Declaration& p : model.parameters()) {

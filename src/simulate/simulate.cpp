@@ -9,6 +9,7 @@
 #include <string_view>
 
 #include "common/decimal.hpp"
+#include "momentid/algebra_lock.hpp"
 #include "momentid/error.hpp"
 #include "simulate/step.hpp"
 #include "simulate/switching.hpp"
@@ -504,6 +505,7 @@ std::vector<double> noise_standard_deviations(const Model& model,
 
 void simulate(const Model& model, const SimulationOptions& options, SampleSink& sink,
               const std::vector<double>& noise_sd) {
+  const AlgebraLock lock;
   options.validate(model);
   if (noise_sd.size() != options.noise.size()) {
     throw std::invalid_argument("simulate: one noise standard deviation per noise entry needed");
@@ -515,6 +517,7 @@ void simulate(const Model& model, const SimulationOptions& options, SampleSink& 
 }
 
 void simulate(const Model& model, const SimulationOptions& options, SampleSink& sink) {
+  const AlgebraLock lock;
   simulate(model, options, sink, noise_standard_deviations(model, options));
 }
 
@@ -583,6 +586,7 @@ std::vector<std::size_t> observed_channels(const Model& model, const SimulationO
 
 std::vector<std::string> simulate_to_file(const Model& model, const SimulationOptions& options,
                                           const std::string& path, DataWriter::Format format) {
+  const AlgebraLock lock;
   options.validate(model);
   const std::vector<double> noise_sd = noise_standard_deviations(model, options);
   const std::vector<std::size_t> channels = observed_channels(model, options);

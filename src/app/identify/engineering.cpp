@@ -8,6 +8,7 @@
 #include <cstdlib>
 #include <numbers>
 
+#include "momentid/algebra_lock.hpp"
 #include "momentid/error.hpp"
 #include "momentid/identify.hpp"
 #include "momentid/simulate.hpp"
@@ -309,10 +310,12 @@ Result or_unavailable(const Compute& compute) {
 }  // namespace
 
 LinearisedModes linearised_modes(const IdentifyResult& r) {
+  const AlgebraLock lock;
   return or_unavailable<LinearisedModes>([&] { return modes_of(r); });
 }
 
 NonlinearCurves nonlinear_curves(const IdentifyResult& r) {
+  const AlgebraLock lock;
   return or_unavailable<NonlinearCurves>([&] { return curves_of(r); });
 }
 

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "common/number.hpp"
+#include "momentid/algebra_lock.hpp"
 #include "momentid/identify.hpp"
 #include "momentid/model.hpp"
 
@@ -109,6 +110,7 @@ std::string equation_text(const Model& model, const Equation& eq,
 }  // namespace
 
 std::vector<std::string> identified_equations(const IdentifyResult& r) {
+  const AlgebraLock lock;
   if (!r.estimate.usable()) return {};
   std::vector<std::string> out;
   for (const Equation& eq : r.model->equations()) {

@@ -3,11 +3,13 @@
 #include <memory>
 
 #include "app/identify/steps.hpp"
+#include "momentid/algebra_lock.hpp"
 
 namespace momentid {
 
 IdentifyResult identify(const Model& model, const DataSource& source,
                         const IdentifyOptions& options) {
+  const AlgebraLock lock;
   options.validate(model);
   IdentifyResult result;
   result.model = std::make_shared<const Model>(model);

@@ -6,6 +6,7 @@
 
 #include "common/json.hpp"
 #include "common/number.hpp"
+#include "momentid/algebra_lock.hpp"
 #include "momentid/derive.hpp"
 #include "momentid/identify.hpp"
 #include "momentid/json.hpp"
@@ -351,6 +352,7 @@ Json diagnostics_json(const IdentifyResult& r) {
 }  // namespace
 
 std::string format_text(const IdentifyResult& r) {
+  const AlgebraLock lock;
   const Estimate& e = r.estimate;
   const DataMoments& d = r.data;
   std::ostringstream out;
@@ -387,6 +389,7 @@ std::string format_text(const IdentifyResult& r) {
 }
 
 nlohmann::ordered_json json_value(const IdentifyResult& r) {
+  const AlgebraLock lock;
   Json out = {{"model", r.model->name()},
               {"data", r.data_name},
               {"parameters", parameters_json(r.estimate.main().parameters)}};

@@ -8,6 +8,7 @@
 
 #include "app/validate/record.hpp"
 #include "common/json.hpp"
+#include "momentid/algebra_lock.hpp"
 #include "momentid/validate.hpp"
 
 namespace momentid {
@@ -28,6 +29,7 @@ SourceLocation location(const std::string& path, const std::string& text, std::s
 }  // namespace
 
 ParameterValues read_estimates(const Model& model, const std::string& path) {
+  const AlgebraLock lock;
   std::ifstream in(path, std::ios::binary);
   if (!in) throw DataError(file_start(path), "cannot open the estimates file");
   std::stringstream buffer;

@@ -4,6 +4,7 @@
 
 #include "app/variables.hpp"
 #include "common/decimal.hpp"
+#include "momentid/algebra_lock.hpp"
 
 namespace momentid {
 
@@ -108,6 +109,7 @@ std::size_t run_label(const Record& record, std::size_t r) {
 
 void write_replay(const Model& model, const Replay& replay, const std::string& path,
                   DataWriter::Format format) {
+  const AlgebraLock lock;
   const Record& record = replay.record;
   std::vector<std::string> columns;
   if (record.has_time) columns.push_back("t");

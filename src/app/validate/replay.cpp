@@ -9,6 +9,7 @@
 #include "app/validate/record.hpp"
 #include "app/variables.hpp"
 #include "common/decimal.hpp"
+#include "momentid/algebra_lock.hpp"
 #include "momentid/lagged.hpp"
 #include "momentid/validate.hpp"
 
@@ -139,6 +140,7 @@ std::pair<int, double> chosen_substeps(const Model& model, const ParameterValues
 }  // namespace
 
 Replay replay(const Model& model, const DataSource& source, const ReplayOptions& options) {
+  const AlgebraLock lock;
   options.record.validate(&model);
   return replay_record(model, read_record(model, source, options), options);
 }

@@ -9,6 +9,7 @@
 #include "common/decimal.hpp"
 #include "common/json.hpp"
 #include "common/number.hpp"
+#include "momentid/algebra_lock.hpp"
 #include "momentid/json.hpp"
 #include "momentid/validate.hpp"
 
@@ -66,6 +67,7 @@ std::string check_text(const CorrelationCheck& c, bool sensitive) {
 }  // namespace
 
 std::string format_text(const ValidateResult& r) {
+  const AlgebraLock lock;
   const Replay& replay = r.replay;
   const Record& record = replay.record;
   const Model& model = *r.model;
@@ -172,6 +174,7 @@ void initial_state_json(Json& out, const ValidateResult& r) {
 }  // namespace
 
 nlohmann::ordered_json json_value(const ValidateResult& r) {
+  const AlgebraLock lock;
   const Replay& replay = r.replay;
   const Record& record = replay.record;
   const Model& model = *r.model;
