@@ -34,11 +34,15 @@ template <> inline constexpr const char* error_message<item_after_comma<multipli
 template <> inline constexpr const char* error_message<name_list> = "expected a comma-separated list of names";
 template <> inline constexpr const char* error_message<param_list> = "expected a comma-separated list of parameters, each optionally '= value'";
 template <> inline constexpr const char* error_message<const_list> = "expected a comma-separated list of constants, each '= value'";
-template <> inline constexpr const char* error_message<equals> = "expected '=' of an equation, or a statement keyword (model, state, input, param, const, multipliers)";
+template <> inline constexpr const char* error_message<measured_equals> = "expected '=' after the measured column's name, as in 'measured a = v''";
+template <> inline constexpr const char* error_message<measured_target> = "expected a state's derivative, as in v' or y''";
+template <> inline constexpr const char* error_message<item_after_comma<measured_item>> = "expected a measured column after ','";
+template <> inline constexpr const char* error_message<measured_list> = "expected a measured column, as in 'measured a = v''";
+template <> inline constexpr const char* error_message<equals> = "expected '=' of an equation, or a statement keyword (model, state, input, param, const, measured, multipliers)";
 template <> inline constexpr const char* error_message<rhs_after_equals> = "expected the right side of the equation after '='";
 template <> inline constexpr const char* error_message<multiplier_list> = "expected a comma-separated list of multipliers (monomials in the states)";
 template <> inline constexpr const char* error_message<statement_end> = "expected an operator or the end of the line";
-template <> inline constexpr const char* error_message<line> = "expected a statement: model, state, input, param, const, multipliers or an equation";
+template <> inline constexpr const char* error_message<line> = "expected a statement: model, state, input, param, const, measured, multipliers or an equation";
 template <> inline constexpr const char* error_message<list_end> = "expected ',' or the end of the multiplier list";
 // clang-format on
 
@@ -50,6 +54,7 @@ inline bool may_follow_line_break(std::string_view message) {
         error_message<exponent_after_operator>, error_message<closing_paren>,
         error_message<expression_in_parens>, error_message<item_after_comma<declared_name>>,
         error_message<item_after_comma<param_item>>, error_message<item_after_comma<const_item>>,
+        error_message<item_after_comma<measured_item>>,
         error_message<item_after_comma<multiplier>>}) {
     if (message == m) return true;
   }

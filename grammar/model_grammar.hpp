@@ -57,6 +57,7 @@ struct kw_const : sor<TAO_PEGTL_KEYWORD("constants"), TAO_PEGTL_KEYWORD("constan
 // `multipliers` or `multiplier`
 struct kw_multipliers : sor<TAO_PEGTL_KEYWORD("multipliers"), TAO_PEGTL_KEYWORD("multiplier")> {};
 struct kw_dot : TAO_PEGTL_KEYWORD("dot") {};
+struct kw_measured : TAO_PEGTL_KEYWORD("measured") {};
 // `fixed`, after a parameter's value; not reserved, as no name can stand there
 struct kw_fixed : TAO_PEGTL_KEYWORD("fixed") {};
 
@@ -100,7 +101,8 @@ struct call_arguments : opt<list<expression, one<','>, pegtl::space>> {};
 // name(args): a function call, accepted by the grammar and rejected by the meaning checks
 struct call : seq<name, sp, one<'('>, ws, call_arguments, must<closing_paren>> {};
 // a word that starts a statement, never a variable
-struct reserved : sor<kw_model, kw_state, kw_input, kw_param, kw_const, kw_multipliers> {};
+struct reserved
+    : sor<kw_model, kw_state, kw_input, kw_param, kw_const, kw_multipliers, kw_measured> {};
 // a name, optionally followed by primes
 struct variable : seq<not_at<reserved>, name, opt<primes>> {};
 // the expression after '(', possibly on the next line
@@ -171,6 +173,13 @@ struct input_declaration : seq<kw_input, sp, must<name_list>> {};
 struct param_declaration : seq<kw_param, sp, must<param_list>> {};
 struct const_declaration : seq<kw_const, sp, must<const_list>> {};
 
+// `measured a = v'`: the column `a` holds the time derivative of state v (`y''` when y' = v)
+struct measured_target : seq<name, primes> {};
+struct measured_equals : one<'='> {};
+struct measured_item : seq<declared_name, sp, must<measured_equals>, sp, must<measured_target>> {};
+struct measured_list : comma_list<measured_item> {};
+struct measured_statement : seq<kw_measured, sp, must<measured_list>> {};
+
 // `label:` in front of an equation or inside a multipliers statement
 struct label : name {};
 struct label_prefix : seq<label, sp, one<':'>, not_at<one<'='>>> {};
@@ -192,7 +201,7 @@ struct multipliers_statement
     : seq<kw_multipliers, sp, opt<label_prefix>, sp, must<multiplier_list>> {};
 
 struct statement : sor<model_statement, state_declaration, input_declaration, param_declaration,
-                       const_declaration, multipliers_statement, equation> {};
+                       const_declaration, measured_statement, multipliers_statement, equation> {};
 // what may follow a complete statement on its line
 struct statement_end : line_end {};
 // a line: blank, a comment, or one statement

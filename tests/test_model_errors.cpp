@@ -76,6 +76,52 @@ m*v' = -c*v - q*y + x
                 6, 15, "m*v' = -c*v - q*y + x");
   }
 
+  TEST_CASE("a measured column that is not a state's first or second derivative is refused") {
+    constexpr const char* kBody = R"(
+param c, k
+y' = v
+v' = -c*v - k*y + x
+)";
+    const auto declared = [&](const std::string& statement) {
+      return "state y, v\ninput x\n" + statement + kBody;
+    };
+    check_error(error_of<ModelError>(declared("measured a = w'")),
+                "'w' is not declared (declared: states y, v; inputs x; parameters c, k; "
+                "measured columns a)",
+                3, 14, "measured a = w'");
+    check_error(error_of<ModelError>(declared("measured a = x'")),
+                "cannot take the time derivative of an input 'x': only states have derivatives", 3,
+                14, "measured a = x'");
+    check_error(error_of<ModelError>(declared("measured a = y'''")),
+                "a measured column holds a state's first or second derivative (v' or y''), "
+                "found order 3",
+                3, 15, "measured a = y'''");
+    check_error(error_of<ModelError>(declared("measured u = y'")),
+                "y' = v (equation 1): a column holding y' holds v, which a record gives as the "
+                "state's own column (--columns \"v=COLUMN\")",
+                3, 14, "measured u = y'");
+    check_error(error_of<ModelError>(declared("measured a = v'\nmeasured b = y''")),
+                "'a' (line 3) already holds v'", 4, 14, "measured b = y''");
+    check_error(error_of<ModelError>(declared("measured a = v''")),
+                "v'' needs an equation v' = w with a state w, whose derivative the column then "
+                "holds (write 'measured a = w'' with that state)",
+                3, 14, "measured a = v''");
+    check_error(error_of<ModelError>(declared("measured x = v'")),
+                "'x' is already declared as an input at 2:7", 3, 10, "measured x = v'");
+    check_error(error_of<ModelError>("state y, v\ninput x\nmeasured a = v'\nparam c, k\n"
+                                     "y' = v\nv' = -c*v - k*y + x + a\n"),
+                "'a' is a measured column, which equations do not name: write the derivative "
+                "it holds, v'",
+                6, 23, "v' = -c*v - k*y + x + a");
+    check_error(error_of<ParseError>(declared("measured a v'")),
+                "expected '=' after the measured column's name, as in 'measured a = v''", 3, 12,
+                "measured a v'");
+    check_error(error_of<ParseError>(declared("measured a = v")),
+                "expected a state's derivative, as in v' or y''", 3, 15, "measured a = v");
+    check_error(error_of<ModelError>(declared("measured model = v'")),
+                "'model' is a reserved word and cannot be declared", 3, 10, "measured model = v'");
+  }
+
   TEST_CASE("a fixed parameter without a value is reported at 'fixed'") {
     const auto e = error_of<ModelError>("state y\nparam c, k fixed\ny' = -c*y - k*y^3\n");
     check_error(e, "a fixed parameter needs its value: write 'k = VALUE fixed'", 2, 12,
@@ -469,7 +515,7 @@ v' = -k*y
 )");
     check_error(e,
                 "expected '=' of an equation, or a statement keyword (model, state, input, param, "
-                "const, multipliers)",
+                "const, measured, multipliers)",
                 3, 4, "y' v");
   }
 
@@ -553,8 +599,8 @@ param k
 $ y' = -k*y
 )");
     check_error(e,
-                "expected a statement: model, state, input, param, const, multipliers or an "
-                "equation",
+                "expected a statement: model, state, input, param, const, measured, multipliers "
+                "or an equation",
                 3, 1, "$ y' = -k*y");
   }
 

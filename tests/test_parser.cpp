@@ -1,5 +1,6 @@
 #include <doctest/doctest.h>
 
+#include "momentid/derive.hpp"
 #include "momentid/model.hpp"
 
 namespace {
@@ -23,6 +24,31 @@ multipliers motion: y, v, y^3, y*v^2
 }  // namespace
 
 TEST_SUITE("parser") {
+  TEST_CASE("a measured column of a derivative is a channel after the inputs") {
+    using namespace momentid;
+    const Model model = parse_model(R"(state y, v
+input x
+measured acc = y''   # the same as v'
+param c, k
+y' = v
+v' = -c*v - k*y + x*abs(v)
+)",
+                                    "accelerometer.mom");
+    REQUIRE(model.measured_derivatives().size() == 1);
+    CHECK(model.measured_derivatives()[0].state == 1);
+    CHECK(model.measured_derivatives()[0].written == "y''");
+    CHECK(model.channel_names() == std::vector<std::string>{"y", "v", "x", "acc"});
+    CHECK(model.variables()[3] == Variable{"acc", VariableKind::kDerivative, 0});
+    CHECK(model.variables()[4].kind == VariableKind::kFunction);
+    CHECK(model.measured_derivative_of(1) == 3);
+    CHECK(model.measured_derivative_of(0) == -1);
+    CHECK(model.channel_count() == 4);
+    const std::string text = format_text(derive(model, {.degree = 1}));
+    // E[y*v'] and E[v*v'] are read from the column, not eliminated.
+    CHECK(text.find("E[y*acc]") != std::string::npos);
+    CHECK(text.find("E[v*acc]") != std::string::npos);
+  }
+
   TEST_CASE("declarations keep their order, kinds and exact values") {
     const momentid::Model& model = duffing();
     CHECK(model.name() == "duffing");

@@ -189,6 +189,27 @@ TEST_SUITE("simulate") {
     CHECK(rate[1] == doctest::Approx((-3 * 0.5 - 2 + 1) / 5.0).epsilon(1e-15));
   }
 
+  TEST_CASE("a measured derivative column holds the state's rate at each sample") {
+    const Model model = model_file("duffing_accelerometer.mom");
+    SimulationOptions options = options_for(model, 500, 3);
+    options.inputs[0] = InputSpec::parse("multisine:f1=0.05,f2=2,lines=40", "--input");
+    Recorder record(4);  // y, v, x, a
+    momentid::simulate(model, options, record);
+    REQUIRE(record.rows.size() == 500);
+    for (const auto& row : record.rows) {
+      const double y = row[1], v = row[2], x = row[3], a = row[4];
+      CHECK(a == doctest::Approx(-0.5 * v - 4 * y - y * y * y + x).epsilon(1e-12));
+    }
+    // A held input would make it jump at every sample.
+    options.inputs[0] = InputSpec{};
+    CHECK_THROWS_WITH_AS(momentid::simulate(model, options, record),
+                         "inputs: the measured column 'a' (v') would jump at every sample of the "
+                         "held "
+                         "input x: give x a smooth process (x=multisine:f1=F1,f2=F2,lines=L) or "
+                         "leave the column out (observe y,v,x)",
+                         momentid::UsageError);
+  }
+
   TEST_CASE("runs are numbered and, with continue, start where the previous one ended") {
     const Model model = model_file("kozin_4_1a.mom");
     SimulationOptions options = options_for(model, 100, 5);

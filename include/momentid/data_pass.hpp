@@ -67,8 +67,11 @@ struct DataOptions {
   // shift), at a sample interval `stride` times the data's: the record sampled more coarsely, for
   // the sampling bias. The channel statistics still see every row.
   std::size_t stride = 1, phase = 0;
-  // Per channel (states, then inputs): a value subtracted from every sample as it is read, such
-  // as the channel's mean; empty: none.
+  // Columns that hold time derivatives of states (Model::measured_derivatives()): channels after
+  // the inputs in the moments' numbering, read as the states are (never shifted or held).
+  std::vector<std::string> derivatives;
+  // Per channel (states, inputs, then derivatives): a value subtracted from every sample as it is
+  // read, such as the channel's mean; empty: none.
   std::vector<double> offsets;
   // Channels computed from the others, after the offsets are subtracted.
   std::vector<ComputedChannel> computed;
@@ -77,7 +80,7 @@ struct DataOptions {
 // What one pass over a data file yields.
 struct DataMoments {
   MomentEstimates estimates;                // for the requested moments, in their order
-  std::vector<ChannelStatistics> channels;  // the model's states, then inputs
+  std::vector<ChannelStatistics> channels;  // the states, inputs, then derivatives
   DataMetadata metadata;
   InputHold hold = InputHold::kSample;
   std::optional<double> time_step;
@@ -87,7 +90,8 @@ struct DataMoments {
 };
 
 // Reads `source` once, streaming (memory does not grow with a file), and estimates `moments`
-// over the model's variables (states, then inputs), with the channels' statistics. Throws
+// over the model's variables (states, inputs, derivatives, then computed channels), with the
+// channels' statistics. Throws
 // DataError for bad data (the first problem in record order) and Error if a file cannot be read.
 //
 // The source is cut into shards (DataSource::shards; whole files with an input shift or a

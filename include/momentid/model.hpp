@@ -13,9 +13,9 @@
 
 namespace momentid {
 
-enum class SymbolKind { kState, kInput, kParameter, kConstant };
+enum class SymbolKind { kState, kInput, kParameter, kConstant, kMeasured };
 
-// "state", "input", "parameter" or "constant".
+// "state", "input", "parameter", "constant" or "measured column".
 const char* kind_name(SymbolKind kind);
 
 // One declared name. `value` is the nominal value of a parameter (optional; the simulator uses
@@ -45,13 +45,24 @@ struct VariableFunction {
   SourceLocation where;  // of its first use
 };
 
-// What a variable of the monomials is. A record has a column for each state and input
-// (Variable::channel()), while a function's values are computed from the columns its argument
-// holds.
-enum class VariableKind { kState, kInput, kFunction };
+// A `measured a = v'` statement: a record's column holds the time derivative of a state, as an
+// accelerometer's does when v is a velocity (`measured a = y''` says the same when y' = v).
+// Equations keep writing v'; where a moment or cross-moment needs E[g*v'], it is read from the
+// column instead of being eliminated.
+struct MeasuredDerivative {
+  std::string name;
+  int state = 0;        // whose first derivative the column holds
+  std::string written;  // the derivative as the statement writes it: "v'", "y''"
+  SourceLocation where;
+};
+
+// What a variable of the monomials is. A record has a column for each state, input and measured
+// derivative (Variable::channel()), while a function's values are computed from the columns its
+// argument holds.
+enum class VariableKind { kState, kInput, kDerivative, kFunction };
 
 // A variable of the monomials (Model::variables()): `index` is its position among the model's
-// states(), inputs() or functions(), by its kind.
+// states(), inputs(), measured_derivatives() or functions(), by its kind.
 struct Variable {
   std::string name;
   VariableKind kind = VariableKind::kState;
@@ -118,10 +129,16 @@ class Model {
   const VariableFunction& function_of(const Variable& variable) const {
     return functions_[static_cast<std::size_t>(variable.index)];
   }
-  // The variables that monomials are written in: states, then inputs, then functions.
+  // The columns that hold derivatives of states, in order of declaration.
+  const std::vector<MeasuredDerivative>& measured_derivatives() const { return measured_; }
+  // The index into variables() of the column that holds state i's derivative, or -1.
+  int measured_derivative_of(int state) const;
+  // The variables that monomials are written in: states, then inputs, then measured derivatives,
+  // then functions.
   const std::vector<Variable>& variables() const { return variables_; }
-  // The variables that a record has columns for (Variable::channel()): the states and inputs.
-  std::size_t channel_count() const { return states_.size() + inputs_.size(); }
+  // The variables that a record has columns for (Variable::channel()): the states, inputs and
+  // measured derivatives.
+  std::size_t channel_count() const { return states_.size() + inputs_.size() + measured_.size(); }
   // Their names, in the order of variables().
   std::vector<std::string> channel_names() const;
 
@@ -134,7 +151,8 @@ class Model {
   const GiNaC::symbol& input_symbol(int i) const { return input_symbols_[i]; }
   const GiNaC::symbol& parameter_symbol(int i) const { return parameter_symbols_[i]; }
   const GiNaC::symbol& function_symbol(int i) const { return function_symbols_[i]; }
-  // The symbol of variables()[v]: a state's, an input's or a function's.
+  const GiNaC::symbol& measured_symbol(int i) const { return measured_symbols_[i]; }
+  // The symbol of variables()[v]: a state's, an input's, a measured derivative's or a function's.
   const GiNaC::symbol& variable_symbol(std::size_t v) const {
     const Variable& variable = variables_[v];
     const auto i = static_cast<std::size_t>(variable.index);
@@ -143,6 +161,8 @@ class Model {
         return state_symbols_[i];
       case VariableKind::kInput:
         return input_symbols_[i];
+      case VariableKind::kDerivative:
+        return measured_symbols_[i];
       case VariableKind::kFunction:
         break;
     }
@@ -160,15 +180,17 @@ class Model {
   std::string name_, title_, file_;
   std::vector<Declaration> states_, inputs_, parameters_, constants_;
   std::vector<VariableFunction> functions_;
+  std::vector<MeasuredDerivative> measured_;
   std::vector<Variable> variables_;
   std::vector<Equation> equations_;
   std::vector<MultiplierSet> multipliers_;
   std::vector<GiNaC::symbol> state_symbols_, derivative_symbols_, input_symbols_,
-      parameter_symbols_, function_symbols_;
+      parameter_symbols_, function_symbols_, measured_symbols_;
   detail::AlgebraSpanEnd algebra_end_;
 };
 
-// How a monomial over Model::variables() changes when every state and input changes sign:
+// How a monomial over Model::variables() changes when every state, input and measured derivative
+// changes sign:
 // kOdd, it changes sign (its moment vanishes for a symmetric system under a symmetric input);
 // kEven, it does not; kNone, neither (abs(p) or sign(p) of a p with terms of both parities,
 // such as abs(y - 1)).

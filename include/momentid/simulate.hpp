@@ -129,7 +129,8 @@ class CompiledModel {
   [[gnu::always_inline]] void fill_powers(const double* y, const double* u) const {
     for (int v = 0; v < channels_; ++v) fill_power_row(v, v < states_ ? y[v] : u[v - states_]);
     for (std::size_t k = 0; k < functions_.size(); ++k) {
-      fill_power_row(channels_ + static_cast<int>(k), function_value(k, y, u));
+      fill_power_row(variables_ - static_cast<int>(functions_.size()) + static_cast<int>(k),
+                     function_value(k, y, u));
     }
   }
   [[gnu::always_inline]] void fill_power_row(int v, double x) const {

@@ -470,7 +470,7 @@ py::dict replay_columns(const Model& model, const Replay& done) {
   const std::size_t states = model.states().size();
   for (std::size_t j = 0; j < states; ++j)
     out[py::str(model.states()[j].name)] = simulated(done, j);
-  for (std::size_t v = states; v < model.channel_count(); ++v) {
+  for (std::size_t v = states; v < states + model.inputs().size(); ++v) {
     out[py::str(model.variables()[v].name)] = recorded(done.record, v);
   }
   if (done.record.runs.size() > 1) out["run"] = run_numbers(done.record);
@@ -501,7 +501,8 @@ py::dict validate_series(const ValidateResult& result) {
   for (const OutputFit& output : result.outputs) {
     measured[py::str(output.name)] = recorded(record, output.state);
   }
-  for (std::size_t v = model.states().size(); v < model.channel_count(); ++v) {
+  for (std::size_t v = model.states().size(); v < model.states().size() + model.inputs().size();
+       ++v) {
     inputs[py::str(model.variables()[v].name)] = recorded(record, v);
   }
   std::size_t rows = 0;

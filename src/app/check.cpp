@@ -28,7 +28,7 @@ CheckResult check(const DataSource& source, const Model* model, const CheckOptio
   result.data_name = source.name();
   result.lags = options.lags;
   result.with_model = model != nullptr;
-  std::vector<std::string> states, inputs;
+  std::vector<std::string> states, inputs, derivatives;
   // Per model variable: whether the check reads it.
   std::vector<bool> kept;
   if (model != nullptr) {
@@ -41,9 +41,15 @@ CheckResult check(const DataSource& source, const Model* model, const CheckOptio
     const auto is_state = [&](std::size_t v) {
       return model->variables()[v].kind == VariableKind::kState;
     };
+    // A column that measures a derivative is read when the record has it.
+    const auto is_derivative = [&](std::size_t v) {
+      return model->variables()[v].kind == VariableKind::kDerivative;
+    };
     for (std::size_t v = 0; v < present.size(); ++v) {
       const std::string& name = model->variables()[v].name;
-      if (is_state(v) && !present[v] && derivable) {
+      if (is_derivative(v)) {
+        kept.push_back(present[v]);
+      } else if (is_state(v) && !present[v] && derivable) {
         result.missing_states.push_back(name);
         kept.push_back(false);
       } else if (!is_state(v) && !present[v]) {
@@ -54,6 +60,10 @@ CheckResult check(const DataSource& source, const Model* model, const CheckOptio
       }
     }
     for (std::size_t v = 0; v < kept.size(); ++v) {
+      if (is_derivative(v)) {
+        if (kept[v]) derivatives.push_back(model->variables()[v].name);
+        continue;
+      }
       if (!is_state(v) && !result.missing_inputs.empty()) kept[v] = false;
       if (kept[v]) (is_state(v) ? states : inputs).push_back(model->variables()[v].name);
     }
@@ -98,6 +108,7 @@ CheckResult check(const DataSource& source, const Model* model, const CheckOptio
   DataOptions data_options;
   data_options.lags = options.lags;
   data_options.record = options.record;
+  data_options.derivatives = derivatives;
   result.data = moments_from_data(source, states, inputs, moments, data_options);
   if (system) result.identities = check_identities(*system, full_moments, result.data.estimates);
   for (std::string& w : data_warnings(result.data)) result.warnings.push_back(std::move(w));

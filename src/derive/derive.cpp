@@ -1,6 +1,6 @@
 // The dynamical moment technique, symbolically: multiply each equation by monomials in the
-// states, take expectations, and reduce every derivative moment E[y^a * yj'] with kinematic
-// equations and the stationarity identities E[d/dt y^b] = 0.
+// states, take expectations, and reduce every derivative moment E[y^a * yj'] with a column that
+// measures yj', kinematic equations or the stationarity identities E[d/dt y^b] = 0.
 
 #include "momentid/derive.hpp"
 
@@ -223,6 +223,13 @@ class Deriver {
       std::map<DerivativeMoment, numeric> pending;
       pending.swap(part.derivatives);
       for (const auto& [d, c] : pending) {
+        if (const int a = model_.measured_derivative_of(d.state); a >= 0) {
+          // E[g*v'] with a column holding v': a data moment, E[g*a].
+          Monomial moment = d.monomial;
+          moment[static_cast<std::size_t>(a)] += 1;
+          add_to(part.moments, moment, c);
+          continue;
+        }
         if (kinematic_[d.state]) {
           add_kinematic(part.moments, d.monomial, d.state, c);
           continue;

@@ -98,10 +98,22 @@ class LagDeriver {
 
   const Observation& observation(int v) const { return observed_[v]; }
 
+  // Whether a term of `eq` reads a derivative from its column, and the same derivative is also
+  // the derivative in s of its state's reading.
+  bool read_both_ways(const Equation& eq) const {
+    return std::any_of(eq.terms.begin(), eq.terms.end(), [&](const Term& t) {
+      if (t.derivative < 0) return false;
+      const int column = model_.measured_derivative_of(t.derivative);
+      return column >= 0 && measured_[static_cast<std::size_t>(column)] &&
+             observed_[t.derivative].base >= 0;
+    });
+  }
+
   // The lag functions of one term, weighted, for instrument ψ: throws ModelError when the term
   // is not a time derivative of measured channels.
+  // `columns`: read a derivative from the column that measures it, where there is one.
   std::pair<LagFunction, numeric> lag_function(const Equation& eq, const Term& t,
-                                               const Monomial& instrument) const {
+                                               const Monomial& instrument, bool columns) const {
     Monomial measured(variables_, 0);
     std::vector<std::pair<int, int>> derivatives;  // (base, order), one per factor
     numeric scale = t.coefficient;
@@ -128,10 +140,17 @@ class LagDeriver {
       }
     }
     if (t.derivative >= 0) {
-      const Observation& o = observed_[t.derivative];
-      if (o.base < 0) unobservable(t.derivative);
-      scale *= o.scale;
-      derivatives.emplace_back(o.base, o.order + 1);
+      // A column that holds the derivative is read as it is (C[ψ;a](s)), rather than as one
+      // more derivative in s of the state's reading: no stencil differences its estimates.
+      const int column = columns ? model_.measured_derivative_of(t.derivative) : -1;
+      if (column >= 0 && measured_[static_cast<std::size_t>(column)]) {
+        measured[column] += 1;
+      } else {
+        const Observation& o = observed_[t.derivative];
+        if (o.base < 0) unobservable(t.derivative);
+        scale *= o.scale;
+        derivatives.emplace_back(o.base, o.order + 1);
+      }
     }
     if (derivatives.empty()) return {{instrument, measured, 0}, scale};
     const auto [base, order] = derivatives.front();
@@ -170,7 +189,16 @@ class LagDeriver {
  private:
   // "state " or "input ", for a message about a missing column.
   std::string channel_kind(std::size_t v) const {
-    return model_.variables()[v].kind == VariableKind::kState ? "state " : "input ";
+    switch (model_.variables()[v].kind) {
+      case VariableKind::kState:
+        return "state ";
+      case VariableKind::kInput:
+        return "input ";
+      case VariableKind::kDerivative:
+      case VariableKind::kFunction:
+        break;
+    }
+    return "measured column ";
   }
 
   // Fills observed_[v]; `depth` guards against kinematic cycles.
@@ -194,6 +222,18 @@ class LagDeriver {
       return o;
     }
     o.reason = "a column for " + channel_kind(v) + name;
+    if (variable.kind == VariableKind::kDerivative) {
+      // Without its column, the derivative of how the data show its state.
+      const int state =
+          model_.measured_derivatives()[static_cast<std::size_t>(variable.index)].state;
+      const Observation& s = observe(state, depth + 1);
+      if (s.base < 0) return o;
+      o.base = s.base;
+      o.order = s.order + 1;
+      o.scale = s.scale;
+      o.reason.clear();
+      return o;
+    }
     if (variable.kind != VariableKind::kState || depth > states_) return o;
     // A kinematic equation c_d*a' + c_v*v = 0 (parameter-free, those two terms only) shows v as
     // a derivative of a.
@@ -364,32 +404,39 @@ LaggedSystem derive_lagged(const Model& model, const LagOptions& options) {
   for (std::size_t e = 0; e < model.equations().size(); ++e) {
     const Equation& eq = model.equations()[e];
     if (!has_parameter(eq)) continue;
-    for (const Monomial& instrument : system.instruments) {
-      LaggedEquation row;
-      row.equation = static_cast<int>(e);
-      row.instrument = instrument;
-      row.coefficients.resize(parameters);
-      for (const Term& t : eq.terms) {
-        const auto [f, w] = deriver.lag_function(eq, t, instrument);
-        if (t.parameter >= 0) {
-          add_to(row.coefficients[t.parameter], f, w);
-        } else {
-          add_to(row.rhs, f, -w);
-        }
-      }
-      // The first parameter's first weight positive, as the zero-lag equations print.
-      for (const LagCombination& c : row.coefficients) {
-        if (c.empty()) continue;
-        if (c.begin()->second.is_negative()) {
-          for (auto& combination : row.coefficients) {
-            for (auto& [f, w] : combination) w = -w;
+    // A derivative that a column measures gives the equation twice: read from the column and as
+    // a derivative in s of its state's cross-moments. The column's estimates carry its noise
+    // undamped, the derivative's the differences of a smooth function: which is more precise
+    // depends on the record, and the optimal weighting takes the best combination of the two.
+    std::vector<bool> readings{true};
+    if (deriver.read_both_ways(eq)) readings.push_back(false);
+    for (const bool columns : readings)
+      for (const Monomial& instrument : system.instruments) {
+        LaggedEquation row;
+        row.equation = static_cast<int>(e);
+        row.instrument = instrument;
+        row.coefficients.resize(parameters);
+        for (const Term& t : eq.terms) {
+          const auto [f, w] = deriver.lag_function(eq, t, instrument, columns);
+          if (t.parameter >= 0) {
+            add_to(row.coefficients[t.parameter], f, w);
+          } else {
+            add_to(row.rhs, f, -w);
           }
-          for (auto& [f, w] : row.rhs) w = -w;
         }
-        break;
+        // The first parameter's first weight positive, as the zero-lag equations print.
+        for (const LagCombination& c : row.coefficients) {
+          if (c.empty()) continue;
+          if (c.begin()->second.is_negative()) {
+            for (auto& combination : row.coefficients) {
+              for (auto& [f, w] : combination) w = -w;
+            }
+            for (auto& [f, w] : row.rhs) w = -w;
+          }
+          break;
+        }
+        system.equations.push_back(std::move(row));
       }
-      system.equations.push_back(std::move(row));
-    }
   }
   options.validate(model);
   system.test_functions = lag_test_functions(system.first_lag, system.last_lag);

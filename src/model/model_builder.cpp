@@ -1,8 +1,39 @@
 #include "model/model_builder.hpp"
 
+#include <algorithm>
 #include <cctype>
+#include <optional>
+#include <sstream>
 
 namespace momentid {
+namespace {
+
+// A parameter-free equation c1*s' + c2*w = 0 with w a state: s' = ratio*w.
+struct Kinematic {
+  const Equation* equation = nullptr;
+  int state = 0;  // w
+  GiNaC::numeric ratio;
+};
+std::optional<Kinematic> kinematic_of(const Model& model, int s) {
+  for (const Equation& eq : model.equations()) {
+    if (eq.terms.size() != 2) continue;
+    const Term* derivative = nullptr;
+    const Term* state = nullptr;
+    for (const Term& t : eq.terms) {
+      if (t.parameter >= 0) break;
+      if (t.derivative == s && t.monomial.degree() == 0) derivative = &t;
+      if (t.derivative < 0 && t.monomial.degree() == 1) state = &t;
+    }
+    if (derivative == nullptr || state == nullptr) continue;
+    const auto w = static_cast<std::size_t>(
+        std::find(state->monomial.begin(), state->monomial.end(), 1) - state->monomial.begin());
+    if (model.variables()[w].kind != VariableKind::kState) continue;
+    return Kinematic{&eq, static_cast<int>(w), -state->coefficient / derivative->coefficient};
+  }
+  return std::nullopt;
+}
+
+}  // namespace
 
 ModelBuilder::ModelBuilder(std::string_view text, std::string file)
     : source_(text, file), symbols_(source_), terms_(source_, symbols_), labels_(source_) {
@@ -29,6 +60,8 @@ Model ModelBuilder::build(const std::vector<SyntaxNode>& statements) {
   for (Equation& eq : model_.equations_) {
     for (Term& t : eq.terms) t.monomial.resize(model_.variables_.size());
   }
+  model_.measured_symbols_ = symbols_.measured_symbols();
+  for (std::size_t i = 0; i < symbols_.measured().size(); ++i) add_measured(i);
   for (const SyntaxNode* m : multiplier_nodes_) add_multipliers(*m);
   check_model(model_, source_);
   return std::move(model_);
@@ -54,6 +87,8 @@ void ModelBuilder::collect(const std::vector<SyntaxNode>& statements) {
       symbols_.declare_all(n, SymbolKind::kParameter);
     } else if (n.kind == SyntaxKind::kConstDeclaration) {
       symbols_.declare_all(n, SymbolKind::kConstant);
+    } else if (n.kind == SyntaxKind::kMeasuredStatement) {
+      symbols_.declare_measured(n);
     } else if (n.kind == SyntaxKind::kEquation) {
       equation_nodes_.push_back(&n);
     } else if (n.kind == SyntaxKind::kMultipliersStatement) {
@@ -85,6 +120,58 @@ void ModelBuilder::add_equation(const SyntaxNode& n) {
   eq.label = std::move(label);
   eq.number = static_cast<int>(model_.equations_.size()) + 1;
   model_.equations_.push_back(std::move(eq));
+}
+
+void ModelBuilder::add_measured(std::size_t i) {
+  const Declaration& column = symbols_.measured()[i];
+  const SyntaxNode& target = *symbols_.measured_targets()[i];
+  const SyntaxNode& name_node = target.children.at(0);
+  const std::string name(name_node.text);
+  const std::size_t order = target.children.at(1).text.size();
+  symbols_.derivative(name_node, name);  // a declared state
+  const auto state_of = [&](const std::string& s) {
+    return static_cast<int>(std::find_if(model_.states_.begin(), model_.states_.end(),
+                                         [&](const Declaration& d) { return d.name == s; }) -
+                            model_.states_.begin());
+  };
+  int state = state_of(name);
+  if (order > 2) {
+    source_.fail(target.children.at(1),
+                 "a measured column holds a state's first or second "
+                 "derivative (v' or y''), found order " +
+                     std::to_string(order));
+  }
+  const auto number = [](const GiNaC::numeric& q) {
+    std::ostringstream out;
+    out << q;
+    return out.str();
+  };
+  if (order == 2) {
+    const std::optional<Kinematic> k = kinematic_of(model_, state);
+    if (!k || k->ratio != 1) {
+      source_.fail(target, name + "'' needs an equation " + name +
+                               "' = w with a state w, whose derivative the column then holds "
+                               "(write 'measured " +
+                               column.name + " = w'' with that state)");
+    }
+    state = k->state;
+  }
+  const std::string& holds = model_.states_[static_cast<std::size_t>(state)].name;
+  if (const std::optional<Kinematic> k = kinematic_of(model_, state)) {
+    const std::string& w = model_.states_[static_cast<std::size_t>(k->state)].name;
+    source_.fail(target, holds + "' = " + (k->ratio == 1 ? "" : number(k->ratio) + "*") + w +
+                             " (equation " + k->equation->name() + "): a column holding " + holds +
+                             "' holds " + w + (k->ratio == 1 ? "" : " scaled") +
+                             ", which a record gives as the state's own column (--columns \"" + w +
+                             "=COLUMN\")");
+  }
+  for (const MeasuredDerivative& other : model_.measured_) {
+    if (other.state == state) {
+      source_.fail(target, "'" + other.name + "' (line " + std::to_string(other.where.line) +
+                               ") already holds " + holds + "'");
+    }
+  }
+  model_.measured_.push_back({column.name, state, std::string(target.text), column.where});
 }
 
 void ModelBuilder::add_multipliers(const SyntaxNode& n) {

@@ -31,6 +31,9 @@ class ModelBuilder {
   void collect(const std::vector<SyntaxNode>& statements);
   void add_equation(const SyntaxNode& n);
   void add_multipliers(const SyntaxNode& n);
+  // The state whose derivative measured column i holds, once the equations are read (`y''` is
+  // v' through y' = v).
+  void add_measured(std::size_t i);
 
   Source source_;
   SymbolTable symbols_;

@@ -65,6 +65,9 @@ using ParseTreeRules = KeptRules<
     KeptRule<g::input_declaration, SyntaxKind::kInputDeclaration>,
     KeptRule<g::param_declaration, SyntaxKind::kParamDeclaration>,
     KeptRule<g::const_declaration, SyntaxKind::kConstDeclaration>,
+    KeptRule<g::measured_statement, SyntaxKind::kMeasuredStatement>,
+    KeptRule<g::measured_item, SyntaxKind::kMeasuredItem>,
+    KeptRule<g::measured_target, SyntaxKind::kMeasuredTarget>,
     KeptRule<g::declared_name, SyntaxKind::kDeclaredName>,
     KeptRule<g::param_item, SyntaxKind::kParamItem>,
     KeptRule<g::fixed_mark, SyntaxKind::kFixedMark>,
@@ -217,8 +220,19 @@ const char* kind_name(SymbolKind kind) {
       return "parameter";
     case SymbolKind::kConstant:
       return "constant";
+    case SymbolKind::kMeasured:
+      return "measured column";
   }
   return "";
+}
+
+int Model::measured_derivative_of(int state) const {
+  for (std::size_t i = 0; i < measured_.size(); ++i) {
+    if (measured_[i].state == state) {
+      return static_cast<int>(states_.size() + inputs_.size() + i);
+    }
+  }
+  return -1;
 }
 
 int Model::parameter_index(std::string_view name) const {

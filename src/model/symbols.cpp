@@ -8,6 +8,15 @@ std::string kind_with_article(SymbolKind kind) {
   return kind == SymbolKind::kInput ? std::string("an input") : "a " + std::string(kind_name(kind));
 }
 
+void SymbolTable::declare_measured(const SyntaxNode& statement) {
+  for (const SyntaxNode& item : statement.children) {
+    if (item.kind != SyntaxKind::kMeasuredItem) continue;
+    declare(item.children.at(0), nullptr, SymbolKind::kMeasured);
+    measured_targets_.push_back(&item.children.at(1));
+    measured_written_.emplace_back(item.children.at(1).text);
+  }
+}
+
 SymbolTable::SymbolTable(const Source& source, const Model& model)
     : source_(source),
       states_(model.states()),
@@ -16,6 +25,12 @@ SymbolTable::SymbolTable(const Source& source, const Model& model)
       constants_(model.constants()),
       functions_(model.functions()),
       variables_(model.variables()) {
+  for (std::size_t i = 0; i < model.measured_derivatives().size(); ++i) {
+    const MeasuredDerivative& m = model.measured_derivatives()[i];
+    measured_.push_back({m.name, SymbolKind::kMeasured, std::nullopt, m.where});
+    measured_symbols_.push_back(model.measured_symbol(static_cast<int>(i)));
+    measured_written_.push_back(m.written);
+  }
   for (std::size_t i = 0; i < states_.size(); ++i) {
     state_symbols_.push_back(model.state_symbol(static_cast<int>(i)));
     derivative_symbols_.push_back(model.derivative_symbol(static_cast<int>(i)));
@@ -57,9 +72,9 @@ void SymbolTable::declare(const SyntaxNode& name_node, const SyntaxNode* value_n
                           SymbolKind kind, bool fixed) {
   const std::string name(name_node.text);
   static const std::set<std::string> reserved{
-      "model",     "state",      "states",      "input", "inputs", "param",
-      "params",    "parameter",  "parameters",  "const", "consts", "constant",
-      "constants", "multiplier", "multipliers", "dot",   "abs",    "sign"};
+      "model",       "state",      "states", "input",  "inputs",   "param",     "params",
+      "parameter",   "parameters", "const",  "consts", "constant", "constants", "multiplier",
+      "multipliers", "dot",        "abs",    "sign",   "measured"};
   if (reserved.count(name) != 0) {
     source_.fail(name_node, "'" + name + "' is a reserved word and cannot be declared");
   }
@@ -93,6 +108,9 @@ void SymbolTable::declare(const SyntaxNode& name_node, const SyntaxNode* value_n
     case SymbolKind::kConstant:
       list = &constants_;
       break;
+    case SymbolKind::kMeasured:
+      list = &measured_;
+      break;
   }
   list->push_back(std::move(d));
 }
@@ -109,6 +127,11 @@ void SymbolTable::make_symbols() {
     variables_.push_back(
         {u.name, VariableKind::kInput, static_cast<int>(input_symbols_.size()) - 1});
   }
+  for (const Declaration& m : measured_) {
+    measured_symbols_.emplace_back(m.name);
+    variables_.push_back(
+        {m.name, VariableKind::kDerivative, static_cast<int>(measured_symbols_.size()) - 1});
+  }
   for (const Declaration& p : parameters_) parameter_symbols_.emplace_back(p.name);
   index_symbols();
 }
@@ -116,7 +139,7 @@ void SymbolTable::make_symbols() {
 void SymbolTable::index_symbols() {
   declared_.clear();
   roles_.clear();
-  for (auto* l : {&states_, &inputs_, &parameters_, &constants_}) {
+  for (auto* l : {&states_, &inputs_, &parameters_, &constants_, &measured_}) {
     for (const Declaration& x : *l) declared_[x.name] = &x;
   }
   const int n = static_cast<int>(states_.size());
@@ -130,7 +153,12 @@ void SymbolTable::index_symbols() {
   for (std::size_t i = 0; i < parameters_.size(); ++i) {
     roles_.emplace(parameter_symbols_[i], SymbolRole{SymbolRole::kParameter, static_cast<int>(i)});
   }
-  const int channels = n + static_cast<int>(inputs_.size());
+  const int inputs_end = n + static_cast<int>(inputs_.size());
+  for (std::size_t i = 0; i < measured_.size(); ++i) {
+    roles_.emplace(measured_symbols_[i],
+                   SymbolRole{SymbolRole::kVariable, inputs_end + static_cast<int>(i)});
+  }
+  const int channels = inputs_end + static_cast<int>(measured_.size());
   for (std::size_t i = 0; i < functions_.size(); ++i) {
     roles_.emplace(function_symbols_[i],
                    SymbolRole{SymbolRole::kVariable, channels + static_cast<int>(i)});
@@ -163,6 +191,7 @@ std::string SymbolTable::declared_list() const {
   add("inputs", inputs_);
   add("parameters", parameters_);
   add("constants", constants_);
+  add("measured columns", measured_);
   return out.empty() ? "nothing is declared" : "declared: " + out;
 }
 
@@ -181,6 +210,7 @@ int SymbolTable::index_of(const Declaration& d) const {
   const std::vector<Declaration>& list = d.kind == SymbolKind::kState       ? states_
                                          : d.kind == SymbolKind::kInput     ? inputs_
                                          : d.kind == SymbolKind::kParameter ? parameters_
+                                         : d.kind == SymbolKind::kMeasured  ? measured_
                                                                             : constants_;
   return static_cast<int>(&d - list.data());
 }
@@ -197,6 +227,10 @@ GiNaC::ex SymbolTable::value(const SyntaxNode& at, const std::string& name) cons
       return parameter_symbols_[i];
     case SymbolKind::kConstant:
       return *d.value;
+    case SymbolKind::kMeasured:
+      source_.fail(at, "'" + name + "' is a measured column, which equations do not name: write " +
+                           "the derivative it holds, " +
+                           measured_written_[static_cast<std::size_t>(i)]);
   }
   return 0;
 }

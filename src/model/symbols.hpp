@@ -20,7 +20,7 @@ std::string kind_with_article(SymbolKind kind);
 // into its parameter, variable and derivative factors.
 struct SymbolRole {
   enum Kind { kParameter, kVariable, kDerivative } kind;
-  int index;  // into the parameters, the variables (states, inputs, functions) or the states
+  int index;  // into the parameters, the variables (Model::variables()) or the states
 };
 
 // The declarations of one model, in declaration order, and the GiNaC symbols its equations are
@@ -38,6 +38,9 @@ class SymbolTable {
 
   // Declares every name of a state, input, param or const statement.
   void declare_all(const SyntaxNode& statement, SymbolKind kind);
+  // Declares the columns of a `measured` statement; their derivatives are read once the
+  // equations are (measured_targets()).
+  void declare_measured(const SyntaxNode& statement);
   // Once every name is declared: a name may be used before its declaration.
   void make_symbols();
 
@@ -56,6 +59,9 @@ class SymbolTable {
   const std::vector<Declaration>& inputs() const { return inputs_; }
   const std::vector<Declaration>& parameters() const { return parameters_; }
   const std::vector<Declaration>& constants() const { return constants_; }
+  const std::vector<Declaration>& measured() const { return measured_; }
+  // The `v'` of each measured column, in the order of measured().
+  const std::vector<const SyntaxNode*>& measured_targets() const { return measured_targets_; }
   const std::vector<VariableFunction>& functions() const { return functions_; }
   const std::vector<Variable>& variables() const { return variables_; }
   const std::vector<GiNaC::symbol>& state_symbols() const { return state_symbols_; }
@@ -63,6 +69,7 @@ class SymbolTable {
   const std::vector<GiNaC::symbol>& input_symbols() const { return input_symbols_; }
   const std::vector<GiNaC::symbol>& parameter_symbols() const { return parameter_symbols_; }
   const std::vector<GiNaC::symbol>& function_symbols() const { return function_symbols_; }
+  const std::vector<GiNaC::symbol>& measured_symbols() const { return measured_symbols_; }
 
  private:
   // `value_node` is the `= value` part, or nullptr.
@@ -78,11 +85,13 @@ class SymbolTable {
   int index_of(const Declaration& d) const;
 
   const Source& source_;
-  std::vector<Declaration> states_, inputs_, parameters_, constants_;
+  std::vector<Declaration> states_, inputs_, parameters_, constants_, measured_;
+  std::vector<const SyntaxNode*> measured_targets_;
+  std::vector<std::string> measured_written_;
   std::vector<VariableFunction> functions_;
   std::vector<Variable> variables_;
   std::vector<GiNaC::symbol> state_symbols_, derivative_symbols_, input_symbols_,
-      parameter_symbols_, function_symbols_;
+      parameter_symbols_, function_symbols_, measured_symbols_;
   std::map<std::string, const Declaration*> declared_;    // after all declarations are collected
   std::map<std::string, Declaration> first_declaration_;  // while they are
   std::map<GiNaC::ex, SymbolRole, GiNaC::ex_is_less> roles_;

@@ -195,8 +195,8 @@ GiNaC::ex TermBuilder::eval_call(const SyntaxNode& n) const {
   const SyntaxNode& argument = n.children[1];
   const GiNaC::ex value = eval(argument).expand();
   std::vector<std::pair<GiNaC::numeric, Monomial>> terms;
-  const auto channels =
-      static_cast<std::ptrdiff_t>(symbols_.states().size() + symbols_.inputs().size());
+  const auto channels = static_cast<std::ptrdiff_t>(
+      symbols_.states().size() + symbols_.inputs().size() + symbols_.measured().size());
   for (const SplitTerm& t : split_all(value)) {
     if (total(t.parameters) > 0) {
       source_.fail(argument, "a parameter inside " + name +

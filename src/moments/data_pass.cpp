@@ -38,11 +38,39 @@ std::size_t max_lag_of(const std::vector<Moment>& moments) {
   return out;
 }
 
+// The order the channels are read in: states, derivatives, inputs, so that the pass takes the
+// derivatives for states (continuous, never shifted), while moments number them after the
+// inputs. `read[c]` is the read position of channel c in the moments' numbering (states,
+// inputs, derivatives, computed).
+struct ReadOrder {
+  std::vector<std::size_t> read;
+  std::size_t states = 0, inputs = 0;  // as read: the derivatives count among the states
+
+  ReadOrder(std::size_t s, std::size_t i, std::size_t d, std::size_t computed)
+      : read(s + i + d + computed), states(s + d), inputs(i) {
+    for (std::size_t c = 0; c < read.size(); ++c) {
+      read[c] = c < s ? c : c < s + i ? c + d : c < s + i + d ? c - i : c;
+    }
+  }
+  Monomial monomial(const Monomial& m) const {
+    Monomial out(m.size(), 0);
+    for (std::size_t c = 0; c < m.size(); ++c) out[read[c]] = m[c];
+    return out;
+  }
+  template <typename T>
+  std::vector<T> values(const std::vector<T>& by_channel) const {
+    std::vector<T> out(by_channel.size());
+    for (std::size_t c = 0; c < by_channel.size(); ++c) out[read[c]] = by_channel[c];
+    return out;
+  }
+};
+
 ColumnRequest column_request(const std::vector<std::string>& states,
                              const std::vector<std::string>& inputs, const DataOptions& options,
                              bool several_files) {
   ColumnRequest request;
   request.names = states;
+  request.names.insert(request.names.end(), options.derivatives.begin(), options.derivatives.end());
   request.names.insert(request.names.end(), inputs.begin(), inputs.end());
   request.rename = options.record.columns;
   // Several files: the minimum is the whole record's, checked at its end.
@@ -225,27 +253,30 @@ RangeResult read_all(const Pass& pass, std::unique_ptr<DataReader> first,
 
 // `moments` over the accumulator's columns (ChannelLayout) rather than the channels. The
 // columns of the states are theirs, so increments, which are of states, stay as they are.
-std::vector<Moment> in_columns(std::vector<Moment> moments, const ChannelLayout& layout) {
+std::vector<Moment> in_columns(std::vector<Moment> moments, const ReadOrder& order,
+                               const ChannelLayout& layout) {
   for (Moment& m : moments) {
     if (m.is_increment()) continue;
     std::vector<MomentFactor> factors = m.factors();
     for (MomentFactor& f : factors) {
-      f.channel = static_cast<int>(layout.column.at(static_cast<std::size_t>(f.channel)));
+      const std::size_t read = order.read.at(static_cast<std::size_t>(f.channel));
+      f.channel = static_cast<int>(layout.column.at(read));
     }
     m = Moment(std::move(factors));
   }
   return moments;
 }
 
-// The channels' statistics, named, the states first.
+// The channels' statistics, named, in the moments' numbering (states, inputs, derivatives).
 std::vector<ChannelStatistics> channel_statistics(const LagSums& sums,
                                                   const std::vector<std::string>& names,
-                                                  std::size_t states) {
+                                                  const ReadOrder& order) {
   std::vector<ChannelStatistics> out;
   for (std::size_t c = 0; c < names.size(); ++c) {
-    ChannelStatistics s = sums.statistics(c);
-    s.name = names[c];
-    s.is_input = c >= states;
+    const std::size_t read = order.read[c];
+    ChannelStatistics s = sums.statistics(read);
+    s.name = names[read];
+    s.is_input = read >= order.states;
     out.push_back(std::move(s));
   }
   return out;
@@ -274,6 +305,16 @@ DataMoments moments_from_data(const DataSource& source, const std::vector<std::s
   if (!options.offsets.empty() && options.offsets.size() != channels) {
     throw std::invalid_argument("moments_from_data: one offset per channel needed");
   }
+  const ReadOrder order(states.size(), inputs.size(), options.derivatives.size(),
+                        options.computed.size());
+  // The shards see the channels in the order read.
+  DataOptions read_options = options;
+  if (!options.derivatives.empty()) {
+    if (!options.offsets.empty()) read_options.offsets = order.values(options.offsets);
+    for (ComputedChannel& c : read_options.computed) {
+      for (auto& [coefficient, monomial] : c.argument) monomial = order.monomial(monomial);
+    }
+  }
   const bool any_moments = !keys.empty();
   // Rows that depend on their neighbours across a shard's edge in ways the shard cannot see
   // (a shifted input, a row dropped between two, every other row kept) keep files whole.
@@ -295,6 +336,15 @@ DataMoments moments_from_data(const DataSource& source, const std::vector<std::s
     open_error = std::current_exception();
   }
   out.hold = input_hold(out.metadata, options);
+  if (out.hold == InputHold::kZeroOrderHold && !inputs.empty() && !options.derivatives.empty()) {
+    throw DataError({source.name(), 1, 1, ""},
+                    "the inputs are held over each sample (input hold zoh), so the column '" +
+                        options.derivatives.front() +
+                        "', a derivative of a state they drive, jumps at every sample and its "
+                        "products cannot be averaged over the intervals: record it with inputs "
+                        "sampled as they vary (input hold 'sample'), or take the `measured` "
+                        "statement out of the model");
+  }
   // The merged state keeps the stretches of every shard, so that the batches are made the same
   // way whatever thread or process reads a shard: at least 8 per shard for few shards, one for
   // as many as four per batch (its memory grows by one stretch per shard: 16 MB of data).
@@ -304,10 +354,10 @@ DataMoments moments_from_data(const DataSource& source, const std::vector<std::s
   const bool collapse = shards.size() >= 4 * batches;
   const std::size_t shard_batches =
       std::max<std::size_t>(2, (batches + shards.size() - 1) / shards.size());
-  ChannelLayout layout(states.size(), inputs.size(), options.computed);
-  std::vector<Moment> columns = in_columns(std::move(keys), layout);
-  const PassSetup setup{std::move(columns), states.size(), inputs.size(), std::move(layout),
-                        out.hold,           shard_batches, collapse,      &options};
+  ChannelLayout layout(order.states, order.inputs, read_options.computed);
+  std::vector<Moment> columns = in_columns(std::move(keys), order, layout);
+  const PassSetup setup{std::move(columns), order.states,  order.inputs, std::move(layout),
+                        out.hold,           shard_batches, collapse,     &read_options};
   const Pass pass{source, shards, request, setup, (shard_batches + 1) * shards.size()};
   RangeResult result;
   const auto read = [&] { result = read_all(pass, std::move(first), open_error, channels); };
@@ -341,7 +391,7 @@ DataMoments moments_from_data(const DataSource& source, const std::vector<std::s
           : std::clamp(std::max(accumulator.intervals() / DataOptions::kAutoBatchIntervals,
                                 options.min_batches),
                        DataOptions::kMinAutoBatches, batches));
-  out.channels = channel_statistics(result.state->lags, request.names, states.size());
+  out.channels = channel_statistics(result.state->lags, request.names, order);
   return out;
 }
 

@@ -48,7 +48,7 @@ std::string join(const std::vector<std::string>& items, const std::string& separ
 
 CompiledModel::CompiledModel(const Model& model, const std::vector<numeric>& parameters)
     : states_(static_cast<int>(model.states().size())),
-      channels_(static_cast<int>(model.channel_count())),
+      channels_(static_cast<int>(model.states().size() + model.inputs().size())),
       variables_(static_cast<int>(model.variables().size())) {
   for (const VariableFunction& f : model.functions()) {
     Function& compiled = functions_.emplace_back();
@@ -300,6 +300,26 @@ void SimulationOptions::validate(const Model& model) const {
     if (observed[c]) throw UsageError("observe", "channel '" + name + "' is given twice");
     observed[c] = true;
   }
+  // A derivative of a state that a held input drives jumps at every sample: the record could
+  // not be averaged over its intervals.
+  for (std::size_t i = 0; i < model.measured_derivatives().size(); ++i) {
+    const MeasuredDerivative& d = model.measured_derivatives()[i];
+    const std::size_t c = model.states().size() + model.inputs().size() + i;
+    for (std::size_t k = 0; k < inputs.size() && observed[c]; ++k) {
+      if (!inputs[k].held()) continue;
+      const std::string& input = model.inputs()[k].name;
+      std::vector<std::string> others;
+      for (std::size_t o = 0; o < channels.size(); ++o) {
+        if (o != c && observed[o]) others.push_back(channels[o]);
+      }
+      throw UsageError("inputs", "the measured column '" + d.name + "' (" + d.written +
+                                     ") would jump at every sample of the held input " + input +
+                                     ": give " + input + " a smooth process (" + input +
+                                     "=multisine:f1=F1,f2=F2,lines=L) or leave the column out (" +
+                                     UsageError::mention("observe") + " " + join(others, ",") +
+                                     ")");
+    }
+  }
   std::vector<bool> noisy(channels.size(), false);
   for (const ChannelNoise& n : noise) {
     const std::size_t c = channel(n.channel, "noise");
@@ -353,9 +373,11 @@ void simulate_clean(const Model& model, const SimulationOptions& options, Sample
     smooth = smooth || !options.inputs[i].held();
   }
   SwitchingStep step(f);
-  std::vector<double> values(n + m);
+  // A row: the states, the inputs, then the columns that measure derivatives.
+  std::vector<double> values(model.channel_count());
   double* y = values.data();
   double* u = values.data() + n;
+  std::vector<double> rates(model.measured_derivatives().empty() ? 0 : n);
   // The inputs at the middle and the end of the step: the held values unless an input is smooth.
   std::vector<double> middle(m), end(m);
   const double* u_middle = smooth ? middle.data() : u;
@@ -415,6 +437,15 @@ void simulate_clean(const Model& model, const SimulationOptions& options, Sample
     for (std::size_t s = 0; s < options.samples; ++s) {
       t = static_cast<double>(s) * h;
       draw_inputs();
+      if (!rates.empty()) {
+        if (!f.derivative(y, u, rates.data())) {
+          fail("met a point where the derivatives cannot be solved for");
+        }
+        for (std::size_t i = 0; i < model.measured_derivatives().size(); ++i) {
+          const auto state = static_cast<std::size_t>(model.measured_derivatives()[i].state);
+          values[n + m + i] = rates[state];
+        }
+      }
       sink.sample(t, values.data(), run);
       integrate();
     }

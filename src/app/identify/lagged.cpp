@@ -83,10 +83,10 @@ void check_lagged_options(const Model& model, const IdentifyOptions& options,
   }
 }
 
-// The channels a lagged pass reads: the variables the equations need, states then inputs, as
-// the accumulator numbers them, then the functions it computes from them.
+// The channels a lagged pass reads: the variables the equations need, states, inputs and
+// derivatives, as the pass numbers them, then the functions it computes from them.
 struct LaggedChannels {
-  std::vector<std::string> states, inputs;
+  std::vector<std::string> states, inputs, derivatives;
   std::vector<ComputedChannel> computed;  // over the channels read
   std::vector<int> channel;               // per model variable: its channel, or -1 when not read
 };
@@ -98,8 +98,11 @@ LaggedChannels lagged_channels(const Model& model, const LaggedSystem& system) {
   for (std::size_t v = 0; v < model.variables().size(); ++v) {
     const Variable& variable = model.variables()[v];
     if (!variable.channel() || !system.needed[v]) continue;
-    (variable.kind == VariableKind::kState ? out.states : out.inputs).push_back(variable.name);
-    // States come first among the channels, and the variables are in that order too.
+    (variable.kind == VariableKind::kState   ? out.states
+     : variable.kind == VariableKind::kInput ? out.inputs
+                                             : out.derivatives)
+        .push_back(variable.name);
+    // The pass numbers its channels in the variables' order.
     out.channel[v] = static_cast<int>(next++);
   }
   if (model.functions().empty()) return out;
@@ -242,6 +245,8 @@ LaggedChannels read_lagged(IdentifyResult& result, const LagOptions& lag_options
   LaggedChannels c = lagged_channels(*result.model, *result.lagged->system);
   result.lagged->channels = c.states;
   result.lagged->channels.insert(result.lagged->channels.end(), c.inputs.begin(), c.inputs.end());
+  result.lagged->channels.insert(result.lagged->channels.end(), c.derivatives.begin(),
+                                 c.derivatives.end());
   // The rows need the sample interval, which the data give: accumulate, then build rows.
   const LaggedRows probe = lagged_rows(*result.lagged->system, 1.0, c.channel, {});
   result.lagged->moments = probe.moments;
@@ -254,7 +259,8 @@ LaggedChannels read_lagged(IdentifyResult& result, const LagOptions& lag_options
     mean_index.push_back(static_cast<std::size_t>(found - moments.begin()));
     if (found == moments.end()) moments.push_back(mean);
   }
-  DataOptions data_options = pass_options(options);
+  DataOptions data_options = pass_options(*result.model, options);
+  data_options.derivatives = c.derivatives;
   // The optimal weighting estimates the equations' covariance from the batches.
   data_options.min_batches = kBatchesPerEquation * probe.rows.a.size();
   data_options.offsets =
@@ -272,12 +278,14 @@ LaggedChannels read_lagged(IdentifyResult& result, const LagOptions& lag_options
   return c;
 }
 
-// The noise on each state channel: given, or estimated from its autocorrelation (inputs are
-// taken as measured without noise).
-std::vector<double> noise_variances(const IdentifyResult& result, std::size_t states,
+// The noise on each channel of a state or a derivative: given, or estimated from its
+// autocorrelation (inputs are taken as measured without noise).
+std::vector<double> noise_variances(const IdentifyResult& result, const LaggedChannels& channels,
                                     const IdentifyOptions& options) {
   std::vector<double> noise(result.lagged->channels.size(), 0.0);
-  for (std::size_t c = 0; c < states; ++c) {
+  const std::size_t states = channels.states.size(), inputs = channels.inputs.size();
+  for (std::size_t c = 0; c < noise.size(); ++c) {
+    if (c >= states && c < states + inputs) continue;
     if (options.noise) {
       const auto given = options.noise->find(result.lagged->channels[c]);
       if (given != options.noise->end()) noise[c] = given->second;
@@ -328,7 +336,7 @@ void identify_lagged(IdentifyResult& result, const DataSource& source,
                          window_cut + " to stay within " +
                          std::to_string(IdentifyOptions::kMaxLaggedMoments) + " moments";
   }
-  result.lagged->noise = noise_variances(result, channels.states.size(), options);
+  result.lagged->noise = noise_variances(result, channels, options);
   // The moments name the computed channels after the channels read (lagged_moment_text).
   for (std::size_t v = 0; v < channels.channel.size(); ++v) {
     const Variable& variable = result.model->variables()[v];

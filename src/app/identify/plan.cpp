@@ -83,8 +83,15 @@ std::vector<ComputedChannel> computed_channels(const Model& model) {
   return out;
 }
 
-DataOptions pass_options(const IdentifyOptions& options) {
+std::vector<std::string> derivative_names(const Model& model) {
+  std::vector<std::string> out;
+  for (const MeasuredDerivative& d : model.measured_derivatives()) out.push_back(d.name);
+  return out;
+}
+
+DataOptions pass_options(const Model& model, const IdentifyOptions& options) {
   DataOptions data_options;
+  data_options.derivatives = derivative_names(model);
   data_options.record = options.record;
   data_options.batches = options.batches.value_or(0);
   data_options.min_rows = 2 * (options.batches ? *options.batches : DataOptions::kMinAutoBatches);
@@ -101,6 +108,7 @@ std::vector<double> channel_offsets(const DataSource& source,
                                     std::map<std::string, double>& centered) {
   std::vector<std::string> channels = states;
   channels.insert(channels.end(), inputs.begin(), inputs.end());
+  channels.insert(channels.end(), options.derivatives.begin(), options.derivatives.end());
   centered.clear();
   if (std::none_of(channels.begin(), channels.end(), [&](const std::string& c) {
         return std::find(center.begin(), center.end(), c) != center.end();

@@ -42,6 +42,8 @@ EquationChoice choose_equations(const Model& model, const RecordSurvey& record,
 // The state and input names of `model`, in declaration order: the channels of a zero-lag pass.
 std::vector<std::string> state_names(const Model& model);
 std::vector<std::string> input_names(const Model& model);
+// The names of the columns that hold derivatives (Model::measured_derivatives()).
+std::vector<std::string> derivative_names(const Model& model);
 
 // The model's abs and sign terms as channels the pass computes; throws ModelError at an equation
 // whose function mixes states and inputs.
@@ -49,7 +51,7 @@ std::vector<ComputedChannel> computed_channels(const Model& model);
 
 // The options of a pass over the record as `options` ask for it (columns, sample interval,
 // layout, input hold, batches, threads), with the autocorrelations the noise estimates need.
-DataOptions pass_options(const IdentifyOptions& options);
+DataOptions pass_options(const Model& model, const IdentifyOptions& options);
 
 // The offsets of DataOptions for the channels `states` then `inputs`: the mean of each channel
 // that `center` names, from a pass of its own, and 0 for the others; none when `center` names

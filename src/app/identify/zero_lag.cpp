@@ -87,7 +87,7 @@ void identify_zero_lag(IdentifyResult& result, const DataSource& source,
   zero_lag.system = std::make_shared<const MomentSystem>(plan.system);
   zero_lag.moments = plan.moments;
   result.gmm = optimal_weighting(model, options, zero_lag.system->equations.size());
-  DataOptions data_options = pass_options(options);
+  DataOptions data_options = pass_options(model, options);
   data_options.computed = computed_channels(model);
   // The optimal weighting estimates the equations' covariance from the batches.
   if (result.gmm)

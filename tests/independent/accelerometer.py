@@ -1,0 +1,96 @@
+#!/usr/bin/python3
+"""identify's defaults on shaker records with an accelerometer, made by numpy and scipy
+(lab_records.py), not momentid: the Duffing oscillator at 2048 Hz, 2% white noise on every
+channel, a `t` column and no metadata. The acceleration is the right-hand side of the equations
+at each sample, computed from the exact states and force.
+
+  displacement  the force, y and a (models/duffing_accelerometer.mom) against the force and y
+                alone (models/duffing.mom): both `ok` within 3 standard errors, and every
+                standard error with the acceleration no larger than without it.
+  all_channels  the force, y, v and a: `ok` within 3 standard errors.
+  velocity      the force, v and a, no displacement: the equations need y^3, which neither
+                column shows: exit 2 naming y.
+
+Usage: accelerometer.py CASE MOMENTID MODELS WORKDIR
+"""
+import os
+import subprocess
+import sys
+
+import numpy as np
+
+import lab_records as lab
+
+FS = 2048
+SAMPLES = 409600
+NOISE = 0.02
+
+
+def record(seed):
+    """The clean record of the Duffing oscillator of lab.SDOF, with its acceleration `a`."""
+    rng = np.random.default_rng(seed)
+    clean = lab.sdof(rng, FS, SAMPLES)
+    p = lab.SDOF
+    y, v, x = clean["y"], clean["v"], clean["x"]
+    clean["a"] = x - p["c"] * v - p["k"] * y - p["eps"] * y**3
+    return rng, clean
+
+
+def write(rng, clean, channels, path):
+    columns = {"t": clean["t"]}
+    for name in channels:
+        columns[name] = lab.measured(rng, clean[name], NOISE)
+    lab.write_csv(path, columns)
+
+
+def run(momentid, model, path):
+    print(f"{os.path.basename(model)} on {os.path.basename(path)}:")
+    report = lab.identify(momentid, model, path)
+    worst = lab.describe(report, lab.SDOF)
+    return report, worst
+
+
+def displacement(momentid, models, workdir):
+    rng, clean = record(20271101)
+    with_a, without = f"{workdir}/y_a_x.csv", f"{workdir}/y_x.csv"
+    write(rng, clean, ("y", "a", "x"), with_a)
+    write(rng, clean, ("y", "x"), without)
+    accel, worst_accel = run(momentid, f"{models}/duffing_accelerometer.mom", with_a)
+    alone, worst_alone = run(momentid, f"{models}/duffing.mom", without)
+    passed = all(r.get("diagnostics", {}).get("status") == "ok" for r in (accel, alone))
+    passed &= worst_accel <= 3 and worst_alone <= 3
+    for name in lab.SDOF:
+        ratio = (accel["parameters"][name]["std_error"] / alone["parameters"][name]["std_error"]
+                 if passed else np.nan)
+        print(f"  {name}: standard error with a / without: {ratio:.3f}")
+        passed &= ratio <= 1
+    return passed
+
+
+def all_channels(momentid, models, workdir):
+    rng, clean = record(20271102)
+    path = f"{workdir}/y_v_a_x.csv"
+    write(rng, clean, ("y", "v", "a", "x"), path)
+    report, worst = run(momentid, f"{models}/duffing_accelerometer.mom", path)
+    return report.get("diagnostics", {}).get("status") == "ok" and worst <= 3
+
+
+def velocity(momentid, models, workdir):
+    rng, clean = record(20271103)
+    path = f"{workdir}/v_a_x.csv"
+    write(rng, clean, ("v", "a", "x"), path)
+    result = subprocess.run([momentid, "identify", f"{models}/duffing_accelerometer.mom", path],
+                            capture_output=True, text=True)
+    print(result.stderr.strip())
+    return result.returncode == 2 and "'y'" in result.stderr
+
+
+CASES = {"displacement": displacement, "all_channels": all_channels, "velocity": velocity}
+
+if __name__ == "__main__":
+    case, momentid, models, workdir = sys.argv[1:5]
+    workdir = os.path.join(workdir, f"accelerometer_{case}")
+    os.makedirs(workdir, exist_ok=True)
+    ok = CASES[case](momentid, models, workdir)
+    print("PASS" if ok else "FAIL")
+    sys.exit(0 if ok else 1)
