@@ -68,6 +68,39 @@ TEST_SUITE("lagged") {
           "such as y' = y2 defines it)");
   }
 
+  TEST_CASE("an acceleration column alone reads y and v as its integrals, differentiated away") {
+    const momentid::Model model = momentid::parse_model(
+        "state y, v\ninput x\nmeasured a = v'\nparam c, k\nconst m = 2\n"
+        "y' = v\nm*v' = -c*v - k*y + x\n",
+        "acceleration.mom");
+    // Variables y, v, x, a: the force and the acceleration measured.
+    const auto system = momentid::derive_lagged(model, {.measured = {false, false, true, true}});
+    CHECK(system.derivatives == std::vector<std::string>{"y'' = a", "v' = a"});
+    CHECK(system.instruments == std::vector<momentid::Monomial>{{0, 0, 0, 1}});
+    REQUIRE(system.equations.size() == 1);
+    // The equation's second derivative in s: C[y;a] = C''[y;y], C[v;a] = C'[y;y].
+    CHECK(lagged_equation_text(system, 0) ==
+          "c*C'[a;a](s) + k*C[a;a](s) = -2*C''[a;a](s) + C''[a;x](s)");
+    CHECK(system.needed == std::vector<bool>{false, false, true, true});
+    // With the velocity measured as well, y is its integral: one derivative clears it.
+    const auto velocity = momentid::derive_lagged(model, {.measured = {false, true, true, true}});
+    CHECK(velocity.derivatives == std::vector<std::string>{"y' = v"});
+    CHECK(lagged_equation_text(velocity, 0) ==
+          "c*C'[v;v](s) + k*C[v;v](s) = -2*C'[v;a](s) + C'[v;x](s)");
+  }
+
+  TEST_CASE("a power of a state read only through its derivative names the state and --integrate") {
+    const momentid::Model model = model_file("duffing_accelerometer.mom");
+    const auto e = error_from<momentid::ModelError>([&] {
+      momentid::derive_lagged(model, {.measured = {false, false, true, true}});
+    });
+    CHECK(e.message() ==
+          "term 'eps*y^3' of equation 2 needs a column for state 'y': the record shows it only "
+          "through 'a' (y'' = a), which gives the terms linear in y alone (give the record a "
+          "column 'y', or form y from 'a' with --integrate y)");
+    CHECK(e.location().line == 9);
+  }
+
   TEST_CASE("lags that reach lag 0 or are too few for the test functions are refused") {
     const momentid::Model model = model_file("duffing.mom");
     CHECK(std::string(error_from<momentid::UsageError>([&] {

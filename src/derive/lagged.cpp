@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
+#include <optional>
 #include <set>
 #include <sstream>
 #include <stdexcept>
@@ -94,6 +95,7 @@ class LagDeriver {
         states_(static_cast<int>(model.states().size())),
         observed_(model.variables().size()) {
     for (int v = 0; v < variables_; ++v) observe(v, 0);
+    integrate();
   }
 
   const Observation& observation(int v) const { return observed_[v]; }
@@ -105,7 +107,7 @@ class LagDeriver {
       if (t.derivative < 0) return false;
       const int column = model_.measured_derivative_of(t.derivative);
       return column >= 0 && measured_[static_cast<std::size_t>(column)] &&
-             observed_[t.derivative].base >= 0;
+             observed_[t.derivative].base >= 0 && observed_[t.derivative].order >= 0;
     });
   }
 
@@ -116,6 +118,13 @@ class LagDeriver {
                                                const Monomial& instrument, bool columns) const {
     Monomial measured(variables_, 0);
     std::vector<std::pair<int, int>> derivatives;  // (base, order), one per factor
+    const auto read = [&](int base, int order, int power) {
+      if (order == 0) {
+        measured[base] += power;
+      } else {
+        derivatives.insert(derivatives.end(), static_cast<std::size_t>(power), {base, order});
+      }
+    };
     numeric scale = t.coefficient;
     auto unobservable = [&](int v) {
       throw ModelError(eq.where, "term '" + term_text(model_, t) + "' of equation " + eq.name() +
@@ -133,11 +142,7 @@ class LagDeriver {
       const Observation& o = observed_[v];
       if (o.base < 0) unobservable(v);
       scale *= GiNaC::pow(o.scale, numeric(e));
-      if (o.order == 0) {
-        measured[o.base] += e;
-      } else {
-        derivatives.insert(derivatives.end(), static_cast<std::size_t>(e), {o.base, o.order});
-      }
+      read(o.base, o.order, e);
     }
     if (t.derivative >= 0) {
       // A column that holds the derivative is read as it is (C[ψ;a](s)), rather than as one
@@ -149,7 +154,7 @@ class LagDeriver {
         const Observation& o = observed_[t.derivative];
         if (o.base < 0) unobservable(t.derivative);
         scale *= o.scale;
-        derivatives.emplace_back(o.base, o.order + 1);
+        read(o.base, o.order + 1, 1);
       }
     }
     if (derivatives.empty()) return {{instrument, measured, 0}, scale};
@@ -160,10 +165,26 @@ class LagDeriver {
         std::all_of(measured.begin(), measured.end(), [](int e) { return e == 0; });
     if (derivatives.size() == 1 && rest_constant && (order == 1 || power == 0) &&
         order <= kMaxLagOrder) {
-      // b^p * b' = d/dt b^(p+1) / (p+1); b^(k) alone is the k-th derivative of b.
+      // b^p * b' = d/dt b^(p+1) / (p+1); b^(k) alone is the k-th derivative of b, and a
+      // negative k an integral, which derive_lagged differentiates away.
       Monomial function(variables_, 0);
       function[base] = power + 1;
       return {{instrument, function, order}, scale / (power + 1)};
+    }
+    // A state the data show only through a derivative column enters linearly or not at all.
+    for (int v = 0; v < variables_; ++v) {
+      const bool integral = (t.monomial[v] > 0 && observed_[v].order < 0) ||
+                            (t.derivative == v && observed_[v].order < -1);
+      if (!integral) continue;
+      const std::string& name = model_.variables()[v].name;
+      const std::string& column = model_.variables()[observed_[v].base].name;
+      throw ModelError(eq.where, "term '" + term_text(model_, t) + "' of equation " + eq.name() +
+                                     " needs a column for state '" + name +
+                                     "': the record shows it only through '" + column + "' (" +
+                                     definition(v) + "), which gives the terms linear in " + name +
+                                     " alone (give the record a column '" + name + "', or form " +
+                                     name + " from '" + column + "' with --integrate " + name +
+                                     ")");
     }
     // Name the unmeasured variable the term would need, with how the data show it.
     std::string why = "channels the data lack: it is not a time derivative of measured channels";
@@ -178,12 +199,15 @@ class LagDeriver {
         eq.where, "term '" + term_text(model_, t) + "' of equation " + eq.name() + " needs " + why);
   }
 
-  // "v = y'" for a state the data show as a derivative.
+  // "v = y'" for a state the data show as a derivative, "y'' = a" for one they show through
+  // its derivative.
   std::string definition(int v) const {
     const Observation& o = observed_[v];
-    std::string out = model_.variables()[v].name + " = ";
-    if (o.scale != 1) out += number_text(o.scale) + "*";
-    return out + model_.variables()[o.base].name + primes(o.order);
+    const std::string& name = model_.variables()[v].name;
+    const std::string scale = o.scale != 1 ? number_text(o.scale) + "*" : "";
+    if (o.order < 0)
+      return name + primes(-o.order) + " = " + scale + model_.variables()[o.base].name;
+    return name + " = " + scale + model_.variables()[o.base].name + primes(o.order);
   }
 
  private:
@@ -260,6 +284,58 @@ class LagDeriver {
     return o;
   }
 
+  // Reads the states that observe() left unread through a column of their derivative (v' = a)
+  // or a kinematic equation from a state so read (y' = v): as integrals of a measured channel,
+  // negative orders. Only where no derivative reads them, so that the readings above stand.
+  void integrate() {
+    for (bool changed = true; changed;) {
+      changed = false;
+      for (int v = 0; v < states_; ++v) {
+        Observation& o = observed_[v];
+        if (o.base >= 0) continue;
+        const int column = model_.measured_derivative_of(v);
+        if (column >= 0 && measured_[static_cast<std::size_t>(column)]) {
+          o = {column, -1, 1, ""};
+        } else if (const std::optional<Observation> k = integral_of(v)) {
+          o = *k;
+        } else {
+          continue;
+        }
+        changed = true;
+      }
+    }
+    // An unmeasured derivative column whose state is now read.
+    for (const MeasuredDerivative& d : model_.measured_derivatives()) {
+      const int v = model_.variable_index(d.name);
+      const Observation& s = observed_[d.state];
+      if (observed_[v].base < 0 && s.base >= 0) observed_[v] = {s.base, s.order + 1, s.scale, ""};
+    }
+  }
+
+  // A kinematic equation c_d*v' + c_w*w = 0 (parameter-free, those two terms only) with w read:
+  // v as the integral of w's reading.
+  std::optional<Observation> integral_of(int v) const {
+    for (const Equation& eq : model_.equations()) {
+      if (eq.terms.size() != 2) continue;
+      const Term* derivative = nullptr;
+      const Term* state = nullptr;
+      for (const Term& t : eq.terms) {
+        if (t.parameter >= 0) break;
+        const int degree = std::accumulate(t.monomial.begin(), t.monomial.end(), 0);
+        if (t.derivative == v && degree == 0) derivative = &t;
+        if (t.derivative < 0 && degree == 1) state = &t;
+      }
+      if (derivative == nullptr || state == nullptr) continue;
+      const auto w = static_cast<int>(std::find(state->monomial.begin(), state->monomial.end(), 1) -
+                                      state->monomial.begin());
+      const Observation& r = observed_[w];
+      if (w == v || r.base < 0) continue;
+      return Observation{r.base, r.order - 1,
+                         r.scale * (-state->coefficient / derivative->coefficient), ""};
+    }
+    return std::nullopt;
+  }
+
   const Model& model_;
   std::vector<bool> measured_;
   int variables_, states_;
@@ -284,7 +360,8 @@ bool has_parameter(const Equation& eq) {
 // their parameters nearly collinear, and the cubes tell them apart (on the drag, friction and
 // clearance oscillators of docs/measured-data.md the standard errors of c2, f and kc fell 3 to
 // 15 times).
-std::vector<Monomial> default_instruments(const Model& model, const std::vector<bool>& measured) {
+std::vector<Monomial> default_instruments(const Model& model, const std::vector<bool>& measured,
+                                          const LagDeriver& deriver) {
   std::vector<Monomial> out;
   const int cube = model.functions().empty() ? 1 : 3;
   for (std::size_t v = 0; v < model.states().size(); ++v) {
@@ -299,6 +376,14 @@ std::vector<Monomial> default_instruments(const Model& model, const std::vector<
       m[v] = power;
       if (std::find(out.begin(), out.end(), m) == out.end()) out.push_back(m);
     }
+  }
+  // A derivative column stands for its state when the data show the state only through it.
+  for (const MeasuredDerivative& d : model.measured_derivatives()) {
+    const auto v = static_cast<std::size_t>(model.variable_index(d.name));
+    if (!measured[v] || deriver.observation(d.state).order >= 0) continue;
+    Monomial m(model.variables().size(), 0);
+    m[v] = 1;
+    out.push_back(m);
   }
   return out;
 }
@@ -396,7 +481,7 @@ LaggedSystem derive_lagged(const Model& model, const LagOptions& options) {
     }
   }
   system.instruments =
-      options.instruments ? *options.instruments : default_instruments(model, measured);
+      options.instruments ? *options.instruments : default_instruments(model, measured, deriver);
   if (system.instruments.empty()) {
     throw UsageError("lags: no instruments: the data have none of the model's states");
   }
@@ -416,12 +501,30 @@ LaggedSystem derive_lagged(const Model& model, const LagOptions& options) {
         row.equation = static_cast<int>(e);
         row.instrument = instrument;
         row.coefficients.resize(parameters);
-        for (const Term& t : eq.terms) {
-          const auto [f, w] = deriver.lag_function(eq, t, instrument, columns);
+        std::vector<std::pair<LagFunction, numeric>> terms;
+        for (const Term& t : eq.terms)
+          terms.push_back(deriver.lag_function(eq, t, instrument, columns));
+        // A state read as the integral of a column (y'' = a) enters at a negative order: its
+        // cross-moments are known up to a polynomial in s, which the equation's derivative in s
+        // of the order that clears the integrals drops, leaving the measured channels alone.
+        int lowest = 0;
+        for (const auto& [f, w] : terms) lowest = std::min(lowest, f.order);
+        for (std::size_t i = 0; i < terms.size(); ++i) {
+          LagFunction& f = terms[i].first;
+          f.order -= lowest;
+          if (f.order > kMaxLagOrder) {
+            throw ModelError(eq.where, "term '" + term_text(model, eq.terms[i]) + "' of equation " +
+                                           eq.name() + " needs the derivative of order " +
+                                           std::to_string(f.order) + " in the lag, above " +
+                                           std::to_string(kMaxLagOrder) +
+                                           ", to clear the integrals of the states read from a "
+                                           "derivative column (measure one of them)");
+          }
+          const Term& t = eq.terms[i];
           if (t.parameter >= 0) {
-            add_to(row.coefficients[t.parameter], f, w);
+            add_to(row.coefficients[t.parameter], f, terms[i].second);
           } else {
-            add_to(row.rhs, f, -w);
+            add_to(row.rhs, f, -terms[i].second);
           }
         }
         // The first parameter's first weight positive, as the zero-lag equations print.

@@ -10,6 +10,12 @@ at each sample, computed from the exact states and force.
   all_channels  the force, y, v and a: `ok` within 3 standard errors.
   velocity      the force, v and a, no displacement: the equations need y^3, which neither
                 column shows: exit 2 naming y.
+  acceleration_sdof   the force and a alone, a linear oscillator (lab.chain with one mass,
+                      sampled exactly): within 3 standard errors.
+  acceleration_chain  the force and the accelerations alone, a linear chain of two masses:
+                      within 3 standard errors.
+  acceleration_duffing  the force and a alone, the Duffing oscillator: exit 2 before the pass,
+                      naming y and --integrate.
 
 Usage: accelerometer.py CASE MOMENTID MODELS WORKDIR
 """
@@ -85,7 +91,51 @@ def velocity(momentid, models, workdir):
     return result.returncode == 2 and "'y'" in result.stderr
 
 
-CASES = {"displacement": displacement, "all_channels": all_channels, "velocity": velocity}
+def linear(momentid, workdir, masses, seed):
+    """The chain of `masses` from accelerations and the force alone."""
+    rng = np.random.default_rng(seed)
+    truth = lab.chain_truth(rng, masses)
+    clean = lab.chain(rng, masses, truth, FS, 200000, 100.0)
+    n = len(masses)
+    model = lab.chain_model(masses, truth)
+    if n == 1:
+        # One mass: the spring to the ground and the end spring act as one.
+        truth = {"c1": truth["c1"], "k1": truth["k1"] + truth["kt"]}
+        model = ("model oscillator\nstate y1, v1\ninput x\nparam c1, k1\n"
+                 f"const m1 = {masses[0]}\ny1' = v1\nm1*v1' = -c1*v1 - k1*y1 + x\n")
+    model += "".join(f"measured a{i} = v{i}'\n" for i in range(1, n + 1))
+    model_path, path = f"{workdir}/chain.mom", f"{workdir}/accelerations.csv"
+    with open(model_path, "w") as out:
+        out.write(model)
+    write(rng, clean, [f"a{i}" for i in range(1, n + 1)] + ["x"], path)
+    print(f"chain of {n} on {os.path.basename(path)}:")
+    report = lab.identify(momentid, model_path, path)
+    worst = lab.describe(report, truth)
+    return report.get("diagnostics", {}).get("status") == "ok" and worst <= 3
+
+
+def acceleration_sdof(momentid, models, workdir):
+    return linear(momentid, workdir, [1.0], 20271104)
+
+
+def acceleration_chain(momentid, models, workdir):
+    return linear(momentid, workdir, [1.0, 1.5], 20271105)
+
+
+def acceleration_duffing(momentid, models, workdir):
+    rng, clean = record(20271106)
+    path = f"{workdir}/a_x.csv"
+    write(rng, clean, ("a", "x"), path)
+    result = subprocess.run([momentid, "identify", f"{models}/duffing_accelerometer.mom", path],
+                            capture_output=True, text=True)
+    print(result.stderr.strip())
+    return (result.returncode == 2 and "'y'" in result.stderr
+            and "--integrate y" in result.stderr and result.stdout == "")
+
+
+CASES = {"displacement": displacement, "all_channels": all_channels, "velocity": velocity,
+         "acceleration_sdof": acceleration_sdof, "acceleration_chain": acceleration_chain,
+         "acceleration_duffing": acceleration_duffing}
 
 if __name__ == "__main__":
     case, momentid, models, workdir = sys.argv[1:5]

@@ -157,7 +157,8 @@ def chain_matrices(masses, truth, corner, damping):
 
 def chain(rng, masses, truth, fs, samples, rms):
     """The chain sampled exactly at fs from its stationary distribution, driven by a force
-    low-passed at 40 Hz (second order, damping 0.7) of RMS `rms`: a dict of y1..yn, x and t."""
+    low-passed at 40 Hz (second order, damping 0.7) of RMS `rms`: a dict of y1..yn, their
+    velocities v1..vn and accelerations a1..an, x and t."""
     n = len(masses)
     a, b = chain_matrices(masses, truth, 40.0, 0.7)
     m = len(b)
@@ -184,6 +185,9 @@ def chain(rng, masses, truth, fs, samples, rms):
     del drive
     z = (modes @ vectors.T).real * scale
     record = {f"y{i + 1}": z[:, i] for i in range(n)}
+    record.update({f"v{i + 1}": z[:, n + i] for i in range(n)})
+    # The accelerations are the rows of the velocities in z' = A z (the noise drives x' only).
+    record.update({f"a{i + 1}": z @ a[n + i] for i in range(n)})
     record["x"] = z[:, 2 * n]
     record["t"] = np.arange(samples) / fs
     return record

@@ -23,17 +23,24 @@ bool function_holds(const VariableFunction& f, std::size_t c) {
                      [&](const auto& term) { return term.second[c] != 0; });
 }
 
-// Per measured state that the lagged equations read: the lag at which its autocorrelation first
-// falls below 1/e, from the lagged moments C[y;y](s) of the pass; 0 when it stays above across
-// the window.
+// Per measured state that the lagged equations read, or derivative column that stands for its
+// unmeasured state: the lag at which its autocorrelation first falls below 1/e, from the lagged
+// moments C[y;y](s) of the pass; 0 when it stays above across the window.
 std::map<std::string, int> correlation_lags(const IdentifyResult& r,
                                             const std::vector<int>& channel) {
   const LaggedSystem& system = *r.lagged->system;
+  const Model& model = *r.model;
   std::map<Moment, std::size_t> index;
   for (std::size_t k = 0; k < r.lagged->moments.size(); ++k) index.emplace(r.lagged->moments[k], k);
   std::map<std::string, int> out;
-  for (std::size_t v = 0; v < r.model->states().size(); ++v) {
-    if (channel[v] < 0 || !system.measured[v]) continue;
+  for (std::size_t v = 0; v < model.channel_count(); ++v) {
+    const Variable& variable = model.variables()[v];
+    const bool stands_for_state =
+        variable.kind == VariableKind::kState ||
+        (variable.kind == VariableKind::kDerivative &&
+         !system.measured[static_cast<std::size_t>(
+             model.measured_derivatives()[static_cast<std::size_t>(variable.index)].state)]);
+    if (channel[v] < 0 || !system.measured[v] || !stands_for_state) continue;
     const ChannelStatistics& c = r.data.channels[static_cast<std::size_t>(channel[v])];
     if (!(c.variance > 0)) continue;
     Monomial y(channel.size(), 0);
