@@ -51,6 +51,47 @@ TEST_SUITE("options") {
             &model));
   }
 
+  TEST_CASE("a column mapped from a state's derivative is declared as a measured statement would") {
+    const momentid::Model model = model_file("duffing.mom");
+    RecordOptions options{.columns = {{"v'", "accel"}, {"x", "force"}}};
+    const momentid::Model with = momentid::declare_derivative_columns(model, options);
+    REQUIRE(with.measured_derivatives().size() == 1);
+    CHECK(with.measured_derivatives()[0].name == "accel");
+    CHECK(with.measured_derivatives()[0].state == 1);  // v
+    CHECK(options.columns ==
+          std::map<std::string, std::string>{{"accel", "accel"}, {"x", "force"}});
+    CHECK_NOTHROW(options.validate(&with));
+    // y'' through y' = v is the same; a column name that cannot be a variable gives v_dot.
+    RecordOptions odd{.columns = {{"y''", "Accel (m/s^2)"}}};
+    const momentid::Model second = momentid::declare_derivative_columns(model, odd);
+    CHECK(second.measured_derivatives()[0].name == "v_dot");
+    CHECK(odd.columns == std::map<std::string, std::string>{{"v_dot", "Accel (m/s^2)"}});
+    // A model that declares the column keeps its name for it.
+    const momentid::Model declared = model_file("duffing_accelerometer.mom");
+    RecordOptions mapped{.columns = {{"y''", "accel"}}};
+    CHECK(momentid::declare_derivative_columns(declared, mapped).measured_derivatives().size() ==
+          1);
+    CHECK(mapped.columns == std::map<std::string, std::string>{{"a", "accel"}});
+    const auto refused = [&](std::map<std::string, std::string> columns, const momentid::Model& m) {
+      RecordOptions o{.columns = std::move(columns)};
+      const UsageError e =
+          error_from<UsageError>([&] { momentid::declare_derivative_columns(m, o); });
+      CHECK(e.option() == "columns");
+      return std::string(e.what());
+    };
+    CHECK(refused({{"x'", "a"}}, model) ==
+          "columns: x'=a: x is not a state of model duffing (a column may hold a state's "
+          "derivative)");
+    CHECK(refused({{"v'''", "a"}}, model) ==
+          "columns: v'''=a: a measured column holds a state's first or second derivative (v' or "
+          "y''), found order 3");
+    CHECK(refused({{"y'", "a"}}, model) ==
+          "columns: y'=a: y' = v (equation 1): a column holding y' holds v, which a record gives "
+          "as the state's own column (--columns \"v=COLUMN\")");
+    CHECK(refused({{"v'", "accel"}, {"a", "accel"}}, declared) ==
+          "columns: v'=accel and a=accel name the same channel, a");
+  }
+
   TEST_CASE("parameter values by name become the model's values in order, nominal where absent") {
     const momentid::Model model = model_file("duffing.mom");  // c = 0.5, k = 4, eps = 1
     const auto values = momentid::parameter_vector(

@@ -97,6 +97,13 @@ struct Equation {
   std::string name() const { return label.empty() ? std::to_string(number) : label; }
 };
 
+// A parameter-free equation c1*s' + c2*w = 0 with w a state (y' = v): s' = ratio*w.
+struct Kinematic {
+  const Equation* equation = nullptr;
+  int state = 0;  // w
+  GiNaC::numeric ratio;
+};
+
 // A `multipliers` statement: monomials in the states by which to multiply one labelled equation,
 // or every equation when `equation` is empty.
 struct MultiplierSet {
@@ -133,6 +140,10 @@ class Model {
   const std::vector<MeasuredDerivative>& measured_derivatives() const { return measured_; }
   // The index into variables() of the column that holds state i's derivative, or -1.
   int measured_derivative_of(int state) const;
+  // The kinematic equation that gives state s's derivative as another state, if any.
+  std::optional<Kinematic> kinematic(int s) const;
+  // The model file's text, as parsed.
+  const std::string& text() const { return text_; }
   // The variables that monomials are written in: states, then inputs, then measured derivatives,
   // then functions.
   const std::vector<Variable>& variables() const { return variables_; }
@@ -177,7 +188,7 @@ class Model {
  private:
   friend class ModelBuilder;
   detail::AlgebraSpanStart algebra_start_;  // copies and destruction hold the AlgebraLock
-  std::string name_, title_, file_;
+  std::string name_, title_, file_, text_;
   std::vector<Declaration> states_, inputs_, parameters_, constants_;
   std::vector<VariableFunction> functions_;
   std::vector<MeasuredDerivative> measured_;

@@ -69,4 +69,12 @@ struct RecordOptions {
   void validate(const Model* model) const;
 };
 
+// `model` with the columns that `record.columns` maps from a state's derivative (v' or y'', as
+// in `--columns "v'=accel"`) declared as a `measured` statement would: each such key becomes the
+// variable of that column, the one the model file declares for that derivative, else a new one
+// named after the column (or the state and `_dot` when that name is not free). Throws
+// UsageError ("columns") for a key that is not a state's first or second derivative, with the
+// message the `measured` statement would get.
+Model declare_derivative_columns(const Model& model, RecordOptions& record);
+
 }  // namespace momentid

@@ -583,9 +583,10 @@ PYBIND11_MODULE(_momentid, m) {
   m.def("_identify",
         [](const Model& model, const py::object& data, const std::string& name,
            const std::map<std::string, std::string>& metadata, const py::dict& options) {
-          const IdentifyOptions identify_with = identify_options(model, options);
+          IdentifyOptions identify_with = identify_options(model, options);
+          const Model with = declare_derivative_columns(model, identify_with.record);
           const DataSource source = data_source(data, name, metadata);
-          const IdentifyResult result = identify(model, source, identify_with);
+          const IdentifyResult result = identify(with, source, identify_with);
           return py::make_tuple(format_text(result), to_python(json_value(result)));
         });
 
@@ -594,9 +595,10 @@ PYBIND11_MODULE(_momentid, m) {
     CheckOptions check_with;
     if (auto lags = get<std::size_t>(options, "lags")) check_with.lags = *lags;
     check_with.record = record_options(options);
-    const Model* with = model.is_none() ? nullptr : &model.cast<const Model&>();
+    std::optional<Model> with;
+    if (!model.is_none()) with = declare_derivative_columns(model.cast<const Model&>(), check_with.record);
     const DataSource source = data_source(data, name, metadata);
-    const CheckResult result = check(source, with, check_with);
+    const CheckResult result = check(source, with ? &*with : nullptr, check_with);
     return py::make_tuple(format_text(result), check_dict(result));
   });
 
@@ -610,9 +612,10 @@ PYBIND11_MODULE(_momentid, m) {
   m.def("_validate",
         [](const Model& model, const py::object& data, const std::string& name,
            const std::map<std::string, std::string>& metadata, const py::dict& options) {
-          const ValidateOptions validate_with = validate_options(model, options);
+          ValidateOptions validate_with = validate_options(model, options);
+          const Model with = declare_derivative_columns(model, validate_with.replay.record);
           const DataSource source = data_source(data, name, metadata);
-          ValidateResult result = validate(model, source, validate_with);
+          ValidateResult result = validate(with, source, validate_with);
           result.parameters_from =
               get<std::string>(options, "parameters_from").value_or("the model's nominal values");
           if (auto plot = get<std::string>(options, "plot")) write_plot(result, *plot);

@@ -358,3 +358,36 @@ def test_json_text_is_the_programs_value(cli, cli_csv, gmm_json, gmm_result):
     # to_dict() is a copy: changing it leaves the result as it was.
     gmm_result.to_dict()["parameters"].clear()
     assert gmm_result.to_dict()["parameters"] == gmm_json["parameters"]
+
+
+def test_a_column_of_a_derivative_is_named_as_the_command_line_names_it():
+    """A linear oscillator's force and acceleration alone, integrated by scipy: the force a
+    smooth sum of 400 sines at random frequencies (a force held over each sample would put kinks
+    into the acceleration), 2% noise on the acceleration."""
+    from scipy.integrate import solve_ivp
+    model = momentid.Model("state y, v\ninput F\nparam c, k\ny' = v\nv' = -c*v - k*y + F\n",
+                           name="oscillator")
+    c, k, fs, seconds = 3.0, 900.0, 256.0, 400.0
+    rng = np.random.default_rng(7)
+    frequencies = rng.uniform(0.5, 20.0, 400)
+    amplitudes = rng.normal(0, 4.0, 400)
+    phases = rng.uniform(0, 2 * np.pi, 400)
+
+    def force(t):
+        return np.sum(amplitudes * np.sin(2 * np.pi * frequencies * np.asarray(t)[..., None]
+                                          + phases), axis=-1)
+
+    t = np.arange(int(seconds * fs)) / fs
+    solution = solve_ivp(lambda s, z: [z[1], -c * z[1] - k * z[0] + force(s)], (0, t[-1]),
+                         [0.0, 0.0], t_eval=t, rtol=1e-10, atol=1e-12, method="DOP853")
+    y, v = solution.y
+    accel = force(t) - c * v - k * y
+    keep = t >= 20.0  # past the start from rest
+    data = {"time": t[keep], "shaker": force(t[keep]),
+            "acc": accel[keep] + 0.02 * np.std(accel) * rng.standard_normal(keep.sum())}
+    result = momentid.identify(model, data, columns={"v'": "acc", "F": "shaker", "t": "time"})
+    assert "acc" in result.text and "not measured: y'' = acc, v' = acc" in result.text
+    for name, truth in (("c", c), ("k", k)):
+        assert abs(result.estimates[name] - truth) < 3 * result.std_errors[name], result.text
+    with pytest.raises(momentid.UsageError, match=r"^columns: x'=acc: x is not a state"):
+        momentid.identify(model, data, columns={"x'": "acc", "F": "shaker", "t": "time"})

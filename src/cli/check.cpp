@@ -37,6 +37,7 @@ int run_check(CheckCommand& command) {
   }
   command.options.record.hold = hold_option(command.hold);
   command.options.record.columns = column_map(command.columns);
+  if (model) model = declare_derivative_columns(*model, command.options.record);
   TerminalProgress progress(!command.quiet);
   command.options.record.control.progress = progress.callback();
   const CheckResult result = check(data_sources(files), model ? &*model : nullptr, command.options);

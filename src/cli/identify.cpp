@@ -63,8 +63,11 @@ std::optional<std::map<std::string, double>> noise_option(const Model& model,
 }
 
 int run_identify(IdentifyCommand& command) {
-  const Model model = model_argument(command.model, command.data.front(), "identify MODEL DATA...");
   IdentifyOptions& options = command.options;
+  options.record.columns = column_map(command.columns);
+  const Model model = declare_derivative_columns(
+      model_argument(command.model, command.data.front(), "identify MODEL DATA..."),
+      options.record);
   if (command.multipliers) {
     options.multipliers = parse_multiplier_list(model, *command.multipliers, "--multipliers");
   }
@@ -72,7 +75,6 @@ int run_identify(IdentifyCommand& command) {
   options.weighting = parse_weighting(command.weighting, "weighting");
   options.method = parse_method(command.method, "method");
   options.extrapolate = command.extrapolate == "dt";
-  options.record.columns = column_map(command.columns);
   if (command.lags) options.lags = lag_range(*command.lags);
   options.noise = noise_option(model, command.noise);
   if (command.instruments) {

@@ -45,8 +45,10 @@ std::pair<double, double> window_option(const std::string& text) {
 }
 
 int run_validate(ValidateCommand& command) {
-  const Model model = model_argument(command.model, command.data, "validate MODEL DATA");
   ReplayOptions& replay = command.options.replay;
+  replay.record.columns = column_map(command.columns);
+  const Model model = declare_derivative_columns(
+      model_argument(command.model, command.data, "validate MODEL DATA"), replay.record);
   std::string from = "the model's nominal values";
   if (!command.estimates.empty()) {
     from = command.estimates + (command.set.empty() ? "" : ", then --set");
@@ -61,7 +63,6 @@ int run_validate(ValidateCommand& command) {
     replay.interpolation = parse_interpolation(command.interpolation, "interpolation");
   }
   replay.record.dt = command.dt;
-  replay.record.columns = column_map(command.columns);
   command.options.skip = command.skip;
   command.options.center = command.center.size() == 1 && command.center[0] == "all"
                                ? model.channel_names()

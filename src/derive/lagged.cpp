@@ -259,24 +259,15 @@ class LagDeriver {
       return o;
     }
     if (variable.kind != VariableKind::kState || depth > states_) return o;
-    // A kinematic equation c_d*a' + c_v*v = 0 (parameter-free, those two terms only) shows v as
-    // a derivative of a.
-    for (const Equation& eq : model_.equations()) {
-      if (eq.terms.size() != 2) continue;
-      const Term* derivative = nullptr;
-      const Term* state = nullptr;
-      for (const Term& t : eq.terms) {
-        if (t.parameter >= 0) break;
-        const int degree = std::accumulate(t.monomial.begin(), t.monomial.end(), 0);
-        if (t.derivative >= 0 && degree == 0) derivative = &t;
-        if (t.derivative < 0 && degree == 1 && t.monomial[v] == 1) state = &t;
-      }
-      if (derivative == nullptr || state == nullptr || derivative->derivative == v) continue;
-      const Observation& a = observe(derivative->derivative, depth + 1);
-      if (a.base < 0) continue;
-      o.base = a.base;
-      o.order = a.order + 1;
-      o.scale = a.scale * (-derivative->coefficient / state->coefficient);
+    // A kinematic equation a' = ratio*v shows v as a derivative of a.
+    for (int a = 0; a < states_; ++a) {
+      const std::optional<Kinematic> k = model_.kinematic(a);
+      if (!k || k->state != v || a == v) continue;
+      const Observation& r = observe(a, depth + 1);
+      if (r.base < 0) continue;
+      o.base = r.base;
+      o.order = r.order + 1;
+      o.scale = r.scale / k->ratio;
       o.reason.clear();
       return o;
     }
@@ -312,28 +303,13 @@ class LagDeriver {
     }
   }
 
-  // A kinematic equation c_d*v' + c_w*w = 0 (parameter-free, those two terms only) with w read:
-  // v as the integral of w's reading.
+  // A kinematic equation v' = ratio*w with w read: v as the integral of w's reading.
   std::optional<Observation> integral_of(int v) const {
-    for (const Equation& eq : model_.equations()) {
-      if (eq.terms.size() != 2) continue;
-      const Term* derivative = nullptr;
-      const Term* state = nullptr;
-      for (const Term& t : eq.terms) {
-        if (t.parameter >= 0) break;
-        const int degree = std::accumulate(t.monomial.begin(), t.monomial.end(), 0);
-        if (t.derivative == v && degree == 0) derivative = &t;
-        if (t.derivative < 0 && degree == 1) state = &t;
-      }
-      if (derivative == nullptr || state == nullptr) continue;
-      const auto w = static_cast<int>(std::find(state->monomial.begin(), state->monomial.end(), 1) -
-                                      state->monomial.begin());
-      const Observation& r = observed_[w];
-      if (w == v || r.base < 0) continue;
-      return Observation{r.base, r.order - 1,
-                         r.scale * (-state->coefficient / derivative->coefficient), ""};
-    }
-    return std::nullopt;
+    const std::optional<Kinematic> k = model_.kinematic(v);
+    if (!k || k->state == v) return std::nullopt;
+    const Observation& r = observed_[k->state];
+    if (r.base < 0) return std::nullopt;
+    return Observation{r.base, r.order - 1, r.scale * k->ratio, ""};
   }
 
   const Model& model_;

@@ -6,38 +6,10 @@
 #include <sstream>
 
 namespace momentid {
-namespace {
-
-// A parameter-free equation c1*s' + c2*w = 0 with w a state: s' = ratio*w.
-struct Kinematic {
-  const Equation* equation = nullptr;
-  int state = 0;  // w
-  GiNaC::numeric ratio;
-};
-std::optional<Kinematic> kinematic_of(const Model& model, int s) {
-  for (const Equation& eq : model.equations()) {
-    if (eq.terms.size() != 2) continue;
-    const Term* derivative = nullptr;
-    const Term* state = nullptr;
-    for (const Term& t : eq.terms) {
-      if (t.parameter >= 0) break;
-      if (t.derivative == s && t.monomial.degree() == 0) derivative = &t;
-      if (t.derivative < 0 && t.monomial.degree() == 1) state = &t;
-    }
-    if (derivative == nullptr || state == nullptr) continue;
-    const auto w = static_cast<std::size_t>(
-        std::find(state->monomial.begin(), state->monomial.end(), 1) - state->monomial.begin());
-    if (model.variables()[w].kind != VariableKind::kState) continue;
-    return Kinematic{&eq, static_cast<int>(w), -state->coefficient / derivative->coefficient};
-  }
-  return std::nullopt;
-}
-
-}  // namespace
-
 ModelBuilder::ModelBuilder(std::string_view text, std::string file)
     : source_(text, file), symbols_(source_), terms_(source_, symbols_), labels_(source_) {
   model_.file_ = std::move(file);
+  model_.text_ = std::string(text);
 }
 
 Model ModelBuilder::build(const std::vector<SyntaxNode>& statements) {
@@ -147,7 +119,7 @@ void ModelBuilder::add_measured(std::size_t i) {
     return out.str();
   };
   if (order == 2) {
-    const std::optional<Kinematic> k = kinematic_of(model_, state);
+    const std::optional<Kinematic> k = model_.kinematic(state);
     if (!k || k->ratio != 1) {
       source_.fail(target, name + "'' needs an equation " + name +
                                "' = w with a state w, whose derivative the column then holds "
@@ -157,7 +129,7 @@ void ModelBuilder::add_measured(std::size_t i) {
     state = k->state;
   }
   const std::string& holds = model_.states_[static_cast<std::size_t>(state)].name;
-  if (const std::optional<Kinematic> k = kinematic_of(model_, state)) {
+  if (const std::optional<Kinematic> k = model_.kinematic(state)) {
     const std::string& w = model_.states_[static_cast<std::size_t>(k->state)].name;
     source_.fail(target, holds + "' = " + (k->ratio == 1 ? "" : number(k->ratio) + "*") + w +
                              " (equation " + k->equation->name() + "): a column holding " + holds +

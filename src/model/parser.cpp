@@ -235,6 +235,25 @@ int Model::measured_derivative_of(int state) const {
   return -1;
 }
 
+std::optional<Kinematic> Model::kinematic(int s) const {
+  for (const Equation& eq : equations_) {
+    if (eq.terms.size() != 2) continue;
+    const Term* derivative = nullptr;
+    const Term* state = nullptr;
+    for (const Term& t : eq.terms) {
+      if (t.parameter >= 0) break;
+      if (t.derivative == s && t.monomial.degree() == 0) derivative = &t;
+      if (t.derivative < 0 && t.monomial.degree() == 1) state = &t;
+    }
+    if (derivative == nullptr || state == nullptr) continue;
+    const auto w = static_cast<std::size_t>(
+        std::find(state->monomial.begin(), state->monomial.end(), 1) - state->monomial.begin());
+    if (variables_[w].kind != VariableKind::kState) continue;
+    return Kinematic{&eq, static_cast<int>(w), -state->coefficient / derivative->coefficient};
+  }
+  return std::nullopt;
+}
+
 int Model::parameter_index(std::string_view name) const {
   for (std::size_t i = 0; i < parameters_.size(); ++i) {
     if (parameters_[i].name == name) return static_cast<int>(i);
