@@ -372,6 +372,11 @@ class RecordSimulator {
   std::vector<std::vector<double>> run(const std::vector<std::vector<double>>& inputs,
                                        const std::vector<double>& initial, double start,
                                        std::size_t run_number, std::size_t rows) const;
+  // The columns of the model's measured derivatives (Model::measured_derivatives()) along
+  // `states` as run() returns them, from the equations at each row's states and inputs.
+  std::vector<std::vector<double>> derivatives(
+      const std::vector<std::vector<double>>& states,
+      const std::vector<std::vector<double>>& inputs) const;
 
   static constexpr int kMaxSubsteps = 64;
 

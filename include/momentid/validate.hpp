@@ -76,6 +76,9 @@ struct Replay {
   std::vector<std::vector<double>> initial;  // per run, per state
   // simulated[r][j][n]: state j at row n of run r.
   std::vector<std::vector<std::vector<double>>> simulated;
+  // derivatives[r][i][n]: measured derivative i (Model::measured_derivatives()) at row n of run
+  // r, from the equations along the simulation.
+  std::vector<std::vector<std::vector<double>>> derivatives;
 
   static constexpr std::size_t kStartSamples = 7;
 };
@@ -129,7 +132,8 @@ struct CorrelationCheck {
 // How well one measured state is reproduced, over the rows compared (all runs, after the skip).
 struct OutputFit {
   std::string name;
-  std::size_t state = 0;  // its index among the model's states
+  // Its index among the outputs: the model's states, then its measured derivatives.
+  std::size_t state = 0;
   std::size_t samples = 0;
   double rms = 0;  // root mean square of measured - simulated
   // 100 (1 - |y - y_sim| / |y - mean(y)|): 100 for a perfect reproduction, 0 for the mean.
@@ -140,6 +144,10 @@ struct OutputFit {
   std::optional<CorrelationCheck> autocorrelation;
   std::vector<CorrelationCheck> cross;
 };
+
+// Output j of a model (OutputFit::state: its states, then its measured derivatives) as an index
+// into Model::variables().
+std::size_t output_variable(const Model& model, std::size_t j);
 
 // How fast two simulations of the model under the record's input separate when one starts
 // from the initial state perturbed by kPerturbation of each state's spread (docs/cli/validate.md,

@@ -499,7 +499,7 @@ py::dict validate_series(const ValidateResult& result) {
     states[py::str(model.states()[j].name)] = simulated(result.replay, j);
   }
   for (const OutputFit& output : result.outputs) {
-    measured[py::str(output.name)] = recorded(record, output.state);
+    measured[py::str(output.name)] = recorded(record, output_variable(model, output.state));
   }
   for (std::size_t v = model.states().size(); v < model.states().size() + model.inputs().size();
        ++v) {
@@ -596,7 +596,8 @@ PYBIND11_MODULE(_momentid, m) {
     if (auto lags = get<std::size_t>(options, "lags")) check_with.lags = *lags;
     check_with.record = record_options(options);
     std::optional<Model> with;
-    if (!model.is_none()) with = declare_derivative_columns(model.cast<const Model&>(), check_with.record);
+    if (!model.is_none())
+      with = declare_derivative_columns(model.cast<const Model&>(), check_with.record);
     const DataSource source = data_source(data, name, metadata);
     const CheckResult result = check(source, with ? &*with : nullptr, check_with);
     return py::make_tuple(format_text(result), check_dict(result));

@@ -14,6 +14,7 @@
 #include <cstdio>
 #include <sstream>
 
+#include "app/validate/fit.hpp"
 #include "common/json.hpp"
 #include "momentid/error.hpp"
 #include "momentid/validate.hpp"
@@ -279,9 +280,9 @@ void write_plot(const ValidateResult& result, const std::string& path,
   if (record.runs.size() > 1) title += " (run " + std::to_string(run.number) + " shown)";
   page.heading(title);
   for (const OutputFit& fit : result.outputs) {
-    const std::size_t j = fit.state;
-    const std::vector<double>& y = run.columns[static_cast<std::size_t>(record.column_of(j))];
-    const std::vector<double>& sim = result.replay.simulated.front()[j];
+    const std::vector<double>& y =
+        run.columns[static_cast<std::size_t>(record.column_of(output_variable(model, fit.state)))];
+    const std::vector<double>& sim = simulated_output(model, result.replay, 0, fit.state);
     std::vector<double> xs, measured, simulated, error;
     for (std::size_t n = from; n < to; ++n) {
       xs.push_back(time(n));

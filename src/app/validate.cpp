@@ -31,16 +31,20 @@ void ValidateOptions::validate() const {
 
 namespace {
 
-// The states the record has, in model order; DataError when it has none.
-std::vector<std::size_t> measured_states(const Model& model, const Record& record) {
+// The outputs the record has (fit.hpp): its states, then its measured derivatives, in model
+// order; DataError when it has none.
+std::vector<std::size_t> measured_outputs(const Model& model, const Record& record) {
   std::vector<std::size_t> out;
-  for (std::size_t j = 0; j < model.states().size(); ++j) {
-    if (record.column_of(j) >= 0) out.push_back(j);
+  const std::size_t outputs = model.states().size() + model.measured_derivatives().size();
+  for (std::size_t j = 0; j < outputs; ++j) {
+    if (record.column_of(output_variable(model, j)) >= 0) out.push_back(j);
   }
   if (out.empty()) {
-    throw DataError(file_start(record.name),
-                    "none of the states of model " + model.name() +
-                        " is a column of the data: there is nothing to compare");
+    throw DataError(
+        file_start(record.name),
+        "none of the states of model " + model.name() +
+            (model.measured_derivatives().empty() ? "" : ", nor of its measured columns,") +
+            " is a column of the data: there is nothing to compare");
   }
   return out;
 }
@@ -171,7 +175,7 @@ ValidateResult validate(const Model& model, const DataSource& source,
   result.centered = center_record(model, record, options.center);
   result.replay = replay_record(*result.model, std::move(record), options.replay);
   const Replay& replay = result.replay;
-  const std::vector<std::size_t> outputs = measured_states(model, replay.record);
+  const std::vector<std::size_t> outputs = measured_outputs(model, replay.record);
   if (replay.record.missing.rows > 0) {
     result.warnings.push_back(missing_warning(replay.record.missing));
   }
@@ -183,7 +187,7 @@ ValidateResult validate(const Model& model, const DataSource& source,
   result.sensitivity = measure_sensitivity(model, simulator, replay);
   choose_skips(model, simulator, options, result);
   for (std::size_t j : outputs) {
-    ComparedRows rows = compared_rows(replay, j, result.skip);
+    ComparedRows rows = compared_rows(model, replay, j, result.skip);
     OutputFit fit = output_fit(model, j, rows);
     add_correlation_checks(model, replay.record, result.skip, std::move(rows.error), options.lags,
                            fit);
@@ -195,8 +199,17 @@ ValidateResult validate(const Model& model, const DataSource& source,
   }
   // The statistics judge a sensitive model, and show where a reproducible trajectory that
   // fails differs.
+  // Over the states the record has, which come first among the outputs.
   if (result.sensitivity.sensitive || !result.consistent) {
-    result.statistics = compare_statistics(model, simulator, replay, outputs);
+    std::vector<std::size_t> states;
+    for (std::size_t j : outputs) {
+      if (j < model.states().size()) states.push_back(j);
+    }
+    if (states.empty()) {
+      result.statistics.not_compared = "the record has no state's column";
+    } else {
+      result.statistics = compare_statistics(model, simulator, replay, states);
+    }
   }
   judge(result);
   return result;

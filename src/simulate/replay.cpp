@@ -91,6 +91,24 @@ RecordSimulator::RecordSimulator(const Model& model, const ParameterValues& para
   for (Interpolation method : methods_) within_.emplace_back(method, fractions);
 }
 
+std::vector<std::vector<double>> RecordSimulator::derivatives(
+    const std::vector<std::vector<double>>& states,
+    const std::vector<std::vector<double>>& inputs) const {
+  const std::vector<MeasuredDerivative>& measured = model_.measured_derivatives();
+  const std::size_t rows = states.empty() ? 0 : states.front().size();
+  std::vector<std::vector<double>> out(measured.size(), std::vector<double>(rows, NAN));
+  std::vector<double> y(states.size()), u(inputs.size()), rates(states.size());
+  for (std::size_t n = 0; n < rows && !measured.empty(); ++n) {
+    for (std::size_t j = 0; j < y.size(); ++j) y[j] = states[j][n];
+    for (std::size_t i = 0; i < u.size(); ++i) u[i] = inputs[i][n];
+    if (!f_.derivative(y.data(), u.data(), rates.data())) continue;
+    for (std::size_t i = 0; i < measured.size(); ++i) {
+      out[i][n] = rates[static_cast<std::size_t>(measured[i].state)];
+    }
+  }
+  return out;
+}
+
 std::vector<std::vector<double>> RecordSimulator::run(
     const std::vector<std::vector<double>>& inputs, const std::vector<double>& initial,
     double start, std::size_t run_number, std::size_t rows) const {

@@ -16,9 +16,13 @@ at each sample, computed from the exact states and force.
                       within 3 standard errors.
   acceleration_duffing  the force and a alone, the Duffing oscillator: exit 2 before the pass,
                       naming y and --integrate.
+  validate            validate on the force and a alone of the one-mass chain, with the
+                      estimates: it compares a (the record's only output) with the acceleration
+                      of the simulation, fit above 95%, and judges the model consistent.
 
 Usage: accelerometer.py CASE MOMENTID MODELS WORKDIR
 """
+import json
 import os
 import subprocess
 import sys
@@ -92,7 +96,8 @@ def velocity(momentid, models, workdir):
 
 
 def linear(momentid, workdir, masses, seed):
-    """The chain of `masses` from accelerations and the force alone."""
+    """The chain of `masses` from accelerations and the force alone: whether the estimates are
+    `ok` within 3 standard errors, and the model, record and report files."""
     rng = np.random.default_rng(seed)
     truth = lab.chain_truth(rng, masses)
     clean = lab.chain(rng, masses, truth, FS, 200000, 100.0)
@@ -111,15 +116,33 @@ def linear(momentid, workdir, masses, seed):
     print(f"chain of {n} on {os.path.basename(path)}:")
     report = lab.identify(momentid, model_path, path)
     worst = lab.describe(report, truth)
-    return report.get("diagnostics", {}).get("status") == "ok" and worst <= 3
+    report_path = f"{workdir}/estimates.json"
+    with open(report_path, "w") as out:
+        json.dump(report, out)
+    passed = report.get("diagnostics", {}).get("status") == "ok" and worst <= 3
+    return passed, model_path, path, report_path
 
 
 def acceleration_sdof(momentid, models, workdir):
-    return linear(momentid, workdir, [1.0], 20271104)
+    return linear(momentid, workdir, [1.0], 20271104)[0]
 
 
 def acceleration_chain(momentid, models, workdir):
-    return linear(momentid, workdir, [1.0, 1.5], 20271105)
+    return linear(momentid, workdir, [1.0, 1.5], 20271105)[0]
+
+
+def validate(momentid, models, workdir):
+    passed, model, path, estimates = linear(momentid, workdir, [1.0], 20271107)
+    result = subprocess.run([momentid, "validate", model, path, "--estimates", estimates,
+                             "--format", "json"], capture_output=True, text=True)
+    if result.returncode != 0:
+        print(result.stderr)
+        return False
+    report = json.loads(result.stdout)
+    outputs = report["outputs"]
+    print(f"  validate: outputs {list(outputs)}, fit of a1 {outputs['a1']['fit_percent']:.2f}%, "
+          f"consistent {report['consistent']}")
+    return passed and list(outputs) == ["a1"] and outputs["a1"]["fit_percent"] > 95 and report["consistent"]
 
 
 def acceleration_duffing(momentid, models, workdir):
@@ -135,7 +158,7 @@ def acceleration_duffing(momentid, models, workdir):
 
 CASES = {"displacement": displacement, "all_channels": all_channels, "velocity": velocity,
          "acceleration_sdof": acceleration_sdof, "acceleration_chain": acceleration_chain,
-         "acceleration_duffing": acceleration_duffing}
+         "acceleration_duffing": acceleration_duffing, "validate": validate}
 
 if __name__ == "__main__":
     case, momentid, models, workdir = sys.argv[1:5]

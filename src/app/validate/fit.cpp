@@ -13,16 +13,27 @@ std::size_t start_rows(std::size_t compared) {
 
 }  // namespace
 
-ComparedRows compared_rows(const Replay& replay, std::size_t state,
+std::size_t output_variable(const Model& model, std::size_t j) {
+  const std::size_t states = model.states().size();
+  return j < states ? j : j + model.inputs().size();
+}
+
+const std::vector<double>& simulated_output(const Model& model, const Replay& replay, std::size_t r,
+                                            std::size_t j) {
+  const std::size_t states = model.states().size();
+  return j < states ? replay.simulated[r][j] : replay.derivatives[r][j - states];
+}
+
+ComparedRows compared_rows(const Model& model, const Replay& replay, std::size_t output,
                            const std::vector<std::size_t>& skip) {
   const Record& record = replay.record;
-  const std::size_t column = static_cast<std::size_t>(record.column_of(state));
+  const auto column = static_cast<std::size_t>(record.column_of(output_variable(model, output)));
   ComparedRows out;
   out.error.resize(record.runs.size());
   out.measured.resize(record.runs.size());
   for (std::size_t r = 0; r < record.runs.size(); ++r) {
     const std::vector<double>& y = record.runs[r].columns[column];
-    const std::vector<double>& sim = replay.simulated[r][state];
+    const std::vector<double>& sim = simulated_output(model, replay, r, output);
     for (std::size_t n = skip[r]; n < y.size(); ++n) {
       out.measured[r].push_back(y[n]);
       out.error[r].push_back(y[n] - sim[n]);
@@ -31,10 +42,10 @@ ComparedRows compared_rows(const Replay& replay, std::size_t state,
   return out;
 }
 
-OutputFit output_fit(const Model& model, std::size_t state, const ComparedRows& rows) {
+OutputFit output_fit(const Model& model, std::size_t output, const ComparedRows& rows) {
   OutputFit fit;
-  fit.name = model.states()[state].name;
-  fit.state = state;
+  fit.name = model.variables()[output_variable(model, output)].name;
+  fit.state = output;
   double sum_y = 0;
   for (std::size_t r = 0; r < rows.error.size(); ++r) {
     for (double y : rows.measured[r]) sum_y += y;

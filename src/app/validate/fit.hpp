@@ -16,13 +16,17 @@ struct ComparedRows {
   std::vector<std::vector<double>> measured;  // the state's column
 };
 
-// The compared rows of state `state` (which the record has) in every run after `skip` rows.
-ComparedRows compared_rows(const Replay& replay, std::size_t state,
+// Output j in run r as the replay simulated it.
+const std::vector<double>& simulated_output(const Model& model, const Replay& replay, std::size_t r,
+                                            std::size_t j);
+
+// The compared rows of output `output` (which the record has) in every run after `skip` rows.
+ComparedRows compared_rows(const Model& model, const Replay& replay, std::size_t output,
                            const std::vector<std::size_t>& skip);
 
-// The fit of state `state` over `rows`: its samples, rms errors and fit %, without the
+// The fit of output `output` over `rows`: its samples, rms errors and fit %, without the
 // correlation checks (residuals.hpp).
-OutputFit output_fit(const Model& model, std::size_t state, const ComparedRows& rows);
+OutputFit output_fit(const Model& model, std::size_t output, const ComparedRows& rows);
 
 // The warnings about a fit: worse than the data's mean, or an error that grows along the record.
 // Returns whether it warned.

@@ -17,7 +17,6 @@ SourceLocation file_start(const std::string& name) { return {name, 1, 1, ""}; }
 
 Record read_record(const Model& model, const DataSource& source, const ReplayOptions& options) {
   const std::vector<bool> present = variables_present(model, source, options.record);
-  const std::size_t states = model.states().size();
   Record record;
   record.name = source.name();
   const std::vector<std::string> header = data_columns(source, options.record);
@@ -27,7 +26,7 @@ Record read_record(const Model& model, const DataSource& source, const ReplayOpt
   std::vector<std::string> names;
   if (record.has_time) names.push_back("t");
   for (std::size_t v = 0; v < present.size(); ++v) {
-    if (v >= states || present[v]) {
+    if (model.variables()[v].kind == VariableKind::kInput || present[v]) {
       record.variables.push_back(v);
       const std::string& name = model.variables()[v].name;
       names.push_back(name);

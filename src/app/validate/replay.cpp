@@ -57,7 +57,8 @@ std::vector<double> initial_state(const Model& model, const Record& record, cons
     if (column >= 0) {
       out[j] = run.columns[static_cast<std::size_t>(column)][0];
       text = "its first sample";
-    } else if (const VariableReading& r = readings[j]; r.base >= 0 && r.order <= 3) {
+    } else if (const VariableReading& r = readings[j];
+               r.base >= 0 && r.order >= 0 && r.order <= 3) {
       const std::vector<double>& base =
           run.columns[static_cast<std::size_t>(record.column_of(static_cast<std::size_t>(r.base)))];
       const std::size_t count = std::min(Replay::kStartSamples, base.size());
@@ -70,7 +71,10 @@ std::vector<double> initial_state(const Model& model, const Record& record, cons
       text = derivative + " at the start (a cubic fitted to the first " + std::to_string(count) +
              " samples of " + model.variables()[static_cast<std::size_t>(r.base)].name + ")";
     } else {
-      text = "0 (no column, and no kinematic equation defines it from one)";
+      text = readings[j].base >= 0
+                 ? "0 (the record shows it only through the integral of " +
+                       model.variables()[static_cast<std::size_t>(readings[j].base)].name + ")"
+                 : "0 (no column, and no kinematic equation defines it from one)";
     }
     if (how != nullptr) how->push_back(text);
   }
@@ -174,8 +178,10 @@ Replay replay_record(const Model& model, Record read, const ReplayOptions& optio
   const RecordSimulator simulator(model, parameters, out.interpolation, record.dt, out.substeps);
   for (std::size_t r = 0; r < record.runs.size(); ++r) {
     const RecordRun& run = record.runs[r];
-    out.simulated.push_back(simulator.run(run_inputs(model, record, run), out.initial[r],
-                                          run_start(run), run_label(record, r), run.rows()));
+    const std::vector<std::vector<double>> inputs = run_inputs(model, record, run);
+    out.simulated.push_back(
+        simulator.run(inputs, out.initial[r], run_start(run), run_label(record, r), run.rows()));
+    out.derivatives.push_back(simulator.derivatives(out.simulated.back(), inputs));
   }
   return out;
 }

@@ -69,7 +69,8 @@ Json compared_json(const ValidateResult& r) {
               {"level", json_value(s.level)},
               {"outside", s.outside()},
               {"noise_sd", Json::object()}};
-  for (std::size_t o = 0; o < r.outputs.size(); ++o) {
+  // The statistics compare the states, which come first among the outputs.
+  for (std::size_t o = 0; o < s.noise_sd.size(); ++o) {
     out["noise_sd"][r.outputs[o].name] = json_value(s.noise_sd[o]);
   }
   Json& checks = out["checks"] = Json::array();
@@ -107,7 +108,7 @@ std::string statistics_text(const ValidateResult& r) {
     out += "statistics against " + std::to_string(s.runs) +
            " simulations from other initial states (Welch spectra of " + std::to_string(s.segment) +
            "-sample Hann segments, half overlapping; noise added:";
-    for (std::size_t o = 0; o < r.outputs.size(); ++o) {
+    for (std::size_t o = 0; o < s.noise_sd.size(); ++o) {
       out += " " + r.outputs[o].name + " " + number(s.noise_sd[o], "%.3g");
     }
     out += "; " + number(100 * s.level, "%g") + "% bands for all " +
