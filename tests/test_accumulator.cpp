@@ -15,6 +15,7 @@
 #include "momentid/accumulator.hpp"
 #include "momentid/moment.hpp"
 #include "momentid/random.hpp"
+#include "moments/integration.hpp"
 #include "test_support.hpp"
 
 namespace {
@@ -608,5 +609,57 @@ TEST_SUITE("accumulator") {
               InputHold::kSample, kBatches)) ==
           "cannot merge moment accumulators over different channels: 2 states and 1 input here, "
           "3 states and 0 inputs in the other");
+  }
+}
+
+TEST_SUITE("integration filter") {
+  // A sine of acceleration a = sin(w t) at 30 Hz, 2048 Hz sampling, corner 3 Hz: the channel
+  // integrated twice is -a/w^2 through the same high-pass as the acceleration's own channel,
+  // to the trapezoidal rule's corrected error O((w dt)^4), and the channel integrated once is
+  // the derivative of that.
+  TEST_CASE("the integrals of a sine are the sine's through the same high-pass") {
+    const double dt = 1.0 / 2048, w = 2 * 3.141592653589793 * 30;
+    momentid::IntegrationFilter filter({.corner = 3, .dt = dt, .integrals = {2, 1, 0}});
+    CHECK(filter.warm_up() > 1000);
+    CHECK(filter.warm_up() < 20000);
+    const std::size_t rows = filter.warm_up() + 4096;
+    std::vector<double> values;
+    for (std::size_t n = 0; n < rows; ++n) {
+      const double a = std::sin(w * static_cast<double>(n) * dt);
+      values.insert(values.end(), {a, a, a});
+    }
+    filter.start_run();
+    // In two pieces, as blocks come: the same as in one.
+    const std::size_t first = filter.apply(values.data(), 1000);
+    CHECK(first == 0);
+    const double* out = values.data() + 3000;  // the rows kept, at the front of the block
+    const std::size_t kept = filter.apply(values.data() + 3000, rows - 1000);
+    REQUIRE(kept == 4096);
+    double worst_y = 0, worst_v = 0;
+    for (std::size_t n = 1; n + 1 < kept; ++n) {
+      const double* row = out + 3 * n;
+      worst_y = std::max(worst_y, std::abs(row[0] * w * w + row[2]));
+      // v from the central difference of y, whose own error is (w dt)^2/6 of it.
+      const double v = (out[3 * (n + 1)] - out[3 * (n - 1)]) / (2 * dt);
+      worst_v = std::max(worst_v, std::abs(row[1] - v) / (1 / w));
+    }
+    CHECK(worst_y < 1e-5);
+    CHECK(worst_v < 2e-3);
+  }
+
+  TEST_CASE("an offset on the acceleration leaves no drift in its integrals") {
+    momentid::IntegrationFilter filter({.corner = 2, .dt = 1e-3, .integrals = {2}});
+    std::vector<double> values(filter.warm_up() + 100, 5.0);
+    filter.start_run();
+    const std::size_t kept = filter.apply(values.data(), values.size());
+    REQUIRE(kept == 100);
+    for (std::size_t n = 0; n < kept; ++n) CHECK(std::abs(values[n]) < 1e-9);
+  }
+
+  TEST_CASE("a corner beyond Nyquist or an integral count above 2 is refused") {
+    CHECK_THROWS_AS(momentid::IntegrationFilter({.corner = 600, .dt = 1e-3, .integrals = {2}}),
+                    std::invalid_argument);
+    CHECK_THROWS_AS(momentid::IntegrationFilter({.corner = 2, .dt = 1e-3, .integrals = {3}}),
+                    std::invalid_argument);
   }
 }

@@ -318,6 +318,23 @@ TEST_SUITE("app") {
     CHECK(std::string(error_from<momentid::UsageError>([&] {
                         momentid::check(source, &model, {.lags = 0});
                       }).what()) == "lags: expected a number from 1 to 1000, found 0");
+    CHECK(std::string(error_from<momentid::UsageError>([&] {
+                        momentid::identify(model, source, {.integrate = {"x"}});
+                      }).what()) == "integrate: 'x' is not a state of model duffing");
+    CHECK(std::string(error_from<momentid::UsageError>([&] {
+                        momentid::identify(model, source, {.integrate_corner = 2.0});
+                      }).what()) ==
+          "integrate_corner: there is no state to form: give integrate too");
+    CHECK(std::string(error_from<momentid::UsageError>([&] {
+                        momentid::identify(model, source,
+                                           {.integrate = {"y"}, .integrate_corner = -1.0});
+                      }).what()) == "integrate_corner: expected a positive frequency in Hz");
+    CHECK(std::string(error_from<momentid::UsageError>([&] {
+                        momentid::identify(
+                            model, source,
+                            {.method = momentid::Method::kZeroLag, .integrate = {"y"}});
+                      }).what()) ==
+          "method: the zero-lag equations do not read states formed by integrate");
 
     momentid::SimulationOptions simulation;
     simulation.inputs.resize(1);

@@ -75,6 +75,19 @@ struct DataOptions {
   std::vector<double> offsets;
   // Channels computed from the others, after the offsets are subtracted.
   std::vector<ComputedChannel> computed;
+
+  // Channels formed from a column of their derivative (identify's --integrate): every channel
+  // is high-passed by a fourth-order Butterworth filter with corner `corner` (Hz, at the sample
+  // interval `dt`), and a formed channel, read from its derivative's column, is integrated
+  // `integrals[c]` times (1 or 2) by the trapezoidal rule inside that filter, so that the
+  // filtered channels keep the linear relations of the raw ones. Each file is read whole, and
+  // the first rows of each run, while the filter settles to 1e-9 of its start, are dropped.
+  struct Integration {
+    double corner = 0;
+    double dt = 0;
+    std::vector<int> integrals;  // per channel: states, inputs, derivatives (0: filtered alone)
+  };
+  std::optional<Integration> integration;
 };
 
 // What one pass over a data file yields.

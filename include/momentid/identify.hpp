@@ -62,6 +62,14 @@ struct IdentifyOptions {
   // Model variables whose mean is removed before the moments are formed (a sensor offset on a
   // symmetric system): the means come from a first pass over the data.
   std::vector<std::string> center;
+  // States to form from the column of their derivative (`--integrate y`), for records that show
+  // them only through it (y'' = a) and models with terms nonlinear in them: the column is
+  // integrated in the pass inside a high-pass filter that every channel goes through
+  // (DataOptions::Integration), with the corner `integrate_corner` (Hz), by default half the
+  // lowest frequency of the record's band (docs/model-language.md). The formed state is then
+  // read as measured, biased where the filter cuts its nonlinear terms' low frequencies.
+  std::vector<std::string> integrate;
+  std::optional<double> integrate_corner;
   // The sampling bias (`--extrapolate dt`): the zero-lag estimate again from every other sample
   // of a record whose inputs are samples of a continuous signal (not held), both halves; their
   // difference estimates the bias of the estimate at the data's dt, which is removed
@@ -162,6 +170,21 @@ struct IdentifyResult {
   bool gmm = false;
   std::map<std::string, double>
       centered;  // the means removed, by variable (IdentifyOptions::center)
+  // The states formed from a column of their derivative (IdentifyOptions::integrate).
+  struct Integration {
+    struct Formed {
+      std::string state;
+      std::string variable, column;  // the model's variable for the column, and the column
+      int integrals = 0;  // 2 for y from a (y'' = a), 1 for v from it
+    };
+    std::vector<Formed> formed;
+    double corner = 0;  // Hz
+    double dt = 0;      // the sample interval the filter is designed for
+    bool corner_chosen = false;
+    std::string band;        // how the corner was chosen, when it was
+    std::size_t settle = 0;  // rows dropped at the start of each run
+  };
+  std::optional<Integration> integration;
   // The means of the channels read (after `centered` was removed), states then inputs.
   std::vector<ChannelMean> means;
 

@@ -234,7 +234,8 @@ def identify(model: Union[Model, PathLike], data: Any, *,
              input_shift: Optional[int] = None, missing: Optional[str] = None,
              skip_rows: Optional[int] = None, decimal: Optional[str] = None,
              dt_from: Optional[str] = None, threads: Optional[int] = None,
-             extrapolate: bool = False) -> IdentifyResult:
+             extrapolate: bool = False, integrate: Union[None, str, Sequence[str]] = None,
+             integrate_corner: Optional[float] = None) -> IdentifyResult:
     """Estimates the model's parameters from a record, as `momentid identify MODEL DATA`.
 
     model: a Model or a model file's path.
@@ -247,7 +248,11 @@ def identify(model: Union[Model, PathLike], data: Any, *,
       .npy, .mat or HDF5 file (`names` for a 2-D .npy array's columns too, `dt_from` for the
       interval stored in a .mat or HDF5 file: "Ts", or "1/fs" for a rate).
     columns: {model variable: data column} for data whose columns have other names, as
-      `--columns NAME=COLUMN` ({"y": "disp"} reads state y from column disp).
+      `--columns NAME=COLUMN` ({"y": "disp"} reads state y from column disp); a state's
+      derivative names a column of it ({"v'": "accel"}), as a `measured` statement would.
+    integrate, integrate_corner: states formed from the column of their derivative, inside a
+      high-pass filter of that corner (Hz; by default from the record's band), as
+      `--integrate y --integrate-corner HZ`.
     dt: the sample interval (overrides the `t` column).
     method ("auto", "zero-lag", "lagged"): which moment equations (`--method`); by default the
       lagged ones, unbiased under white sensor noise, unless the record is simulated without
@@ -272,6 +277,8 @@ def identify(model: Union[Model, PathLike], data: Any, *,
     source, name, metadata, keep, names = _data_of(data, names)
     if isinstance(center, str):
         center = model.states + model.inputs if center == "all" else [center]
+    if isinstance(integrate, str):
+        integrate = [integrate]
     if not isinstance(extrapolate, bool):
         raise UsageError(f"extrapolate: expected True or False, found {extrapolate!r}")
     options = _options(multipliers=_monomials(multipliers), degree=degree, batches=batches,
@@ -279,7 +286,8 @@ def identify(model: Union[Model, PathLike], data: Any, *,
                        noise=noise, fix=fix, center=center, input_hold=input_hold,
                        input_shift=input_shift, columns=columns, dt=dt, missing=missing,
                        skip_rows=skip_rows, decimal=decimal, names=names, dt_from=dt_from,
-                       threads=threads, extrapolate="dt" if extrapolate else None)
+                       threads=threads, extrapolate="dt" if extrapolate else None,
+                       integrate=integrate, integrate_corner=integrate_corner)
     text, value = _momentid._identify(model._model, source, name, metadata, options)
     del keep
     return IdentifyResult(text, value)

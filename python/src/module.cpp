@@ -259,6 +259,10 @@ IdentifyOptions identify_options(const Model& model, const py::dict& options) {
   out.noise = get<std::map<std::string, double>>(options, "noise");
   if (auto fixed = get<std::map<std::string, double>>(options, "fix")) out.fixed = *fixed;
   if (auto center = get<std::vector<std::string>>(options, "center")) out.center = *center;
+  if (auto integrate = get<std::vector<std::string>>(options, "integrate")) {
+    out.integrate = *integrate;
+  }
+  out.integrate_corner = get<double>(options, "integrate_corner");
   return out;
 }
 

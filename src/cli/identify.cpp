@@ -162,6 +162,13 @@ Command add_identify(CLI::App& app) {
                   "parameters taken as known, NAME=VALUE,...: their terms move to the right-hand "
                   "side")
       ->delimiter(',');
+  sub->add_option("--integrate", options.integrate,
+                  "form these states (NAME,...) from the column of their derivative, for a record "
+                  "without them: integrated in the pass inside a high-pass filter on every channel")
+      ->delimiter(',');
+  sub->add_option("--integrate-corner", options.integrate_corner,
+                  "the corner of --integrate's high-pass filter, Hz (default: half the lower edge "
+                  "of the record's band)");
   sub->add_option("--center", command->center,
                   "remove the means of these channels (NAME,... or all) before forming the "
                   "moments: a sensor offset on a symmetric system")

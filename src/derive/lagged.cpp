@@ -183,8 +183,8 @@ class LagDeriver {
                                      "': the record shows it only through '" + column + "' (" +
                                      definition(v) + "), which gives the terms linear in " + name +
                                      " alone (give the record a column '" + name + "', or form " +
-                                     name + " from '" + column + "' with --integrate " + name +
-                                     ")");
+                                     name + " from '" + column + "' with " +
+                                     UsageError::mention("integrate") + " " + name + ")");
     }
     // Name the unmeasured variable the term would need, with how the data show it.
     std::string why = "channels the data lack: it is not a time derivative of measured channels";

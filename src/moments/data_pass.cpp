@@ -314,12 +314,20 @@ DataMoments moments_from_data(const DataSource& source, const std::vector<std::s
     for (ComputedChannel& c : read_options.computed) {
       for (auto& [coefficient, monomial] : c.argument) monomial = order.monomial(monomial);
     }
+    if (options.integration) {
+      read_options.integration->integrals = order.values(options.integration->integrals);
+    }
+  }
+  if (options.integration && options.integration->integrals.size() != channels) {
+    throw std::invalid_argument("moments_from_data: one integral count per channel needed");
   }
   const bool any_moments = !keys.empty();
   // Rows that depend on their neighbours across a shard's edge in ways the shard cannot see
   // (a shifted input, a row dropped between two, every other row kept) keep files whole.
+  // So do filters, which run through each file from its start.
   const bool whole_files = options.input_shift != 0 || options.stride > 1 ||
-                           options.record.layout.missing != MissingValues::kError;
+                           options.record.layout.missing != MissingValues::kError ||
+                           options.integration.has_value();
   const std::vector<DataSource::Shard> shards = source.shards(
       whole_files ? std::numeric_limits<std::size_t>::max() : options.record.control.shard_bytes);
   request.part.before = std::max<std::size_t>({max_lag_of(keys), options.lags, 1});

@@ -5,6 +5,7 @@
 #include <deque>
 
 #include "moments/blocks.hpp"
+#include "moments/integration.hpp"
 
 namespace momentid {
 namespace {
@@ -139,11 +140,14 @@ class ShardPass {
         widen_(setup),
         shift_(setup.layout.states, setup.layout.inputs, options_.input_shift),
         decimate_(widen_.width(), options_.stride, options_.phase),
-        history_values_(out_.moments.max_lag() * widen_.width()) {}
+        history_values_(out_.moments.max_lag() * widen_.width()) {
+    if (options_.integration) integration_.emplace(*options_.integration);
+  }
 
   // Takes the next block; true if it holds rows of the shard's own.
   bool take(DataBlock& block) {
     subtract_offsets(block);
+    if (integration_ && !filter(block)) return false;
     switch (block.zone) {
       case RowZone::kBefore:
         before(block);
@@ -173,6 +177,20 @@ class ShardPass {
     for (std::size_t r = 0; r < block.rows; ++r) {
       for (std::size_t c = 0; c < channels_; ++c) values[r * channels_ + c] -= options_.offsets[c];
     }
+  }
+
+  // Filters the block's rows (a shard is a whole file), dropping each run's first rows while the
+  // filter settles; the first rows kept start the run. False when none is kept.
+  bool filter(DataBlock& block) {
+    if (block.run_starts) {
+      integration_->start_run();
+      run_pending_ = true;
+    }
+    block.rows = integration_->apply(block.values.data(), block.rows);
+    if (block.rows == 0) return false;
+    block.run_starts = run_pending_;
+    run_pending_ = false;
+    return true;
   }
 
   // Rows of the run before the shard: history for the lagged factors and the lagged pairs.
@@ -232,6 +250,8 @@ class ShardPass {
   std::vector<double> history_;  // of the current run, before the shard
   std::size_t history_values_;
   bool owned_ = false;
+  std::optional<IntegrationFilter> integration_;
+  bool run_pending_ = false;
 };
 
 }  // namespace

@@ -16,6 +16,10 @@ at each sample, computed from the exact states and force.
                       within 3 standard errors.
   acceleration_duffing  the force and a alone, the Duffing oscillator: exit 2 before the pass,
                       naming y and --integrate.
+  integrate           the force and a alone of lab.hardening (physical units, 5-150 Hz), with
+                      --integrate y: y formed, the bias warned of, and k and k3 within 3
+                      standard errors, as examples/accelerometer found them (the damping is
+                      biased by the filter, as the warning says, and not checked).
   validate            validate on the force and a alone of the one-mass chain, with the
                       estimates: it compares a (the record's only output) with the acceleration
                       of the simulation, fit above 95%, and judges the model consistent.
@@ -131,6 +135,37 @@ def acceleration_chain(momentid, models, workdir):
     return linear(momentid, workdir, [1.0, 1.5], 20271105)[0]
 
 
+HARDENING_MODEL = """model hardening
+state y, v
+input x
+measured a = v'
+param c, k, k3
+const m = 1
+y' = v
+m*v' = -c*v - k*y - k3*y^3 + x
+"""
+
+
+def integrate(momentid, models, workdir):
+    rng = np.random.default_rng(20271108)
+    clean = lab.hardening(rng, FS, 200000)
+    path, model = f"{workdir}/a_x.csv", f"{workdir}/hardening.mom"
+    write(rng, clean, ("a", "x"), path)
+    with open(model, "w") as out:
+        out.write(HARDENING_MODEL)
+    print("hardening.mom on a_x.csv, --integrate y:")
+    report = lab.identify(momentid, model, path, "--integrate", "y")
+    lab.describe(report, lab.HARDENING)
+    if "failed" in report:
+        return False
+    z = {name: abs(report["parameters"][name]["estimate"] - value)
+         / report["parameters"][name]["std_error"] for name, value in lab.HARDENING.items()}
+    warned = any("was formed from 'a'" in w for w in report["diagnostics"]["warnings"])
+    formed = report["integration"]["formed"] == [
+        {"state": "y", "column": "a", "integrals": 2}]
+    return warned and formed and z["k"] <= 3 and z["k3"] <= 3
+
+
 def validate(momentid, models, workdir):
     passed, model, path, estimates = linear(momentid, workdir, [1.0], 20271107)
     result = subprocess.run([momentid, "validate", model, path, "--estimates", estimates,
@@ -158,7 +193,8 @@ def acceleration_duffing(momentid, models, workdir):
 
 CASES = {"displacement": displacement, "all_channels": all_channels, "velocity": velocity,
          "acceleration_sdof": acceleration_sdof, "acceleration_chain": acceleration_chain,
-         "acceleration_duffing": acceleration_duffing, "validate": validate}
+         "acceleration_duffing": acceleration_duffing, "integrate": integrate,
+         "validate": validate}
 
 if __name__ == "__main__":
     case, momentid, models, workdir = sys.argv[1:5]

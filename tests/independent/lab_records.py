@@ -22,6 +22,8 @@ from scipy.signal import lfilter
 
 # The Duffing oscillator m y'' = -c y' - k y - eps y^3 + x (models/duffing.mom, m = 1) at 5 Hz.
 SDOF = {"c": 4.0, "k": 1024.0, "eps": 400.0}
+# lab.hardening: m y'' + c y' + k y + k3 y^3 = x with m = 1, in SI units.
+HARDENING = {"c": 10.0, "k": 4.0e4, "k3": 4.0e9}
 # models/duffing_2dof.mom with time 15 times faster: modes at 5.5 and 8.2 Hz.
 TWO_MASS = {"c1": 6.0, "k1": 900.0, "eps1": 225.0, "c2": 4.5, "k2": 2025.0, "eps2": 112.5,
             "kc": 450.0}
@@ -81,6 +83,20 @@ def sdof(rng, fs, samples, rms=800.0, p=SDOF, asymmetric=None):
         y, v = s
         return (v, -c * v - k * y - eps * y**3 - k2 * y**2 - c3 * v**3 + x)
     return oscillator(rng, rates, ("y", "v"), fs, samples, (1.0, 40.0), rms, 10.0)
+
+
+def hardening(rng, fs, samples):
+    """A shaker test of a hardening oscillator in physical units: m = 1, c = 10, k = 4e4 (31.8 Hz),
+    k3 = 4e9 (k3 y^2 about 0.6 k at one standard deviation of y), the force band-limited to
+    5-150 Hz with RMS 60; the record holds y, v, the acceleration a and the force x."""
+    p = HARDENING
+
+    def rates(s, x):
+        y, v = s
+        return (v, x - p["c"] * v - p["k"] * y - p["k3"] * y**3)
+    clean = oscillator(rng, rates, ("y", "v"), fs, samples, (5.0, 150.0), 60.0, 2.0)
+    clean["a"] = clean["x"] - p["c"] * clean["v"] - p["k"] * clean["y"] - p["k3"] * clean["y"]**3
+    return clean
 
 
 def two_mass(rng, fs, samples, rms, p=TWO_MASS):

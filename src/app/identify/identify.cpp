@@ -14,7 +14,10 @@ IdentifyResult identify(const Model& model, const DataSource& source,
   IdentifyResult result;
   result.model = std::make_shared<const Model>(model);
   result.data_name = source.name();
-  const RecordSurvey record = survey_record(model, source, options.record);
+  RecordSurvey record = survey_record(model, source, options.record);
+  if (!options.integrate.empty()) {
+    result.integration = plan_integration(model, source, options, record.present);
+  }
   const EquationChoice choice = choose_equations(model, record, options);
   result.why = choice.why;
   switch (choice.kind) {

@@ -8,6 +8,7 @@
 
 #include "app/identify/steps.hpp"
 #include "common/number.hpp"
+#include "moments/integration.hpp"
 
 namespace momentid {
 namespace {
@@ -23,9 +24,9 @@ bool function_holds(const VariableFunction& f, std::size_t c) {
                      [&](const auto& term) { return term.second[c] != 0; });
 }
 
-// Per measured state that the lagged equations read, or derivative column that stands for its
-// unmeasured state: the lag at which its autocorrelation first falls below 1/e, from the lagged
-// moments C[y;y](s) of the pass; 0 when it stays above across the window.
+// Per measured (or formed) state that the lagged equations read, or derivative column that
+// stands for its unmeasured state: the lag at which its autocorrelation first falls below 1/e,
+// from the lagged moments C[y;y](s) of the pass; 0 when it stays above across the window.
 std::map<std::string, int> correlation_lags(const IdentifyResult& r,
                                             const std::vector<int>& channel) {
   const LaggedSystem& system = *r.lagged->system;
@@ -33,13 +34,20 @@ std::map<std::string, int> correlation_lags(const IdentifyResult& r,
   std::map<Moment, std::size_t> index;
   for (std::size_t k = 0; k < r.lagged->moments.size(); ++k) index.emplace(r.lagged->moments[k], k);
   std::map<std::string, int> out;
+  const std::vector<VariableReading> readings = variable_readings(model, system.measured);
+  const auto formed_from = [&](const std::string& column) {
+    return r.integration && std::any_of(r.integration->formed.begin(), r.integration->formed.end(),
+                                        [&](const auto& f) { return f.variable == column; });
+  };
   for (std::size_t v = 0; v < model.channel_count(); ++v) {
     const Variable& variable = model.variables()[v];
+    // A derivative column counts where its state is read through it, not formed from it.
     const bool stands_for_state =
         variable.kind == VariableKind::kState ||
-        (variable.kind == VariableKind::kDerivative &&
-         !system.measured[static_cast<std::size_t>(
-             model.measured_derivatives()[static_cast<std::size_t>(variable.index)].state)]);
+        (variable.kind == VariableKind::kDerivative && !formed_from(variable.name) &&
+         readings[static_cast<std::size_t>(
+                      model.measured_derivatives()[static_cast<std::size_t>(variable.index)].state)]
+                 .order < 0);
     if (channel[v] < 0 || !system.measured[v] || !stands_for_state) continue;
     const ChannelStatistics& c = r.data.channels[static_cast<std::size_t>(channel[v])];
     if (!(c.variance > 0)) continue;
@@ -268,6 +276,21 @@ LaggedChannels read_lagged(IdentifyResult& result, const LagOptions& lag_options
   }
   DataOptions data_options = pass_options(*result.model, options);
   data_options.derivatives = c.derivatives;
+  if (const auto& integration = result.integration) {
+    data_options.integration = DataOptions::Integration{
+        .corner = integration->corner, .dt = integration->dt, .integrals = {}};
+    DataOptions::Integration& f = *data_options.integration;
+    for (const std::string& name : result.lagged->channels) {
+      int integrals = 0;
+      for (const auto& formed : integration->formed) {
+        if (formed.state == name) {
+          integrals = formed.integrals;
+          data_options.record.columns[name] = formed.column;
+        }
+      }
+      f.integrals.push_back(integrals);
+    }
+  }
   // The optimal weighting estimates the equations' covariance from the batches.
   data_options.min_batches = kBatchesPerEquation * probe.rows.a.size();
   data_options.offsets =
@@ -300,6 +323,24 @@ std::vector<double> noise_variances(const IdentifyResult& result, const LaggedCh
       noise[c] = std::max(0.0, *v);
     }
   }
+  // A formed state's noise is its column's, through the filter: colored, so that its
+  // autocorrelation does not show it.
+  if (const auto& integration = result.integration) {
+    const std::vector<std::string>& names = result.lagged->channels;
+    const IntegrationFilter filter(
+        {.corner = integration->corner, .dt = integration->dt, .integrals = {0, 1, 2}});
+    for (const auto& formed : integration->formed) {
+      const auto at = [&](const std::string& name) {
+        return static_cast<std::size_t>(std::find(names.begin(), names.end(), name) -
+                                        names.begin());
+      };
+      const std::size_t state = at(formed.state), column = at(formed.variable);
+      if (state >= noise.size() || column >= noise.size()) continue;
+      if (options.noise && options.noise->count(formed.state)) continue;
+      noise[state] = noise[column] * filter.noise_gain(static_cast<std::size_t>(formed.integrals)) /
+                     filter.noise_gain(0);
+    }
+  }
   return noise;
 }
 
@@ -313,6 +354,19 @@ void identify_lagged(IdentifyResult& result, const DataSource& source,
   if (options.lags) std::tie(lag_options.first_lag, lag_options.last_lag) = *options.lags;
   lag_options.instruments = options.instruments;
   lag_options.measured = measured;
+  if (result.integration && !options.instruments) {
+    // The formed states carry the integral of the column's noise, slow and correlated across
+    // every lag: the columns they are formed from are the instruments, their noise white.
+    lag_options.instruments.emplace();
+    for (const auto& formed : result.integration->formed) {
+      Monomial m(model.variables().size(), 0);
+      m[static_cast<std::size_t>(model.variable_index(formed.variable))] = 1;
+      if (std::find(lag_options.instruments->begin(), lag_options.instruments->end(), m) ==
+          lag_options.instruments->end()) {
+        lag_options.instruments->push_back(m);
+      }
+    }
+  }
   const std::string instruments_cut = fit_to_budget(model, lag_options, options);
   LaggedChannels channels = read_lagged(result, lag_options, source, options);
   // The default lags span about five correlation times of the measured states: when the
@@ -366,6 +420,16 @@ void identify_lagged(IdentifyResult& result, const DataSource& source,
       {.gmm = result.gmm, .fixed = fixed_values(model, options.fixed), .normalise_rows = true});
   const std::vector<std::string> noisy = noisy_function_warnings(result, channels);
   result.estimate.warnings.insert(result.estimate.warnings.end(), noisy.begin(), noisy.end());
+  if (const auto& integration = result.integration) {
+    for (const auto& formed : integration->formed) {
+      result.estimate.warnings.push_back(
+          "'" + formed.state + "' was formed from '" + formed.column + "' inside a high-pass at " +
+          number(integration->corner, "%.3g") +
+          " Hz: the terms nonlinear in it are biased where the filter cuts their low "
+          "frequencies, the damping most, and the intervals do not include that bias "
+          "(docs/model-language.md, \"Forming a state from its acceleration\")");
+    }
+  }
 }
 
 }  // namespace momentid

@@ -82,6 +82,23 @@ void IdentifyOptions::validate(const Model& model) const {
                                         " to " + std::to_string(kMaxInputShift) + ", found " +
                                         std::to_string(input_shift));
   }
+  for (const std::string& name : integrate) {
+    const int v = model.variable_index(name);
+    if (v < 0 || model.variables()[static_cast<std::size_t>(v)].kind != VariableKind::kState) {
+      throw UsageError("integrate", "'" + name + "' is not a state of model " + model.name());
+    }
+  }
+  if (method == Method::kZeroLag && !integrate.empty()) {
+    throw UsageError("method", "the zero-lag equations do not read states formed by " +
+                                   UsageError::mention("integrate"));
+  }
+  if (integrate_corner && !(std::isfinite(*integrate_corner) && *integrate_corner > 0)) {
+    throw UsageError("integrate_corner", "expected a positive frequency in Hz");
+  }
+  if (integrate_corner && integrate.empty()) {
+    throw UsageError("integrate_corner", "there is no state to form: give " +
+                                             UsageError::mention("integrate") + " too");
+  }
   if (method == Method::kZeroLag && (lags || instruments)) {
     throw UsageError("method", "the zero-lag equations take no lags or instruments");
   }

@@ -23,6 +23,8 @@ EquationChoice choose_equations(const Model& model, const RecordSurvey& record,
   if (options.method == Method::kZeroLag) return {kZeroLag, "asked for"};
   if (options.method == Method::kLagged) return {kLagged, "asked for"};
   if (options.lags || options.instruments) return {kLagged, "lags or instruments were given"};
+  if (!options.integrate.empty())
+    return {kLagged, "they read the states formed from a derivative's column"};
   const bool all_measured = std::all_of(measured.begin(), measured.end(), [](bool m) { return m; });
   if (!all_measured) {
     // Data that cannot show a state, not even as a derivative, get the zero-lag pass and its

@@ -349,6 +349,20 @@ Json diagnostics_json(const IdentifyResult& r) {
   return out;
 }
 
+// "formed (--integrate): y from 'a' (integrated twice); every channel high-passed at ..."
+std::string integration_text(const IdentifyResult::Integration& f) {
+  std::string out = "formed (--integrate):";
+  for (std::size_t i = 0; i < f.formed.size(); ++i) {
+    const auto& s = f.formed[i];
+    out += std::string(i ? ", " : " ") + s.state + " from '" + s.column + "' (integrated " +
+           (s.integrals == 2 ? "twice" : "once") + ")";
+  }
+  out += "; every channel high-passed at " + number(f.corner, "%.3g") +
+         " Hz (fourth-order Butterworth" + (f.corner_chosen ? ", " + f.band : std::string()) +
+         "), the first " + std::to_string(f.settle) + " rows of each run dropped while it settles";
+  return out;
+}
+
 }  // namespace
 
 std::string format_text(const IdentifyResult& r) {
@@ -364,6 +378,7 @@ std::string format_text(const IdentifyResult& r) {
   out << "  chosen: " << r.why << "\n";
   if (r.lagged && !r.lagged->cut.empty()) out << "  " << r.lagged->cut << "\n";
   if (r.lagged && !noise_text(r).empty()) out << noise_text(r) << "\n";
+  if (r.integration) out << integration_text(*r.integration) << "\n";
   if (!r.centered.empty()) {
     out << "means removed (--center):";
     for (const auto& [name, mean] : r.centered) out << " " << name << " " << number(mean, "%.4g");
@@ -396,6 +411,17 @@ nlohmann::ordered_json json_value(const IdentifyResult& r) {
   if (r.estimate.optimal)
     out["least_squares"] = parameters_json(r.estimate.least_squares.parameters);
   out["method"] = method_json(r);
+  if (const auto& f = r.integration) {
+    Json formed = Json::array();
+    for (const auto& s : f->formed) {
+      formed.push_back({{"state", s.state}, {"column", s.column}, {"integrals", s.integrals}});
+    }
+    out["integration"] = {{"formed", formed},
+                          {"corner_hz", json_value(f->corner)},
+                          {"corner_chosen", f->corner_chosen},
+                          {"band", f->band},
+                          {"settle_rows", f->settle}};
+  }
   if (!r.centered.empty()) {
     Json& centered = out["centered"] = Json::object();
     for (const auto& [name, mean] : r.centered) centered[name] = json_value(mean);

@@ -39,6 +39,15 @@ struct EquationChoice {
 EquationChoice choose_equations(const Model& model, const RecordSurvey& record,
                                 const IdentifyOptions& options);
 
+// For IdentifyOptions::integrate: the column each named state is formed from (the record must
+// show it only as the integral of one) and the filter's corner, given or chosen from the band of
+// the record's first input with a column (else of the column integrated); marks the formed
+// states present. Throws UsageError naming integrate, DataError for a record without a sample
+// interval or too short for its band.
+IdentifyResult::Integration plan_integration(const Model& model, const DataSource& source,
+                                             const IdentifyOptions& options,
+                                             std::vector<bool>& present);
+
 // The state and input names of `model`, in declaration order: the channels of a zero-lag pass.
 std::vector<std::string> state_names(const Model& model);
 std::vector<std::string> input_names(const Model& model);
