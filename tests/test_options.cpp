@@ -92,6 +92,33 @@ TEST_SUITE("options") {
           "columns: v'=accel and a=accel name the same channel, a");
   }
 
+  TEST_CASE("a record's metadata declare its derivative columns to a model that lacks them") {
+    const momentid::Model model = model_file("duffing.mom");
+    const std::vector<double> values(4, 0.0);
+    momentid::MemoryData data;
+    for (const char* name : {"y", "x", "acc"}) data.columns.push_back({name, values.data()});
+    data.rows = values.size();
+    // As simulate writes it for models/duffing_accelerometer.mom, and another model's column.
+    data.metadata.add_line({{"measured.acc", "y''"}, {"measured.q", "w'"}});
+    const momentid::DataSource source = momentid::DataSource::memory(data);
+    RecordOptions options;
+    const momentid::Model with = momentid::declare_derivative_columns(model, options, source);
+    REQUIRE(with.measured_derivatives().size() == 1);
+    CHECK(with.measured_derivatives()[0].name == "acc");
+    CHECK(with.measured_derivatives()[0].state == 1);
+    // A model with its own column for v', or a column given for it, keeps that.
+    RecordOptions given{.columns = {{"v'", "other"}}};
+    CHECK(
+        momentid::declare_derivative_columns(model, given, source).measured_derivatives()[0].name ==
+        "other");
+    RecordOptions own;
+    const momentid::Model declared = model_file("duffing_accelerometer.mom");
+    CHECK(momentid::declare_derivative_columns(declared, own, source)
+              .measured_derivatives()[0]
+              .name == "a");
+    CHECK(own.columns.empty());
+  }
+
   TEST_CASE("parameter values by name become the model's values in order, nominal where absent") {
     const momentid::Model model = model_file("duffing.mom");  // c = 0.5, k = 4, eps = 1
     const auto values = momentid::parameter_vector(

@@ -76,5 +76,10 @@ struct RecordOptions {
 // UsageError ("columns") for a key that is not a state's first or second derivative, with the
 // message the `measured` statement would get.
 Model declare_derivative_columns(const Model& model, RecordOptions& record);
+// The same, first adding the columns that the metadata of `source` declare (`measured.a=v'`, as
+// simulate writes them and convert keeps them) for each derivative that neither the model nor
+// `record.columns` gives a column.
+Model declare_derivative_columns(const Model& model, RecordOptions& record,
+                                 const DataSource& source);
 
 }  // namespace momentid

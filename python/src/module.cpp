@@ -588,8 +588,8 @@ PYBIND11_MODULE(_momentid, m) {
         [](const Model& model, const py::object& data, const std::string& name,
            const std::map<std::string, std::string>& metadata, const py::dict& options) {
           IdentifyOptions identify_with = identify_options(model, options);
-          const Model with = declare_derivative_columns(model, identify_with.record);
           const DataSource source = data_source(data, name, metadata);
+          const Model with = declare_derivative_columns(model, identify_with.record, source);
           const IdentifyResult result = identify(with, source, identify_with);
           return py::make_tuple(format_text(result), to_python(json_value(result)));
         });
@@ -599,10 +599,11 @@ PYBIND11_MODULE(_momentid, m) {
     CheckOptions check_with;
     if (auto lags = get<std::size_t>(options, "lags")) check_with.lags = *lags;
     check_with.record = record_options(options);
-    std::optional<Model> with;
-    if (!model.is_none())
-      with = declare_derivative_columns(model.cast<const Model&>(), check_with.record);
     const DataSource source = data_source(data, name, metadata);
+    std::optional<Model> with;
+    if (!model.is_none()) {
+      with = declare_derivative_columns(model.cast<const Model&>(), check_with.record, source);
+    }
     const CheckResult result = check(source, with ? &*with : nullptr, check_with);
     return py::make_tuple(format_text(result), check_dict(result));
   });
@@ -618,8 +619,8 @@ PYBIND11_MODULE(_momentid, m) {
         [](const Model& model, const py::object& data, const std::string& name,
            const std::map<std::string, std::string>& metadata, const py::dict& options) {
           ValidateOptions validate_with = validate_options(model, options);
-          const Model with = declare_derivative_columns(model, validate_with.replay.record);
           const DataSource source = data_source(data, name, metadata);
+          const Model with = declare_derivative_columns(model, validate_with.replay.record, source);
           ValidateResult result = validate(with, source, validate_with);
           result.parameters_from =
               get<std::string>(options, "parameters_from").value_or("the model's nominal values");

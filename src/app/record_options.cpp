@@ -70,6 +70,41 @@ std::optional<Model> with_measured(const Model& model, const std::string& name,
 
 }  // namespace
 
+Model declare_derivative_columns(const Model& model, RecordOptions& record,
+                                 const DataSource& source) {
+  const DataMetadata metadata =
+      source.open({.names = {}, .rename = record.columns, .min_rows = 0, .layout = record.layout})
+          ->metadata();
+  std::vector<int> given;  // the states whose derivative has a column already
+  for (const MeasuredDerivative& d : model.measured_derivatives()) given.push_back(d.state);
+  for (const auto& [key, column] : record.columns) {
+    if (key.find('\'') != std::string::npos) {
+      given.push_back(derivative_state(model, key, key + "=" + column));
+    }
+  }
+  for (const DataMetadata::Line& line : metadata.lines()) {
+    for (const auto& [key, written] : line) {
+      if (!key.starts_with("measured.")) continue;
+      // A declaration that does not fit this model (the record made by another) is left alone.
+      const std::string column = key.substr(std::string("measured.").size());
+      const std::string base = written.substr(0, written.find('\''));
+      const int v = model.variable_index(base);
+      if (v < 0 || model.variables()[static_cast<std::size_t>(v)].kind != VariableKind::kState ||
+          written.size() - base.size() > 2) {
+        continue;
+      }
+      const int state = derivative_state(model, written, written);
+      if (state < 0 || model.kinematic(state) ||
+          std::find(given.begin(), given.end(), state) != given.end()) {
+        continue;
+      }
+      record.columns.emplace(written, column);
+      given.push_back(state);
+    }
+  }
+  return declare_derivative_columns(model, record);
+}
+
 Model declare_derivative_columns(const Model& model, RecordOptions& record) {
   Model out = model;
   std::map<std::string, std::string> columns;

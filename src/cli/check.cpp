@@ -37,10 +37,12 @@ int run_check(CheckCommand& command) {
   }
   command.options.record.hold = hold_option(command.hold);
   command.options.record.columns = column_map(command.columns);
-  if (model) model = declare_derivative_columns(*model, command.options.record);
+  // Once: a pipe or standard input is read whole into a file of its own.
+  const DataSource source = data_sources(files);
+  if (model) model = declare_derivative_columns(*model, command.options.record, source);
   TerminalProgress progress(!command.quiet);
   command.options.record.control.progress = progress.callback();
-  const CheckResult result = check(data_sources(files), model ? &*model : nullptr, command.options);
+  const CheckResult result = check(source, model ? &*model : nullptr, command.options);
   progress.finish();
   write_whole_file("-", format_text(result));
   return 0;

@@ -65,9 +65,10 @@ std::optional<std::map<std::string, double>> noise_option(const Model& model,
 int run_identify(IdentifyCommand& command) {
   IdentifyOptions& options = command.options;
   options.record.columns = column_map(command.columns);
-  const Model model = declare_derivative_columns(
-      model_argument(command.model, command.data.front(), "identify MODEL DATA..."),
-      options.record);
+  const Model file = model_argument(command.model, command.data.front(), "identify MODEL DATA...");
+  // Once: a pipe or standard input is read whole into a file of its own.
+  const DataSource source = data_sources(command.data);
+  const Model model = declare_derivative_columns(file, options.record, source);
   if (command.multipliers) {
     options.multipliers = parse_multiplier_list(model, *command.multipliers, "--multipliers");
   }
@@ -98,7 +99,7 @@ int run_identify(IdentifyCommand& command) {
   }
   TerminalProgress progress(!command.quiet && command.format != "json");
   options.record.control.progress = progress.callback();
-  const IdentifyResult result = identify(model, data_sources(command.data), options);
+  const IdentifyResult result = identify(model, source, options);
   progress.finish();
   write_whole_file("-", command.format == "json" ? format_json(result) : format_text(result));
   if (result.estimate.status == Status::kNothingIdentifiable) {

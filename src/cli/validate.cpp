@@ -47,8 +47,10 @@ std::pair<double, double> window_option(const std::string& text) {
 int run_validate(ValidateCommand& command) {
   ReplayOptions& replay = command.options.replay;
   replay.record.columns = column_map(command.columns);
-  const Model model = declare_derivative_columns(
-      model_argument(command.model, command.data, "validate MODEL DATA"), replay.record);
+  const Model file = model_argument(command.model, command.data, "validate MODEL DATA");
+  // Once: a pipe or standard input is read whole into a file of its own.
+  const DataSource source = data_source(command.data);
+  const Model model = declare_derivative_columns(file, replay.record, source);
   std::string from = "the model's nominal values";
   if (!command.estimates.empty()) {
     from = command.estimates + (command.set.empty() ? "" : ", then --set");
@@ -69,7 +71,7 @@ int run_validate(ValidateCommand& command) {
                                : command.center;
   std::optional<std::pair<double, double>> window;
   if (!command.window.empty()) window = window_option(command.window);
-  ValidateResult result = validate(model, data_source(command.data), command.options);
+  ValidateResult result = validate(model, source, command.options);
   result.parameters_from = from;
   if (!command.plot.empty()) write_plot(result, command.plot, window);
   write_whole_file("-", command.format == "json" ? format_json(result) : format_text(result));

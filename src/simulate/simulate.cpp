@@ -591,6 +591,15 @@ DataMetadata simulation_metadata(const Model& model, const SimulationOptions& op
           to_string(options.inputs[i].held() ? InputHold::kZeroOrderHold : InputHold::kSample));
     metadata.add_line(std::move(line));
   }
+  // The columns of derivatives, so that a model without the `measured` statement reads them.
+  DataMetadata::Line measured;
+  for (const MeasuredDerivative& d : model.measured_derivatives()) {
+    if (options.observe.empty() || std::find(options.observe.begin(), options.observe.end(),
+                                             d.name) != options.observe.end()) {
+      measured.emplace_back("measured." + d.name, d.written);
+    }
+  }
+  if (!measured.empty()) metadata.add_line(std::move(measured));
   if (!options.noise.empty()) {
     DataMetadata::Line noise;
     for (std::size_t k = 0; k < options.noise.size(); ++k) {
