@@ -199,6 +199,9 @@ def summarise(results):
                               "sd_error_pct": 100 * float(np.std(errors)),
                               "rms_z": float(np.sqrt(np.mean(zs**2))),
                               "covered": int(np.sum(np.abs(zs) <= 1.96)), "seeds": len(zs)}
+        failures = [r[method]["failed"] for r, _ in results if "failed" in r[method]]
+        if failures:
+            rows["failed"] = {"count": len(failures), "first": failures[0]}
         table[method] = rows
     return table
 
@@ -208,7 +211,9 @@ def print_table(title, table):
     for method, rows in table.items():
         cells = [f"{name} {r['mean_error_pct']:+.2f}% (sd {r['sd_error_pct']:.2f}%, "
                  f"rms z {r['rms_z']:.1f}, {r['covered']}/{r['seeds']})"
-                 for name, r in rows.items()]
+                 for name, r in rows.items() if name != "failed"]
+        if "failed" in rows:
+            cells.append(f"failed {rows['failed']['count']} times: {rows['failed']['first']}")
         print(f"  {method:11s} " + "; ".join(cells))
 
 
@@ -221,7 +226,7 @@ def plot(summaries, path):
     for ax, key in zip(axes[:, 0], keys):
         table = summaries[key]
         methods = list(table)
-        names = sorted({n for rows in table.values() for n in rows})
+        names = sorted({n for rows in table.values() for n in rows if n != "failed"})
         width = 0.8 / len(methods)
         for i, method in enumerate(methods):
             means = [table[method].get(n, {}).get("mean_error_pct", np.nan) for n in names]

@@ -1,6 +1,6 @@
 // identify --integrate: the column each named state is formed from, and the corner of the
 // high-pass filter the pass puts every channel through, chosen from the record's band when not
-// given (docs/model-language.md, "Measured derivatives: accelerometers").
+// given (docs/model-language.md, "Forming a state from its acceleration").
 
 #include <algorithm>
 #include <cmath>
@@ -149,6 +149,16 @@ IdentifyResult::Integration plan_integration(const Model& model, const DataSourc
                          number(out.corner, "%.6g") + " Hz");
   }
   out.settle = IntegrationFilter({.corner = out.corner, .dt = out.dt, .integrals = {}}).warm_up();
+  // A first run read to its end that the filter's start would take half of.
+  if (rows.size() < kSpectrumRows && 2 * out.settle > rows.size()) {
+    throw DataError({source.name(), 1, 1, ""},
+                    "the high-pass at " + number(out.corner, "%.3g") + " Hz that forming " +
+                        out.formed.front().state + " (" + UsageError::mention("integrate") +
+                        ") needs settles over its first " + std::to_string(out.settle) +
+                        " rows, more than half of the first run's " + std::to_string(rows.size()) +
+                        ": give a longer record or a higher " +
+                        UsageError::mention("integrate_corner"));
+  }
   return out;
 }
 
