@@ -198,8 +198,7 @@ ValidateResult validate(const Model& model, const DataSource& source,
     result.outputs.push_back(std::move(fit));
   }
   // The statistics judge a sensitive model, and show where a reproducible trajectory that
-  // fails differs.
-  // Over the states the record has, which come first among the outputs.
+  // fails differs: over the states the record has, which come first among the outputs.
   if (result.sensitivity.sensitive || !result.consistent) {
     std::vector<std::size_t> states;
     for (std::size_t j : outputs) {
