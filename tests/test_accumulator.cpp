@@ -613,47 +613,50 @@ TEST_SUITE("accumulator") {
 }
 
 TEST_SUITE("integration filter") {
-  // A sine of acceleration a = sin(w t) at 30 Hz, 2048 Hz sampling, corner 3 Hz: the channel
-  // integrated twice is -a/w^2 through the same high-pass as the acceleration's own channel,
-  // to the trapezoidal rule's corrected error O((w dt)^4), and the channel integrated once is
-  // the derivative of that.
-  TEST_CASE("the integrals of a sine are the sine's through the same high-pass") {
-    const double dt = 1.0 / 2048, w = 2 * 3.141592653589793 * 30;
+  // A sine of acceleration a = sin(w t) at 30 Hz, 2048 Hz sampling, corner 3 Hz: each output
+  // row is the filtered channels at (taps - 1)/2 rows before its last input, the acceleration
+  // through the Butterworth magnitude |H|, its integrals through |H|/(i w) and |H|/(i w)^2, to
+  // the filter's tail.
+  TEST_CASE("the integrals of a sine are the sine's through the same zero-phase high-pass") {
+    const double dt = 1.0 / 2048, w = 2 * 3.141592653589793 * 30, wc = 2 * 3.141592653589793 * 3;
     momentid::IntegrationFilter filter({.corner = 3, .dt = dt, .integrals = {2, 1, 0}});
-    CHECK(filter.warm_up() > 1000);
-    CHECK(filter.warm_up() < 20000);
-    const std::size_t rows = filter.warm_up() + 4096;
+    const std::size_t taps = filter.warm_up() + 1, rows = taps + 50000;
+    CHECK(taps % 2 == 1);
     std::vector<double> values;
     for (std::size_t n = 0; n < rows; ++n) {
       const double a = std::sin(w * static_cast<double>(n) * dt);
       values.insert(values.end(), {a, a, a});
     }
+    // In pieces, as blocks come, then the rest of the run.
     filter.start_run();
-    // In two pieces, as blocks come: the same as in one.
-    const std::size_t first = filter.apply(values.data(), 1000);
-    CHECK(first == 0);
-    const double* out = values.data() + 3000;  // the rows kept, at the front of the block
-    const std::size_t kept = filter.apply(values.data() + 3000, rows - 1000);
-    REQUIRE(kept == 4096);
-    double worst_y = 0, worst_v = 0;
-    for (std::size_t n = 1; n + 1 < kept; ++n) {
-      const double* row = out + 3 * n;
-      worst_y = std::max(worst_y, std::abs(row[0] * w * w + row[2]));
-      // v from the central difference of y, whose own error is (w dt)^2/6 of it.
-      const double v = (out[3 * (n + 1)] - out[3 * (n - 1)]) / (2 * dt);
-      worst_v = std::max(worst_v, std::abs(row[1] - v) / (1 / w));
+    std::vector<double> out;
+    filter.push(values.data(), 1000, out);
+    CHECK(out.empty());
+    filter.push(values.data() + 3000, 20000, out);
+    filter.push(values.data() + 63000, rows - 21000, out);
+    filter.flush(out);
+    REQUIRE(out.size() == 3 * (rows - taps + 1));
+    const double gain = 1 / std::sqrt(1 + std::pow(wc / w, 8));
+    double worst = 0;
+    for (std::size_t i = 0; i < out.size() / 3; ++i) {
+      const double t = static_cast<double>(i + (taps - 1) / 2) * dt;
+      worst = std::max({worst, std::abs(out[3 * i] + gain * std::sin(w * t) / (w * w)) * w * w,
+                        std::abs(out[3 * i + 1] + gain * std::cos(w * t) / w) * w,
+                        std::abs(out[3 * i + 2] - gain * std::sin(w * t))});
     }
-    CHECK(worst_y < 1e-5);
-    CHECK(worst_v < 2e-3);
+    CHECK(worst < 1e-5);  // the truncated tails, 1e-10 of the largest tap each, summed
+    // The noise gain of the acceleration's channel is the sum of |H|^2 over the band: near 1.
+    CHECK(filter.noise_gain(2) == doctest::Approx(1).epsilon(0.01));
   }
 
   TEST_CASE("an offset on the acceleration leaves no drift in its integrals") {
-    momentid::IntegrationFilter filter({.corner = 2, .dt = 1e-3, .integrals = {2}});
-    std::vector<double> values(filter.warm_up() + 100, 5.0);
+    momentid::IntegrationFilter filter({.corner = 2, .dt = 1e-3, .integrals = {2, 1}});
+    std::vector<double> values(2 * (filter.warm_up() + 100), 5.0), out;
     filter.start_run();
-    const std::size_t kept = filter.apply(values.data(), values.size());
-    REQUIRE(kept == 100);
-    for (std::size_t n = 0; n < kept; ++n) CHECK(std::abs(values[n]) < 1e-9);
+    filter.push(values.data(), values.size() / 2, out);
+    filter.flush(out);
+    REQUIRE(out.size() == 200);
+    for (double x : out) CHECK(std::abs(x) < 1e-9);
   }
 
   TEST_CASE("a corner beyond Nyquist or an integral count above 2 is refused") {

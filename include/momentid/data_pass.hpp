@@ -77,11 +77,11 @@ struct DataOptions {
   std::vector<ComputedChannel> computed;
 
   // Channels formed from a column of their derivative (identify's --integrate): every channel
-  // is high-passed by a fourth-order Butterworth filter with corner `corner` (Hz, at the sample
-  // interval `dt`), and a formed channel, read from its derivative's column, is integrated
-  // `integrals[c]` times (1 or 2) by the trapezoidal rule inside that filter, so that the
-  // filtered channels keep the linear relations of the raw ones. Each file is read whole, and
-  // the first rows of each run, while the filter settles to 1e-9 of its start, are dropped.
+  // goes through a linear-phase high-pass with the magnitude of a fourth-order Butterworth
+  // filter of corner `corner` (Hz, at the sample interval `dt`), and a formed channel, read from
+  // its derivative's column, through the same divided by (i w)^integrals[c] (1 or 2), its
+  // integral, so that the filtered channels keep the linear relations of the raw ones. Each file
+  // is read whole; the first rows of each run, the filter's length, give no rows.
   struct Integration {
     double corner = 0;
     double dt = 0;

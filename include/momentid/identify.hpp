@@ -175,14 +175,14 @@ struct IdentifyResult {
     struct Formed {
       std::string state;
       std::string variable, column;  // the model's variable for the column, and the column
-      int integrals = 0;  // 2 for y from a (y'' = a), 1 for v from it
+      int integrals = 0;             // 2 for y from a (y'' = a), 1 for v from it
     };
     std::vector<Formed> formed;
     double corner = 0;  // Hz
     double dt = 0;      // the sample interval the filter is designed for
     bool corner_chosen = false;
     std::string band;        // how the corner was chosen, when it was
-    std::size_t settle = 0;  // rows dropped at the start of each run
+    std::size_t settle = 0;  // rows at the start of each run that fill the filter
   };
   std::optional<Integration> integration;
   // The means of the channels read (after `centered` was removed), states then inputs.

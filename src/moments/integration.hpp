@@ -1,9 +1,11 @@
 #pragma once
 // Channels formed in the pass from a column of their derivative (DataOptions::Integration): a
-// fourth-order Butterworth high-pass on every channel read, and the trapezoidal integrator on
-// the formed ones, so that the filtered channels keep the linear relations of the raw ones.
+// linear-phase high-pass on every channel read, with the magnitude of a fourth-order
+// Butterworth filter, and on a formed channel the same divided by (i w)^r, its r-fold integral.
+// The filtered channels keep the linear relations of the raw ones, and, as the filter delays
+// every frequency alike, it adds no phase that the equations could read as damping.
 
-#include <array>
+#include <complex>
 #include <cstddef>
 #include <vector>
 
@@ -16,34 +18,29 @@ class IntegrationFilter {
   // `integration.integrals` per channel in the order the rows hold them.
   explicit IntegrationFilter(const DataOptions::Integration& integration);
 
-  // The rows of each run that are dropped while the filter settles.
-  std::size_t warm_up() const { return warm_up_; }
+  // The rows at the start of each run that give no output: the filter's length less one.
+  std::size_t warm_up() const { return taps_ - 1; }
   // The variance of channel c's output for white noise of unit variance on its input (the sum of
-  // the squares of its impulse response).
+  // the squares of its taps).
   double noise_gain(std::size_t c) const;
 
   void start_run();
-  // Filters `count` rows of `values` (one row after another) in place and returns how many of
-  // them are left, at the front: rows of the warm-up are dropped, and each row's output is the
-  // previous row's (the integrator's correction looks one row ahead).
-  std::size_t apply(double* values, std::size_t count);
+  // Takes `count` rows (one after another) and appends to `out` the filtered rows that are
+  // complete, each the filtered channels at the time (length - 1)/2 rows before its last input.
+  void push(const double* rows, std::size_t count, std::vector<double>& out);
+  // Appends the filtered rows of the run's remaining inputs.
+  void flush(std::vector<double>& out);
 
  private:
-  // y = b0 x + s1; s1 = b1 x - a1 y + s2; s2 = b2 x - a2 y.
-  struct Section {
-    double b0 = 0, b1 = 0, b2 = 0, a1 = 0, a2 = 0;
-  };
-  struct Channel {
-    std::array<Section, 2> sections;
-    double correction = 0;  // c in y[n-1] - c (y[n] - 2 y[n-1] + y[n-2])
-    std::array<double, 4> state{};
-    std::array<double, 2> past{};  // the two previous outputs of the sections
-  };
-  double step(Channel& c, double x) const;
+  void convolve(std::size_t fresh, std::vector<double>& out);
 
-  std::vector<Channel> channels_;
-  std::size_t warm_up_ = 0;
-  std::size_t seen_ = 0;  // rows of the current run
+  std::size_t channels_ = 0;
+  std::size_t taps_ = 0;                      // odd: the response is centred on its middle tap
+  std::size_t size_ = 0;                      // of the FFTs: each gives size_ - taps_ + 1 rows
+  std::vector<std::vector<double>> taps_of_;  // per channel
+  std::vector<std::vector<std::complex<double>>> spectrum_;  // per channel, of its taps
+  std::vector<double> input_;  // the run's rows not yet consumed, with taps_ - 1 before them
+  std::size_t seen_ = 0;       // rows of the run taken
 };
 
 }  // namespace momentid

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstddef>
 #include <deque>
+#include <optional>
 
 #include "moments/blocks.hpp"
 #include "moments/integration.hpp"
@@ -147,7 +148,7 @@ class ShardPass {
   // Takes the next block; true if it holds rows of the shard's own.
   bool take(DataBlock& block) {
     subtract_offsets(block);
-    if (integration_ && !filter(block)) return false;
+    if (integration_) return take_filtered(block);
     switch (block.zone) {
       case RowZone::kBefore:
         before(block);
@@ -165,6 +166,7 @@ class ShardPass {
   }
 
   ShardState finish(bool collapse) {
+    if (integration_) flush_run();
     out_.moments.finish();
     if (collapse) out_.moments.collapse();
     return std::move(out_);
@@ -179,17 +181,34 @@ class ShardPass {
     }
   }
 
-  // Filters the block's rows (a shard is a whole file), dropping each run's first rows while the
-  // filter settles; the first rows kept start the run. False when none is kept.
-  bool filter(DataBlock& block) {
+  // Filters the rows (a shard is a whole file: every block its own); the filtered rows that are
+  // complete go on as a block of the same run, the first of a run starting it. False when none
+  // went on.
+  bool take_filtered(const DataBlock& block) {
+    bool took = false;
     if (block.run_starts) {
+      took = flush_run();
       integration_->start_run();
       run_pending_ = true;
     }
-    block.rows = integration_->apply(block.values.data(), block.rows);
-    if (block.rows == 0) return false;
-    block.run_starts = run_pending_;
+    filtered_.values.clear();
+    integration_->push(block.values.data(), block.rows, filtered_.values);
+    return emit_filtered() || took;
+  }
+
+  // The filtered rows of the run's last inputs.
+  bool flush_run() {
+    filtered_.values.clear();
+    integration_->flush(filtered_.values);
+    return emit_filtered();
+  }
+
+  bool emit_filtered() {
+    filtered_.rows = filtered_.values.size() / channels_;
+    if (filtered_.rows == 0) return false;
+    filtered_.run_starts = run_pending_;
     run_pending_ = false;
+    own(filtered_);
     return true;
   }
 
@@ -251,6 +270,7 @@ class ShardPass {
   std::size_t history_values_;
   bool owned_ = false;
   std::optional<IntegrationFilter> integration_;
+  DataBlock filtered_;
   bool run_pending_ = false;
 };
 

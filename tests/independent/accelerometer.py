@@ -17,9 +17,9 @@ at each sample, computed from the exact states and force.
   acceleration_duffing  the force and a alone, the Duffing oscillator: exit 2 before the pass,
                       naming y and --integrate.
   integrate           the force and a alone of lab.hardening (physical units, 5-150 Hz), with
-                      --integrate y: y formed, the bias warned of, and k and k3 within 3
-                      standard errors, as examples/accelerometer found them (the damping is
-                      biased by the filter, as the warning says, and not checked).
+                      --integrate y: y formed, the bias warned of, and c, k and k3 within 3
+                      standard errors (examples/accelerometer found k about 3% low, which at
+                      2*10^5 samples is about one standard error).
   validate            validate on the force and a alone of the one-mass chain, with the
                       estimates: it compares a (the record's only output) with the acceleration
                       of the simulation, fit above 95%, and judges the model consistent.
@@ -163,7 +163,7 @@ def integrate(momentid, models, workdir):
     warned = any("was formed from 'a'" in w for w in report["diagnostics"]["warnings"])
     formed = report["integration"]["formed"] == [
         {"state": "y", "column": "a", "integrals": 2}]
-    return warned and formed and z["k"] <= 3 and z["k3"] <= 3
+    return warned and formed and all(value <= 3 for value in z.values())
 
 
 def validate(momentid, models, workdir):

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <complex>
 #include <numbers>
+#include <stdexcept>
 #include <unsupported/Eigen/FFT>
 
 #include "app/identify/steps.hpp"
@@ -79,10 +80,15 @@ std::pair<double, std::string> band_corner(const DataSource& source, const std::
   // The corner lies at least two bins above 0, where the spectrum resolves it.
   const double bin = 1 / (static_cast<double>(n) * dt);
   const double lower = static_cast<double>(edge) * bin;
-  const double corner = std::max(lower / 2, 2 * bin);
-  return {corner, "half of " + number(lower, "%.3g") + " Hz, below which '" + column + "' has " +
-                      number(100 * kEdge, "%.2g") + "% of its power (Welch spectrum of its first " +
-                      std::to_string(x.size()) + " rows)"};
+  const std::string share = number(100 * kEdge, "%.2g") + "% of its power";
+  const std::string spectrum = "Welch spectrum of the first " + std::to_string(x.size()) + " rows";
+  if (lower / 2 < 2 * bin) {
+    return {2 * bin, "twice the " + number(bin, "%.3g") + " Hz resolution of the " + spectrum +
+                         " of '" + column + "', which has " + share + " below " +
+                         number(lower, "%.3g") + " Hz"};
+  }
+  return {lower / 2, "half of " + number(lower, "%.3g") + " Hz, below which '" + column + "' has " +
+                         share + " (" + spectrum + ")"};
 }
 
 }  // namespace
@@ -148,15 +154,38 @@ IdentifyResult::Integration plan_integration(const Model& model, const DataSourc
                          number(0.25 / out.dt, "%.6g") + " Hz), found " +
                          number(out.corner, "%.6g") + " Hz");
   }
-  out.settle = IntegrationFilter({.corner = out.corner, .dt = out.dt, .integrals = {}}).warm_up();
-  // A first run read to its end that the filter's start would take half of.
-  if (rows.size() < kSpectrumRows && 2 * out.settle > rows.size()) {
+  const auto length = [&](double corner) {
+    try {
+      return IntegrationFilter({.corner = corner, .dt = out.dt, .integrals = {0, 1, 2}}).warm_up();
+    } catch (const std::invalid_argument&) {
+      throw UsageError("integrate_corner", "a corner of " + number(corner, "%.3g") +
+                                               " Hz is too low for a filter at this sample "
+                                               "interval");
+    }
+  };
+  out.settle = length(out.corner);
+  // A chosen corner rises until the filter fills at most a quarter of a first run read to its
+  // end: its length falls as the corner rises.
+  const bool whole_run = rows.size() < kSpectrumRows;
+  if (out.corner_chosen && whole_run && 4 * out.settle > rows.size()) {
+    const double chosen = out.corner;
+    while (4 * out.settle > rows.size() && (out.corner * 1.25) * out.dt < 0.25) {
+      out.corner *= 1.25;
+      out.settle = length(out.corner);
+    }
+    out.band += ", raised from " + number(chosen, "%.3g") +
+                " Hz so that the filter fills at most a quarter of the first run";
+  }
+  // A first run read to its end that the filter's length would take half of.
+  if (whole_run && 2 * out.settle > rows.size()) {
     throw DataError({source.name(), 1, 1, ""},
-                    "the high-pass at " + number(out.corner, "%.3g") + " Hz that forming " +
-                        out.formed.front().state + " (" + UsageError::mention("integrate") +
-                        ") needs settles over its first " + std::to_string(out.settle) +
-                        " rows, more than half of the first run's " + std::to_string(rows.size()) +
-                        ": give a longer record or a higher " +
+                    "forming " + out.formed.front().state + " (" +
+                        UsageError::mention("integrate") + ") takes a high-pass at " +
+                        number(out.corner, "%.3g") + " Hz whose length, " +
+                        std::to_string(out.settle) +
+                        " rows at the start of each run, is more "
+                        "than half of the first run's " +
+                        std::to_string(rows.size()) + " rows: give a longer record or a higher " +
                         UsageError::mention("integrate_corner"));
   }
   return out;

@@ -425,8 +425,9 @@ void identify_lagged(IdentifyResult& result, const DataSource& source,
       result.estimate.warnings.push_back(
           "'" + formed.state + "' was formed from '" + formed.column + "' inside a high-pass at " +
           number(integration->corner, "%.3g") +
-          " Hz: the terms nonlinear in it are biased where the filter cuts their low "
-          "frequencies, the damping most, and the intervals do not include that bias "
+          " Hz: the terms nonlinear in it lose the low frequencies the filter cuts, which "
+          "biases the estimates (a stiffness by a few percent), and the intervals do not "
+          "include that bias "
           "(docs/model-language.md, \"Forming a state from its acceleration\")");
     }
   }

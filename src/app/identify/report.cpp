@@ -359,7 +359,7 @@ std::string integration_text(const IdentifyResult::Integration& f) {
   }
   out += "; every channel high-passed at " + number(f.corner, "%.3g") +
          " Hz (fourth-order Butterworth" + (f.corner_chosen ? ", " + f.band : std::string()) +
-         "), the first " + std::to_string(f.settle) + " rows of each run dropped while it settles";
+         "), the first " + std::to_string(f.settle) + " rows of each run filling it";
   return out;
 }
 
