@@ -14,6 +14,9 @@ at each sample, computed from the exact states and force.
                       sampled exactly): within 3 standard errors.
   acceleration_chain  the force and the accelerations alone, a linear chain of two masses:
                       within 3 standard errors.
+  acceleration_offset the force and a alone of a linear oscillator (5-150 Hz force, SI units) with
+                      an offset of 5% of its standard deviation on each sensor besides the noise:
+                      a's offset removed by default, `ok` within 3 standard errors.
   acceleration_duffing  the force and a alone, the Duffing oscillator: exit 2 before the pass,
                       naming y and --integrate.
   integrate           the force and a alone of lab.hardening (physical units, 5-150 Hz), with
@@ -180,6 +183,27 @@ def validate(momentid, models, workdir):
     return passed and list(outputs) == ["a1"] and outputs["a1"]["fit_percent"] > 95 and report["consistent"]
 
 
+def acceleration_offset(momentid, models, workdir):
+    truth = {"c": 10.0, "k": 4.0e4}
+
+    def rates(s, x):
+        y, v = s
+        return (v, x - truth["c"] * v - truth["k"] * y)
+    rng = np.random.default_rng(20271109)
+    clean = lab.oscillator(rng, rates, ("y", "v"), FS, 200000, (5.0, 150.0), 60.0, 2.0)
+    clean["a"] = clean["x"] - truth["c"] * clean["v"] - truth["k"] * clean["y"]
+    path, model = f"{workdir}/a_x.csv", f"{workdir}/oscillator.mom"
+    lab.write_csv(path, {"t": clean["t"],
+                         **{n: lab.measured(rng, clean[n], NOISE, offset=0.05) for n in ("a", "x")}})
+    with open(model, "w") as out:
+        out.write(HARDENING_MODEL.replace(", k3", "").replace(" - k3*y^3", ""))
+    print("oscillator.mom on a_x.csv, 5% offsets:")
+    report = lab.identify(momentid, model, path)
+    worst = lab.describe(report, truth)
+    return (report.get("diagnostics", {}).get("status") == "ok" and worst <= 3
+            and "a" in report.get("centered", {}))
+
+
 def acceleration_duffing(momentid, models, workdir):
     rng, clean = record(20271106)
     path = f"{workdir}/a_x.csv"
@@ -193,7 +217,8 @@ def acceleration_duffing(momentid, models, workdir):
 
 CASES = {"displacement": displacement, "all_channels": all_channels, "velocity": velocity,
          "acceleration_sdof": acceleration_sdof, "acceleration_chain": acceleration_chain,
-         "acceleration_duffing": acceleration_duffing, "integrate": integrate,
+         "acceleration_offset": acceleration_offset, "acceleration_duffing": acceleration_duffing,
+         "integrate": integrate,
          "validate": validate}
 
 if __name__ == "__main__":

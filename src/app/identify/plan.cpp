@@ -112,18 +112,22 @@ std::vector<double> channel_offsets(const DataSource& source,
   channels.insert(channels.end(), inputs.begin(), inputs.end());
   channels.insert(channels.end(), options.derivatives.begin(), options.derivatives.end());
   centered.clear();
-  if (std::none_of(channels.begin(), channels.end(), [&](const std::string& c) {
-        return std::find(center.begin(), center.end(), c) != center.end();
-      })) {
-    return {};
-  }
+  // A derivative column's mean is its sensor's offset, as a stationary state's derivative has
+  // mean 0; the integration filter takes offsets out itself.
+  const auto removed = [&](std::size_t c) {
+    return std::find(center.begin(), center.end(), channels[c]) != center.end() ||
+           (c >= states.size() + inputs.size() && !options.integration);
+  };
+  bool any = false;
+  for (std::size_t c = 0; c < channels.size(); ++c) any = any || removed(c);
+  if (!any) return {};
   DataOptions first = options;
   first.offsets.clear();
   const DataMoments means =
       moments_from_data(source, states, inputs, std::vector<Monomial>{}, first);
   std::vector<double> out(channels.size(), 0.0);
   for (std::size_t c = 0; c < channels.size(); ++c) {
-    if (std::find(center.begin(), center.end(), channels[c]) == center.end()) continue;
+    if (!removed(c)) continue;
     out[c] = means.channels[c].mean;
     centered[channels[c]] = out[c];
   }

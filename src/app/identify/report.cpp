@@ -379,10 +379,18 @@ std::string format_text(const IdentifyResult& r) {
   if (r.lagged && !r.lagged->cut.empty()) out << "  " << r.lagged->cut << "\n";
   if (r.lagged && !noise_text(r).empty()) out << noise_text(r) << "\n";
   if (r.integration) out << integration_text(*r.integration) << "\n";
-  if (!r.centered.empty()) {
-    out << "means removed (--center):";
-    for (const auto& [name, mean] : r.centered) out << " " << name << " " << number(mean, "%.4g");
-    out << "\n";
+  // The derivative columns' means apart: they are removed whether or not --center names them.
+  std::string asked, offsets;
+  for (const auto& [name, mean] : r.centered) {
+    const int v = r.model->variable_index(name);
+    const bool derivative =
+        r.model->variables()[static_cast<std::size_t>(v)].kind == VariableKind::kDerivative;
+    (derivative ? offsets : asked) += " " + name + " " + number(mean, "%.4g");
+  }
+  if (!asked.empty()) out << "means removed (--center):" << asked << "\n";
+  if (!offsets.empty()) {
+    out << "offsets removed from the derivative columns (a state's derivative has mean 0):"
+        << offsets << "\n";
   }
   out << "\n";
   if (e.optimal) {

@@ -62,9 +62,11 @@ std::vector<ComputedChannel> computed_channels(const Model& model);
 // layout, input hold, batches, threads), with the autocorrelations the noise estimates need.
 DataOptions pass_options(const Model& model, const IdentifyOptions& options);
 
-// The offsets of DataOptions for the channels `states` then `inputs`: the mean of each channel
-// that `center` names, from a pass of its own, and 0 for the others; none when `center` names
-// none of them. Records the means removed in `centered`.
+// The offsets of DataOptions for the channels `states`, `inputs`, then options.derivatives: the
+// mean of each channel that `center` names, and of each derivative column (whose true mean is 0,
+// so that its mean is an offset) unless options.integration filters every channel, from a pass
+// of its own, and 0 for the others; none when no channel is centered. Records the means removed
+// in `centered`.
 std::vector<double> channel_offsets(const DataSource& source,
                                     const std::vector<std::string>& states,
                                     const std::vector<std::string>& inputs,
