@@ -176,6 +176,8 @@ struct IdentifyResult {
       std::string state;
       std::string variable, column;  // the model's variable for the column, and the column
       int integrals = 0;             // 2 for y from a (y'' = a), 1 for v from it
+      // The formed channel's noise variance per unit of the column's (both through the filter).
+      double noise_gain = 0;
     };
     std::vector<Formed> formed;
     double corner = 0;  // Hz

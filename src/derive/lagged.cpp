@@ -250,12 +250,7 @@ class LagDeriver {
       // Without its column, the derivative of how the data show its state.
       const int state =
           model_.measured_derivatives()[static_cast<std::size_t>(variable.index)].state;
-      const Observation& s = observe(state, depth + 1);
-      if (s.base < 0) return o;
-      o.base = s.base;
-      o.order = s.order + 1;
-      o.scale = s.scale;
-      o.reason.clear();
+      if (observe(state, depth + 1).base >= 0) o = derivative_of(state);
       return o;
     }
     if (variable.kind != VariableKind::kState || depth > states_) return o;
@@ -298,9 +293,15 @@ class LagDeriver {
     // An unmeasured derivative column whose state is now read.
     for (const MeasuredDerivative& d : model_.measured_derivatives()) {
       const int v = model_.variable_index(d.name);
-      const Observation& s = observed_[d.state];
-      if (observed_[v].base < 0 && s.base >= 0) observed_[v] = {s.base, s.order + 1, s.scale, ""};
+      if (observed_[v].base < 0 && observed_[d.state].base >= 0)
+        observed_[v] = derivative_of(d.state);
     }
+  }
+
+  // How the data show the derivative of `state`, which they show.
+  Observation derivative_of(int state) const {
+    const Observation& s = observed_[state];
+    return {s.base, s.order + 1, s.scale, ""};
   }
 
   // A kinematic equation v' = ratio*w with w read: v as the integral of w's reading.
@@ -438,6 +439,58 @@ void LagOptions::validate(const Model& model) const {
   }
 }
 
+namespace {
+
+// Equation e times `instrument` at t - s, in expectation (LagDeriver::lag_function for
+// `columns`).
+LaggedEquation lagged_equation(const Model& model, const LagDeriver& deriver, std::size_t e,
+                               const Monomial& instrument, bool columns) {
+  const Equation& eq = model.equations()[e];
+  LaggedEquation row;
+  row.equation = static_cast<int>(e);
+  row.instrument = instrument;
+  row.coefficients.resize(model.parameters().size());
+  std::vector<std::pair<LagFunction, numeric>> terms;
+  for (const Term& t : eq.terms) terms.push_back(deriver.lag_function(eq, t, instrument, columns));
+  // A state read as the integral of a column (y'' = a) enters at a negative order: its
+  // cross-moments are known up to a polynomial in s, which the equation's derivative in s of
+  // the order that clears the integrals drops, leaving the measured channels alone.
+  int lowest = 0;
+  for (const auto& [f, w] : terms) lowest = std::min(lowest, f.order);
+  for (std::size_t i = 0; i < terms.size(); ++i) {
+    auto& [f, w] = terms[i];
+    f.order -= lowest;
+    if (f.order > kMaxLagOrder) {
+      throw ModelError(eq.where, "term '" + term_text(model, eq.terms[i]) + "' of equation " +
+                                     eq.name() + " needs the derivative of order " +
+                                     std::to_string(f.order) + " in the lag, above " +
+                                     std::to_string(kMaxLagOrder) +
+                                     ", to clear the integrals of the states read from a "
+                                     "derivative column (measure one of them)");
+    }
+    const int parameter = eq.terms[i].parameter;
+    if (parameter >= 0) {
+      add_to(row.coefficients[static_cast<std::size_t>(parameter)], f, w);
+    } else {
+      add_to(row.rhs, f, -w);
+    }
+  }
+  // The first parameter's first weight positive, as the zero-lag equations print.
+  for (const LagCombination& c : row.coefficients) {
+    if (c.empty()) continue;
+    if (c.begin()->second.is_negative()) {
+      for (auto& combination : row.coefficients) {
+        for (auto& [f, w] : combination) w = -w;
+      }
+      for (auto& [f, w] : row.rhs) w = -w;
+    }
+    break;
+  }
+  return row;
+}
+
+}  // namespace
+
 LaggedSystem derive_lagged(const Model& model, const LagOptions& options) {
   const AlgebraLock lock;
   const std::size_t variables = model.variables().size();
@@ -461,7 +514,6 @@ LaggedSystem derive_lagged(const Model& model, const LagOptions& options) {
   if (system.instruments.empty()) {
     throw UsageError("lags: no instruments: the data have none of the model's states");
   }
-  const std::size_t parameters = model.parameters().size();
   for (std::size_t e = 0; e < model.equations().size(); ++e) {
     const Equation& eq = model.equations()[e];
     if (!has_parameter(eq)) continue;
@@ -471,51 +523,11 @@ LaggedSystem derive_lagged(const Model& model, const LagOptions& options) {
     // depends on the record, and the optimal weighting takes the best combination of the two.
     std::vector<bool> readings{true};
     if (deriver.read_both_ways(eq)) readings.push_back(false);
-    for (const bool columns : readings)
+    for (const bool columns : readings) {
       for (const Monomial& instrument : system.instruments) {
-        LaggedEquation row;
-        row.equation = static_cast<int>(e);
-        row.instrument = instrument;
-        row.coefficients.resize(parameters);
-        std::vector<std::pair<LagFunction, numeric>> terms;
-        for (const Term& t : eq.terms)
-          terms.push_back(deriver.lag_function(eq, t, instrument, columns));
-        // A state read as the integral of a column (y'' = a) enters at a negative order: its
-        // cross-moments are known up to a polynomial in s, which the equation's derivative in s
-        // of the order that clears the integrals drops, leaving the measured channels alone.
-        int lowest = 0;
-        for (const auto& [f, w] : terms) lowest = std::min(lowest, f.order);
-        for (std::size_t i = 0; i < terms.size(); ++i) {
-          LagFunction& f = terms[i].first;
-          f.order -= lowest;
-          if (f.order > kMaxLagOrder) {
-            throw ModelError(eq.where, "term '" + term_text(model, eq.terms[i]) + "' of equation " +
-                                           eq.name() + " needs the derivative of order " +
-                                           std::to_string(f.order) + " in the lag, above " +
-                                           std::to_string(kMaxLagOrder) +
-                                           ", to clear the integrals of the states read from a "
-                                           "derivative column (measure one of them)");
-          }
-          const Term& t = eq.terms[i];
-          if (t.parameter >= 0) {
-            add_to(row.coefficients[t.parameter], f, terms[i].second);
-          } else {
-            add_to(row.rhs, f, -terms[i].second);
-          }
-        }
-        // The first parameter's first weight positive, as the zero-lag equations print.
-        for (const LagCombination& c : row.coefficients) {
-          if (c.empty()) continue;
-          if (c.begin()->second.is_negative()) {
-            for (auto& combination : row.coefficients) {
-              for (auto& [f, w] : combination) w = -w;
-            }
-            for (auto& [f, w] : row.rhs) w = -w;
-          }
-          break;
-        }
-        system.equations.push_back(std::move(row));
+        system.equations.push_back(lagged_equation(model, deriver, e, instrument, columns));
       }
+    }
   }
   options.validate(model);
   system.test_functions = lag_test_functions(system.first_lag, system.last_lag);

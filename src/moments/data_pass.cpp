@@ -307,19 +307,17 @@ DataMoments moments_from_data(const DataSource& source, const std::vector<std::s
   }
   const ReadOrder order(states.size(), inputs.size(), options.derivatives.size(),
                         options.computed.size());
-  // The shards see the channels in the order read.
-  DataOptions read_options = options;
-  if (!options.derivatives.empty()) {
-    if (!options.offsets.empty()) read_options.offsets = order.values(options.offsets);
-    for (ComputedChannel& c : read_options.computed) {
-      for (auto& [coefficient, monomial] : c.argument) monomial = order.monomial(monomial);
-    }
-    if (options.integration) {
-      read_options.integration->integrals = order.values(options.integration->integrals);
-    }
-  }
   if (options.integration && options.integration->integrals.size() != channels) {
     throw std::invalid_argument("moments_from_data: one integral count per channel needed");
+  }
+  // The shards see the channels in the order read.
+  DataOptions read_options = options;
+  if (!options.offsets.empty()) read_options.offsets = order.values(options.offsets);
+  for (ComputedChannel& c : read_options.computed) {
+    for (auto& [coefficient, monomial] : c.argument) monomial = order.monomial(monomial);
+  }
+  if (options.integration) {
+    read_options.integration->integrals = order.values(options.integration->integrals);
   }
   const bool any_moments = !keys.empty();
   // Rows that depend on their neighbours across a shard's edge in ways the shard cannot see

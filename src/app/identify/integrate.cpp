@@ -176,6 +176,11 @@ IdentifyResult::Integration plan_integration(const Model& model, const DataSourc
     out.band += ", raised from " + number(chosen, "%.3g") +
                 " Hz so that the filter fills at most a quarter of the first run";
   }
+  const IntegrationFilter filter({.corner = out.corner, .dt = out.dt, .integrals = {0, 1, 2}});
+  for (auto& formed : out.formed) {
+    formed.noise_gain =
+        filter.noise_gain(static_cast<std::size_t>(formed.integrals)) / filter.noise_gain(0);
+  }
   // A first run read to its end that the filter's length would take half of.
   if (whole_run && 2 * out.settle > rows.size()) {
     throw DataError({source.name(), 1, 1, ""},

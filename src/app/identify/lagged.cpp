@@ -8,7 +8,6 @@
 
 #include "app/identify/steps.hpp"
 #include "common/number.hpp"
-#include "moments/integration.hpp"
 
 namespace momentid {
 namespace {
@@ -327,18 +326,14 @@ std::vector<double> noise_variances(const IdentifyResult& result, const LaggedCh
   // autocorrelation does not show it.
   if (const auto& integration = result.integration) {
     const std::vector<std::string>& names = result.lagged->channels;
-    const IntegrationFilter filter(
-        {.corner = integration->corner, .dt = integration->dt, .integrals = {0, 1, 2}});
+    const auto at = [&](const std::string& name) {
+      return static_cast<std::size_t>(std::find(names.begin(), names.end(), name) - names.begin());
+    };
     for (const auto& formed : integration->formed) {
-      const auto at = [&](const std::string& name) {
-        return static_cast<std::size_t>(std::find(names.begin(), names.end(), name) -
-                                        names.begin());
-      };
       const std::size_t state = at(formed.state), column = at(formed.variable);
       if (state >= noise.size() || column >= noise.size()) continue;
       if (options.noise && options.noise->count(formed.state)) continue;
-      noise[state] = noise[column] * filter.noise_gain(static_cast<std::size_t>(formed.integrals)) /
-                     filter.noise_gain(0);
+      noise[state] = noise[column] * formed.noise_gain;
     }
   }
   return noise;

@@ -358,8 +358,9 @@ std::string integration_text(const IdentifyResult::Integration& f) {
            (s.integrals == 2 ? "twice" : "once") + ")";
   }
   out += "; every channel high-passed at " + number(f.corner, "%.3g") +
-         " Hz (fourth-order Butterworth" + (f.corner_chosen ? ", " + f.band : std::string()) +
-         "), the first " + std::to_string(f.settle) + " rows of each run filling it";
+         " Hz (linear phase, a fourth-order Butterworth filter's magnitude" +
+         (f.corner_chosen ? ", " + f.band : std::string()) + "), the first " +
+         std::to_string(f.settle) + " rows of each run filling it";
   return out;
 }
 
