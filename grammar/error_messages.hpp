@@ -38,11 +38,17 @@ template <> inline constexpr const char* error_message<measured_equals> = "expec
 template <> inline constexpr const char* error_message<measured_target> = "expected a state's derivative, as in v' or y''";
 template <> inline constexpr const char* error_message<item_after_comma<measured_item>> = "expected a measured column after ','";
 template <> inline constexpr const char* error_message<measured_list> = "expected a measured column, as in 'measured a = v''";
-template <> inline constexpr const char* error_message<equals> = "expected '=' of an equation, or a statement keyword (model, state, input, param, const, measured, multipliers)";
+template <> inline constexpr const char* error_message<candidate_list> = "expected a comma-separated list of parameters";
+template <> inline constexpr const char* error_message<item_after_comma<candidate_name>> = "expected a parameter name after ','";
+template <> inline constexpr const char* error_message<library_target> = "expected the equation the terms join: a state's derivative (v') or a label";
+template <> inline constexpr const char* error_message<library_colon> = "expected ':' after the equation, as in 'library v': y^2, y^3'";
+template <> inline constexpr const char* error_message<library_list> = "expected a comma-separated list of terms";
+template <> inline constexpr const char* error_message<item_after_comma<library_term>> = "expected a term after ','";
+template <> inline constexpr const char* error_message<equals> = "expected '=' of an equation, or a statement keyword (model, state, input, param, const, measured, multipliers, candidate, library)";
 template <> inline constexpr const char* error_message<rhs_after_equals> = "expected the right side of the equation after '='";
 template <> inline constexpr const char* error_message<multiplier_list> = "expected a comma-separated list of multipliers (monomials in the states)";
 template <> inline constexpr const char* error_message<statement_end> = "expected an operator or the end of the line";
-template <> inline constexpr const char* error_message<line> = "expected a statement: model, state, input, param, const, measured, multipliers or an equation";
+template <> inline constexpr const char* error_message<line> = "expected a statement: model, state, input, param, const, measured, multipliers, candidate, library or an equation";
 template <> inline constexpr const char* error_message<list_end> = "expected ',' or the end of the multiplier list";
 // clang-format on
 
@@ -54,8 +60,9 @@ inline bool may_follow_line_break(std::string_view message) {
         error_message<exponent_after_operator>, error_message<closing_paren>,
         error_message<expression_in_parens>, error_message<item_after_comma<declared_name>>,
         error_message<item_after_comma<param_item>>, error_message<item_after_comma<const_item>>,
-        error_message<item_after_comma<measured_item>>,
-        error_message<item_after_comma<multiplier>>}) {
+        error_message<item_after_comma<measured_item>>, error_message<item_after_comma<multiplier>>,
+        error_message<item_after_comma<candidate_name>>,
+        error_message<item_after_comma<library_term>>}) {
     if (message == m) return true;
   }
   return false;

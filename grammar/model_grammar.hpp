@@ -58,6 +58,9 @@ struct kw_const : sor<TAO_PEGTL_KEYWORD("constants"), TAO_PEGTL_KEYWORD("constan
 struct kw_multipliers : sor<TAO_PEGTL_KEYWORD("multipliers"), TAO_PEGTL_KEYWORD("multiplier")> {};
 struct kw_dot : TAO_PEGTL_KEYWORD("dot") {};
 struct kw_measured : TAO_PEGTL_KEYWORD("measured") {};
+// `candidate` or `candidates`
+struct kw_candidate : sor<TAO_PEGTL_KEYWORD("candidates"), TAO_PEGTL_KEYWORD("candidate")> {};
+struct kw_library : TAO_PEGTL_KEYWORD("library") {};
 // `fixed`, after a parameter's value; not reserved, as no name can stand there
 struct kw_fixed : TAO_PEGTL_KEYWORD("fixed") {};
 
@@ -101,8 +104,8 @@ struct call_arguments : opt<list<expression, one<','>, pegtl::space>> {};
 // name(args): a function call, accepted by the grammar and rejected by the meaning checks
 struct call : seq<name, sp, one<'('>, ws, call_arguments, must<closing_paren>> {};
 // a word that starts a statement, never a variable
-struct reserved
-    : sor<kw_model, kw_state, kw_input, kw_param, kw_const, kw_multipliers, kw_measured> {};
+struct reserved : sor<kw_model, kw_state, kw_input, kw_param, kw_const, kw_multipliers, kw_measured,
+                      kw_candidate, kw_library> {};
 // a name, optionally followed by primes
 struct variable : seq<not_at<reserved>, name, opt<primes>> {};
 // the expression after '(', possibly on the next line
@@ -200,8 +203,23 @@ struct multiplier_list : comma_list<multiplier> {};
 struct multipliers_statement
     : seq<kw_multipliers, sp, opt<label_prefix>, sp, must<multiplier_list>> {};
 
+// `candidate eps, k2`: parameters whose terms term selection may drop
+struct candidate_name : name {};
+struct candidate_list : comma_list<candidate_name> {};
+struct candidate_statement : seq<kw_candidate, sp, must<candidate_list>> {};
+
+// `library v': y^2, y^3, monomials(y, v, 3)`: terms added to the equation of v' (or the one
+// labelled), each with a candidate parameter of its own
+struct library_target : seq<name, opt<primes>> {};
+struct library_colon : one<':'> {};
+struct library_term : expression {};
+struct library_list : comma_list<library_term> {};
+struct library_statement
+    : seq<kw_library, sp, must<library_target>, sp, must<library_colon>, sp, must<library_list>> {};
+
 struct statement : sor<model_statement, state_declaration, input_declaration, param_declaration,
-                       const_declaration, measured_statement, multipliers_statement, equation> {};
+                       const_declaration, measured_statement, multipliers_statement,
+                       candidate_statement, library_statement, equation> {};
 // what may follow a complete statement on its line
 struct statement_end : line_end {};
 // a line: blank, a comment, or one statement

@@ -515,7 +515,7 @@ v' = -k*y
 )");
     check_error(e,
                 "expected '=' of an equation, or a statement keyword (model, state, input, param, "
-                "const, measured, multipliers)",
+                "const, measured, multipliers, candidate, library)",
                 3, 4, "y' v");
   }
 
@@ -599,8 +599,8 @@ param k
 $ y' = -k*y
 )");
     check_error(e,
-                "expected a statement: model, state, input, param, const, measured, multipliers "
-                "or an equation",
+                "expected a statement: model, state, input, param, const, measured, multipliers, "
+                "candidate, library or an equation",
                 3, 1, "$ y' = -k*y");
   }
 

@@ -21,13 +21,15 @@ const char* kind_name(SymbolKind kind);
 // One declared name. `value` is the nominal value of a parameter (optional; the simulator uses
 // it) or the value of a constant (always present). Numbers are kept exact: `0.1` is 1/10. A
 // parameter declared `fixed` (`param m = 2 fixed`) is known: identify uses its value instead of
-// estimating it.
+// estimating it. A candidate parameter (`candidate eps`, or one a `library` statement made) is
+// one whose terms term selection may drop (docs/cli/select.md).
 struct Declaration {
   std::string name;
   SymbolKind kind = SymbolKind::kState;
   std::optional<GiNaC::numeric> value;
   SourceLocation where;
   bool fixed = false;
+  bool candidate = false;
 };
 
 // A factor of a term that is not a power of a state or input: |p| or sign(p) (sign(0) = 0) of

@@ -32,6 +32,7 @@
 #include "momentid/random.hpp"
 #include "momentid/reader.hpp"
 #include "momentid/record_options.hpp"
+#include "momentid/select.hpp"
 #include "momentid/simulate.hpp"
 #include "momentid/types.hpp"
 #include "momentid/validate.hpp"

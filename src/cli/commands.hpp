@@ -27,6 +27,7 @@ struct Command {
 Command add_derive(CLI::App& app);
 Command add_simulate(CLI::App& app);
 Command add_identify(CLI::App& app);
+Command add_select(CLI::App& app);
 Command add_check(CLI::App& app);
 Command add_validate(CLI::App& app);
 Command add_convert(CLI::App& app);

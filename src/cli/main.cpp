@@ -81,8 +81,9 @@ int main(int argc, char** argv) {
 
   const std::vector<momentid::cli::Command> commands{
       momentid::cli::add_derive(app),   momentid::cli::add_simulate(app),
-      momentid::cli::add_identify(app), momentid::cli::add_check(app),
-      momentid::cli::add_validate(app), momentid::cli::add_convert(app)};
+      momentid::cli::add_identify(app), momentid::cli::add_select(app),
+      momentid::cli::add_check(app),    momentid::cli::add_validate(app),
+      momentid::cli::add_convert(app)};
 
   try {
     app.parse(argc, argv);

@@ -24,6 +24,8 @@ Model ModelBuilder::build(const std::vector<SyntaxNode>& statements) {
   model_.input_symbols_ = symbols_.input_symbols();
   model_.parameter_symbols_ = symbols_.parameter_symbols();
   for (const SyntaxNode* eq : equation_nodes_) add_equation(*eq);
+  for (const SyntaxNode* library : library_nodes_) add_library(*library);
+  for (const SyntaxNode* candidates : candidate_nodes_) add_candidates(*candidates);
   // The equations add the functions they use as variables: only now are they all known, and
   // every monomial gets their exponents.
   model_.functions_ = symbols_.functions();
@@ -65,6 +67,10 @@ void ModelBuilder::collect(const std::vector<SyntaxNode>& statements) {
       equation_nodes_.push_back(&n);
     } else if (n.kind == SyntaxKind::kMultipliersStatement) {
       multiplier_nodes_.push_back(&n);
+    } else if (n.kind == SyntaxKind::kLibraryStatement) {
+      library_nodes_.push_back(&n);
+    } else if (n.kind == SyntaxKind::kCandidateStatement) {
+      candidate_nodes_.push_back(&n);
     }
   }
   if (model_.name_.empty()) {
@@ -144,6 +150,152 @@ void ModelBuilder::add_measured(std::size_t i) {
     }
   }
   model_.measured_.push_back({column.name, state, std::string(target.text), column.where});
+}
+
+namespace {
+
+// A parameter's name for a library term: the equation's name, then each factor's name (letters,
+// digits and '_' of it) with its exponent, as in v_y2_x for y^2*x in the equation of v'.
+std::string library_parameter_name(const std::string& prefix,
+                                   const std::vector<Variable>& variables, const Monomial& m) {
+  std::string out = prefix;
+  for (std::size_t v = 0; v < m.size(); ++v) {
+    if (m[v] == 0) continue;
+    std::string factor;
+    for (const char ch : variables[v].name) {
+      if (std::isalnum(static_cast<unsigned char>(ch)) || ch == '_') factor += ch;
+    }
+    if (m[v] > 1) {
+      // y1^2 is y1p2, not y12.
+      if (std::isdigit(static_cast<unsigned char>(factor.back()))) factor += 'p';
+      factor += std::to_string(m[v]);
+    }
+    out += "_" + factor;
+  }
+  return out;
+}
+
+// `m` and `other` over the same variables: the shorter padded with zeros.
+bool same_monomial(Monomial m, Monomial other) {
+  const std::size_t size = std::max(m.size(), other.size());
+  m.resize(size);
+  other.resize(size);
+  return m == other;
+}
+
+}  // namespace
+
+Equation& ModelBuilder::library_equation(const SyntaxNode& target) {
+  const SyntaxNode& name_node = target.children.at(0);
+  const std::string name(name_node.text);
+  auto& equations = model_.equations_;
+  if (target.children.size() == 1) {
+    const auto it = std::find_if(equations.begin(), equations.end(),
+                                 [&](const Equation& eq) { return eq.label == name; });
+    if (it == equations.end()) {
+      const Declaration* d = symbols_.find(name);
+      source_.fail(target, d && d->kind == SymbolKind::kState
+                               ? "no equation is labelled '" + name + "': write " + name +
+                                     "' for the equation of its derivative"
+                               : "no equation is labelled '" + name +
+                                     "': name the equation by a label or by a state's "
+                                     "derivative, as in 'library v': ...'");
+    }
+    return *it;
+  }
+  if (target.children.at(1).text.size() != 1) {
+    source_.fail(target, "expected a state's first derivative, as in v', found '" +
+                             std::string(target.text) + "'");
+  }
+  symbols_.derivative(name_node, name);  // a declared state
+  const auto state =
+      static_cast<int>(std::find_if(model_.states_.begin(), model_.states_.end(),
+                                    [&](const Declaration& d) { return d.name == name; }) -
+                       model_.states_.begin());
+  std::vector<Equation*> holding;
+  for (Equation& eq : equations) {
+    if (std::any_of(eq.terms.begin(), eq.terms.end(),
+                    [&](const Term& t) { return t.derivative == state; })) {
+      holding.push_back(&eq);
+    }
+  }
+  if (holding.size() != 1) {
+    std::string which;
+    for (const Equation* eq : holding) which += (which.empty() ? "" : " and ") + eq->name();
+    source_.fail(target, holding.empty() ? "no equation holds " + name + "'"
+                                         : name + "' is in equations " + which +
+                                               ": label the one the terms join and name it");
+  }
+  return *holding[0];
+}
+
+void ModelBuilder::add_library(const SyntaxNode& n) {
+  const SyntaxNode* target = nullptr;
+  for (const SyntaxNode& c : n.children) {
+    if (c.kind == SyntaxKind::kLibraryTarget) target = &c;
+  }
+  Equation& eq = library_equation(*target);
+  const std::string prefix(target->children.at(0).text);
+  for (const SyntaxNode& item : n.children) {
+    if (item.kind != SyntaxKind::kLibraryTerm) continue;
+    for (const TermBuilder::LibraryTerm& t : terms_.library_terms(item)) {
+      const std::vector<Variable>& variables = symbols_.variables();
+      const auto present = std::find_if(eq.terms.begin(), eq.terms.end(), [&](const Term& other) {
+        return other.parameter >= 0 && other.derivative < 0 &&
+               same_monomial(other.monomial, t.monomial);
+      });
+      if (present != eq.terms.end()) {
+        if (t.generated) continue;
+        const Declaration& p = model_.parameters_[static_cast<std::size_t>(present->parameter)];
+        source_.fail(item, "'" + std::string(item.text) + "' is already a term of equation " +
+                               eq.name() + ", with parameter " + p.name +
+                               (p.candidate ? "" : ": write 'candidate " + p.name + "' instead"));
+      }
+      const std::string name = library_parameter_name(prefix, variables, t.monomial);
+      const auto made = std::find_if(model_.parameters_.begin(), model_.parameters_.end(),
+                                     [&](const Declaration& d) { return d.name == name; });
+      if (const Declaration* d = made != model_.parameters_.end() ? &*made : symbols_.find(name)) {
+        source_.fail(item, "the library names the parameter of '" + std::string(item.text) + "' " +
+                               name + ", which is declared as " + kind_with_article(d->kind) +
+                               " on line " + std::to_string(d->where.line) +
+                               ": rename that declaration");
+      }
+      const Declaration p{.name = name,
+                          .kind = SymbolKind::kParameter,
+                          .value = std::nullopt,
+                          .where = source_.where(item),
+                          .fixed = false,
+                          .candidate = true};
+      model_.parameters_.push_back(p);
+      model_.parameter_symbols_.emplace_back(name);
+      const GiNaC::symbol& symbol = model_.parameter_symbols_.back();
+      eq.rhs += t.coefficient * symbol * t.value;
+      eq.terms.push_back({.coefficient = -t.coefficient,
+                          .parameter = static_cast<int>(model_.parameters_.size()) - 1,
+                          .monomial = t.monomial,
+                          .derivative = -1});
+    }
+  }
+}
+
+void ModelBuilder::add_candidates(const SyntaxNode& n) {
+  for (const SyntaxNode& c : n.children) {
+    if (c.kind != SyntaxKind::kCandidateName) continue;
+    const std::string name(c.text);
+    const auto it = std::find_if(model_.parameters_.begin(), model_.parameters_.end(),
+                                 [&](const Declaration& d) { return d.name == name; });
+    if (it == model_.parameters_.end()) {
+      const Declaration* d = symbols_.find(name);
+      source_.fail(c, "'" + name + "' is " +
+                          (d ? kind_with_article(d->kind) : std::string("not declared")) +
+                          ": a candidate is a parameter whose terms selection may drop");
+    }
+    if (it->fixed) {
+      source_.fail(c, "'" + name + "' is fixed (line " + std::to_string(it->where.line) +
+                          "): a known parameter cannot be a candidate");
+    }
+    it->candidate = true;
+  }
 }
 
 void ModelBuilder::add_multipliers(const SyntaxNode& n) {

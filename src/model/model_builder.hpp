@@ -15,7 +15,8 @@ namespace momentid {
 
 // Builds a Model from the parse tree of a model file. It reads the statements in the order that
 // decides which problem is reported first: the `model` statement and the declarations in file
-// order, then the equations, then the `multipliers` statements, then the model as a whole.
+// order, then the equations, the `library` and `candidate` statements, the `multipliers`
+// statements, then the model as a whole.
 // Model befriends it: it is the one place that fills a Model in.
 class ModelBuilder {
  public:
@@ -31,6 +32,13 @@ class ModelBuilder {
   void collect(const std::vector<SyntaxNode>& statements);
   void add_equation(const SyntaxNode& n);
   void add_multipliers(const SyntaxNode& n);
+  // The terms of a `library` statement, each with a candidate parameter of its own, joined to
+  // the right side of the equation it names.
+  void add_library(const SyntaxNode& n);
+  // The equation a `library` statement's target names: a state's derivative or a label.
+  Equation& library_equation(const SyntaxNode& target);
+  // Marks the parameters of a `candidate` statement.
+  void add_candidates(const SyntaxNode& n);
   // The state whose derivative measured column i holds, once the equations are read (`y''` is
   // v' through y' = v).
   void add_measured(std::size_t i);
@@ -41,7 +49,8 @@ class ModelBuilder {
   EquationLabels labels_;
   Model model_;
   const SyntaxNode* model_statement_ = nullptr;
-  std::vector<const SyntaxNode*> equation_nodes_, multiplier_nodes_;
+  std::vector<const SyntaxNode*> equation_nodes_, multiplier_nodes_, library_nodes_,
+      candidate_nodes_;
 };
 
 }  // namespace momentid

@@ -13,7 +13,8 @@ constexpr int kMaxNumberDigits = 2000;  // of a number computed from a power
 
 bool is_sum(const SyntaxNode& n) {
   return n.kind == SyntaxKind::kLhs || n.kind == SyntaxKind::kRhs ||
-         n.kind == SyntaxKind::kMultiplier || n.kind == SyntaxKind::kExpression;
+         n.kind == SyntaxKind::kMultiplier || n.kind == SyntaxKind::kLibraryTerm ||
+         n.kind == SyntaxKind::kExpression;
 }
 bool is_product(const SyntaxNode& n) {
   return n.kind == SyntaxKind::kProduct || n.kind == SyntaxKind::kTermOperand;
@@ -47,6 +48,32 @@ int total(const std::vector<int>& v) {
   int s = 0;
   for (int x : v) s += x;
   return s;
+}
+
+// The call that expression `n` consists of, with nothing around it, or nullptr.
+const SyntaxNode* sole_call(const SyntaxNode& n) {
+  const SyntaxNode* at = &n;
+  while (at->kind != SyntaxKind::kCall) {
+    if (at->children.size() != 1) return nullptr;
+    at = &at->children[0];
+  }
+  return at;
+}
+
+// Every exponent vector over `count` variables whose sum is `degree`, appended to `out`.
+void exponents_of_degree(std::size_t count, int degree, std::vector<int>& partial,
+                         std::vector<std::vector<int>>& out) {
+  if (partial.size() + 1 == count) {
+    partial.push_back(degree);
+    out.push_back(partial);
+    partial.pop_back();
+    return;
+  }
+  for (int e = degree; e >= 0; --e) {
+    partial.push_back(e);
+    exponents_of_degree(count, degree - e, partial, out);
+    partial.pop_back();
+  }
 }
 
 }  // namespace
@@ -140,6 +167,107 @@ void TermBuilder::add_monomial_checked(const SyntaxNode& n, std::vector<Monomial
   }
   Monomial in_states(m.begin(), m.begin() + static_cast<std::ptrdiff_t>(symbols_.states().size()));
   if (std::find(out.begin(), out.end(), in_states) == out.end()) out.push_back(in_states);
+}
+
+// --- Library terms ----------------------------------------------------------------------------
+
+std::vector<TermBuilder::LibraryTerm> TermBuilder::library_terms(const SyntaxNode& n) const {
+  try {
+    return library_terms_checked(n);
+  } catch (const LocatedError&) {
+    throw;
+  } catch (const std::exception& e) {
+    source_.fail(n, std::string("cannot evaluate the library term: ") + e.what());
+  }
+}
+
+std::vector<TermBuilder::LibraryTerm> TermBuilder::library_terms_checked(
+    const SyntaxNode& n) const {
+  if (const SyntaxNode* call = sole_call(n); call && call->children.at(0).text == "monomials") {
+    return generated_terms(*call);
+  }
+  const GiNaC::ex value = eval_sum(n, false).expand();
+  const std::vector<SplitTerm> terms = split_all(value);
+  const std::string text(n.text);
+  if (terms.size() != 1) {
+    source_.fail(n,
+                 "a library term is one product of states, inputs, abs(...) and sign(...), "
+                 "found " +
+                     std::to_string(terms.size()) + " terms in '" + text +
+                     "' (write a sum by hand with a 'candidate' parameter)");
+  }
+  const SplitTerm& t = terms[0];
+  if (total(t.parameters) != 0) {
+    source_.fail(n, "a library term has no parameter, found '" + text +
+                        "': the library gives each term a parameter of its own");
+  }
+  if (total(t.derivatives) != 0) {
+    source_.fail(n, "a library term cannot hold a derivative, found '" + text + "'");
+  }
+  if (t.variables.degree() == 0) {
+    source_.fail(
+        n, "a library term holds a state, an input, abs(...) or sign(...), found '" + text + "'");
+  }
+  return {{t.coefficient, t.variables, value / t.coefficient, false}};
+}
+
+std::vector<TermBuilder::LibraryTerm> TermBuilder::generated_terms(const SyntaxNode& call) const {
+  const std::string usage =
+      "monomials(NAME, ..., DEGREE): the monomials of degree 1 to DEGREE in "
+      "the states and inputs named";
+  if (call.children.size() < 3) source_.fail(call, "expected " + usage);
+  std::vector<std::size_t> variables;
+  for (std::size_t i = 1; i + 1 < call.children.size(); ++i) {
+    const SyntaxNode& argument = call.children[i];
+    const SyntaxNode* leaf = &argument;
+    while (leaf->children.size() == 1 && leaf->kind != SyntaxKind::kVariable) {
+      leaf = &leaf->children[0];
+    }
+    const std::string name(leaf->text);
+    const Declaration* d = leaf->kind == SyntaxKind::kVariable && leaf->children.size() == 1
+                               ? symbols_.find(name)
+                               : nullptr;
+    if (!d || (d->kind != SymbolKind::kState && d->kind != SymbolKind::kInput)) {
+      source_.fail(argument, "expected a state or an input in " + usage + ", found '" +
+                                 std::string(argument.text) + "'");
+    }
+    const auto& all = symbols_.variables();
+    const auto v = static_cast<std::size_t>(
+        std::find_if(all.begin(), all.end(), [&](const Variable& x) { return x.name == name; }) -
+        all.begin());
+    if (std::find(variables.begin(), variables.end(), v) != variables.end()) {
+      source_.fail(argument, "'" + name + "' is named twice in monomials(...)");
+    }
+    variables.push_back(v);
+  }
+  const SyntaxNode& last = call.children.back();
+  const GiNaC::ex degree_value = eval(last);
+  if (!GiNaC::is_a<GiNaC::numeric>(degree_value) ||
+      !GiNaC::ex_to<GiNaC::numeric>(degree_value).is_pos_integer() ||
+      GiNaC::ex_to<GiNaC::numeric>(degree_value).to_long() > kMaxGeneratedDegree) {
+    source_.fail(last, "expected the highest degree, a whole number from 1 to " +
+                           std::to_string(kMaxGeneratedDegree) + ", as the last argument of " +
+                           usage + ", found '" + std::string(last.text) + "'");
+  }
+  const int degree = GiNaC::ex_to<GiNaC::numeric>(degree_value).to_int();
+  std::vector<std::vector<int>> exponents;
+  std::vector<int> partial;
+  for (int d = 1; d <= degree; ++d) exponents_of_degree(variables.size(), d, partial, exponents);
+  if (exponents.size() > kMaxGenerated) {
+    source_.fail(call, "monomials(...) would make " + std::to_string(exponents.size()) +
+                           " terms, more than " + std::to_string(kMaxGenerated) +
+                           ": name fewer variables or a lower degree");
+  }
+  std::vector<LibraryTerm> out;
+  for (const std::vector<int>& e : exponents) {
+    LibraryTerm t{1, Monomial(symbols_.variables().size()), 1, true};
+    for (std::size_t i = 0; i < variables.size(); ++i) {
+      t.monomial[variables[i]] = e[i];
+      t.value *= GiNaC::pow(symbols_.value(call, symbols_.variables()[variables[i]].name), e[i]);
+    }
+    out.push_back(std::move(t));
+  }
+  return out;
 }
 
 // --- Expressions ------------------------------------------------------------------------------

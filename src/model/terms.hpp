@@ -29,6 +29,21 @@ class TermBuilder {
   // an instrument), to `out` unless it is there already.
   void add_monomial(const SyntaxNode& n, std::vector<Monomial>& out, bool inputs = false) const;
 
+  // A term of a `library` statement: a number times a product of variables (states, inputs,
+  // functions), its value and whether a `monomials(...)` call made it rather than the text.
+  struct LibraryTerm {
+    GiNaC::numeric coefficient;
+    Monomial monomial;  // over the variables known so far
+    GiNaC::ex value;
+    bool generated = false;
+  };
+  // The terms that library item `n` stands for: itself, or for `monomials(y, v, 3)` every
+  // monomial of degree 1 to 3 in the states and inputs named.
+  std::vector<LibraryTerm> library_terms(const SyntaxNode& n) const;
+  // The most terms one `monomials(...)` call may make, and its highest degree.
+  static constexpr std::size_t kMaxGenerated = 200;
+  static constexpr int kMaxGeneratedDegree = 9;
+
  private:
   // An expanded term taken apart into its factors, exponents indexed like the declarations.
   struct SplitTerm {
@@ -41,6 +56,8 @@ class TermBuilder {
   // equation() and add_monomial() without turning GiNaC's exceptions into located errors.
   Equation equation_checked(const SyntaxNode& n) const;
   void add_monomial_checked(const SyntaxNode& n, std::vector<Monomial>& out, bool inputs) const;
+  std::vector<LibraryTerm> library_terms_checked(const SyntaxNode& n) const;
+  std::vector<LibraryTerm> generated_terms(const SyntaxNode& call) const;
 
   // The value of an expression node, with constants replaced by their values.
   GiNaC::ex eval(const SyntaxNode& n) const;

@@ -341,6 +341,24 @@ std::vector<double> noise_variances(const IdentifyResult& result, const LaggedCh
 
 }  // namespace
 
+MomentRows lagged_rows_of(const IdentifyResult& result, const LaggedSystem& system) {
+  const LaggedChannels channels = lagged_channels(*result.model, *result.lagged->system);
+  LaggedRows rows = lagged_rows(system, *result.data.time_step, channels.channel,
+                                result.lagged->noise, result.lagged->stencil_reach);
+  std::map<Moment, std::size_t> index;
+  for (std::size_t k = 0; k < result.lagged->moments.size(); ++k) {
+    index.emplace(result.lagged->moments[k], k);
+  }
+  const auto reindex = [&](MomentRows::Entry& entry) {
+    for (auto& [k, weight] : entry.moments) k = index.at(rows.moments[k]);
+  };
+  for (auto& row : rows.rows.a) {
+    for (MomentRows::Entry& entry : row) reindex(entry);
+  }
+  for (MomentRows::Entry& entry : rows.rows.b) reindex(entry);
+  return std::move(rows.rows);
+}
+
 void identify_lagged(IdentifyResult& result, const DataSource& source,
                      const IdentifyOptions& options, const std::vector<bool>& measured) {
   const Model& model = *result.model;

@@ -191,4 +191,9 @@ void estimate_sampling_bias(IdentifyResult& result, const DataSource& source,
 void identify_lagged(IdentifyResult& result, const DataSource& source,
                      const IdentifyOptions& options, const std::vector<bool>& measured);
 
+// The equations of `system` (the result's own lagged system, or one derived with its
+// instruments at fewer lags) as rows over the moments of the result's pass
+// (result.lagged->moments), with the result's noise and stencils.
+MomentRows lagged_rows_of(const IdentifyResult& result, const LaggedSystem& system);
+
 }  // namespace momentid

@@ -1,0 +1,97 @@
+#pragma once
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "momentid/identify.hpp"
+
+// Like identify.hpp, this header does not include GiNaC.
+namespace momentid {
+
+// How to select terms (docs/cli/select.md): the record is read and the library identified as
+// identify does with these options, on the lagged equations.
+struct SelectOptions {
+  IdentifyOptions identify;
+  // Every subset of the candidates is scored up to this many candidates; beyond, backward
+  // elimination from the whole library.
+  std::size_t exhaustive = 16;
+  // The subsets the ranking keeps, best first.
+  std::size_t ranked = 5;
+
+  static constexpr std::size_t kMaxExhaustive = 20;
+};
+
+// Which terms of a library the data want: the library identified from one pass, every subset of
+// its candidate parameters scored on the library's fixed optimal weighting by the moment
+// selection criterion J / dispersion + |S| ln T (S the candidates kept, T the sample intervals, J
+// calibrated as the J test is), the difference-in-J test of each candidate at the best subset,
+// the best subset on narrower lag windows of the same pass, and the chosen model identified.
+struct SelectResult {
+  // A subset of the library: per parameter of the model, whether it is kept (parameters that are
+  // not candidates always are).
+  struct Subset {
+    std::vector<bool> kept;
+    double criterion = 0;
+    double j = 0;  // calibrated; chi-square(dof) for the right model
+    int dof = 0;
+    double pvalue = 0;
+  };
+  // A candidate at the chosen subset: J without it less J with it, chi-square(1) when its
+  // parameter is 0.
+  struct CandidateTest {
+    std::string name;
+    std::string terms;  // the monomials its parameter multiplies, as in "y^2*v"
+    bool kept = false;
+    double difference = 0;
+    double pvalue = 0;
+  };
+  // The best subset on the equations at lags first..last (the same pass and instruments).
+  struct Window {
+    int first_lag = 0, last_lag = 0;
+    std::vector<bool> kept;
+  };
+
+  IdentifyResult library;  // the whole library, identified
+  // The chosen model (chosen_model_text) identified as identify does, from a second pass.
+  IdentifyResult chosen;
+  std::vector<std::size_t> candidates;  // parameter indices
+  bool exhaustive = true;               // every subset scored, else backward elimination
+  std::size_t scored = 0;               // subsets scored
+  double penalty = 0;                   // per candidate kept: ln T
+  // The library's J over its degrees of freedom when its J test rejects it at 1%, else 1: the
+  // criterion and the candidates' tests divide J by it.
+  double dispersion = 1;
+  std::vector<Subset> ranking;       // best first
+  std::vector<CandidateTest> tests;  // per candidate
+  std::vector<Window> windows;       // the library's window first
+  std::vector<std::string> warnings;
+
+  // The kept candidates' names, in declaration order.
+  std::vector<std::string> selected() const;
+};
+
+// Identifies the library `model` (which must have candidates: a `candidate` or `library`
+// statement) from `source` on the lagged equations and selects its terms. Throws UsageError
+// for options that choose other equations, ModelError for a model without candidates, and what
+// identify throws; Error when the library's equations cannot be weighted.
+//
+// Example (model_file.hpp):
+//   std::shared_ptr<const Model> library = load_model("examples/select/library.mom");
+//   SelectResult r = select_terms(*library, DataSource::file("record.csv"));
+//   std::cout << format_text(r);
+SelectResult select_terms(const Model& model, const DataSource& source,
+                          const SelectOptions& options = {});
+
+// The ranking, the candidates' tests, the windows and the warnings, then the chosen model's
+// identify report.
+std::string format_text(const SelectResult& result);
+// The chosen model's identify JSON with `selected` and `dropped` (candidate names) and
+// `selection` (docs/json.md, "select").
+std::string format_json(const SelectResult& result);
+// The chosen model as a model file: the library's equations without the dropped terms, its
+// parameters valued at their estimates (the chosen model's once it is identified), for identify,
+// validate and simulate.
+std::string chosen_model_text(const SelectResult& result);
+
+}  // namespace momentid

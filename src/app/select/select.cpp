@@ -1,0 +1,288 @@
+// Term selection (docs/cli/select.md): the library identified from one pass, then subsets of
+// its candidates scored on the library's fixed weighting.
+
+#include "momentid/select.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+
+#include "app/identify/steps.hpp"
+#include "common/number.hpp"
+#include "momentid/algebra_lock.hpp"
+#include "solve/distributions.hpp"
+#include "solve/fixed.hpp"
+#include "solve/selection.hpp"
+
+namespace momentid {
+namespace {
+
+// Runner-up subsets within this much of the best criterion are reported as nearly as good
+// (a difference of 2 in a BIC-type criterion is the usual "barely worth a mention").
+constexpr double kCloseCriterion = 2;
+// Candidates whose estimates on the library correlate beyond this are reported as collinear.
+constexpr double kCollinear = 0.995;
+// The best subset's J test p-value below which it is reported as rejected; the library's, below
+// which its J over its degrees of freedom scales every J of the selection.
+constexpr double kRejected = 0.01;
+
+// The scoring of subsets over the free parameters on one weighting.
+struct Scorer {
+  const FixedWeighting& weighting;
+  std::vector<bool> always;             // per free parameter: not a candidate
+  std::vector<std::size_t> candidates;  // free-parameter indices
+  double penalty = 0;
+  double dispersion = 1;  // SelectResult::dispersion
+
+  // Candidate flags -> free-parameter flags.
+  std::vector<bool> kept(const std::vector<bool>& chosen) const {
+    std::vector<bool> out = always;
+    for (std::size_t c = 0; c < candidates.size(); ++c) {
+      if (chosen[c]) out[candidates[c]] = true;
+    }
+    return out;
+  }
+  SelectResult::Subset score(const std::vector<bool>& chosen) const {
+    SelectResult::Subset s;
+    s.kept = kept(chosen);
+    s.j = weighting.j(s.kept);
+    s.dof = weighting.dof(s.kept);
+    s.criterion = s.j / dispersion +
+                  penalty * static_cast<double>(std::count(chosen.begin(), chosen.end(), true));
+    s.pvalue =
+        s.dof > 0 ? chi_square_upper_tail(s.j, s.dof) : std::numeric_limits<double>::quiet_NaN();
+    return s;
+  }
+};
+
+// The library's J over its degrees of freedom when its J test rejects it, else 1: the misfit
+// that no candidate explains (numerical error of a record without noise, a noise not modelled),
+// by which every J of the selection is divided, as quasi-likelihood criteria divide deviances.
+double dispersion_of(const FixedWeighting& weighting, std::size_t parameters) {
+  const std::vector<bool> all(parameters, true);
+  const double j = weighting.j(all);
+  const int dof = weighting.dof(all);
+  if (dof <= 0 || chi_square_upper_tail(j, dof) >= kRejected) return 1;
+  return j / dof;
+}
+
+// Every subset, or the path of backward elimination, best first; `scored` counts them.
+std::vector<SelectResult::Subset> search(const Scorer& scorer, bool exhaustive,
+                                         std::size_t& scored) {
+  const std::size_t n = scorer.candidates.size();
+  std::vector<SelectResult::Subset> out;
+  if (exhaustive) {
+    for (std::size_t mask = 0; mask < (std::size_t{1} << n); ++mask) {
+      std::vector<bool> chosen(n);
+      for (std::size_t c = 0; c < n; ++c) chosen[c] = ((mask >> c) & 1U) != 0;
+      out.push_back(scorer.score(chosen));
+    }
+    scored = out.size();
+  } else {
+    std::vector<bool> chosen(n, true);
+    out.push_back(scorer.score(chosen));
+    scored = 1;
+    for (std::size_t left = n; left > 0; --left) {
+      std::optional<SelectResult::Subset> best;
+      std::size_t drop = 0;
+      for (std::size_t c = 0; c < n; ++c) {
+        if (!chosen[c]) continue;
+        chosen[c] = false;
+        SelectResult::Subset s = scorer.score(chosen);
+        ++scored;
+        chosen[c] = true;
+        if (!best || s.criterion < best->criterion) {
+          best = std::move(s);
+          drop = c;
+        }
+      }
+      chosen[drop] = false;
+      out.push_back(std::move(*best));
+    }
+  }
+  std::stable_sort(out.begin(), out.end(),
+                   [](const auto& a, const auto& b) { return a.criterion < b.criterion; });
+  return out;
+}
+
+// Free-parameter flags -> flags over every parameter (fixed ones kept).
+std::vector<bool> over_parameters(const std::vector<bool>& free_kept,
+                                  const std::vector<std::optional<double>>& fixed) {
+  std::vector<bool> out;
+  std::size_t f = 0;
+  for (const auto& value : fixed) out.push_back(value ? true : free_kept[f++]);
+  return out;
+}
+
+// "y^2*v": the monomials parameter p multiplies, as its terms have them.
+std::string terms_of(const Model& model, std::size_t p) {
+  std::string out;
+  for (const Equation& eq : model.equations()) {
+    for (const Term& t : eq.terms) {
+      if (t.parameter != static_cast<int>(p)) continue;
+      std::string term = format_monomial(model, t.monomial);
+      if (t.derivative >= 0) {
+        term = (term == "1" ? "" : term + "*") +
+               model.states()[static_cast<std::size_t>(t.derivative)].name + "'";
+      }
+      out += (out.empty() ? "" : ", ") + term;
+    }
+  }
+  return out;
+}
+
+// The library's equations at `system`'s lags, their fixed parameters moved to the right.
+MomentRows free_rows(const IdentifyResult& library, const LaggedSystem& system,
+                     const std::vector<std::optional<double>>& fixed) {
+  return without_fixed(lagged_rows_of(library, system), fixed);
+}
+
+}  // namespace
+
+std::vector<std::string> SelectResult::selected() const {
+  std::vector<std::string> out;
+  if (ranking.empty()) return out;
+  for (const std::size_t p : candidates) {
+    if (ranking.front().kept[p]) out.push_back(library.model->parameters()[p].name);
+  }
+  return out;
+}
+
+SelectResult select_terms(const Model& model, const DataSource& source,
+                          const SelectOptions& options) {
+  const AlgebraLock lock;
+  if (options.identify.method == Method::kZeroLag || options.identify.multipliers ||
+      options.identify.degree > 0 || options.identify.extrapolate) {
+    throw UsageError("method",
+                     "select scores the terms on the lagged equations: multipliers, a degree, "
+                     "the sampling bias and the zero-lag equations are identify's");
+  }
+  if (options.exhaustive > SelectOptions::kMaxExhaustive) {
+    throw UsageError("exhaustive", "every subset is scored for at most " +
+                                       std::to_string(SelectOptions::kMaxExhaustive) +
+                                       " candidates, found " + std::to_string(options.exhaustive));
+  }
+  const std::vector<std::optional<double>> fixed = fixed_values(model, options.identify.fixed);
+  SelectResult out;
+  for (std::size_t p = 0; p < model.parameters().size(); ++p) {
+    if (model.parameters()[p].candidate && !fixed[p]) out.candidates.push_back(p);
+  }
+  if (out.candidates.empty()) {
+    throw ModelError({model.file(), 1, 1, ""},
+                     "model " + model.name() +
+                         " has no candidate terms: mark parameters with 'candidate NAME, ...' or "
+                         "add terms with 'library v': y^2, y^3' (docs/model-language.md)");
+  }
+  IdentifyOptions identify_options = options.identify;
+  identify_options.method = Method::kLagged;
+  identify_options.weighting = Weighting::kGmm;
+  out.library = identify(model, source, identify_options);
+  out.library.why = "term selection scores the terms on them";
+  const IdentifyResult& library = out.library;
+  if (!library.estimate.usable()) {
+    throw Error("the library of model " + model.name() + " cannot be estimated on " +
+                source.name() + ": " + library.estimate.message);
+  }
+  std::vector<bool> always;
+  std::vector<std::size_t> free_candidates;
+  for (std::size_t p = 0; p < fixed.size(); ++p) {
+    if (fixed[p]) continue;
+    const bool candidate =
+        std::find(out.candidates.begin(), out.candidates.end(), p) != out.candidates.end();
+    if (candidate) free_candidates.push_back(always.size());
+    always.push_back(!candidate);
+  }
+  out.penalty = std::log(static_cast<double>(std::max<std::size_t>(library.estimate.intervals, 2)));
+  out.exhaustive = out.candidates.size() <= options.exhaustive;
+  const std::string what = "term selection of model " + model.name();
+  // The subsets scored on the equations of `system`, best first, and the weighting.
+  const auto score_on = [&](const LaggedSystem& system, std::size_t& scored) {
+    const MomentRows rows = free_rows(library, system, fixed);
+    FixedWeighting weighting(rows, always.size(), library.data.estimates, true, what);
+    const Scorer scorer{weighting, always, free_candidates, out.penalty,
+                        dispersion_of(weighting, always.size())};
+    return std::pair{search(scorer, out.exhaustive, scored), std::move(weighting)};
+  };
+  const LaggedSystem& system = *library.lagged->system;
+  auto [ranking, weighting] = score_on(system, out.scored);
+  out.dispersion = dispersion_of(weighting, always.size());
+  const Scorer scorer{weighting, always, free_candidates, out.penalty, out.dispersion};
+  // The tests at the chosen subset, over the candidates.
+  std::vector<bool> chosen(free_candidates.size());
+  for (std::size_t c = 0; c < chosen.size(); ++c) {
+    chosen[c] = ranking.front().kept[free_candidates[c]];
+  }
+  const double j_best = ranking.front().j;
+  for (std::size_t c = 0; c < chosen.size(); ++c) {
+    std::vector<bool> other = chosen;
+    other[c] = !other[c];
+    const double j_other = scorer.score(other).j;
+    const double difference = chosen[c] ? j_other - j_best : j_best - j_other;
+    const std::size_t p = out.candidates[c];
+    out.tests.push_back({model.parameters()[p].name, terms_of(model, p), chosen[c], difference,
+                         chi_square_upper_tail(difference / out.dispersion, 1)});
+  }
+  for (std::size_t a = 0; a < free_candidates.size(); ++a) {
+    for (std::size_t b = a + 1; b < free_candidates.size(); ++b) {
+      const double rho = weighting.correlation(free_candidates[a], free_candidates[b]);
+      if (std::abs(rho) > kCollinear) {
+        out.warnings.push_back("candidates " + out.tests[a].name + " (" + out.tests[a].terms +
+                               ") and " + out.tests[b].name + " (" + out.tests[b].terms +
+                               ") are nearly collinear on these data (their estimates correlate " +
+                               number(rho, "%.4f") +
+                               " on the library): the selection between them is uncertain");
+      }
+    }
+  }
+  if (out.dispersion > 1) {
+    out.warnings.push_back(
+        "the J test rejects the whole library (J " + number(out.dispersion, "%.3g") +
+        " times its degrees of freedom): the record holds a misfit that no candidate explains "
+        "(the numerical error of a record without noise, a noise or an offset not modelled), "
+        "and the selection divides every J by that factor");
+  }
+  for (SelectResult::Subset& s : ranking) s.kept = over_parameters(s.kept, fixed);
+  if (ranking.size() > options.ranked) ranking.resize(std::max<std::size_t>(options.ranked, 2));
+  out.ranking = std::move(ranking);
+  if (out.ranking.size() > 1 &&
+      out.ranking[1].criterion - out.ranking[0].criterion < kCloseCriterion) {
+    out.warnings.push_back("the runner-up is within " + number(kCloseCriterion, "%g") +
+                           " of the best subset's criterion: the data hardly prefer one of them");
+  }
+  // The same selection on narrower windows of the same pass: half and three quarters of the lags.
+  out.windows.push_back({system.first_lag, system.last_lag, out.ranking.front().kept});
+  for (const int quarters : {2, 3}) {
+    const int last = system.first_lag + (system.last_lag - system.first_lag) * quarters / 4;
+    if (last - system.first_lag + 1 < LagOptions::kMinSpan) continue;
+    LagOptions narrower;
+    narrower.first_lag = system.first_lag;
+    narrower.last_lag = last;
+    narrower.instruments = system.instruments;
+    narrower.measured = system.measured;
+    const LaggedSystem sub = derive_lagged(model, narrower);
+    std::size_t scored = 0;
+    const auto [sub_ranking, sub_weighting] = score_on(sub, scored);
+    out.windows.push_back(
+        {sub.first_lag, sub.last_lag, over_parameters(sub_ranking.front().kept, fixed)});
+  }
+  for (std::size_t w = 1; w < out.windows.size(); ++w) {
+    if (out.windows[w].kept == out.windows[0].kept) continue;
+    out.warnings.push_back(
+        "the chosen terms change with the lag window (see 'windows'): the "
+        "selection is not stable on this record");
+    break;
+  }
+  // The chosen model identified on its own equations, as identify takes the file it is
+  // written to: its instruments are its own, not the library's highest powers.
+  const Model written = parse_model(chosen_model_text(out), model.file());
+  out.chosen = identify(written, source, options.identify);
+  if (out.chosen.estimate.j_pvalue && *out.chosen.estimate.j_pvalue < kRejected) {
+    out.warnings.insert(out.warnings.begin(), "the J test rejects the chosen model (p = " +
+                                                  number(*out.chosen.estimate.j_pvalue, "%.2g") +
+                                                  "): the library may lack a term the data need");
+  }
+  return out;
+}
+
+}  // namespace momentid

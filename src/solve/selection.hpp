@@ -1,0 +1,47 @@
+#pragma once
+
+// Term selection on one fixed weighting (docs/cli/select.md): the moment equations of a library
+// of terms, weighted once at the library's own first-step estimate, give every subset of its
+// parameters a J statistic by a small least-squares solve, so that subsets are compared on the
+// same scale and none needs the data again.
+
+#include <Eigen/Dense>
+#include <string>
+#include <vector>
+
+#include "momentid/estimate.hpp"
+
+namespace momentid {
+
+class FixedWeighting {
+ public:
+  // The equations `rows` (over `parameters` parameters) at `estimates`, weighted by the inverse
+  // batch covariance of the equations at the library's least-squares estimate, as the optimal
+  // weighting of solve_rows is. Throws Error when the library's equations cannot be weighted
+  // (rank-deficient, fewer batches than rows plus two, no more equations than parameters, or no
+  // sampling error to calibrate J by): `what` names the library in the message.
+  FixedWeighting(const MomentRows& rows, std::size_t parameters, const MomentEstimates& estimates,
+                 bool normalise_rows, const std::string& what);
+
+  // J of the subset `kept` (a flag per parameter): the weighted residual's squared length at the
+  // subset's estimate on this weighting, times the library's calibration factor, so that J at
+  // the library is its calibrated J test statistic (j_test) and a subset's J less the library's
+  // is asymptotically chi-square in the parameters dropped.
+  double j(const std::vector<bool>& kept) const;
+  // The equations the weighting counts less the parameters `kept` holds: J's degrees of freedom.
+  int dof(const std::vector<bool>& kept) const;
+  // The correlation between the estimates of parameters p and q on the library.
+  double correlation(std::size_t p, std::size_t q) const;
+
+ private:
+  // The library's estimate, in scaled columns, (A' W A)^-1 and J: a subset's J is the library's
+  // plus the Wald form of the parameters it drops, which stays exact where J is tiny against
+  // b' W b (records without noise).
+  Eigen::VectorXd theta_;
+  Eigen::MatrixXd covariance_;
+  double objective_ = 0;
+  double calibration_ = 1;
+  Eigen::Index rank_ = 0;
+};
+
+}  // namespace momentid

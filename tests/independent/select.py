@@ -1,0 +1,192 @@
+#!/usr/bin/python3
+"""momentid select on records made by numpy and scipy (lab_records.py), not momentid: an oscillator
+driven by a shaker force, sampled at 1024 Hz, 10^5 samples, white noise on the displacement (and
+velocity) and no metadata, against the library of docs/cli/select.md
+
+    v' = 0 + v_y y + v_y2 y^2 + ... + v_y5 y^5 + v_v v + v_y_v y v + v_y2_v y^2 v + v_x x
+
+with no options. Each case checks that the chosen terms are the true ones, that the chosen model's
+J test does not reject it at 1%, and that its estimates lie within 3 standard errors of the truth.
+
+  duffing      the Duffing oscillator of lab.SDOF, 5% noise on y
+  asymmetric   the same with -300 y^2, 10% noise on y
+  van_der_pol  v' = mu (1 - y^2) v - k y + x, mu = 2, k = 400, 5% noise on y
+  damping      y, v and x measured, 2% noise, the library {y, v, v^2, v^3}: the Duffing
+               oscillator's linear damping, then cubic damping -c3 v^3 in place of -c v
+  written      duffing's chosen model written by -o: identify takes it as it is, `ok`, with the
+               same terms and estimates within 3 standard errors of the truth
+  no_candidates  a model without candidates: exit 2, naming 'candidate' and 'library'
+
+Usage: select.py CASE MOMENTID WORKDIR
+"""
+import json
+import os
+import subprocess
+import sys
+
+import numpy as np
+
+import lab_records as lab
+
+FS = 1024
+SAMPLES = 100000
+LIBRARY = """model library "a polynomial library for an oscillator"
+state y, v
+input x
+y' = v
+v' = 0
+library v': monomials(y, 5), v, y*v, y^2*v, x
+"""
+DAMPING_LIBRARY = """state y, v
+input x
+y' = v
+v' = 0
+library v': y, y^3, v, v^2, v^3, x
+"""
+
+
+def oscillator(seed, rates, rms):
+    return lab.oscillator(np.random.default_rng(seed), rates, ("y", "v"), FS, SAMPLES,
+                          (1.0, 40.0), rms, 10.0)
+
+
+def write(seed, clean, noise, path, channels=("y",)):
+    rng = np.random.default_rng(seed + 1)
+    columns = {"t": clean["t"], "x": clean["x"]}
+    for name in channels:
+        columns[name] = lab.measured(rng, clean[name], noise)
+    lab.write_csv(path, columns)
+
+
+def select(momentid, model, path, *options):
+    result = subprocess.run([momentid, "select", model, path, "--format", "json", *options],
+                            capture_output=True, text=True)
+    if result.returncode != 0:
+        print(result.stderr.strip())
+        return None
+    return json.loads(result.stdout)
+
+
+def judge(report, truth):
+    """The chosen terms are those of `truth` (a value per parameter kept), J is not rejected and
+    every estimate is within 3 standard errors."""
+    if report is None:
+        return False
+    selected = sorted(report["selected"])
+    print(f"  selected {', '.join(selected)}; ranking:")
+    for entry in report["selection"]["ranking"][:3]:
+        print(f"    {entry['criterion']:10.4g}  J {entry['j']:8.4g} on {entry['dof']}  "
+              f"{', '.join(entry['selected'])}")
+    passed = selected == sorted(truth)
+    pvalue = report["diagnostics"]["j_pvalue"]
+    print(f"  J test p = {pvalue:.3g}")
+    passed &= pvalue is not None and pvalue >= 0.01
+    for name, value in truth.items():
+        p = report["parameters"].get(name)
+        if p is None:
+            return False
+        z = (p["estimate"] - value) / p["std_error"]
+        print(f"  {name}: {p['estimate']:.6g} +- {p['std_error']:.3g} (true {value:g}, z {z:+.2f})")
+        passed &= abs(z) <= 3
+    return passed
+
+
+def library(workdir, text=LIBRARY):
+    path = f"{workdir}/library.mom"
+    with open(path, "w") as out:
+        out.write(text)
+    return path
+
+
+def duffing_record(workdir):
+    p = lab.SDOF
+    clean = oscillator(20271201, lambda s, x: (s[1], x - p["c"] * s[1] - p["k"] * s[0]
+                                                 - p["eps"] * s[0]**3), 800.0)
+    path = f"{workdir}/duffing.csv"
+    write(20271201, clean, 0.05, path)
+    truth = {"v_y": -p["k"], "v_y3": -p["eps"], "v_v": -p["c"], "v_x": 1.0}
+    return path, truth
+
+
+def duffing(momentid, workdir):
+    path, truth = duffing_record(workdir)
+    return judge(select(momentid, library(workdir), path), truth)
+
+
+def asymmetric(momentid, workdir):
+    p = lab.SDOF
+    clean = oscillator(20271202, lambda s, x: (s[1], x - p["c"] * s[1] - p["k"] * s[0]
+                                                 - 300.0 * s[0]**2 - p["eps"] * s[0]**3), 800.0)
+    path = f"{workdir}/asymmetric.csv"
+    write(20271202, clean, 0.10, path)
+    truth = {"v_y": -p["k"], "v_y2": -300.0, "v_y3": -p["eps"], "v_v": -p["c"], "v_x": 1.0}
+    return judge(select(momentid, library(workdir), path), truth)
+
+
+def van_der_pol(momentid, workdir):
+    mu, k = 2.0, 400.0
+    clean = oscillator(20271203, lambda s, x: (s[1], x + mu * (1 - s[0]**2) * s[1] - k * s[0]),
+                       200.0)
+    path = f"{workdir}/van_der_pol.csv"
+    write(20271203, clean, 0.05, path)
+    truth = {"v_y": -k, "v_v": mu, "v_y2_v": -mu, "v_x": 1.0}
+    return judge(select(momentid, library(workdir), path), truth)
+
+
+def damping(momentid, workdir):
+    p = lab.SDOF
+    model = library(workdir, DAMPING_LIBRARY)
+    passed = True
+    for law, seed, term, value in (("linear", 20271204, "v_v", p["c"]),
+                                   ("cubic", 20271205, "v_v3", 8.0)):
+        power = 1 if law == "linear" else 3
+        clean = oscillator(seed, lambda s, x: (s[1], x - value * s[1]**power - p["k"] * s[0]
+                                                 - p["eps"] * s[0]**3), 800.0)
+        path = f"{workdir}/{law}.csv"
+        write(seed, clean, 0.02, path, ("y", "v"))
+        print(f"{law} damping:")
+        truth = {"v_y": -p["k"], "v_y3": -p["eps"], term: -value, "v_x": 1.0}
+        passed &= judge(select(momentid, model, path), truth)
+    return passed
+
+
+def written(momentid, workdir):
+    path, truth = duffing_record(workdir)
+    chosen = f"{workdir}/chosen.mom"
+    result = subprocess.run([momentid, "select", library(workdir), path, "-o", chosen],
+                            capture_output=True, text=True)
+    if result.returncode != 0:
+        print(result.stderr)
+        return False
+    print(open(chosen).read())
+    report = lab.identify(momentid, chosen, path)
+    print(f"  identify: {report.get('diagnostics', {}).get('status')}")
+    passed = report.get("diagnostics", {}).get("status") == "ok"
+    passed &= sorted(report["parameters"]) == sorted(truth)
+    for name, value in truth.items():
+        e = report["parameters"][name]
+        z = (e["estimate"] - value) / e["std_error"]
+        print(f"  {name}: {e['estimate']:.6g} +- {e['std_error']:.3g} (z {z:+.2f})")
+        passed &= abs(z) <= 3
+    return passed
+
+
+def no_candidates(momentid, workdir):
+    path, _ = duffing_record(workdir)
+    model = library(workdir, "state y, v\ninput x\nparam c, k\ny' = v\nv' = -c*v - k*y + x\n")
+    result = subprocess.run([momentid, "select", model, path], capture_output=True, text=True)
+    print(result.stderr.strip())
+    return (result.returncode == 2 and "'candidate NAME, ...'" in result.stderr
+            and "'library" in result.stderr and result.stdout == "")
+
+
+CASES = {"duffing": duffing, "asymmetric": asymmetric, "van_der_pol": van_der_pol,
+         "damping": damping, "written": written, "no_candidates": no_candidates}
+
+if __name__ == "__main__":
+    case, momentid, workdir = sys.argv[1:4]
+    workdir = os.path.join(workdir, f"select_{case}")
+    os.makedirs(workdir, exist_ok=True)
+    ok = CASES[case](momentid, workdir)
+    print("PASS" if ok else "FAIL")
+    sys.exit(0 if ok else 1)
