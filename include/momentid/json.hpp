@@ -15,6 +15,7 @@ namespace momentid {
 struct IdentifyResult;
 struct LaggedSystem;
 struct MomentSystem;
+struct SelectResult;
 struct ValidateResult;
 
 // docs/json.md, "derive": the zero-lag moment equations.
@@ -23,6 +24,8 @@ nlohmann::ordered_json json_value(const MomentSystem& system);
 nlohmann::ordered_json json_value(const LaggedSystem& system);
 // docs/json.md, "identify".
 nlohmann::ordered_json json_value(const IdentifyResult& result);
+// docs/json.md, "select".
+nlohmann::ordered_json json_value(const SelectResult& result);
 // docs/json.md, "validate".
 nlohmann::ordered_json json_value(const ValidateResult& result);
 

@@ -33,8 +33,8 @@ from typing import Any, Mapping, Optional, Sequence, Union
 import numpy as _np
 
 __all__ = [
-    "Model", "Equations", "Record", "Fit", "IdentifyResult", "CheckResult", "ValidateResult",
-    "identify", "check", "simulate", "validate",
+    "Model", "Equations", "Record", "Fit", "IdentifyResult", "SelectResult", "CheckResult",
+    "ValidateResult", "identify", "select", "check", "simulate", "validate",
     "Error", "ModelError", "DataError", "UsageError", "MomentidWarning", "__version__",
 ]
 
@@ -72,7 +72,8 @@ from . import _momentid  # noqa: E402  (the exceptions above must exist before i
 
 __version__: str = _momentid.__version__
 
-from ._results import CheckResult, Fit, IdentifyResult, ValidateResult, _json_text  # noqa: E402
+from ._results import (CheckResult, Fit, IdentifyResult, SelectResult,  # noqa: E402
+                       ValidateResult, _json_text)
 
 PathLike = Union[str, "_os.PathLike[str]"]
 # Monomials: a list (["y", "y*v^2"]) or the command line's list in one string ("y, y*v^2").
@@ -291,6 +292,48 @@ def identify(model: Union[Model, PathLike], data: Any, *,
     text, value = _momentid._identify(model._model, source, name, metadata, options)
     del keep
     return IdentifyResult(text, value)
+
+
+def select(model: Union[Model, PathLike], data: Any, *,
+           columns: Optional[Mapping[str, str]] = None, names: Optional[Sequence[str]] = None,
+           dt: Optional[float] = None, batches: Optional[int] = None,
+           lags: Optional[tuple[int, int]] = None, instruments: Monomials = None,
+           noise: Optional[Mapping[str, float]] = None, fix: Optional[Mapping[str, float]] = None,
+           center: Union[None, str, Sequence[str]] = None, input_hold: Optional[str] = None,
+           input_shift: Optional[int] = None, missing: Optional[str] = None,
+           skip_rows: Optional[int] = None, decimal: Optional[str] = None,
+           dt_from: Optional[str] = None, threads: Optional[int] = None,
+           integrate: Union[None, str, Sequence[str]] = None,
+           integrate_corner: Optional[float] = None, exhaustive: Optional[int] = None,
+           ranked: Optional[int] = None) -> SelectResult:
+    """Chooses the terms of a library model that the record wants, as `momentid select MODEL
+    DATA` (docs/cli/select.md): the model's candidates (`candidate` and `library` statements)
+    scored on the lagged equations of one pass, and the chosen model identified.
+
+    The options are identify()'s for the record and the lagged equations; exhaustive: every
+    subset is scored up to this many candidates (default 16, at most 20), backward elimination
+    beyond; ranked: the subsets the ranking keeps (default 5).
+
+    Returns a SelectResult: the chosen model's IdentifyResult (params, bse, jtest(), ...) with
+    selected and dropped (candidate names), ranking, tests, windows, selection_warnings,
+    model_text (the chosen model as a model file) and write_model(path). Raises ModelError for a
+    model without candidates, and what identify() raises.
+    """
+    model = _model_of(model)
+    source, name, metadata, keep, names = _data_of(data, names)
+    if isinstance(center, str):
+        center = model.states + model.inputs if center == "all" else [center]
+    if isinstance(integrate, str):
+        integrate = [integrate]
+    options = _options(batches=batches, lags=lags, instruments=_monomials(instruments),
+                       noise=noise, fix=fix, center=center, input_hold=input_hold,
+                       input_shift=input_shift, columns=columns, dt=dt, missing=missing,
+                       skip_rows=skip_rows, decimal=decimal, names=names, dt_from=dt_from,
+                       threads=threads, integrate=integrate, integrate_corner=integrate_corner,
+                       exhaustive=exhaustive, ranked=ranked)
+    text, value, model_text = _momentid._select(model._model, source, name, metadata, options)
+    del keep
+    return SelectResult(text, value, model_text)
 
 
 @_older_keywords

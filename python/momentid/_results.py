@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import copy as _copy
 import json as _json
+import os as _os
 from typing import Optional, Union
 
 import numpy as _np
@@ -227,6 +228,34 @@ class IdentifyResult(Fit):
         values = ", ".join(f"{name}={value:.6g}±{self.std_errors[name]:.2g}"
                            for name, value in self.estimates.items())
         return f"<momentid.IdentifyResult {self.status}: {values}>"
+
+
+class SelectResult(IdentifyResult):
+    """What select() found: the chosen model's IdentifyResult (its params, bse, jtest(), ...,
+    and summary(), the whole text report of `momentid select`), and:
+
+    selected, dropped: the candidates' names; ranking: the best subsets, each a dict with
+      "selected", "criterion", "j", "dof" and "pvalue"; tests: per candidate, "candidate",
+      "terms", "kept", "j_change" and "pvalue" (the difference-in-J test at the chosen subset);
+      windows: the chosen candidates on narrower lag windows; selection_warnings.
+    model_text: the chosen model as a model file; write_model(path) writes it.
+    """
+
+    def __init__(self, text: str, value: Union[str, dict], model_text: str = "") -> None:
+        super().__init__(text, value)
+        selection = self._dict["selection"]
+        self.selected = list(self._dict["selected"])
+        self.dropped = list(self._dict["dropped"])
+        self.ranking = selection["ranking"]
+        self.tests = selection["tests"]
+        self.windows = selection["windows"]
+        self.selection_warnings = selection["warnings"]
+        self.model_text = model_text
+
+    def write_model(self, path: Union[str, _os.PathLike]) -> None:
+        """Writes the chosen model as a model file, for identify(), validate() and simulate()."""
+        with open(path, "w", encoding="utf-8") as out:
+            out.write(self.model_text)
 
 
 class CheckResult:

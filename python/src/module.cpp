@@ -594,6 +594,19 @@ PYBIND11_MODULE(_momentid, m) {
           return py::make_tuple(format_text(result), to_python(json_value(result)));
         });
 
+  m.def("_select", [](const Model& model, const py::object& data, const std::string& name,
+                      const std::map<std::string, std::string>& metadata, const py::dict& options) {
+    SelectOptions select_with;
+    select_with.identify = identify_options(model, options);
+    if (auto n = get<std::size_t>(options, "exhaustive")) select_with.exhaustive = *n;
+    if (auto n = get<std::size_t>(options, "ranked")) select_with.ranked = *n;
+    const DataSource source = data_source(data, name, metadata);
+    const Model with = declare_derivative_columns(model, select_with.identify.record, source);
+    const SelectResult result = select_terms(with, source, select_with);
+    return py::make_tuple(format_text(result), to_python(json_value(result)),
+                          chosen_model_text(result));
+  });
+
   m.def("_check", [](const py::object& model, const py::object& data, const std::string& name,
                      const std::map<std::string, std::string>& metadata, const py::dict& options) {
     CheckOptions check_with;

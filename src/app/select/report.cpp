@@ -90,7 +90,7 @@ std::string format_text(const SelectResult& r) {
   return out.str();
 }
 
-std::string format_json(const SelectResult& r) {
+nlohmann::ordered_json json_value(const SelectResult& r) {
   Json out = json_value(r.chosen);
   const std::vector<bool>& best = r.ranking.front().kept;
   out["selected"] = kept_names(r, best, true);
@@ -124,7 +124,9 @@ std::string format_json(const SelectResult& r) {
                       {"tests", tests},
                       {"windows", windows},
                       {"warnings", r.warnings}};
-  return json_text(out);
+  return out;
 }
+
+std::string format_json(const SelectResult& r) { return json_text(json_value(r)); }
 
 }  // namespace momentid

@@ -1,0 +1,66 @@
+"""momentid.select on a Van der Pol record that scipy integrates: the chosen terms, the report and
+JSON the command line gives, and the chosen model written for identify()."""
+import numpy as np
+import pytest
+
+import momentid
+
+LIBRARY = """model library
+state y, v
+input x
+y' = v
+v' = 0
+library v': monomials(y, 3), v, y^2*v, x
+"""
+
+
+@pytest.fixture(scope="module")
+def record():
+    """v' = mu (1 - y^2) v - k y + x, mu = 2, k = 400, the force a sum of 300 sines on 1-30 Hz,
+    sampled at 512 Hz for 200 s, 5% noise on y."""
+    from scipy.integrate import solve_ivp
+    mu, k, fs, seconds = 2.0, 400.0, 512.0, 200.0
+    rng = np.random.default_rng(11)
+    frequencies = rng.uniform(1.0, 30.0, 300)
+    amplitudes = rng.normal(0, 15.0, 300)
+    phases = rng.uniform(0, 2 * np.pi, 300)
+
+    def force(t):
+        return np.sum(amplitudes * np.sin(2 * np.pi * frequencies * np.asarray(t)[..., None]
+                                          + phases), axis=-1)
+
+    t = np.arange(int(seconds * fs)) / fs
+    solution = solve_ivp(lambda s, z: [z[1], mu * (1 - z[0]**2) * z[1] - k * z[0] + force(s)],
+                         (0, t[-1]), [0.0, 0.0], t_eval=t, rtol=1e-9, atol=1e-11, method="DOP853")
+    y = solution.y[0]
+    keep = t >= 10.0
+    return ({"t": t[keep], "x": force(t[keep]),
+             "y": y[keep] + 0.05 * np.std(y) * rng.standard_normal(keep.sum())},
+            {"v_y": -k, "v_v": mu, "v_y2_v": -mu, "v_x": 1.0})
+
+
+def test_select_chooses_the_true_terms_and_writes_the_model(record, tmp_path):
+    data, truth = record
+    result = momentid.select(momentid.Model(LIBRARY), data)
+    assert sorted(result.selected) == sorted(truth), result.text
+    assert result.dropped == ["v_y2", "v_y3"]
+    assert result.ranking[0]["selected"] == result.selected
+    assert [t["candidate"] for t in result.tests] == ["v_y", "v_y2", "v_y3", "v_v", "v_y2_v",
+                                                      "v_x"]
+    assert result.text.startswith("term selection for model library")
+    for name, value in truth.items():
+        assert abs(result.estimates[name] - value) < 3 * result.std_errors[name], result.text
+    assert result.jtest()[1] >= 0.01
+    path = tmp_path / "chosen.mom"
+    result.write_model(path)
+    again = momentid.identify(path, data)
+    assert sorted(again.estimates) == sorted(truth)
+    for name in truth:
+        assert again.estimates[name] == pytest.approx(result.estimates[name], rel=1e-12)
+
+
+def test_a_model_without_candidates_is_refused(record):
+    data, _ = record
+    model = momentid.Model("state y, v\ninput x\nparam c, k\ny' = v\nv' = -c*v - k*y + x\n")
+    with pytest.raises(momentid.ModelError, match="has no candidate terms"):
+        momentid.select(model, data)
