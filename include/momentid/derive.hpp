@@ -147,6 +147,8 @@ HeldInputCorrections held_input_corrections(const Model& model,
 
 // All monomials in `states` variables of total degree 1..degree, lowest degree first.
 std::vector<Monomial> monomials_up_to(int states, int degree);
+// How many there are, C(states + degree, degree) - 1, as a double (it may be huge).
+double count_monomials(int states, int degree);
 
 // Output formats (docs/cli/derive.md, "momentid derive").
 std::string format_moment(const Model& model, const Monomial& moment);

@@ -66,9 +66,6 @@ struct SelectResult {
   std::vector<CandidateTest> tests;  // per candidate
   std::vector<Window> windows;       // the library's window first
   std::vector<std::string> warnings;
-
-  // The kept candidates' names, in declaration order.
-  std::vector<std::string> selected() const;
 };
 
 // Identifies the library `model` (which must have candidates: a `candidate` or `library`

@@ -276,10 +276,7 @@ def identify(model: Union[Model, PathLike], data: Any, *,
     """
     model = _model_of(model)
     source, name, metadata, keep, names = _data_of(data, names)
-    if isinstance(center, str):
-        center = model.states + model.inputs if center == "all" else [center]
-    if isinstance(integrate, str):
-        integrate = [integrate]
+    center, integrate = _channel_lists(model, center), _names(integrate)
     if not isinstance(extrapolate, bool):
         raise UsageError(f"extrapolate: expected True or False, found {extrapolate!r}")
     options = _options(multipliers=_monomials(multipliers), degree=degree, batches=batches,
@@ -321,10 +318,7 @@ def select(model: Union[Model, PathLike], data: Any, *,
     """
     model = _model_of(model)
     source, name, metadata, keep, names = _data_of(data, names)
-    if isinstance(center, str):
-        center = model.states + model.inputs if center == "all" else [center]
-    if isinstance(integrate, str):
-        integrate = [integrate]
+    center, integrate = _channel_lists(model, center), _names(integrate)
     options = _options(batches=batches, lags=lags, instruments=_monomials(instruments),
                        noise=noise, fix=fix, center=center, input_hold=input_hold,
                        input_shift=input_shift, columns=columns, dt=dt, missing=missing,
@@ -433,8 +427,7 @@ def validate(model: Union[Model, PathLike], data: Any,
     elif params:
         origin += " and params"
     source, name, metadata, keep, names = _data_of(data, names)
-    if isinstance(center, str):
-        center = model.states + model.inputs if center == "all" else [center]
+    center = _channel_lists(model, center)
     options = _options(params=_numbers(params), parameters_from=origin, skip=skip, lags=lags,
                        interpolation=interpolation, substeps=substeps, columns=columns,
                        dt=dt,
@@ -447,6 +440,17 @@ def validate(model: Union[Model, PathLike], data: Any,
 
 
 # --- helpers ----------------------------------------------------------------------------------
+
+def _channel_lists(model: Model, center: Union[None, str, Sequence[str]]) -> Optional[list]:
+    """`center` as a list of variables: "all" is every state and input."""
+    if isinstance(center, str):
+        return model.states + model.inputs if center == "all" else [center]
+    return None if center is None else list(center)
+
+
+def _names(names: Union[None, str, Sequence[str]]) -> Optional[list]:
+    return [names] if isinstance(names, str) else None if names is None else list(names)
+
 
 def _options(**options: Any) -> dict:
     return {key: value for key, value in options.items() if value is not None}

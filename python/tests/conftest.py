@@ -69,6 +69,20 @@ def record(duffing):
     return momentid.simulate(duffing, samples=20000, seed=3, inputs={"x": INPUT})
 
 
+def sines(rng, count, band, amplitude):
+    """A smooth random force: `count` sines at frequencies uniform on `band` (Hz), normal
+    amplitudes of scale `amplitude` and uniform phases, as a function of time (array or
+    scalar)."""
+    frequencies = rng.uniform(band[0], band[1], count)
+    amplitudes = rng.normal(0, amplitude, count)
+    phases = rng.uniform(0, 2 * np.pi, count)
+
+    def force(t):
+        return np.sum(amplitudes * np.sin(2 * np.pi * frequencies * np.asarray(t)[..., None]
+                                          + phases), axis=-1)
+    return force
+
+
 def read_csv(path):
     """The columns of a CSV file written by the program: {name: float64 array}, `#` lines
     (the metadata) skipped."""

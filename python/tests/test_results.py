@@ -19,7 +19,7 @@ import pytest
 
 import momentid
 
-from conftest import DUFFING, INPUT, TRUE, read_csv
+from conftest import DUFFING, INPUT, TRUE, read_csv, sines
 
 # The arrays are the JSON's numbers, or computed from them by a few operations.
 REL = 1e-12
@@ -369,13 +369,7 @@ def test_a_column_of_a_derivative_is_named_as_the_command_line_names_it():
                            name="oscillator")
     c, k, fs, seconds = 3.0, 900.0, 256.0, 400.0
     rng = np.random.default_rng(7)
-    frequencies = rng.uniform(0.5, 20.0, 400)
-    amplitudes = rng.normal(0, 4.0, 400)
-    phases = rng.uniform(0, 2 * np.pi, 400)
-
-    def force(t):
-        return np.sum(amplitudes * np.sin(2 * np.pi * frequencies * np.asarray(t)[..., None]
-                                          + phases), axis=-1)
+    force = sines(rng, 400, (0.5, 20.0), 4.0)
 
     t = np.arange(int(seconds * fs)) / fs
     solution = solve_ivp(lambda s, z: [z[1], -c * z[1] - k * z[0] + force(s)], (0, t[-1]),

@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 import momentid
+from conftest import sines
 
 LIBRARY = """model library
 state y, v
@@ -21,13 +22,7 @@ def record():
     from scipy.integrate import solve_ivp
     mu, k, fs, seconds = 2.0, 400.0, 512.0, 200.0
     rng = np.random.default_rng(11)
-    frequencies = rng.uniform(1.0, 30.0, 300)
-    amplitudes = rng.normal(0, 15.0, 300)
-    phases = rng.uniform(0, 2 * np.pi, 300)
-
-    def force(t):
-        return np.sum(amplitudes * np.sin(2 * np.pi * frequencies * np.asarray(t)[..., None]
-                                          + phases), axis=-1)
+    force = sines(rng, 300, (1.0, 30.0), 15.0)
 
     t = np.arange(int(seconds * fs)) / fs
     solution = solve_ivp(lambda s, z: [z[1], mu * (1 - z[0]**2) * z[1] - k * z[0] + force(s)],

@@ -579,16 +579,13 @@ std::vector<Monomial> monomials_up_to(int states, int max_degree) {
   return out;
 }
 
-namespace {
-
-// How many monomials in `states` variables have degree 1..degree: C(states + degree, degree) - 1.
 double count_monomials(int states, int degree) {
   double c = 1;
   for (int i = 1; i <= degree; ++i) c = c * (states + i) / i;
   return c - 1;
 }
 
-}  // namespace
+namespace {}  // namespace
 
 MomentSystem derive(const Model& model, const DeriveOptions& options) {
   const AlgebraLock lock;

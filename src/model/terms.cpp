@@ -4,6 +4,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "momentid/derive.hpp"
+
 namespace momentid {
 namespace {
 
@@ -60,35 +62,25 @@ const SyntaxNode* sole_call(const SyntaxNode& n) {
   return at;
 }
 
-// Every exponent vector over `count` variables whose sum is `degree`, appended to `out`.
-void exponents_of_degree(std::size_t count, int degree, std::vector<int>& partial,
-                         std::vector<std::vector<int>>& out) {
-  if (partial.size() + 1 == count) {
-    partial.push_back(degree);
-    out.push_back(partial);
-    partial.pop_back();
-    return;
-  }
-  for (int e = degree; e >= 0; --e) {
-    partial.push_back(e);
-    exponents_of_degree(count, degree - e, partial, out);
-    partial.pop_back();
-  }
-}
-
 }  // namespace
 
 // --- Equations and multipliers ----------------------------------------------------------------
 
-// GiNaC reports arithmetic it cannot do by exceptions; they become errors at the equation.
-Equation TermBuilder::equation(const SyntaxNode& n) const {
+// GiNaC reports arithmetic it cannot do by exceptions; they become errors at node `n`, "cannot
+// evaluate the `what`: ...".
+template <class Evaluate>
+auto TermBuilder::located(const SyntaxNode& n, const char* what, Evaluate evaluate) const {
   try {
-    return equation_checked(n);
+    return evaluate();
   } catch (const LocatedError&) {
     throw;
   } catch (const std::exception& e) {
-    source_.fail(n, std::string("cannot evaluate the equation: ") + e.what());
+    source_.fail(n, std::string("cannot evaluate the ") + what + ": " + e.what());
   }
+}
+
+Equation TermBuilder::equation(const SyntaxNode& n) const {
+  return located(n, "equation", [&] { return equation_checked(n); });
 }
 
 Equation TermBuilder::equation_checked(const SyntaxNode& n) const {
@@ -126,13 +118,7 @@ Equation TermBuilder::equation_checked(const SyntaxNode& n) const {
 }
 
 void TermBuilder::add_monomial(const SyntaxNode& n, std::vector<Monomial>& out, bool inputs) const {
-  try {
-    add_monomial_checked(n, out, inputs);
-  } catch (const LocatedError&) {
-    throw;
-  } catch (const std::exception& e) {
-    source_.fail(n, std::string("cannot evaluate the multiplier: ") + e.what());
-  }
+  located(n, "multiplier", [&] { add_monomial_checked(n, out, inputs); });
 }
 
 void TermBuilder::add_monomial_checked(const SyntaxNode& n, std::vector<Monomial>& out,
@@ -172,13 +158,7 @@ void TermBuilder::add_monomial_checked(const SyntaxNode& n, std::vector<Monomial
 // --- Library terms ----------------------------------------------------------------------------
 
 std::vector<TermBuilder::LibraryTerm> TermBuilder::library_terms(const SyntaxNode& n) const {
-  try {
-    return library_terms_checked(n);
-  } catch (const LocatedError&) {
-    throw;
-  } catch (const std::exception& e) {
-    source_.fail(n, std::string("cannot evaluate the library term: ") + e.what());
-  }
+  return located(n, "library term", [&] { return library_terms_checked(n); });
 }
 
 std::vector<TermBuilder::LibraryTerm> TermBuilder::library_terms_checked(
@@ -250,16 +230,15 @@ std::vector<TermBuilder::LibraryTerm> TermBuilder::generated_terms(const SyntaxN
                            usage + ", found '" + std::string(last.text) + "'");
   }
   const int degree = GiNaC::ex_to<GiNaC::numeric>(degree_value).to_int();
-  std::vector<std::vector<int>> exponents;
-  std::vector<int> partial;
-  for (int d = 1; d <= degree; ++d) exponents_of_degree(variables.size(), d, partial, exponents);
-  if (exponents.size() > kMaxGenerated) {
-    source_.fail(call, "monomials(...) would make " + std::to_string(exponents.size()) +
+  const auto count = static_cast<int>(variables.size());
+  if (count_monomials(count, degree) > kMaxGenerated) {
+    source_.fail(call, "monomials(...) would make " +
+                           std::to_string(static_cast<long>(count_monomials(count, degree))) +
                            " terms, more than " + std::to_string(kMaxGenerated) +
                            ": name fewer variables or a lower degree");
   }
   std::vector<LibraryTerm> out;
-  for (const std::vector<int>& e : exponents) {
+  for (const Monomial& e : monomials_up_to(count, degree)) {
     LibraryTerm t{1, Monomial(symbols_.variables().size()), 1, true};
     for (std::size_t i = 0; i < variables.size(); ++i) {
       t.monomial[variables[i]] = e[i];

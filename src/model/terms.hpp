@@ -53,7 +53,11 @@ class TermBuilder {
     std::vector<int> derivatives;
   };
 
-  // equation() and add_monomial() without turning GiNaC's exceptions into located errors.
+  // `evaluate()`, its exceptions other than located errors turned into errors at `n`.
+  template <class Evaluate>
+  auto located(const SyntaxNode& n, const char* what, Evaluate evaluate) const;
+  // equation(), add_monomial() and library_terms() without turning GiNaC's exceptions into
+  // located errors.
   Equation equation_checked(const SyntaxNode& n) const;
   void add_monomial_checked(const SyntaxNode& n, std::vector<Monomial>& out, bool inputs) const;
   std::vector<LibraryTerm> library_terms_checked(const SyntaxNode& n) const;

@@ -140,15 +140,6 @@ MomentRows free_rows(const IdentifyResult& library, const LaggedSystem& system,
 
 }  // namespace
 
-std::vector<std::string> SelectResult::selected() const {
-  std::vector<std::string> out;
-  if (ranking.empty()) return out;
-  for (const std::size_t p : candidates) {
-    if (ranking.front().kept[p]) out.push_back(library.model->parameters()[p].name);
-  }
-  return out;
-}
-
 SelectResult select_terms(const Model& model, const DataSource& source,
                           const SelectOptions& options) {
   const AlgebraLock lock;
@@ -158,6 +149,7 @@ SelectResult select_terms(const Model& model, const DataSource& source,
                      "select scores the terms on the lagged equations: multipliers, a degree, "
                      "the sampling bias and the zero-lag equations are identify's");
   }
+  if (options.ranked == 0) throw UsageError("ranked", "expected at least 1 subset, found 0");
   if (options.exhaustive > SelectOptions::kMaxExhaustive) {
     throw UsageError("exhaustive", "every subset is scored for at most " +
                                        std::to_string(SelectOptions::kMaxExhaustive) +
@@ -196,18 +188,20 @@ SelectResult select_terms(const Model& model, const DataSource& source,
   out.penalty = std::log(static_cast<double>(std::max<std::size_t>(library.estimate.intervals, 2)));
   out.exhaustive = out.candidates.size() <= options.exhaustive;
   const std::string what = "term selection of model " + model.name();
-  // The subsets scored on the equations of `system`, best first, and the weighting.
-  const auto score_on = [&](const LaggedSystem& system, std::size_t& scored) {
-    const MomentRows rows = free_rows(library, system, fixed);
-    FixedWeighting weighting(rows, always.size(), library.data.estimates, true, what);
-    const Scorer scorer{weighting, always, free_candidates, out.penalty,
-                        dispersion_of(weighting, always.size())};
-    return std::pair{search(scorer, out.exhaustive, scored), std::move(weighting)};
+  // The weighting of the equations of `system`, and its scorer.
+  const auto weighting_of = [&](const LaggedSystem& system) {
+    return FixedWeighting(free_rows(library, system, fixed), always.size(), library.data.estimates,
+                          true, what);
+  };
+  const auto scorer_of = [&](const FixedWeighting& weighting) {
+    return Scorer{weighting, always, free_candidates, out.penalty,
+                  dispersion_of(weighting, always.size())};
   };
   const LaggedSystem& system = *library.lagged->system;
-  auto [ranking, weighting] = score_on(system, out.scored);
-  out.dispersion = dispersion_of(weighting, always.size());
-  const Scorer scorer{weighting, always, free_candidates, out.penalty, out.dispersion};
+  const FixedWeighting weighting = weighting_of(system);
+  const Scorer scorer = scorer_of(weighting);
+  out.dispersion = scorer.dispersion;
+  std::vector<SelectResult::Subset> ranking = search(scorer, out.exhaustive, out.scored);
   // The tests at the chosen subset, over the candidates.
   std::vector<bool> chosen(free_candidates.size());
   for (std::size_t c = 0; c < chosen.size(); ++c) {
@@ -242,14 +236,13 @@ SelectResult select_terms(const Model& model, const DataSource& source,
         "(the numerical error of a record without noise, a noise or an offset not modelled), "
         "and the selection divides every J by that factor");
   }
-  for (SelectResult::Subset& s : ranking) s.kept = over_parameters(s.kept, fixed);
-  if (ranking.size() > options.ranked) ranking.resize(std::max<std::size_t>(options.ranked, 2));
-  out.ranking = std::move(ranking);
-  if (out.ranking.size() > 1 &&
-      out.ranking[1].criterion - out.ranking[0].criterion < kCloseCriterion) {
+  if (ranking.size() > 1 && ranking[1].criterion - ranking[0].criterion < kCloseCriterion) {
     out.warnings.push_back("the runner-up is within " + number(kCloseCriterion, "%g") +
                            " of the best subset's criterion: the data hardly prefer one of them");
   }
+  ranking.resize(std::min(ranking.size(), options.ranked));
+  for (SelectResult::Subset& s : ranking) s.kept = over_parameters(s.kept, fixed);
+  out.ranking = std::move(ranking);
   // The same selection on narrower windows of the same pass: half and three quarters of the lags.
   out.windows.push_back({system.first_lag, system.last_lag, out.ranking.front().kept});
   for (const int quarters : {2, 3}) {
@@ -261,8 +254,10 @@ SelectResult select_terms(const Model& model, const DataSource& source,
     narrower.instruments = system.instruments;
     narrower.measured = system.measured;
     const LaggedSystem sub = derive_lagged(model, narrower);
+    const FixedWeighting sub_weighting = weighting_of(sub);
     std::size_t scored = 0;
-    const auto [sub_ranking, sub_weighting] = score_on(sub, scored);
+    const std::vector<SelectResult::Subset> sub_ranking =
+        search(scorer_of(sub_weighting), out.exhaustive, scored);
     out.windows.push_back(
         {sub.first_lag, sub.last_lag, over_parameters(sub_ranking.front().kept, fixed)});
   }
