@@ -605,3 +605,31 @@ TEST_SUITE("derive lagged abs and sign") {
     CHECK(b.at("c4*c0" + at) == 0);
   }
 }
+
+TEST_SUITE("derive lagged default instruments") {
+  // Variables y, v, x (and abs or sign of one): monomials {y, v, x[, f]}.
+  TEST_CASE("odd terms take the state and its highest power") {
+    const Model model = momentid::parse_model(
+        "state y, v\ninput x\nparam c, k, e\ny' = v\nv' = -c*v - k*y - e*y^3 + x\n", "d.mom");
+    const auto system = momentid::derive_lagged(model, {.measured = {true, false, true}});
+    CHECK(system.instruments == std::vector<momentid::Monomial>{{1, 0, 0}, {3, 0, 0}});
+  }
+  TEST_CASE("a parameter on an even term adds the square, on the input the input") {
+    const Model model = momentid::parse_model(
+        "state y, v\ninput x\nparam c, k, q, e, b\ny' = v\n"
+        "v' = -c*v - k*y - q*y^2 - e*y^3 + b*x\n",
+        "d.mom");
+    const auto system = momentid::derive_lagged(model, {.measured = {true, false, true}});
+    CHECK(system.instruments ==
+          std::vector<momentid::Monomial>{{1, 0, 0}, {2, 0, 0}, {3, 0, 0}, {0, 0, 1}});
+  }
+  TEST_CASE("abs(v)*v is odd and abs(y) even; a known input term adds no instrument") {
+    const Model odd = oscillator("a*abs(v)*v");
+    CHECK(momentid::derive_lagged(odd, {}).instruments ==
+          std::vector<momentid::Monomial>{{1, 0, 0, 0}, {3, 0, 0, 0}, {0, 1, 0, 0}, {0, 3, 0, 0}});
+    const Model even = oscillator("a*abs(y)");
+    CHECK(momentid::derive_lagged(even, {}).instruments ==
+          std::vector<momentid::Monomial>{
+              {1, 0, 0, 0}, {2, 0, 0, 0}, {3, 0, 0, 0}, {0, 1, 0, 0}, {0, 2, 0, 0}, {0, 3, 0, 0}});
+  }
+}

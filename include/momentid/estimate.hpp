@@ -24,6 +24,10 @@ struct SolveOptions {
   // rate_key, in the order of moments_to_estimate), known from elsewhere, which is added to the
   // errors (docs/uncertainty.md, "End values").
   std::vector<std::vector<double>> rate_covariance;
+  // solve_rows() only: a variance per moment of the estimates, known from elsewhere (the
+  // accuracy that the equations' discretization leaves, docs/measured-data.md, "The accuracy
+  // floor"), added to the errors of its record mean; empty: none.
+  std::vector<double> moment_variance;
 };
 
 // The moments solve() needs estimates of: the system's moments, then those its identities

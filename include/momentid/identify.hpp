@@ -148,6 +148,8 @@ struct IdentifyResult {
     std::vector<std::string> channels;
     std::vector<double> noise;  // the noise variance used per channel
     int stencil_reach = 0;      // of the lag-derivative stencils
+    // Per moment: the variance of the accuracy floor added to its errors (SolveOptions).
+    std::vector<double> moment_variance;
     // Per measured state the equations read: the lag at which its autocorrelation first falls
     // below 1/e, 0 if it stays above across the lags.
     std::map<std::string, int> correlation_lags;

@@ -332,15 +332,46 @@ bool has_parameter(const Equation& eq) {
                      [](const Term& t) { return t.parameter >= 0; });
 }
 
+// Whether `m` keeps its sign when every state and input changes sign (the symmetry of an
+// oscillator without even terms): abs(p) is even, sign(p) as odd as p; a function of an argument
+// of mixed degrees, which breaks the symmetry anyway, counts as even.
+bool even_monomial(const Model& model, const Monomial& m) {
+  int odd = 0;
+  for (std::size_t v = 0; v < m.size(); ++v) {
+    if (m[v] == 0) continue;
+    const Variable& variable = model.variables()[v];
+    int parity = 1;
+    if (variable.kind == VariableKind::kFunction) {
+      const VariableFunction& f = model.functions()[static_cast<std::size_t>(variable.index)];
+      std::set<int> degrees;
+      for (const auto& [c, monomial] : f.argument) {
+        degrees.insert(std::accumulate(monomial.begin(), monomial.end(), 0) % 2);
+      }
+      if (degrees.size() != 1) return true;
+      parity = f.kind == FunctionKind::kAbs ? 0 : *degrees.begin();
+    }
+    odd += parity * m[v];
+  }
+  return odd % 2 == 0;
+}
+
 // Each measured state, and its highest power in the equations' terms. With abs or sign terms
 // also its cube: the states alone correlate with v and |v|*v (or sign(v)) alike, which leaves
 // their parameters nearly collinear, and the cubes tell them apart (on the drag, friction and
 // clearance oscillators of docs/measured-data.md the standard errors of c2, f and kc fell 3 to
-// 15 times).
+// 15 times). With a parameter on a term of even degree (y^2, y*v) also its square: on a
+// symmetric structure such a term is uncorrelated with odd instruments, and its parameter left
+// unidentified. And each input whose term has a parameter (docs/measured-data.md,
+// "Instruments").
 std::vector<Monomial> default_instruments(const Model& model, const std::vector<bool>& measured,
                                           const LagDeriver& deriver) {
   std::vector<Monomial> out;
   const int cube = model.functions().empty() ? 1 : 3;
+  bool even = false;
+  for (const Equation& eq : model.equations()) {
+    for (const Term& t : eq.terms) even |= t.parameter >= 0 && even_monomial(model, t.monomial);
+  }
+  const int square = even ? 2 : 1;
   for (std::size_t v = 0; v < model.states().size(); ++v) {
     if (!measured[v]) continue;
     int highest = 1;
@@ -348,11 +379,24 @@ std::vector<Monomial> default_instruments(const Model& model, const std::vector<
       if (!has_parameter(eq)) continue;
       for (const Term& t : eq.terms) highest = std::max(highest, t.monomial[v]);
     }
-    for (int power : {1, cube, highest}) {
+    for (int power : {1, square, cube, highest}) {
       Monomial m(model.variables().size(), 0);
       m[v] = power;
       if (std::find(out.begin(), out.end(), m) == out.end()) out.push_back(m);
     }
+  }
+  // An input whose term has a parameter: the states at earlier times hardly correlate with a
+  // broadband input, the input itself does.
+  for (std::size_t i = 0; i < model.inputs().size(); ++i) {
+    const std::size_t v = model.states().size() + i;
+    bool estimated = false;
+    for (const Equation& eq : model.equations()) {
+      for (const Term& t : eq.terms) estimated |= t.parameter >= 0 && t.monomial[v] > 0;
+    }
+    if (!measured[v] || !estimated) continue;
+    Monomial m(model.variables().size(), 0);
+    m[v] = 1;
+    out.push_back(m);
   }
   // A derivative column stands for its state when the data show the state only through it.
   for (const MeasuredDerivative& d : model.measured_derivatives()) {

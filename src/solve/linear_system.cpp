@@ -34,6 +34,25 @@ void check_shape(const MomentRows& rows, Index parameters, std::size_t moments) 
   }
 }
 
+KnownCovariance diagonal_covariance(const std::vector<double>& variance,
+                                    const MomentEstimates& estimates) {
+  const auto k = static_cast<Index>(estimates.mean.size());
+  KnownCovariance known(k, k);
+  if (variance.empty()) return known;
+  if (variance.size() != estimates.mean.size()) {
+    throw std::invalid_argument("solve_rows: " + std::to_string(variance.size()) +
+                                " moment variances for " + std::to_string(k) + " moments");
+  }
+  std::vector<Eigen::Triplet<double>> entries;
+  for (Index i = 0; i < k; ++i) {
+    if (variance[static_cast<std::size_t>(i)] > 0) {
+      entries.emplace_back(i, i, variance[static_cast<std::size_t>(i)]);
+    }
+  }
+  known.setFromTriplets(entries.begin(), entries.end());
+  return known;
+}
+
 namespace {
 
 // Each row divided by the length of its coefficients; the uses with it.

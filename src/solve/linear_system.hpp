@@ -46,4 +46,9 @@ Eigen::SparseMatrix<double> equations_jacobian(const LinearSystem& system,
 // J mu: J K J'.
 using KnownCovariance = Eigen::SparseMatrix<double>;
 
+// The known covariance of independent moments with the variances `variance` (one per moment of
+// `estimates`, or empty: none). Throws std::invalid_argument for another count.
+KnownCovariance diagonal_covariance(const std::vector<double>& variance,
+                                    const MomentEstimates& estimates);
+
 }  // namespace momentid

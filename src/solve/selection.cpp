@@ -17,7 +17,8 @@ using Eigen::MatrixXd;
 using Eigen::VectorXd;
 
 FixedWeighting::FixedWeighting(const MomentRows& rows, std::size_t parameters,
-                               const MomentEstimates& estimates, bool normalise_rows,
+                               const MomentEstimates& estimates,
+                               const std::vector<double>& moment_variance, bool normalise_rows,
                                const std::string& what) {
   const auto params = static_cast<Index>(parameters);
   check_shape(rows, params, estimates.mean.size());
@@ -34,8 +35,7 @@ FixedWeighting::FixedWeighting(const MomentRows& rows, std::size_t parameters,
                 " equations needs more batches than equations, found " + std::to_string(batches));
   }
   const MatrixXd deviations = batch_deviations(estimates);
-  const auto moments = static_cast<Index>(estimates.mean.size());
-  const KnownCovariance known(moments, moments);
+  const KnownCovariance known = diagonal_covariance(moment_variance, estimates);
   const OptimalWeighting gmm = optimal_weighting(system, ls, deviations, known);
   const JTest test = j_test(system, ls, gmm, deviations, known, batches);
   if (!test.statistic || !(gmm.objective > 0)) {
@@ -45,7 +45,7 @@ FixedWeighting::FixedWeighting(const MomentRows& rows, std::size_t parameters,
   calibration_ = *test.statistic / gmm.objective;
   rank_ = gmm.rank;
   theta_ = gmm.theta_scaled;
-  covariance_ = gmm.information_inverse;
+  covariance_ = finite_sample_factor(batches, gmm.rank, params) * gmm.information_inverse;
   objective_ = gmm.objective;
 }
 

@@ -220,9 +220,8 @@ Estimate solve(const MomentSystem& system, const std::vector<Monomial>& moments,
 
 Estimate solve_rows(const MomentRows& rows, const std::vector<std::string>& names,
                     const MomentEstimates& estimates, const SolveOptions& options) {
-  const auto k = static_cast<Index>(estimates.mean.size());
   const MatrixXd deviations = batch_deviations(estimates);
-  const KnownCovariance known(k, k);
+  const KnownCovariance known = diagonal_covariance(options.moment_variance, estimates);
   return solve_on(rows, names, estimates, options, {deviations, known});
 }
 

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <numeric>
 #include <tuple>
 
@@ -339,6 +340,31 @@ std::vector<double> noise_variances(const IdentifyResult& result, const LaggedCh
   return noise;
 }
 
+// The accuracy floor of the lagged moments (docs/measured-data.md, "The accuracy floor"): the
+// variance of an error of kAccuracyFloor times the largest magnitude that the pair psi, F
+// reaches over the lags, for each E[psi(t - s) F(t)], as if independent.
+constexpr double kAccuracyFloor = 1e-6;
+
+std::vector<double> accuracy_floor(const std::vector<Moment>& moments,
+                                   const std::vector<double>& mean) {
+  const auto pair_of = [](const Moment& m) {
+    std::vector<MomentFactor> key = m.factors();
+    for (MomentFactor& f : key) f.lag = std::min(f.lag, 1);
+    return key;
+  };
+  std::map<std::vector<MomentFactor>, double> peak;
+  for (std::size_t k = 0; k < moments.size(); ++k) {
+    double& p = peak[pair_of(moments[k])];
+    p = std::max(p, std::abs(mean[k]));
+  }
+  std::vector<double> variance(moments.size());
+  for (std::size_t k = 0; k < moments.size(); ++k) {
+    const double floor = kAccuracyFloor * peak[pair_of(moments[k])];
+    variance[k] = floor * floor;
+  }
+  return variance;
+}
+
 }  // namespace
 
 MomentRows lagged_rows_of(const IdentifyResult& result, const LaggedSystem& system) {
@@ -428,9 +454,13 @@ void identify_lagged(IdentifyResult& result, const DataSource& source,
   std::vector<std::string> names;
   for (const Declaration& p : model.parameters()) names.push_back(p.name);
   result.gmm = optimal_weighting(model, options, rows.rows.a.size());
-  result.estimate = solve_rows(
-      rows.rows, names, result.data.estimates,
-      {.gmm = result.gmm, .fixed = fixed_values(model, options.fixed), .normalise_rows = true});
+  result.lagged->moment_variance =
+      accuracy_floor(result.lagged->moments, result.data.estimates.mean);
+  result.estimate = solve_rows(rows.rows, names, result.data.estimates,
+                               {.gmm = result.gmm,
+                                .fixed = fixed_values(model, options.fixed),
+                                .normalise_rows = true,
+                                .moment_variance = result.lagged->moment_variance});
   const std::vector<std::string> noisy = noisy_function_warnings(result, channels);
   result.estimate.warnings.insert(result.estimate.warnings.end(), noisy.begin(), noisy.end());
   if (const auto& integration = result.integration) {

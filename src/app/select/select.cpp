@@ -191,7 +191,7 @@ SelectResult select_terms(const Model& model, const DataSource& source,
   // The weighting of the equations of `system`, and its scorer.
   const auto weighting_of = [&](const LaggedSystem& system) {
     return FixedWeighting(free_rows(library, system, fixed), always.size(), library.data.estimates,
-                          true, what);
+                          library.lagged->moment_variance, true, what);
   };
   const auto scorer_of = [&](const FixedWeighting& weighting) {
     return Scorer{weighting, always, free_candidates, out.penalty,
