@@ -7,6 +7,7 @@
 #include <string_view>
 #include <vector>
 
+#include "momentid/lagged.hpp"
 #include "momentid/model.hpp"
 #include "test_support.hpp"
 
@@ -173,5 +174,21 @@ TEST_SUITE("library") {
                             "test.mom");
     });
     CHECK(e.message() == "y' is in equations 1 and 2: label the one the terms join and name it");
+  }
+
+  TEST_CASE("the lagged equations name every library term the data cannot carry at once") {
+    const Model m = parsed("library motion: y, v^2, v^3, x\n");
+    // y and x measured, v not: v^2 and v^3 are no time derivatives of y.
+    const auto e = error_from<ModelError>([&] {
+      momentid::derive_lagged(m, {.measured = {true, false, true}});
+    });
+    CHECK(e.message() ==
+          "2 terms of equation motion cannot be read from the data's channels (leave them out, or "
+          "record the channels they need):\n"
+          "  term '-motion_v2*v^2' of equation motion needs a column for v: it is not a time "
+          "derivative of measured channels (v = y')\n"
+          "  term '-motion_v3*v^3' of equation motion needs a column for v: it is not a time "
+          "derivative of measured channels (v = y')");
+    CHECK(e.location().line == 5);
   }
 }

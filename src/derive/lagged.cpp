@@ -495,7 +495,23 @@ LaggedEquation lagged_equation(const Model& model, const LagDeriver& deriver, st
   row.instrument = instrument;
   row.coefficients.resize(model.parameters().size());
   std::vector<std::pair<LagFunction, numeric>> terms;
-  for (const Term& t : eq.terms) terms.push_back(deriver.lag_function(eq, t, instrument, columns));
+  // Every term the data cannot carry is named at once (a library may hold several).
+  std::vector<ModelError> cannot;
+  for (const Term& t : eq.terms) {
+    try {
+      terms.push_back(deriver.lag_function(eq, t, instrument, columns));
+    } catch (const ModelError& e) {
+      cannot.push_back(e);
+    }
+  }
+  if (cannot.size() == 1) throw cannot.front();
+  if (!cannot.empty()) {
+    std::string message = std::to_string(cannot.size()) + " terms of equation " + eq.name() +
+                          " cannot be read from the data's channels (leave them out, or record " +
+                          "the channels they need):";
+    for (const ModelError& e : cannot) message += "\n  " + e.message();
+    throw ModelError(eq.where, message);
+  }
   // A state read as the integral of a column (y'' = a) enters at a negative order: its
   // cross-moments are known up to a polynomial in s, which the equation's derivative in s of
   // the order that clears the integrals drops, leaving the measured channels alone.

@@ -57,7 +57,7 @@ struct Scorer {
 };
 
 // The library's J over its degrees of freedom when its J test rejects it, else 1: the misfit
-// that no candidate explains (numerical error of a record without noise, a noise not modelled),
+// that no candidate explains (a noise or an offset not modelled, a law outside the library),
 // by which every J of the selection is divided, as quasi-likelihood criteria divide deviances.
 double dispersion_of(const FixedWeighting& weighting, std::size_t parameters) {
   const std::vector<bool> all(parameters, true);
@@ -233,7 +233,7 @@ SelectResult select_terms(const Model& model, const DataSource& source,
     out.warnings.push_back(
         "the J test rejects the whole library (J " + number(out.dispersion, "%.3g") +
         " times its degrees of freedom): the record holds a misfit that no candidate explains "
-        "(the numerical error of a record without noise, a noise or an offset not modelled), "
+        "(a noise or an offset not modelled, a law outside the library), "
         "and the selection divides every J by that factor");
   }
   if (ranking.size() > 1 && ranking[1].criterion - ranking[0].criterion < kCloseCriterion) {
@@ -275,7 +275,12 @@ SelectResult select_terms(const Model& model, const DataSource& source,
   if (out.chosen.estimate.j_pvalue && *out.chosen.estimate.j_pvalue < kRejected) {
     out.warnings.insert(out.warnings.begin(), "the J test rejects the chosen model (p = " +
                                                   number(*out.chosen.estimate.j_pvalue, "%.2g") +
-                                                  "): the library may lack a term the data need");
+                                                  "): the library may lack a term the data need" +
+                                                  (options.identify.center.empty()
+                                                       ? ", or a channel carries an offset "
+                                                         "(--center removes it from the "
+                                                         "displacement of a symmetric structure)"
+                                                       : ""));
   }
   return out;
 }
