@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstddef>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -18,8 +19,13 @@ struct SelectOptions {
   std::size_t exhaustive = 16;
   // The subsets the ranking keeps, best first.
   std::size_t ranked = 5;
+  // A second record: the best subsets (at most kValidated of the ranking), each identified on
+  // the record selected from, are simulated through its inputs and compared with it as validate
+  // does (docs/cli/select.md, "Validation on a second record"); nullopt: none.
+  std::optional<DataSource> validation;
 
   static constexpr std::size_t kMaxExhaustive = 20;
+  static constexpr std::size_t kValidated = 3;
 };
 
 // Which terms of a library the data want: the library identified from one pass, every subset of
@@ -46,6 +52,18 @@ struct SelectResult {
     double difference = 0;
     double pvalue = 0;
   };
+  // A subset of the ranking, identified on the record selected from and simulated through the
+  // validation record's inputs: per measured state, its fit (100 (1 - |y - y_sim| / |y -
+  // mean(y)|)) and the root mean square of the error.
+  struct Validated {
+    std::size_t rank = 0;  // in `ranking`, from 0
+    struct Output {
+      std::string name;
+      double fit = 0, rms = 0;
+    };
+    std::vector<Output> outputs;
+    bool consistent = true;  // as validate judges the model (ValidateResult::consistent)
+  };
   // The best subset on the equations at lags first..last (the same pass and instruments).
   struct Window {
     int first_lag = 0, last_lag = 0;
@@ -66,6 +84,9 @@ struct SelectResult {
   std::vector<CandidateTest> tests;  // per candidate
   std::vector<Window> windows;       // the library's window first
   std::vector<std::string> warnings;
+  // With SelectOptions::validation: its name and the best subsets on it, best first.
+  std::string validation_name;
+  std::vector<Validated> validated;
 };
 
 // Identifies the library `model` (which must have candidates: a `candidate` or `library`
@@ -90,5 +111,9 @@ std::string format_json(const SelectResult& result);
 // parameters valued at their estimates (the chosen model's once it is identified), for identify,
 // validate and simulate.
 std::string chosen_model_text(const SelectResult& result);
+// The subset `kept` of the library as a model file, its parameters valued at the estimates of
+// `estimated` (0 for a parameter it lacks): chosen_model_text for any subset.
+std::string subset_model_text(const SelectResult& result, const std::vector<bool>& kept,
+                              const IdentifyResult& estimated);
 
 }  // namespace momentid

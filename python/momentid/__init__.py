@@ -302,14 +302,16 @@ def select(model: Union[Model, PathLike], data: Any, *,
            dt_from: Optional[str] = None, threads: Optional[int] = None,
            integrate: Union[None, str, Sequence[str]] = None,
            integrate_corner: Optional[float] = None, exhaustive: Optional[int] = None,
-           ranked: Optional[int] = None) -> SelectResult:
+           ranked: Optional[int] = None, validate: Any = None) -> SelectResult:
     """Chooses the terms of a library model that the record wants, as `momentid select MODEL
     DATA` (docs/cli/select.md): the model's candidates (`candidate` and `library` statements)
     scored on the lagged equations of one pass, and the chosen model identified.
 
     The options are identify()'s for the record and the lagged equations; exhaustive: every
     subset is scored up to this many candidates (default 16, at most 20), backward elimination
-    beyond; ranked: the subsets the ranking keeps (default 5).
+    beyond; ranked: the subsets the ranking keeps (default 5); validate: a second record (a
+    path or a mapping of columns) on which the best three subsets, each identified on `data`,
+    are simulated through its inputs and compared with it, as validate() does.
 
     Returns a SelectResult: the chosen model's IdentifyResult (params, bse, jtest(), ...) with
     selected and dropped (candidate names), ranking, tests, windows, selection_warnings,
@@ -325,8 +327,10 @@ def select(model: Union[Model, PathLike], data: Any, *,
                        skip_rows=skip_rows, decimal=decimal, names=names, dt_from=dt_from,
                        threads=threads, integrate=integrate, integrate_corner=integrate_corner,
                        exhaustive=exhaustive, ranked=ranked)
-    text, value, model_text = _momentid._select(model._model, source, name, metadata, options)
-    del keep
+    second = (None, "", {}, None) if validate is None else _data_of(validate, None)[:4]
+    text, value, model_text = _momentid._select(model._model, source, name, metadata, options,
+                                                *second[:3])
+    del keep, second
     return SelectResult(text, value, model_text)
 
 

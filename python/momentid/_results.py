@@ -237,7 +237,9 @@ class SelectResult(IdentifyResult):
     selected, dropped: the candidates' names; ranking: the best subsets, each a dict with
       "selected", "criterion", "j", "dof" and "pvalue"; tests: per candidate, "candidate",
       "terms", "kept", "j_change" and "pvalue" (the difference-in-J test at the chosen subset);
-      windows: the chosen candidates on narrower lag windows; selection_warnings.
+      windows: the chosen candidates on narrower lag windows; selection_warnings;
+      validation: with select(validate=...), the best subsets on the second record, each a dict
+      with "rank", "selected", "outputs" ({state: {"fit", "rms"}}) and "consistent" (else []).
     model_text: the chosen model as a model file; write_model(path) writes it.
     """
 
@@ -250,6 +252,7 @@ class SelectResult(IdentifyResult):
         self.tests = selection["tests"]
         self.windows = selection["windows"]
         self.selection_warnings = selection["warnings"]
+        self.validation = selection.get("validation", {}).get("subsets", [])
         self.model_text = model_text
 
     def write_model(self, path: Union[str, _os.PathLike]) -> None:

@@ -595,8 +595,13 @@ PYBIND11_MODULE(_momentid, m) {
         });
 
   m.def("_select", [](const Model& model, const py::object& data, const std::string& name,
-                      const std::map<std::string, std::string>& metadata, const py::dict& options) {
+                      const std::map<std::string, std::string>& metadata, const py::dict& options,
+                      const py::object& validation, const std::string& validation_name,
+                      const std::map<std::string, std::string>& validation_metadata) {
     SelectOptions select_with;
+    if (!validation.is_none()) {
+      select_with.validation = data_source(validation, validation_name, validation_metadata);
+    }
     select_with.identify = identify_options(model, options);
     if (auto n = get<std::size_t>(options, "exhaustive")) select_with.exhaustive = *n;
     if (auto n = get<std::size_t>(options, "ranked")) select_with.ranked = *n;

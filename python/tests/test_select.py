@@ -59,3 +59,19 @@ def test_a_model_without_candidates_is_refused(record):
     model = momentid.Model("state y, v\ninput x\nparam c, k\ny' = v\nv' = -c*v - k*y + x\n")
     with pytest.raises(momentid.ModelError, match="has no candidate terms"):
         momentid.select(model, data)
+
+
+def test_the_best_subsets_are_validated_on_a_second_record(record):
+    data, truth = record
+    half = len(data["t"]) // 2
+    first = {name: values[:half] for name, values in data.items()}
+    second = {name: values[half:] - (values[half] if name == "t" else 0) for name, values
+              in data.items()}
+    result = momentid.select(momentid.Model(LIBRARY), first, validate=second)
+    assert [v["rank"] for v in result.validation] == [1, 2, 3]
+    assert [v["selected"] for v in result.validation] == [r["selected"]
+                                                          for r in result.ranking[:3]]
+    chosen = result.validation[0]
+    assert sorted(chosen["selected"]) == sorted(truth)
+    assert chosen["outputs"]["y"]["fit"] > 80, result.text
+    assert "validation on <arrays>" in result.text

@@ -18,6 +18,7 @@ struct SelectCommand {
   IdentifyArguments arguments;
   SelectOptions options;
   std::string output;
+  std::string validation;
 };
 
 int run_select(SelectCommand& command) {
@@ -26,6 +27,8 @@ int run_select(SelectCommand& command) {
   TerminalProgress progress(!a.quiet && a.format != "json");
   a.options.record.control.progress = progress.callback();
   command.options.identify = a.options;
+  if (!command.validation.empty())
+    command.options.validation = DataSource::file(command.validation);
   const SelectResult result = select_terms(inputs.model, inputs.source, command.options);
   progress.finish();
   // The model file first: a report on standard output that names a file not written would mislead.
@@ -55,6 +58,9 @@ Command add_select(CLI::App& app) {
       ->check(CLI::Range(std::size_t{0}, SelectOptions::kMaxExhaustive));
   sub->add_option("--ranked", command->options.ranked, "the subsets the ranking shows (default 5)")
       ->check(CLI::Range(std::size_t{1}, std::size_t{100}));
+  sub->add_option("--validate", command->validation,
+                  "a second record: the best three subsets, each identified on DATA, simulated "
+                  "through its inputs and compared with it");
   return {sub, [command] { return run_select(*command); }};
 }
 

@@ -15,6 +15,10 @@ J test does not reject it at 1%, and that its estimates lie within 3 standard er
   van_der_pol  v' = mu (1 - y^2) v - k y + x, mu = 2, k = 400, 5% noise on y
   damping      y, v and x measured, 2% noise, the library {y, v, v^2, v^3}: the Duffing
                oscillator's linear damping, then cubic damping -c3 v^3 in place of -c v
+  validated    duffing's record with --validate on a second record of another seed: the three
+               best subsets, each simulated through its force, the chosen one first and fitting
+               the second record's y to better than 90%; a validation file that does not exist
+               ends the run before the pass (exit 2, naming it)
   written      duffing's chosen model written by -o: identify takes it as it is, `ok`, with the
                same terms and estimates within 3 standard errors of the truth
   no_candidates  a model without candidates: exit 2, naming 'candidate' and 'library'
@@ -157,6 +161,32 @@ def damping(momentid, workdir):
     return passed
 
 
+def validated(momentid, workdir):
+    path, truth = duffing_record(workdir)
+    p = lab.SDOF
+    clean = oscillator(20271211, lambda s, x: (s[1], x - p["c"] * s[1] - p["k"] * s[0]
+                                                 - p["eps"] * s[0]**3), 800.0)
+    second = f"{workdir}/second.csv"
+    write(20271211, clean, 0.05, second)
+    report = select(momentid, library(workdir), path, "--validate", second)
+    if report is None:
+        return False
+    subsets = report["selection"]["validation"]["subsets"]
+    for entry in subsets:
+        print(f"  rank {entry['rank']}: y fit {entry['outputs']['y']['fit']:.2f}%  "
+              f"{', '.join(entry['selected'])}")
+    passed = [entry["rank"] for entry in subsets] == [1, 2, 3]
+    passed &= report["selection"]["validation"]["data"] == second
+    passed &= sorted(subsets[0]["selected"]) == sorted(truth)
+    passed &= subsets[0]["outputs"]["y"]["fit"] > 90 and subsets[0]["consistent"]
+    missing = subprocess.run([momentid, "select", library(workdir), path, "--validate",
+                              f"{workdir}/none.csv"], capture_output=True, text=True)
+    print(missing.stderr.strip())
+    passed &= (missing.returncode == 2 and f"{workdir}/none.csv: cannot open the data file"
+               in missing.stderr and missing.stdout == "")
+    return passed
+
+
 def written(momentid, workdir):
     path, truth = duffing_record(workdir)
     chosen = f"{workdir}/chosen.mom"
@@ -187,8 +217,9 @@ def no_candidates(momentid, workdir):
             and "'library" in result.stderr and result.stdout == "")
 
 
-CASES = {"duffing": duffing, "clean": clean, "asymmetric": asymmetric, "van_der_pol": van_der_pol,
-         "damping": damping, "written": written, "no_candidates": no_candidates}
+CASES = {"duffing": duffing, "clean": clean, "asymmetric": asymmetric,
+         "van_der_pol": van_der_pol, "damping": damping, "validated": validated,
+         "written": written, "no_candidates": no_candidates}
 
 if __name__ == "__main__":
     case, momentid, workdir = sys.argv[1:4]

@@ -42,10 +42,14 @@ std::string side_text(const Model& model, const std::vector<std::pair<Term, bool
 }  // namespace
 
 std::string chosen_model_text(const SelectResult& result) {
-  const Model& model = *result.library.model;
-  const std::vector<bool>& kept = result.ranking.front().kept;
   // The chosen model's estimates once it is identified; the library's before.
-  const IdentifyResult& estimated = result.chosen.model ? result.chosen : result.library;
+  return subset_model_text(result, result.ranking.front().kept,
+                           result.chosen.model ? result.chosen : result.library);
+}
+
+std::string subset_model_text(const SelectResult& result, const std::vector<bool>& kept,
+                              const IdentifyResult& estimated) {
+  const Model& model = *result.library.model;
   const auto value_of = [&](const Declaration& d) {
     for (const ParameterEstimate& e : estimated.parameters()) {
       if (e.name == d.name) return number(e.estimate, "%.10g");
@@ -53,7 +57,7 @@ std::string chosen_model_text(const SelectResult& result) {
     return std::string("0");
   };
   std::ostringstream out;
-  out << "# The terms of " << model.file() << " that momentid select chose on "
+  out << "# The terms of " << model.file() << " that momentid select kept on "
       << result.library.data_name << ";\n# the parameters' values are their estimates.\n";
   out << "model " << model.name();
   if (!model.title().empty()) out << " \"" << model.title() << "\"";

@@ -83,6 +83,19 @@ std::string format_text(const SelectResult& r) {
   for (const SelectResult::Window& w : r.windows) {
     out << "  lags " << w.first_lag << ".." << w.last_lag << ": " << kept_terms(r, w.kept) << "\n";
   }
+  if (!r.validated.empty()) {
+    out << "\nvalidation on " << r.validation_name
+        << " (each subset identified on the record above, simulated through its inputs)\n";
+    for (const SelectResult::Validated& v : r.validated) {
+      out << "  rank " << v.rank + 1 << ":";
+      for (const auto& o : v.outputs) {
+        out << " " << o.name << " fit " << number(o.fit, "%.2f") << "% (rms "
+            << number(o.rms, "%.4g") << ")";
+      }
+      out << (v.consistent ? "" : ", inconsistent (see validate)") << "  "
+          << kept_terms(r, r.ranking[v.rank].kept) << "\n";
+    }
+  }
   out << "\n";
   if (r.warnings.empty()) out << "selection warnings: none\n";
   for (const std::string& w : r.warnings) out << "selection warning: " << w << "\n";
@@ -116,6 +129,17 @@ nlohmann::ordered_json json_value(const SelectResult& r) {
     windows.push_back(
         {{"lags", {w.first_lag, w.last_lag}}, {"selected", kept_names(r, w.kept, true)}});
   }
+  Json validated = Json::array();
+  for (const SelectResult::Validated& v : r.validated) {
+    Json fits = Json::object();
+    for (const auto& o : v.outputs) {
+      fits[o.name] = {{"fit", json_value(o.fit)}, {"rms", json_value(o.rms)}};
+    }
+    validated.push_back({{"rank", v.rank + 1},
+                         {"selected", kept_names(r, r.ranking[v.rank].kept, true)},
+                         {"outputs", fits},
+                         {"consistent", v.consistent}});
+  }
   out["selection"] = {{"search", r.exhaustive ? "exhaustive" : "backward"},
                       {"scored", r.scored},
                       {"penalty", json_value(r.penalty)},
@@ -124,6 +148,9 @@ nlohmann::ordered_json json_value(const SelectResult& r) {
                       {"tests", tests},
                       {"windows", windows},
                       {"warnings", r.warnings}};
+  if (!r.validated.empty()) {
+    out["selection"]["validation"] = {{"data", r.validation_name}, {"subsets", validated}};
+  }
   return out;
 }
 

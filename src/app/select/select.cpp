@@ -11,6 +11,7 @@
 #include "app/identify/steps.hpp"
 #include "common/number.hpp"
 #include "momentid/algebra_lock.hpp"
+#include "momentid/validate.hpp"
 #include "solve/distributions.hpp"
 #include "solve/fixed.hpp"
 #include "solve/selection.hpp"
@@ -138,10 +139,40 @@ MomentRows free_rows(const IdentifyResult& library, const LaggedSystem& system,
   return without_fixed(lagged_rows_of(library, system), fixed);
 }
 
+// The best subsets of the ranking (SelectOptions::kValidated at most), each identified on the
+// record selected from (the chosen one already is), simulated through the inputs of
+// options.validation and compared with it.
+void validate_best(SelectResult& out, const DataSource& source, const SelectOptions& options) {
+  const Model& library = *out.library.model;
+  ValidateOptions validation;
+  validation.replay.record = options.identify.record;
+  validation.center = options.identify.center;
+  const std::size_t count = std::min(out.ranking.size(), SelectOptions::kValidated);
+  for (std::size_t rank = 0; rank < count; ++rank) {
+    IdentifyResult identified;
+    if (rank > 0) {
+      const Model subset =
+          parse_model(subset_model_text(out, out.ranking[rank].kept, out.library), library.file());
+      identified = identify(subset, source, options.identify);
+    }
+    const IdentifyResult& estimated = rank == 0 ? out.chosen : identified;
+    const Model model =
+        parse_model(subset_model_text(out, out.ranking[rank].kept, estimated), library.file());
+    const ValidateResult result = validate(model, *options.validation, validation);
+    SelectResult::Validated entry{rank, {}, result.consistent};
+    for (const OutputFit& fit : result.outputs)
+      entry.outputs.push_back({fit.name, fit.fit, fit.rms});
+    out.validated.push_back(std::move(entry));
+    if (rank == 0) out.validation_name = result.replay.record.name;
+  }
+}
+
 }  // namespace
 
 SelectResult select_terms(const Model& model, const DataSource& source,
                           const SelectOptions& options) {
+  // The validation record is opened now: a file that cannot be read ends the run before the pass.
+  if (options.validation) options.validation->open({});
   const AlgebraLock lock;
   if (options.identify.method == Method::kZeroLag || options.identify.multipliers ||
       options.identify.degree > 0 || options.identify.extrapolate) {
@@ -282,6 +313,7 @@ SelectResult select_terms(const Model& model, const DataSource& source,
                                                          "displacement of a symmetric structure)"
                                                        : ""));
   }
+  if (options.validation) validate_best(out, source, options);
   return out;
 }
 
