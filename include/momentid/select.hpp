@@ -63,6 +63,7 @@ struct SelectResult {
     };
     std::vector<Output> outputs;
     bool consistent = true;  // as validate judges the model (ValidateResult::consistent)
+    std::string failed;      // why it could not be validated (its simulation blew up), or empty
   };
   // The best subset on the equations at lags first..last (the same pass and instruments).
   struct Window {

@@ -88,6 +88,7 @@ std::string format_text(const SelectResult& r) {
         << " (each subset identified on the record above, simulated through its inputs)\n";
     for (const SelectResult::Validated& v : r.validated) {
       out << "  rank " << v.rank + 1 << ":";
+      if (!v.failed.empty()) out << " not validated (" << v.failed << ")";
       for (const auto& o : v.outputs) {
         out << " " << o.name << " fit " << number(o.fit, "%.2f") << "% (rms "
             << number(o.rms, "%.4g") << ")";
@@ -139,6 +140,7 @@ nlohmann::ordered_json json_value(const SelectResult& r) {
                          {"selected", kept_names(r, r.ranking[v.rank].kept, true)},
                          {"outputs", fits},
                          {"consistent", v.consistent}});
+    if (!v.failed.empty()) validated.back()["failed"] = v.failed;
   }
   out["selection"] = {{"search", r.exhaustive ? "exhaustive" : "backward"},
                       {"scored", r.scored},

@@ -158,13 +158,22 @@ void validate_best(SelectResult& out, const DataSource& source, const SelectOpti
     const IdentifyResult& estimated = rank == 0 ? out.chosen : identified;
     const Model model =
         parse_model(subset_model_text(out, out.ranking[rank].kept, estimated), library.file());
-    const ValidateResult result = validate(model, *options.validation, validation);
-    SelectResult::Validated entry{rank, {}, result.consistent};
-    for (const OutputFit& fit : result.outputs)
-      entry.outputs.push_back({fit.name, fit.fit, fit.rms});
+    SelectResult::Validated entry{rank};
+    try {
+      const ValidateResult result = validate(model, *options.validation, validation);
+      entry.consistent = result.consistent;
+      for (const OutputFit& fit : result.outputs) {
+        entry.outputs.push_back({fit.name, fit.fit, fit.rms});
+      }
+    } catch (const LocatedError&) {
+      throw;  // the second record's own fault (a missing column, a bad field)
+    } catch (const Error& e) {
+      entry.consistent = false;
+      entry.failed = e.what();  // its simulation blew up
+    }
     out.validated.push_back(std::move(entry));
-    if (rank == 0) out.validation_name = result.replay.record.name;
   }
+  out.validation_name = options.validation->name();
 }
 
 }  // namespace
