@@ -258,8 +258,9 @@ def table(args):
                    if row["select"]["error"] is not None and (row["noise"] > 0) == noisy]
         if pvalues:
             size = np.mean(np.array(pvalues) < 0.05)
-            print(f"the J test's size at 5% at the true model, records {'with' if noisy else 'without'}"
-                  f" noise: {100 * size:.1f}% of {len(pvalues)}")
+            kind = "with" if noisy else "without"
+            print(f"the J test's size at 5% at the true model, records {kind} noise: "
+                  f"{100 * size:.1f}% of {len(pvalues)}")
 
 
 def plot(args):
