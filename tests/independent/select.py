@@ -19,6 +19,10 @@ J test does not reject it at 1%, and that its estimates lie within 3 standard er
                best subsets, each simulated through its force, the chosen one first and fitting
                the second record's y to better than 90%; a validation file that does not exist
                ends the run before the pass (exit 2, naming it)
+  blows_up     a softening oscillator (+400 y^3) selected on a record that stays in its well and
+               validated on the same record with a force 20 times stronger: the chosen model's
+               simulation leaves the well and blows up, which is reported for that subset (not
+               validated, with the reason) while the others are still compared; exit 0
   written      duffing's chosen model written by -o: identify takes it as it is, `ok`, with the
                same terms and estimates within 3 standard errors of the truth
   no_candidates  a model without candidates: exit 2, naming 'candidate' and 'library'
@@ -187,6 +191,27 @@ def validated(momentid, workdir):
     return passed
 
 
+def blows_up(momentid, workdir):
+    clean = oscillator(20271212, lambda s, x: (s[1], x - 4.0 * s[1] - 1024.0 * s[0]
+                                                 + 400.0 * s[0]**3), 200.0)
+    y = lab.measured(np.random.default_rng(20271213), clean["y"], 0.02)
+    path, stronger = f"{workdir}/softening.csv", f"{workdir}/stronger.csv"
+    lab.write_csv(path, {"t": clean["t"], "y": y, "x": clean["x"]})
+    lab.write_csv(stronger, {"t": clean["t"], "y": y, "x": 20 * clean["x"]})
+    model = library(workdir, "state y, v\ninput x\ny' = v\nv' = 0\nlibrary v': y, y^3, v, x\n")
+    report = select(momentid, model, path, "--validate", stronger)
+    if report is None:
+        return False
+    subsets = report["selection"]["validation"]["subsets"]
+    for entry in subsets:
+        print(f"  rank {entry['rank']}: {entry.get('failed') or entry['outputs']}")
+    chosen = subsets[0]
+    return (sorted(chosen["selected"]) == ["v_v", "v_x", "v_y", "v_y3"]
+            and "blew up" in chosen.get("failed", "") and not chosen["outputs"]
+            and not chosen["consistent"] and len(subsets) == 3
+            and all("failed" in entry or entry["outputs"] for entry in subsets[1:]))
+
+
 def written(momentid, workdir):
     path, truth = duffing_record(workdir)
     chosen = f"{workdir}/chosen.mom"
@@ -219,6 +244,7 @@ def no_candidates(momentid, workdir):
 
 CASES = {"duffing": duffing, "clean": clean, "asymmetric": asymmetric,
          "van_der_pol": van_der_pol, "damping": damping, "validated": validated,
+         "blows_up": blows_up,
          "written": written, "no_candidates": no_candidates}
 
 if __name__ == "__main__":

@@ -93,7 +93,7 @@ std::string format_text(const SelectResult& r) {
         out << " " << o.name << " fit " << number(o.fit, "%.2f") << "% (rms "
             << number(o.rms, "%.4g") << ")";
       }
-      out << (v.consistent ? "" : ", inconsistent (see validate)") << "  "
+      out << (v.consistent || !v.failed.empty() ? "" : ", inconsistent (see validate)") << "  "
           << kept_terms(r, r.ranking[v.rank].kept) << "\n";
     }
   }
