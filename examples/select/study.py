@@ -46,7 +46,6 @@ LIBRARY = os.path.join(os.path.dirname(os.path.abspath(__file__)), "library.mom"
 FS = 1024.0
 BAND = (1.0, 40.0)
 BURN_IN = 10.0
-CANDIDATES = ["v_y", "v_y2", "v_y3", "v_y4", "v_y5", "v_v", "v_y_v", "v_y2_v", "v_x"]
 
 # Each system: its true library coefficients and the RMS of its force.
 SYSTEMS = {
@@ -58,10 +57,18 @@ SYSTEMS = {
 THRESHOLDS = (0.5, 5.0)
 
 
+def library_terms(y, v, x):
+    """The library's terms, by their parameters' names."""
+    return {"v_y": y, "v_y2": y**2, "v_y3": y**3, "v_y4": y**4, "v_y5": y**5, "v_v": v,
+            "v_y_v": y * v, "v_y2_v": y**2 * v, "v_x": x}
+
+
+LIBRARY_NAMES = list(library_terms(0.0, 0.0, 0.0))
+
+
 def acceleration(truth, y, v, x):
     """The library's right-hand side with the coefficients `truth`."""
-    terms = {"v_y": y, "v_y2": y**2, "v_y3": y**3, "v_y4": y**4, "v_y5": y**5, "v_v": v,
-             "v_y_v": y * v, "v_y2_v": y**2 * v, "v_x": x}
+    terms = library_terms(y, v, x)
     return sum(value * terms[name] for name, value in truth.items())
 
 
@@ -136,7 +143,7 @@ def by_threshold(path, threshold):
         estimates = {name: p["estimate"] for name, p in report["parameters"].items()
                      if name not in zero}
         small = [name for name, value in estimates.items() if abs(value) < threshold]
-        if not small or len(zero) + len(small) == len(CANDIDATES):
+        if not small or len(zero) + len(small) == len(LIBRARY_NAMES):
             kept = sorted(name for name in estimates if name not in small)
             return kept, {name: estimates[name] for name in kept}
         zero += small
@@ -147,10 +154,8 @@ def by_equation_error(y, x, threshold):
     dt = 1 / FS
     a = (y[2:] - 2 * y[1:-1] + y[:-2]) / dt**2
     v = (y[2:] - y[:-2]) / (2 * dt)
-    yy, xx = y[1:-1], x[1:-1]
-    columns = {"v_y": yy, "v_y2": yy**2, "v_y3": yy**3, "v_y4": yy**4, "v_y5": yy**5, "v_v": v,
-               "v_y_v": yy * v, "v_y2_v": yy**2 * v, "v_x": xx}
-    kept = list(CANDIDATES)
+    columns = library_terms(y[1:-1], v, x[1:-1])
+    kept = list(LIBRARY_NAMES)
     while True:
         matrix = np.column_stack([columns[name] for name in kept])
         coefficients = np.linalg.lstsq(matrix, a, rcond=None)[0]

@@ -315,12 +315,10 @@ SelectResult select_terms(const Model& model, const DataSource& source,
   if (out.chosen.estimate.j_pvalue && *out.chosen.estimate.j_pvalue < kRejected) {
     out.warnings.insert(out.warnings.begin(), "the J test rejects the chosen model (p = " +
                                                   number(*out.chosen.estimate.j_pvalue, "%.2g") +
-                                                  "): the library may lack a term the data need" +
-                                                  (options.identify.center.empty()
-                                                       ? ", or a channel carries an offset "
-                                                         "(--center removes it from the "
-                                                         "displacement of a symmetric structure)"
-                                                       : ""));
+                                                  "): the library may lack a term the data need "
+                                                  "(an offset on a displacement puts a constant "
+                                                  "into its equation, which no library term "
+                                                  "is)");
   }
   if (options.validation) validate_best(out, source, options);
   return out;
