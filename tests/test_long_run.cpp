@@ -125,6 +125,43 @@ TEST_SUITE("long-run covariance") {
     CHECK(c.covariance.isApprox(momentid::batch_covariance(x)));
   }
 
+  // The J test's traces (j_test.cpp): over many directions of almost no long-run variance, the
+  // zeroed negative eigenvalues leave a positive part of the noise in each.
+  TEST_CASE("the linear estimate's trace is unbiased where the zeroed one is not") {
+    momentid::PortableRandom random(13, 0);
+    constexpr Eigen::Index kBatches = 500, kWhite = 4, kColumns = 40;
+    constexpr int kRepeats = 200;
+    // The mean's covariance times B: 1 per white column, 2 / B per telescoping one.
+    const double truth = kWhite + 2.0 * (kColumns - kWhite) / kBatches;
+    double sum[2] = {0, 0}, squares[2] = {0, 0};
+    for (int r = 0; r < kRepeats; ++r) {
+      Eigen::MatrixXd x(kBatches, kColumns);
+      for (Eigen::Index c = 0; c < kColumns; ++c) {
+        double end = random.normal();
+        for (Eigen::Index b = 0; b < kBatches; ++b) {
+          const double next = random.normal();
+          x(b, c) = c < kWhite ? next : next - end;
+          end = next;
+        }
+      }
+      const momentid::LongRunCovariance c = momentid::long_run_covariance(x);
+      const double traces[2] = {c.linear.trace() * kBatches, c.covariance.trace() * kBatches};
+      for (int k = 0; k < 2; ++k) {
+        sum[k] += traces[k];
+        squares[k] += traces[k] * traces[k];
+      }
+    }
+    double mean[2], error[2];
+    for (int k = 0; k < 2; ++k) {
+      mean[k] = sum[k] / kRepeats;
+      error[k] = std::sqrt((squares[k] / kRepeats - mean[k] * mean[k]) / (kRepeats - 1));
+    }
+    INFO("linear " << mean[0] << " +- " << error[0] << ", zeroed " << mean[1] << " +- " << error[1]
+                   << ", truth " << truth);
+    CHECK(std::abs(mean[0] - truth) < 4 * error[0]);
+    CHECK(mean[1] - truth > 4 * error[1]);
+  }
+
   TEST_CASE("constant columns have no error") {
     const momentid::LongRunCovariance c =
         momentid::long_run_covariance(Eigen::MatrixXd::Ones(100, 3));

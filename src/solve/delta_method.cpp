@@ -67,6 +67,7 @@ LongRunCovariance with_known(LongRunCovariance errors, const MatrixXd& added) {
     if (series > 0) dof = std::min(dof, errors.dof * (total / series) * (total / series));
   }
   errors.covariance += added;
+  errors.linear += added;
   if (std::isfinite(dof)) errors.dof = dof;
   return errors;
 }

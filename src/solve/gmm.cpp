@@ -1,5 +1,8 @@
 #include "solve/gmm.hpp"
 
+#include <cmath>
+
+#include "solve/delta_method.hpp"
 #include "solve/long_run.hpp"
 
 namespace momentid {
@@ -43,6 +46,18 @@ double finite_sample_factor(std::size_t batches, Index equations, Index paramete
   const auto m = static_cast<double>(equations);
   const auto q = static_cast<double>(parameters);
   return n * (n - 1) / ((n - m + q) * (n - m + q - 1));
+}
+
+GmmErrors gmm_errors(const LinearSystem& system, const LeastSquares& first,
+                     const OptimalWeighting& gmm, const MatrixXd& deviations,
+                     const KnownCovariance& known, std::size_t batches) {
+  const MatrixXd jacobian = sensitivity(system, first.scale, gmm.information_inverse, gmm.left,
+                                        gmm.weight * gmm.residual, gmm.theta_scaled);
+  const double factor = finite_sample_factor(batches, gmm.rank, system.a.cols());
+  GmmErrors out;
+  out.series = std::sqrt(factor) * deviations * jacobian.transpose();
+  out.errors = with_known(long_run_covariance(out.series), jacobian * known * jacobian.transpose());
+  return out;
 }
 
 }  // namespace momentid

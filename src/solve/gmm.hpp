@@ -4,6 +4,7 @@
 
 #include "solve/least_squares.hpp"
 #include "solve/linear_system.hpp"
+#include "solve/long_run.hpp"
 
 namespace momentid {
 
@@ -36,5 +37,16 @@ OptimalWeighting optimal_weighting(const LinearSystem& system, const LeastSquare
 // and q parameters (Gaussian batch means, Wishart S): the product of the two, by which the
 // series' covariance is to be multiplied.
 double finite_sample_factor(std::size_t batches, Eigen::Index equations, Eigen::Index parameters);
+
+// The errors of the optimally weighted estimate: `series`, the batch series of its first-order
+// errors (parameters unscaled) times the root of finite_sample_factor, and `errors`, their
+// long-run covariance plus what the moments' known covariance adds.
+struct GmmErrors {
+  Eigen::MatrixXd series;
+  LongRunCovariance errors;
+};
+GmmErrors gmm_errors(const LinearSystem& system, const LeastSquares& first,
+                     const OptimalWeighting& gmm, const Eigen::MatrixXd& deviations,
+                     const KnownCovariance& known, std::size_t batches);
 
 }  // namespace momentid

@@ -63,7 +63,10 @@ LongRunCovariance long_run_covariance(const MatrixXd& batches) {
   const Index b = batches.rows(), d = batches.cols();
   const auto bd = static_cast<double>(b);
   const Index last = (b - 1) / 2, m = last - kFirstOrdinate + 1;
-  if (b < kMinSpectralBatches) return {batch_covariance(batches), std::max(0.0, bd - 1), 0};
+  if (b < kMinSpectralBatches) {
+    const MatrixXd s = batch_covariance(batches);
+    return {s, s, std::max(0.0, bd - 1), 0};
+  }
 
   // The Hann-tapered series and its periodogram: I_j = z_j z_j^*, E[I_j] ~ f(w_j).
   VectorXd taper(b);
@@ -94,7 +97,7 @@ LongRunCovariance long_run_covariance(const MatrixXd& batches) {
       ++used;
     }
   }
-  if (used == 0) return {MatrixXd::Zero(d, d), bd - 1, 0};
+  if (used == 0) return {MatrixXd::Zero(d, d), MatrixXd::Zero(d, d), bd - 1, 0};
   s /= used;
   VectorXd w(m);
   for (Index j = 0; j < m; ++j) {
@@ -116,9 +119,9 @@ LongRunCovariance long_run_covariance(const MatrixXd& batches) {
   MatrixXd v =
       (re.transpose() * kappa.asDiagonal() * re + im.transpose() * kappa.asDiagonal() * im) / bd;
   v = (v + v.transpose()) / 2;
-  Eigen::SelfAdjointEigenSolver<MatrixXd> eigen(v);
-  v = eigen.eigenvectors() * eigen.eigenvalues().cwiseMax(0).asDiagonal() *
-      eigen.eigenvectors().transpose();
+  const Eigen::SelfAdjointEigenSolver<MatrixXd> eigen(v);
+  const MatrixXd clipped = eigen.eigenvectors() * eigen.eigenvalues().cwiseMax(0).asDiagonal() *
+                           eigen.eigenvectors().transpose();
 
   // Neighbouring tapered ordinates are correlated: rho_k = |sum h^2 e^{-i w_k t}| / sum h^2.
   const VectorXd kf = kappa.cwiseProduct(best.spectrum);
@@ -133,7 +136,7 @@ LongRunCovariance long_run_covariance(const MatrixXd& batches) {
     variance += 2 * rho * rho * kf.head(m - k).dot(kf.tail(m - k));
   }
   const double mean = kf.sum();
-  return {v, variance > 0 ? 2 * mean * mean / variance : bd - 1, best.order};
+  return {clipped, v, variance > 0 ? 2 * mean * mean / variance : bd - 1, best.order};
 }
 
 }  // namespace momentid

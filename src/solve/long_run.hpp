@@ -24,9 +24,13 @@ namespace momentid {
 // it mixes with the removed mean is left out. The result is a fixed linear combination of the
 // periodogram matrices with one weight per frequency, whatever the columns, so that a projection
 // of the series gets the projection of the covariance; negative eigenvalues (from negative
-// weights) are set to zero.
+// weights) are set to zero in `covariance`, not in `linear`.
 struct LongRunCovariance {
   Eigen::MatrixXd covariance;  // of the record's mean
+  // The same before negative eigenvalues are set to zero: unbiased where the moving average fits,
+  // which `covariance` is not in a series with many directions of nearly no long-run variance
+  // (each gets a positive part of its noise). What traces over many directions take (j_test).
+  Eigen::MatrixXd linear;
   // Effective degrees of freedom of the estimate (Satterthwaite, with the correlation of
   // neighbouring tapered ordinates): what the t quantiles and the J test use.
   double dof = 0;

@@ -44,8 +44,8 @@ FixedWeighting::FixedWeighting(const MomentRows& rows, std::size_t parameters,
   }
   calibration_ = *test.statistic / gmm.objective;
   rank_ = gmm.rank;
-  theta_ = gmm.theta_scaled;
-  covariance_ = finite_sample_factor(batches, gmm.rank, params) * gmm.information_inverse;
+  theta_ = gmm.theta;
+  covariance_ = gmm_errors(system, ls, gmm, deviations, known, batches).errors.covariance;
   objective_ = gmm.objective;
 }
 
@@ -65,7 +65,7 @@ double FixedWeighting::j(const std::vector<bool>& kept) const {
     for (Index k = 0; k < n; ++k) m(i, k) = covariance_(a, dropped[static_cast<std::size_t>(k)]);
   }
   const double added = n > 0 ? q.dot(m.ldlt().solve(q)) : 0.0;
-  return calibration_ * (objective_ + std::max(0.0, added));
+  return calibration_ * objective_ + std::max(0.0, added);
 }
 
 int FixedWeighting::dof(const std::vector<bool>& kept) const {

@@ -25,13 +25,12 @@ class FixedWeighting {
                  const std::vector<double>& moment_variance, bool normalise_rows,
                  const std::string& what);
 
-  // J of the subset `kept` (a flag per parameter): the weighted residual's squared length at the
-  // subset's estimate on this weighting, times the library's calibration factor, so that J at
-  // the library is its calibrated J test statistic (j_test) and a subset's J less the library's
-  // is asymptotically chi-square in the parameters dropped. The part that the dropped parameters
-  // add is divided by the finite-sample factor of the estimated weights (gmm.hpp), by which
-  // identify multiplies the estimates' covariance: a library of a hundred equations weighted
-  // from 500 batches makes it about 1.5.
+  // J of the subset `kept` (a flag per parameter): the library's calibrated J test statistic
+  // (j_test) plus the Wald statistic of the parameters the subset drops, on the library's
+  // estimate and its covariance as identify reports it (the long-run covariance of the errors'
+  // batch series, times the finite-sample factor of the estimated weights, gmm.hpp). So a
+  // subset's J less the library's is asymptotically chi-square in the parameters dropped, and for
+  // one parameter the square of the t statistic that identify prints for it on the library.
   double j(const std::vector<bool>& kept) const;
   // The equations the weighting counts less the parameters `kept` holds: J's degrees of freedom.
   int dof(const std::vector<bool>& kept) const;
@@ -39,10 +38,9 @@ class FixedWeighting {
   double correlation(std::size_t p, std::size_t q) const;
 
  private:
-  // The library's estimate, in scaled columns, (A' W A)^-1 times the finite-sample factor, and J:
-  // a subset's J is the library's
-  // plus the Wald form of the parameters it drops, which stays exact where J is tiny against
-  // b' W b (records without noise).
+  // The library's estimate and its covariance, and its J: a subset's J is the library's plus the
+  // Wald form of the parameters it drops, which stays exact where J is tiny against b' W b
+  // (records without noise).
   Eigen::VectorXd theta_;
   Eigen::MatrixXd covariance_;
   double objective_ = 0;

@@ -65,12 +65,8 @@ void report_least_squares(Estimate& out, const LinearSystem& system, const Least
 void report_gmm(Estimate& out, const LinearSystem& system, const LeastSquares& ls,
                 const std::vector<bool>& identifiable, const MomentErrors& moments) {
   const OptimalWeighting gmm = optimal_weighting(system, ls, moments.deviations, moments.known);
-  const MatrixXd jacobian = sensitivity(system, ls.scale, gmm.information_inverse, gmm.left,
-                                        gmm.weight * gmm.residual, gmm.theta_scaled);
-  const double finite_sample = finite_sample_factor(out.batches, gmm.rank, system.a.cols());
-  const MatrixXd series = std::sqrt(finite_sample) * moments.deviations * jacobian.transpose();
-  const LongRunCovariance errors =
-      with_known(long_run_covariance(series), added_by(moments, jacobian));
+  const auto [series, errors] =
+      gmm_errors(system, ls, gmm, moments.deviations, moments.known, out.batches);
   out.error_batches = rows_of(series);
   Fit& fit = out.optimal.emplace();
   fit.objective = out.intervals > 0 ? gmm.objective / static_cast<double>(out.intervals) : kNaN;
