@@ -93,6 +93,12 @@ TEST_SUITE("library") {
           std::vector<std::string>{"c", "v_y"});
   }
 
+  TEST_CASE("the constant 1 is a term whose parameter is the constant") {
+    const Model m = parsed("library v': 1, y\n");
+    CHECK(names(m, true) == std::vector<std::string>{"v_const", "v_y"});
+    CHECK(terms_of(m, "v_const") == "1");
+  }
+
   TEST_CASE("a name ending in a digit keeps its exponent apart") {
     const Model m = momentid::parse_model(
         "state y1, v1\ny1' = v1\nv1' = 0\nlibrary v1': y1^2, y1*v1\n", "test.mom");
@@ -109,7 +115,10 @@ TEST_SUITE("library") {
                 "parameter of its own",
                 13);
     check_error(error_of<ModelError>("library v': 3\n"),
-                "a library term holds a state, an input, abs(...) or sign(...), found '3'", 13);
+                "a constant library term is written 1 (its parameter is the constant), found '3'",
+                13);
+    check_error(error_of<ModelError>("library v': y, 1, 1\n"),
+                "'1' is already a term of equation motion, with parameter v_const", 19);
     check_error(error_of<ModelError>("library v': y'\n"),
                 "a library term cannot hold a derivative, found 'y''", 13);
     check_error(error_of<ModelError>("library v': v\n"),

@@ -155,9 +155,11 @@ void ModelBuilder::add_measured(std::size_t i) {
 namespace {
 
 // A parameter's name for a library term: the equation's name, then each factor's name (letters,
-// digits and '_' of it) with its exponent, as in v_y2_x for y^2*x in the equation of v'.
+// digits and '_' of it) with its exponent, as in v_y2_x for y^2*x in the equation of v', or
+// v_const for the constant 1.
 std::string library_parameter_name(const std::string& prefix,
                                    const std::vector<Variable>& variables, const Monomial& m) {
+  if (std::all_of(m.begin(), m.end(), [](int e) { return e == 0; })) return prefix + "_const";
   std::string out = prefix;
   for (std::size_t v = 0; v < m.size(); ++v) {
     if (m[v] == 0) continue;

@@ -184,9 +184,11 @@ std::vector<TermBuilder::LibraryTerm> TermBuilder::library_terms_checked(
   if (total(t.derivatives) != 0) {
     source_.fail(n, "a library term cannot hold a derivative, found '" + text + "'");
   }
-  if (t.variables.degree() == 0) {
+  // The constant is written 1: its parameter is the constant itself (an offset, a static load).
+  if (t.variables.degree() == 0 && t.coefficient != 1) {
     source_.fail(
-        n, "a library term holds a state, an input, abs(...) or sign(...), found '" + text + "'");
+        n, "a constant library term is written 1 (its parameter is the constant), found '" + text +
+               "'");
   }
   return {{t.coefficient, t.variables, value / t.coefficient, false}};
 }

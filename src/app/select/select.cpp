@@ -313,12 +313,23 @@ SelectResult select_terms(const Model& model, const DataSource& source,
   const Model written = parse_model(chosen_model_text(out), model.file());
   out.chosen = identify(written, source, options.identify);
   if (out.chosen.estimate.j_pvalue && *out.chosen.estimate.j_pvalue < kRejected) {
-    out.warnings.insert(out.warnings.begin(), "the J test rejects the chosen model (p = " +
-                                                  number(*out.chosen.estimate.j_pvalue, "%.2g") +
-                                                  "): the library may lack a term the data need "
-                                                  "(an offset on a displacement puts a constant "
-                                                  "into its equation, which no library term "
-                                                  "is)");
+    out.warnings.insert(out.warnings.begin(),
+                        "the J test rejects the chosen model (p = " +
+                            number(*out.chosen.estimate.j_pvalue, "%.2g") +
+                            "): the library may lack a term the data need (an offset on a "
+                            "measured channel puts a constant into its equation: the library "
+                            "term 1)");
+  }
+  for (std::size_t p = 0; p < model.parameters().size(); ++p) {
+    if (out.ranking.front().kept[p] && model.parameters()[p].candidate &&
+        terms_of(model, p) == "1") {
+      out.warnings.push_back(
+          "the constant " + model.parameters()[p].name +
+          " is kept: the record's equilibrium is off zero (a sensor offset or a static load), "
+          "and the other terms are in the record's coordinates, where an offset o turns a "
+          "cubic spring into y^3, y^2 and y terms, k3 (y - o)^3 "
+          "(docs/cli/select.md, \"Offsets\")");
+    }
   }
   if (options.validation) validate_best(out, source, options);
   return out;
