@@ -623,6 +623,15 @@ TEST_SUITE("derive lagged default instruments") {
     CHECK(system.instruments ==
           std::vector<momentid::Monomial>{{1, 0, 0}, {2, 0, 0}, {3, 0, 0}, {0, 0, 1}});
   }
+  TEST_CASE("the highest power is the one the term is read as: y^2*v with v unmeasured is y^3") {
+    const Model model = momentid::parse_model(
+        "state y, v\ninput x\nparam mu, k\ny' = v\nv' = mu*(1 - y^2)*v - k*y + x\n", "d.mom");
+    CHECK(momentid::derive_lagged(model, {.measured = {true, false, true}}).instruments ==
+          std::vector<momentid::Monomial>{{1, 0, 0}, {3, 0, 0}});
+    // With v measured the term is read as it stands.
+    CHECK(momentid::derive_lagged(model, {.measured = {true, true, true}}).instruments ==
+          std::vector<momentid::Monomial>{{1, 0, 0}, {2, 0, 0}, {0, 1, 0}});
+  }
   TEST_CASE("abs(v)*v is odd and abs(y) even; a known input term adds no instrument") {
     const Model odd = oscillator("a*abs(v)*v");
     CHECK(momentid::derive_lagged(odd, {}).instruments ==

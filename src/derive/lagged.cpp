@@ -355,7 +355,20 @@ bool even_monomial(const Model& model, const Monomial& m) {
   return odd % 2 == 0;
 }
 
-// Each measured state, and its highest power in the equations' terms. With abs or sign terms
+// The power of variable `v` in the function that term `t` of `eq` is read as, or in the term
+// itself when the data cannot carry it (lagged_equation says so).
+int read_power(const LagDeriver& deriver, const Equation& eq, const Term& t, std::size_t v) {
+  try {
+    return deriver.lag_function(eq, t, Monomial(t.monomial.size(), 0), true).first.function[v];
+  } catch (const ModelError&) {
+    return t.monomial[v];
+  }
+}
+
+// Each measured state, and its highest power in the functions the equations' terms are read as
+// (y^2*v with v = y' unmeasured is the lag derivative of y^3 / 3: y^3, the instrument that
+// correlates with it on a symmetric structure, where y^2 left the Van der Pol oscillator's
+// damping five times less certain). With abs or sign terms
 // also its cube: the states alone correlate with v and |v|*v (or sign(v)) alike, which leaves
 // their parameters nearly collinear, and the cubes tell them apart (on the drag, friction and
 // clearance oscillators of docs/measured-data.md the standard errors of c2, f and kc fell 3 to
@@ -377,7 +390,7 @@ std::vector<Monomial> default_instruments(const Model& model, const std::vector<
     int highest = 1;
     for (const Equation& eq : model.equations()) {
       if (!has_parameter(eq)) continue;
-      for (const Term& t : eq.terms) highest = std::max(highest, t.monomial[v]);
+      for (const Term& t : eq.terms) highest = std::max(highest, read_power(deriver, eq, t, v));
     }
     for (int power : {1, square, cube, highest}) {
       Monomial m(model.variables().size(), 0);
