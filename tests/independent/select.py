@@ -13,8 +13,9 @@ J test does not reject it at 1%, and that its estimates lie within 3 standard er
                error, which the accuracy floor covers (docs/measured-data.md)
   asymmetric   the same with -300 y^2, 10% noise on y
   van_der_pol  v' = mu (1 - y^2) v - k y + x, mu = 2, k = 400, 5% noise on y
-  damping      y, v and x measured, 2% noise, the library {y, v, v^2, v^3}: the Duffing
-               oscillator's linear damping, then cubic damping -c3 v^3 in place of -c v
+  damping      y, v and x measured, 2% noise, the library {y, y^3, v, v^2, v^3, |v| v, x}: the
+               Duffing oscillator's linear damping, then cubic damping -8 v^3 and drag
+               -0.5 |v| v in place of -c v
   offset       duffing's oscillator as a lab records it: 3% noise and an offset of 2% of its
                standard deviation on y, 1% noise on x; the library with the constant 1 keeps it
                and the y^2 and y terms that the offset makes of the cubic spring in the measured
@@ -55,7 +56,7 @@ DAMPING_LIBRARY = """state y, v
 input x
 y' = v
 v' = 0
-library v': y, y^3, v, v^2, v^3, x
+library v': y, y^3, v, v^2, v^3, abs(v)*v, x
 """
 
 
@@ -158,10 +159,11 @@ def damping(momentid, workdir):
     passed = True
     # Seed 20271204 made a linear-damping record on which the true model's J test gives
     # p = 0.0055: the 1% test rejects the truth in 1% of records (tests/independent/j_size.py).
-    for law, seed, term, value in (("linear", 20271206, "v_v", p["c"]),
-                                   ("cubic", 20271205, "v_v3", 8.0)):
-        power = 1 if law == "linear" else 3
-        clean = oscillator(seed, lambda s, x: (s[1], x - value * s[1]**power - p["k"] * s[0]
+    for law, seed, term, value, force in (
+            ("linear", 20271206, "v_v", p["c"], lambda v: p["c"] * v),
+            ("cubic", 20271205, "v_v3", 8.0, lambda v: 8.0 * v**3),
+            ("drag", 20271209, "v_v_absv", 0.5, lambda v: 0.5 * abs(v) * v)):
+        clean = oscillator(seed, lambda s, x: (s[1], x - force(s[1]) - p["k"] * s[0]
                                                  - p["eps"] * s[0]**3), 800.0)
         path = f"{workdir}/{law}.csv"
         write(seed, clean, 0.02, path, ("y", "v"))
