@@ -368,7 +368,7 @@ int read_power(const LagDeriver& deriver, const Equation& eq, const Term& t, std
 // Each measured state, and its highest power in the functions the equations' terms are read as
 // (y^2*v with v = y' unmeasured is the lag derivative of y^3 / 3: y^3, the instrument that
 // correlates with it on a symmetric structure, where y^2 left the Van der Pol oscillator's
-// damping five times less certain). With abs or sign terms
+// damping 4.5 times less certain). With abs or sign terms
 // also its cube: the states alone correlate with v and |v|*v (or sign(v)) alike, which leaves
 // their parameters nearly collinear, and the cubes tell them apart (on the drag, friction and
 // clearance oscillators of docs/measured-data.md the standard errors of c2, f and kc fell 3 to
