@@ -177,10 +177,12 @@ struct Sensitivity {
 // distances (docs/cli/validate.md, "Statistics").
 struct StatisticCheck {
   std::string output;  // the state's name
-  std::string kind;    // "psd", "distribution", "crossings" or "prediction"
-  // The statistic at `at` (frequencies in Hz, probabilities, levels, or for "prediction" the
-  // time ahead in s, where the statistic is the rms prediction error): the record's, and the
-  // runs' mean, smallest and largest.
+  std::string kind;    // "psd", "distribution", "crossings", "prediction" or "bias"
+  // The statistic at `at` (frequencies in Hz, probabilities, levels, for "prediction" the time
+  // ahead in s, where the statistic is the rms prediction error, and for "bias" the index of each
+  // state, where it is the slope of the prediction error at that time ahead on the state's
+  // prediction, in units of the two states' spreads): the record's, and the runs' mean, smallest
+  // and largest.
   std::vector<double> at, measured, mean, low, high;
   double distance = 0;
   std::vector<double> run_distances;

@@ -298,7 +298,7 @@ class ValidateResult:
     trajectory cannot be reproduced and the statistics judge the model); `sensitivity` its
     figures (dict: time_to_spread, lyapunov, ...); consistent: the overall verdict as a
     boolean, `verdict` in words; `statistics`: None, or the statistics compared (dict with
-    `checks`, each with output, kind (psd, distribution, crossings, prediction), distance,
+    `checks`, each with output, kind (psd, distribution, crossings, prediction, bias), distance,
     limit, inside and the arrays at, measured, mean, low, high).
 
     The fit of output y is 100 (1 - |e| / |m - mean(m)|) over the compared rows, with

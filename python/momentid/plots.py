@@ -26,6 +26,7 @@ _KINDS = {
     "distribution": ("probability", "quantile", False),
     "crossings": ("level", "up-crossing rate", False),
     "prediction": ("time ahead [s]", "prediction error", False),
+    "bias": ("state predicted (index)", "slope of the prediction error", False),
 }
 
 

@@ -411,7 +411,7 @@ def test_validate_judges_a_sensitive_model_by_its_statistics(duffing):
     checks = result.statistics["checks"]
     # Both states are in the record: the prediction errors are compared too.
     assert [c["kind"] for c in checks] == ["psd", "distribution", "crossings"] * 2 + \
-        ["prediction"] * 2
+        ["prediction", "bias"] * 2
     assert all(c["inside"] for c in checks)
     assert len(checks[0]["at"]) == result.statistics["segment"] // 2 + 1
 

@@ -88,7 +88,8 @@ def test_validation_draws_the_measured_and_simulated_series_over_the_compared_ro
 
 def test_validation_draws_each_statistic_against_the_band_of_the_runs(hardening_check):
     checks = hardening_check.statistics["checks"]
-    assert {c["kind"] for c in checks} == {"psd", "distribution", "crossings", "prediction"}
+    assert {c["kind"] for c in checks} == {"psd", "distribution", "crossings", "prediction",
+                                           "bias"}
     assert {c["inside"] for c in checks} == {True, False}
     fig = hardening_check.plot()
     outputs = len(hardening_check.measured)

@@ -12,6 +12,7 @@ std::string kind_text(const std::string& kind) {
   if (kind == "psd") return "power spectral density";
   if (kind == "distribution") return "amplitude quantiles";
   if (kind == "prediction") return "prediction error";
+  if (kind == "bias") return "prediction bias (the error's slopes on the states)";
   return "up-crossing rates";
 }
 

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cfloat>
 #include <cmath>
+#include <numeric>
 #include <random>
 
 #include "app/validate/record.hpp"
@@ -173,9 +174,12 @@ std::size_t prediction_horizon(const StatisticCheck& psd, double dt) {
 }
 
 // The prediction errors of one series of states (prediction_fit), each state's rms in units of
-// its spread, and the sensor offsets fitted, in the same units.
+// its spread, and the sensor offsets fitted, in the same units; and per state j the slopes of its
+// error at the horizon on each state's prediction there (slopes[j][i], in units of spread j over
+// spread i): a wrong parameter makes the error follow the states, noise does not.
 struct PredictionFit {
   std::vector<double> errors, offsets;
+  std::vector<std::vector<double>> slopes;
 };
 
 // The model's response started from `states` (per state, run by run) at every `horizon`-th row
@@ -198,6 +202,11 @@ PredictionFit prediction_fit(const Model& model, const RecordSimulator& simulato
   std::vector<Eigen::VectorXd> u(states.size(), Eigen::VectorXd::Zero(k));
   std::vector<Eigen::MatrixXd> p(states.size(), Eigen::MatrixXd::Zero(k, k));
   double count = 0;
+  // At the horizon, per state j and i: the sums of e_j x_i and of m_j x_i, x_i the prediction of
+  // state i; and of x_i^2.
+  std::vector<Eigen::VectorXd> ex(states.size(), Eigen::VectorXd::Zero(k));
+  std::vector<Eigen::MatrixXd> mx(states.size(), Eigen::MatrixXd::Zero(k, k));
+  Eigen::VectorXd xx = Eigen::VectorXd::Zero(k);
   for (std::size_t r = 0; r < record.runs.size(); ++r) {
     const RecordRun& run = record.runs[r];
     const std::vector<std::vector<double>> inputs = run_inputs(model, record, run);
@@ -221,10 +230,16 @@ PredictionFit prediction_fit(const Model& model, const RecordSimulator& simulato
         from[i] += kStep * spread[i];
         moved.push_back(predict(from));
       }
+      Eigen::VectorXd x(k);
+      for (std::size_t i = 0; i < states.size(); ++i) {
+        x(static_cast<Eigen::Index>(i)) = predicted[i][horizon];
+      }
+      xx += x.cwiseAbs2();
       for (std::size_t n = 1; n <= horizon; ++n) {
         for (std::size_t j = 0; j < states.size(); ++j) {
           const double e = predicted[j][n] - states[j][r][start + n];
           q[j] += e * e;
+          if (n == horizon) ex[j] += e * x;
           if (!fit_offsets) continue;
           Eigen::VectorXd m(k);
           for (std::size_t i = 0; i < moved.size(); ++i) {
@@ -233,6 +248,7 @@ PredictionFit prediction_fit(const Model& model, const RecordSimulator& simulato
           }
           u[j] += e * m;
           p[j] += m * m.transpose();
+          if (n == horizon) mx[j] += x * m.transpose();
         }
       }
       count += static_cast<double>(horizon);
@@ -253,13 +269,23 @@ PredictionFit prediction_fit(const Model& model, const RecordSimulator& simulato
     const double square = q[j] + 2 * b.dot(u[j]) + b.dot(p[j] * b);
     out.errors.push_back(std::sqrt(std::max(square, 0.0) / std::max(count, 1.0)) / spread[j]);
     out.offsets.push_back(b(static_cast<Eigen::Index>(j)) / spread[j]);
+    std::vector<double> slopes;
+    for (std::size_t i = 0; i < states.size(); ++i) {
+      const auto at = static_cast<Eigen::Index>(i);
+      const double sum = ex[j](at) + mx[j].row(at).dot(b);
+      slopes.push_back(xx(at) > 0 ? sum / xx(at) * spread[i] / spread[j] : 0.0);
+    }
+    out.slopes.push_back(std::move(slopes));
   }
   return out;
 }
 
-// The prediction check of each state: the record's prediction error (prediction_fit), the
-// runs' own as the distances that set the band, each floored at kPredictionFloor: below it the
-// difference is the integrators', not the models'. `psd`: the first state's spectrum check.
+// The prediction checks of each state: the record's prediction error (prediction_fit), the
+// runs' own as the distances that set the band; and the bias check, the slopes of the error at
+// the horizon on the states' predictions against the runs' (a stiffness 10% off leaves the rms
+// error of a noisy record inside its band, but makes the error follow the states). Each distance
+// is floored at kPredictionFloor: below it the difference is the integrators', not the models'.
+// `psd`: the first state's spectrum check.
 void add_prediction_checks(const Model& model, const RecordSimulator& simulator,
                            const Record& record, const std::vector<Runs>& measured,
                            const std::vector<std::vector<Runs>>& runs, const StatisticCheck& psd,
@@ -276,23 +302,35 @@ void add_prediction_checks(const Model& model, const RecordSimulator& simulator,
   // The runs have no offset. Fitting the record's few constants over its many predicted rows
   // lowers its mean square error by only about (states / rows) of it, so the runs' errors,
   // unfitted, set the band at a fraction of the cost.
-  std::vector<std::vector<double>> of_runs;
+  std::vector<PredictionFit> of_runs;
   for (const std::vector<Runs>& run : runs) {
-    of_runs.push_back(prediction_fit(model, simulator, record, run, horizon, spread, false).errors);
+    of_runs.push_back(prediction_fit(model, simulator, record, run, horizon, spread, false));
   }
+  const auto floored = [&](StatisticCheck& c) {
+    c.distance = std::max(c.distance, kPredictionFloor);
+    for (double& d : c.run_distances) d = std::max(d, kPredictionFloor);
+  };
   const double ahead = static_cast<double>(horizon) * record.dt;
   for (std::size_t j = 0; j < measured.size(); ++j) {
-    std::vector<std::vector<double>> errors;
-    for (const std::vector<double>& run : of_runs) errors.push_back({run[j]});
+    std::vector<std::vector<double>> errors, slopes;
+    for (const PredictionFit& run : of_runs) {
+      errors.push_back({run.errors[j]});
+      slopes.push_back(run.slopes[j]);
+    }
     StatisticCheck c =
         check(model.states()[j].name, "prediction", {ahead}, {own[j]}, errors, false);
-    c.distance = std::max(own[j], kPredictionFloor);
+    c.distance = own[j];
     c.offset = fit.offsets[j];
     c.run_distances.clear();
-    for (const std::vector<double>& e : errors) {
-      c.run_distances.push_back(std::max(e[0], kPredictionFloor));
-    }
+    for (const std::vector<double>& e : errors) c.run_distances.push_back(e[0]);
+    floored(c);
     checks.push_back(std::move(c));
+    std::vector<double> index(measured.size());
+    std::iota(index.begin(), index.end(), 0.0);
+    StatisticCheck bias =
+        check(model.states()[j].name, "bias", std::move(index), fit.slopes[j], slopes, false);
+    floored(bias);
+    checks.push_back(std::move(bias));
   }
 }
 
