@@ -42,11 +42,10 @@ FixedWeighting::FixedWeighting(const MomentRows& rows, std::size_t parameters,
     throw Error(what + ": the library's J statistic cannot be calibrated (" +
                 (test.warning.empty() ? std::string("no residual") : test.warning) + ")");
   }
-  calibration_ = *test.statistic / gmm.objective;
+  library_j_ = *test.statistic;
   rank_ = gmm.rank;
   theta_ = gmm.theta;
   covariance_ = gmm_errors(system, ls, gmm, deviations, known, batches).errors.covariance;
-  objective_ = gmm.objective;
 }
 
 double FixedWeighting::j(const std::vector<bool>& kept) const {
@@ -65,7 +64,7 @@ double FixedWeighting::j(const std::vector<bool>& kept) const {
     for (Index k = 0; k < n; ++k) m(i, k) = covariance_(a, dropped[static_cast<std::size_t>(k)]);
   }
   const double added = n > 0 ? q.dot(m.ldlt().solve(q)) : 0.0;
-  return calibration_ * objective_ + std::max(0.0, added);
+  return library_j_ + std::max(0.0, added);
 }
 
 int FixedWeighting::dof(const std::vector<bool>& kept) const {

@@ -38,13 +38,12 @@ class FixedWeighting {
   double correlation(std::size_t p, std::size_t q) const;
 
  private:
-  // The library's estimate and its covariance, and its J: a subset's J is the library's plus the
-  // Wald form of the parameters it drops, which stays exact where J is tiny against b' W b
-  // (records without noise).
+  // The library's estimate and its covariance, and its calibrated J: a subset's J is the
+  // library's plus the Wald form of the parameters it drops, which stays exact where J is tiny
+  // against b' W b (records without noise).
   Eigen::VectorXd theta_;
   Eigen::MatrixXd covariance_;
-  double objective_ = 0;
-  double calibration_ = 1;
+  double library_j_ = 0;
   Eigen::Index rank_ = 0;
 };
 

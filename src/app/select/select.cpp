@@ -133,6 +133,19 @@ std::string terms_of(const Model& model, std::size_t p) {
   return out;
 }
 
+// Whether parameter p multiplies the constant alone (the library term 1).
+bool constant(const Model& model, std::size_t p) {
+  bool found = false;
+  for (const Equation& eq : model.equations()) {
+    for (const Term& t : eq.terms) {
+      if (t.parameter != static_cast<int>(p)) continue;
+      if (t.derivative >= 0 || t.monomial.degree() > 0) return false;
+      found = true;
+    }
+  }
+  return found;
+}
+
 // The library's equations at `system`'s lags, their fixed parameters moved to the right.
 MomentRows free_rows(const IdentifyResult& library, const LaggedSystem& system,
                      const std::vector<std::optional<double>>& fixed) {
@@ -321,8 +334,7 @@ SelectResult select_terms(const Model& model, const DataSource& source,
                             "term 1)");
   }
   for (std::size_t p = 0; p < model.parameters().size(); ++p) {
-    if (out.ranking.front().kept[p] && model.parameters()[p].candidate &&
-        terms_of(model, p) == "1") {
+    if (out.ranking.front().kept[p] && model.parameters()[p].candidate && constant(model, p)) {
       out.warnings.push_back(
           "the constant " + model.parameters()[p].name +
           " is kept: the record's equilibrium is off zero (a sensor offset or a static load), "
