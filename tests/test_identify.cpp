@@ -98,6 +98,28 @@ momentid::IdentifyResult identify_from_displacement(
   return momentid::identify(model, momentid::DataSource::memory(std::move(data)), o);
 }
 
+// Simulates 2*10^5 samples of the Duffing model under `input` with 3% noise on y and v and
+// identifies it from y, v and x with `o`.
+momentid::IdentifyResult identify_all_measured(const std::string& input,
+                                               const momentid::IdentifyOptions& o = {}) {
+  const Model model = model_file("duffing.mom");
+  momentid::SimulationOptions options;
+  options.inputs = {momentid::InputSpec::parse(input, "test")};
+  options.samples = 200000;
+  options.dt = 0.01;
+  options.noise = {{"y", 0.03}, {"v", 0.03}};
+  Columns columns(3);
+  momentid::simulate(model, options, columns);
+  momentid::MemoryData data;
+  data.rows = options.samples;
+  data.columns = {{"y", columns.values[0].data()},
+                  {"v", columns.values[1].data()},
+                  {"x", columns.values[2].data()}};
+  data.metadata.add_line(
+      {{"dt", "0.01"}, {"input-hold", input.starts_with("ma:") ? "zoh" : "sample"}});
+  return momentid::identify(model, momentid::DataSource::memory(std::move(data)), o);
+}
+
 // Simulates `model` (its nominal values) under the held input `input` into memory, every state
 // and input recorded, and identifies it; with `dt`, the data's metadata give the sample interval
 // and the hold (otherwise they give neither).
@@ -414,6 +436,41 @@ TEST_SUITE("identify") {
     REQUIRE(r.estimate.optimal.has_value());
     REQUIRE(r.estimate.optimal->parameters.size() == 3);
     check_near_truth(model, r, 0.005);
+  }
+
+  TEST_CASE("with every state measured, the zero-lag check compares the zero-lag estimate") {
+    const std::string multisine = "multisine:f1=0.05,f2=1,lines=40,rms=20";
+    const momentid::IdentifyResult r = identify_all_measured(multisine);
+    REQUIRE(r.lagged.has_value());
+    REQUIRE(r.lagged->zero_lag_check.has_value());
+    const auto& check = *r.lagged->zero_lag_check;
+    INFO("unavailable: ", check.unavailable);
+    REQUIRE(check.pvalue.has_value());
+    // Multipliers up to degree 5 in y and v: 20 equations; 3 parameters against 50 groups.
+    CHECK(check.degree == 5);
+    CHECK(check.equations == 20);
+    CHECK(check.left_out == 0);
+    CHECK(check.dof == std::make_pair(3.0, 47.0));
+    // The true model: not rejected, and the two estimates within a few of their errors.
+    CHECK(*check.pvalue > 0.01);
+    CHECK(momentid::status(r) == momentid::Status::kOk);
+    const auto& lagged = r.parameters();
+    for (std::size_t p = 0; p < lagged.size(); ++p) {
+      CHECK(std::abs(check.estimates[p] - lagged[p].estimate) < 10 * lagged[p].std_error);
+    }
+    CHECK(momentid::format_text(r).find("  zero-lag check: T^2 = ") != std::string::npos);
+    // Asked for the lagged equations: no check.
+    momentid::IdentifyOptions lagged_only;
+    lagged_only.method = momentid::Method::kLagged;
+    CHECK_FALSE(identify_all_measured(multisine, lagged_only).lagged->zero_lag_check.has_value());
+    // A held input: none, and why.
+    const momentid::IdentifyResult held = identify_all_measured("ma:K=10,w=0.1,sigma=20");
+    REQUIRE(held.lagged->zero_lag_check.has_value());
+    CHECK(held.lagged->zero_lag_check->unavailable ==
+          "the input is held over each sample, whose kinks the zero-lag equations would need "
+          "corrected");
+    CHECK(momentid::format_text(held).find("  zero-lag check: none: the input is held") !=
+          std::string::npos);
   }
 
   TEST_CASE("by default the zero-lag equations are optimally weighted, a batch per 200 rows") {

@@ -5,6 +5,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "momentid/accumulator.hpp"
@@ -156,6 +157,22 @@ struct IdentifyResult {
     // What was cut from the default lags and instruments to stay within kMaxLaggedMoments, e.g.
     // "cut to 4 of the 10 instruments to stay within 3000 moments"; empty when nothing was.
     std::string cut;
+    // The zero-lag check (docs/measured-data.md, "The zero-lag check"), made when the defaults
+    // chose the lagged equations for a record with every state measured: the zero-lag equations
+    // with multipliers up to `degree` (their moments noise-corrected, those that hold abs or
+    // sign of a noisy state left out), solved from the same pass, and Hotelling's test of the
+    // difference of their estimate from the lagged one. The zero-lag equations weigh the tails
+    // of the states' distribution, where a wrong law of damping or stiffness shows that the
+    // lagged equations' instruments cannot see. `unavailable` says why there is no test.
+    struct ZeroLagCheck {
+      int degree = 0;
+      std::size_t equations = 0, left_out = 0;  // zero-lag equations taken and left out
+      std::vector<double> estimates;            // theirs, per parameter
+      std::optional<double> statistic, pvalue;  // T^2, and its p-value from F(dof)
+      std::pair<double, double> dof;
+      std::string unavailable;
+    };
+    std::optional<ZeroLagCheck> zero_lag_check;
   };
 
   std::shared_ptr<const Model> model;
@@ -250,8 +267,9 @@ std::string format_text(const IdentifyResult& result);
 // The JSON layout (docs/json.md, "identify").
 std::string format_json(const IdentifyResult& result);
 // What makes a result doubtful (docs/cli/identify.md, "Warnings"): a J test that rejects the model
-// (p < 0.01), a stationarity identity violated (|z| > 4), a state with a mean of more than 0.2
-// of its standard deviation when the model is symmetric and its inputs have none.
+// (p < 0.01), a zero-lag check that does, a stationarity identity violated (|z| > 4), a state with
+// a mean of more than 0.2 of its standard deviation when the model is symmetric and its inputs have
+// none.
 std::vector<std::string> doubts(const IdentifyResult& result);
 // The solver's status; when it is kOk, kDoubtful when there are doubts, else kUntested when no
 // J test was made.

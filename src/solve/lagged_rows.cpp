@@ -8,43 +8,10 @@
 #include <map>
 
 #include "momentid/estimate.hpp"
+#include "solve/rows.hpp"
 
 namespace momentid {
 namespace {
-
-// E[(y + e)^p] over white Gaussian e of variance v is the expectation of y^p plus lower powers;
-// the Hermite polynomial He_p(y; v) = sum_k (-1)^k p! / (k! (p - 2k)! 2^k) v^k y^(p - 2k) has
-// E[He_p(y + e; v)] = E[y^p]. Returns the terms (power, weight) of He_p.
-std::vector<std::pair<int, double>> hermite(int p, double v) {
-  std::vector<std::pair<int, double>> out;
-  double weight = 1;  // (-1)^k p! / (k! (p - 2k)! 2^k) v^k, by recurrence in k
-  for (int k = 0; 2 * k <= p; ++k) {
-    out.emplace_back(p - 2 * k, weight);
-    weight *= -v * (p - 2 * k) * (p - 2 * k - 1) / (2.0 * (k + 1));
-  }
-  return out;
-}
-
-// The monomial (over channels) with every noisy channel's power replaced by its Hermite
-// polynomial: the terms of the product, each a monomial with its weight. Channels are
-// independent, so the product of their polynomials is the polynomial of the product.
-std::vector<std::pair<Monomial, double>> corrected(const Monomial& m,
-                                                   const std::vector<double>& noise) {
-  std::vector<std::pair<Monomial, double>> terms{{Monomial(m.size(), 0), 1.0}};
-  for (std::size_t c = 0; c < m.size(); ++c) {
-    if (m[c] == 0) continue;
-    std::vector<std::pair<Monomial, double>> next;
-    for (const auto& [power, w] : hermite(m[c], c < noise.size() ? noise[c] : 0.0)) {
-      for (const auto& [term, weight] : terms) {
-        Monomial t = term;
-        t[c] = power;
-        next.emplace_back(t, weight * w);
-      }
-    }
-    terms = std::move(next);
-  }
-  return terms;
-}
 
 // Per channel read: the channels its values are computed from, for an abs or sign of them
 // (empty for a channel of the record).
@@ -111,10 +78,10 @@ LaggedRows lagged_rows(const LaggedSystem& system, double dt, const std::vector<
       const std::vector<double> w = stencil_weights(f.order, stencil);
       const int reach = stencil_reach(f.order, stencil);
       const double scale = weight.to_double() / std::pow(dt, f.order);
-      const auto instruments = corrected(remap(f.instrument), noise);
+      const auto instruments = noise_corrected(remap(f.instrument), noise);
       // The instrument, at an earlier time, carries noise independent of the function's.
       const Monomial read = remap(f.function);
-      const auto functions = corrected(read, correctable_noise(read, noise, from));
+      const auto functions = noise_corrected(read, correctable_noise(read, noise, from));
       for (int s = system.first_lag; s <= system.last_lag; ++s) {
         double ws = 0;
         for (int j = -reach; j <= reach; ++j) {

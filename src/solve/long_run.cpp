@@ -59,6 +59,16 @@ MatrixXd batch_covariance(const MatrixXd& batches) {
   return x.transpose() * x / (static_cast<double>(b) * static_cast<double>(b - 1));
 }
 
+MatrixXd grouped_covariance(const MatrixXd& batches, Index groups) {
+  const Index b = batches.rows();
+  MatrixXd means(groups, batches.cols());
+  for (Index k = 0; k < groups; ++k) {
+    const Index from = k * b / groups, to = (k + 1) * b / groups;
+    means.row(k) = batches.middleRows(from, to - from).colwise().mean();
+  }
+  return batch_covariance(means);
+}
+
 LongRunCovariance long_run_covariance(const MatrixXd& batches) {
   const Index b = batches.rows(), d = batches.cols();
   const auto bd = static_cast<double>(b);

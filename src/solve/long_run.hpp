@@ -53,4 +53,12 @@ LongRunCovariance long_run_covariance(const Eigen::MatrixXd& batches);
 // optimally weighted estimate, whose own errors come from long_run_covariance.
 Eigen::MatrixXd batch_covariance(const Eigen::MatrixXd& batches);
 
+// The covariance of the mean from `groups` groups of consecutive batches (as even in size as the
+// batches allow), as if the groups' means were independent: groups - 1 degrees of freedom, every
+// batch weighed alike. The spectral estimate tapers the series' ends, which is what lets it see
+// the nearly zero long-run variance of records without noise; a series whose variance one
+// extreme batch near an end holds (a high power of a state in a large excursion) then looks
+// far more certain than it is (observed: a third of the variance). Needs 2 <= groups <= batches.
+Eigen::MatrixXd grouped_covariance(const Eigen::MatrixXd& batches, Eigen::Index groups);
+
 }  // namespace momentid

@@ -5,6 +5,42 @@
 #include <string>
 
 namespace momentid {
+namespace {
+
+// E[(y + e)^p] over white Gaussian e of variance v is the expectation of y^p plus lower powers;
+// the Hermite polynomial He_p(y; v) = sum_k (-1)^k p! / (k! (p - 2k)! 2^k) v^k y^(p - 2k) has
+// E[He_p(y + e; v)] = E[y^p]. Returns the terms (power, weight) of He_p.
+std::vector<std::pair<int, double>> hermite(int p, double v) {
+  std::vector<std::pair<int, double>> out;
+  double weight = 1;  // (-1)^k p! / (k! (p - 2k)! 2^k) v^k, by recurrence in k
+  for (int k = 0; 2 * k <= p; ++k) {
+    out.emplace_back(p - 2 * k, weight);
+    weight *= -v * (p - 2 * k) * (p - 2 * k - 1) / (2.0 * (k + 1));
+  }
+  return out;
+}
+
+}  // namespace
+
+// The noise of different variables is independent, so that the product of their polynomials is
+// the polynomial of the product.
+std::vector<std::pair<Monomial, double>> noise_corrected(const Monomial& m,
+                                                         const std::vector<double>& noise) {
+  std::vector<std::pair<Monomial, double>> terms{{Monomial(m.size(), 0), 1.0}};
+  for (std::size_t c = 0; c < m.size(); ++c) {
+    if (m[c] == 0) continue;
+    std::vector<std::pair<Monomial, double>> next;
+    for (const auto& [power, w] : hermite(m[c], c < noise.size() ? noise[c] : 0.0)) {
+      for (const auto& [term, weight] : terms) {
+        Monomial t = term;
+        t[c] = power;
+        next.emplace_back(t, weight * w);
+      }
+    }
+    terms = std::move(next);
+  }
+  return terms;
+}
 
 std::vector<Monomial> moments_to_estimate(const MomentSystem& system) {
   std::vector<Monomial> out = system.moments;

@@ -5,11 +5,20 @@
 
 #include <map>
 #include <optional>
+#include <utility>
 #include <vector>
 
 #include "momentid/estimate.hpp"
 
 namespace momentid {
+
+// The terms (monomial, weight) of `m` with every power of a noisy variable replaced by its
+// Hermite polynomial in the variance noise[v] of white Gaussian noise on it (absent or 0: none),
+// y^3 by y^3 - 3 noise y^1: their expectation over the noise is that of the clean monomial. Every
+// term is listed whatever the variances, zero weights too, so that the list can be made before
+// the variances are known.
+std::vector<std::pair<Monomial, double>> noise_corrected(const Monomial& m,
+                                                         const std::vector<double>& noise);
 
 // Each moment's position in `moments`.
 std::map<Monomial, std::size_t> positions(const std::vector<Monomial>& moments);

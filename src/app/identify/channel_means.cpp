@@ -21,14 +21,7 @@ std::vector<Monomial> first_moments_of(std::size_t channels, std::size_t variabl
 std::vector<ChannelMean> channel_means(const std::vector<std::string>& names,
                                        const MomentEstimates& all,
                                        const std::vector<std::size_t>& index) {
-  MomentEstimates means;
-  means.intervals = all.intervals;
-  means.batch_intervals = all.batch_intervals;
-  for (std::size_t k : index) means.mean.push_back(all.mean[k]);
-  for (const std::vector<double>& batch : all.batch_means) {
-    std::vector<double>& row = means.batch_means.emplace_back();
-    for (std::size_t k : index) row.push_back(batch[k]);
-  }
+  const MomentEstimates means = moments_at(all, index);
   std::vector<ChannelMean> out;
   if (means.batch_means.size() < 2) return out;
   const LongRunCovariance errors = long_run_covariance(batch_deviations(means));

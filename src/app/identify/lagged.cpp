@@ -251,9 +251,11 @@ std::string fit_to_budget(const Model& model, LagOptions& lag_options,
 }
 
 // Derives the equations for the lags of `lag_options` and makes the pass over the data into
-// `result`.
+// `result`, reading the zero-lag check's moments as well when `check` plans one (into
+// `check_moments`; the check is dropped when the pass does not read a variable it needs).
 LaggedChannels read_lagged(IdentifyResult& result, const LagOptions& lag_options,
-                           const DataSource& source, const IdentifyOptions& options) {
+                           const DataSource& source, const IdentifyOptions& options,
+                           std::optional<ZeroLagCheckPlan>& check, MomentEstimates& check_moments) {
   result.lagged = IdentifyResult::Lagged{};
   result.lagged->system =
       std::make_shared<const LaggedSystem>(derive_lagged(*result.model, lag_options));
@@ -273,6 +275,28 @@ LaggedChannels read_lagged(IdentifyResult& result, const LagOptions& lag_options
     const auto found = std::find(moments.begin(), moments.end(), mean);
     mean_index.push_back(static_cast<std::size_t>(found - moments.begin()));
     if (found == moments.end()) moments.push_back(mean);
+  }
+  std::vector<std::size_t> check_index;
+  if (check && std::all_of(check->moments.begin(), check->moments.end(), [&](const Monomial& m) {
+        for (std::size_t v = 0; v < m.size(); ++v) {
+          if (m[v] != 0 && c.channel[v] < 0) return false;
+        }
+        return true;
+      })) {
+    std::map<Moment, std::size_t> at;
+    for (std::size_t k = 0; k < moments.size(); ++k) at.emplace(moments[k], k);
+    for (const Monomial& m : check->moments) {
+      Monomial read(result.lagged->channels.size() + c.computed.size(), 0);
+      for (std::size_t v = 0; v < m.size(); ++v) {
+        if (m[v] != 0) read[static_cast<std::size_t>(c.channel[v])] = m[v];
+      }
+      const Moment moment = m.rate() ? Moment::increment_of(read) : Moment::from_monomial(read);
+      const auto [it, added] = at.emplace(moment, moments.size());
+      if (added) moments.push_back(it->first);
+      check_index.push_back(it->second);
+    }
+  } else {
+    check.reset();
   }
   DataOptions data_options = pass_options(*result.model, options);
   data_options.derivatives = c.derivatives;
@@ -298,6 +322,7 @@ LaggedChannels read_lagged(IdentifyResult& result, const LagOptions& lag_options
   data_options.computed = c.computed;
   result.data = moments_from_data(source, c.states, c.inputs, moments, data_options);
   result.means = channel_means(result.lagged->channels, result.data.estimates, mean_index);
+  if (check) check_moments = moments_at(result.data.estimates, check_index);
   result.data.estimates = first_moments(result.data.estimates, probe.moments.size());
   if (!result.data.time_step) {
     throw DataError({source.name(), 1, 1, ""},
@@ -407,7 +432,9 @@ void identify_lagged(IdentifyResult& result, const DataSource& source,
     }
   }
   const std::string instruments_cut = fit_to_budget(model, lag_options, options);
-  LaggedChannels channels = read_lagged(result, lag_options, source, options);
+  std::optional<ZeroLagCheckPlan> check = plan_zero_lag_check(model, options, measured);
+  MomentEstimates check_moments;
+  LaggedChannels channels = read_lagged(result, lag_options, source, options, check, check_moments);
   // The default lags span about five correlation times of the measured states: when the
   // first pass shows them far from that (more than 1.5 times longer or 2 times shorter), a
   // second pass takes the lags the data call for, as far as the budget allows.
@@ -422,7 +449,7 @@ void identify_lagged(IdentifyResult& result, const DataSource& source,
         std::max(std::min(wanted, most), system.first_lag + LagOptions::kMinSpan - 1);
     if (2 * granted > 3 * last || 2 * granted < last) {
       lag_options.last_lag = granted;
-      channels = read_lagged(result, lag_options, source, options);
+      channels = read_lagged(result, lag_options, source, options, check, check_moments);
     }
     if (wanted > 3 * result.lagged->system->last_lag / 2) {
       window_cut = "lags " + std::to_string(result.lagged->system->first_lag) + ".." +
@@ -461,6 +488,9 @@ void identify_lagged(IdentifyResult& result, const DataSource& source,
                                 .fixed = fixed_values(model, options.fixed),
                                 .normalise_rows = true,
                                 .moment_variance = result.lagged->moment_variance});
+  if (check && result.estimate.j_pvalue) {
+    check_with_zero_lag(result, *check, check_moments, channels.channel, options);
+  }
   const std::vector<std::string> noisy = noisy_function_warnings(result, channels);
   result.estimate.warnings.insert(result.estimate.warnings.end(), noisy.begin(), noisy.end());
   if (const auto& integration = result.integration) {

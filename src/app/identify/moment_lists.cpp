@@ -33,6 +33,18 @@ std::vector<Monomial> with_products(const std::vector<Monomial>& g) {
   return out;
 }
 
+MomentEstimates moments_at(const MomentEstimates& all, const std::vector<std::size_t>& index) {
+  MomentEstimates out;
+  out.batch_intervals = all.batch_intervals;
+  out.intervals = all.intervals;
+  for (std::size_t k : index) out.mean.push_back(all.mean[k]);
+  for (const std::vector<double>& batch : all.batch_means) {
+    std::vector<double>& to = out.batch_means.emplace_back();
+    for (std::size_t k : index) to.push_back(batch[k]);
+  }
+  return out;
+}
+
 MomentEstimates first_moments(const MomentEstimates& all, std::size_t count) {
   MomentEstimates out = all;
   out.mean.resize(count);

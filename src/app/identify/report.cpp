@@ -159,6 +159,27 @@ void diagnostics_text(std::ostringstream& out, const IdentifyResult& r) {
         << " degrees of freedom, p = " << number(*e.j_pvalue, "%.3g")
         << (*e.j_pvalue < 0.01 ? " (the model does not fit the data)" : "") << "\n";
   }
+  if (const auto& check = r.lagged ? r.lagged->zero_lag_check : std::nullopt) {
+    out << "  zero-lag check: ";
+    if (check->pvalue) {
+      out << "T^2 = " << number(*check->statistic, "%.4g") << " on "
+          << number(check->dof.first, "%.0f") << " and " << number(check->dof.second, "%.0f")
+          << " degrees of freedom, p = " << number(*check->pvalue, "%.3g")
+          << (*check->pvalue < 0.01 ? " (the model does not fit the data)" : "") << "; the "
+          << check->equations << " zero-lag equations up to degree " << check->degree;
+      if (check->left_out > 0) {
+        out << " (" << check->left_out << " left out: they hold abs or sign of a noisy state)";
+      }
+      out << " give";
+      const auto& list = r.parameters();
+      for (std::size_t p = 0; p < list.size(); ++p) {
+        out << (p ? ", " : " ") << list[p].name << " " << number(check->estimates[p], "%.6g");
+      }
+    } else {
+      out << "none: " << check->unavailable;
+    }
+    out << "\n";
+  }
   refinements_text(out, r);
   if (!e.identities.empty()) {
     out << "  stationarity identities (sample violation, z-score):\n";
@@ -334,6 +355,20 @@ Json diagnostics_json(const IdentifyResult& r) {
               {"j_statistic", e.j_statistic ? json_value(*e.j_statistic) : Json()},
               {"j_dof", e.j_dof},
               {"j_pvalue", e.j_pvalue ? json_value(*e.j_pvalue) : Json()}};
+  if (const auto& check = r.lagged ? r.lagged->zero_lag_check : std::nullopt) {
+    Json estimates = Json::object();
+    if (!check->estimates.empty()) estimates = by_parameter(r, check->estimates);
+    out["zero_lag_check"] = {
+        {"degree", check->degree},
+        {"equations", check->equations},
+        {"left_out", check->left_out},
+        {"estimates", estimates},
+        {"statistic", check->statistic ? json_value(*check->statistic) : Json()},
+        {"dof", check->pvalue ? Json{json_value(check->dof.first), json_value(check->dof.second)}
+                              : Json()},
+        {"p_value", check->pvalue ? json_value(*check->pvalue) : Json()},
+        {"unavailable", check->unavailable}};
+  }
   refinements_json(out, r);
   Json& exact = out["taken_as_exact"] = Json::object();
   for (const auto& [name, value] : assumed(r)) exact[name] = json_value(value);

@@ -153,6 +153,9 @@ std::vector<std::vector<double>> rate_covariance(const std::vector<Monomial>& g,
 
 // ---- moment lists -----------------------------------------------------------------------------
 
+// The moments of `all` at `index`, in that order, overall and per batch.
+MomentEstimates moments_at(const MomentEstimates& all, const std::vector<std::size_t>& index);
+
 // The first `count` moments of `all`, overall and per batch.
 MomentEstimates first_moments(const MomentEstimates& all, std::size_t count);
 
@@ -190,6 +193,29 @@ void estimate_sampling_bias(IdentifyResult& result, const DataSource& source,
 // `measured`: per model variable, whether the data have its column.
 void identify_lagged(IdentifyResult& result, const DataSource& source,
                      const IdentifyOptions& options, const std::vector<bool>& measured);
+
+// ---- the zero-lag check (zero_lag_check.cpp) ---------------------------------------------------
+
+// The zero-lag check's highest degree and what the lagged pass reads for it.
+struct ZeroLagCheckPlan {
+  int degree = 0;
+  std::vector<Monomial> moments;  // over the model's variables, with their noise corrections'
+};
+
+// The plan of the zero-lag check (IdentifyResult::Lagged::ZeroLagCheck) when the defaults take
+// the lagged equations for a record that shows every state and input (`measured`, per model
+// variable) in its own column; nullopt otherwise.
+std::optional<ZeroLagCheckPlan> plan_zero_lag_check(const Model& model,
+                                                    const IdentifyOptions& options,
+                                                    const std::vector<bool>& measured);
+
+// The check into result.lagged->zero_lag_check, after the lagged estimate: `moments` are the
+// estimates of plan.moments from the same pass (its batches), `channel` the pass's channel per
+// model variable. At the highest degree up to plan.degree whose equations keep
+// kBatchesPerEquation batches each.
+void check_with_zero_lag(IdentifyResult& result, const ZeroLagCheckPlan& plan,
+                         const MomentEstimates& moments, const std::vector<int>& channel,
+                         const IdentifyOptions& options);
 
 // The equations of `system` (the result's own lagged system, or one derived with its
 // instruments at fewer lags) as rows over the moments of the result's pass
