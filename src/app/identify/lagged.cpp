@@ -322,6 +322,7 @@ LaggedChannels read_lagged(IdentifyResult& result, const LagOptions& lag_options
   data_options.computed = c.computed;
   result.data = moments_from_data(source, c.states, c.inputs, moments, data_options);
   result.means = channel_means(result.lagged->channels, result.data.estimates, mean_index);
+  add_end_errors(result.means, *result.model, result.data);
   if (check) check_moments = moments_at(result.data.estimates, check_index);
   result.data.estimates = first_moments(result.data.estimates, probe.moments.size());
   if (!result.data.time_step) {

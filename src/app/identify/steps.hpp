@@ -97,6 +97,13 @@ std::vector<ChannelMean> channel_means(const std::vector<std::string>& names,
                                        const MomentEstimates& all,
                                        const std::vector<std::size_t>& index);
 
+// Adds to the standard error of the mean of each state w that a kinematic equation makes another
+// state's derivative (v in y' = v) the error of the record's ends: its mean over a run is
+// (y(end) - y(start)) / (ratio T), whose batch series telescopes, so that the batches show
+// nearly none of it; the ends, far apart, are independent draws of y, 2 runs Var(y) /
+// (ratio T)^2 over the runs. Needs the sample interval; `data` holds the channels' statistics.
+void add_end_errors(std::vector<ChannelMean>& means, const Model& model, const DataMoments& data);
+
 // ---- the zero-lag equations ---------------------------------------------------------------------
 
 // The zero-lag moment equations of a model and what one pass over a record must read for them.

@@ -102,6 +102,7 @@ void identify_zero_lag(IdentifyResult& result, const DataSource& source,
                                  plan.pass_moments.begin()));
   }
   result.means = channel_means(model.channel_names(), all, mean_index);
+  add_end_errors(result.means, model, result.data);
 
   SolveOptions solve_options{.gmm = result.gmm, .fixed = fixed_values(model, options.fixed)};
   if (!plan.rated.empty()) {
