@@ -7,7 +7,8 @@
 // ends the process from inside the library (status 1), once after writing part of the file. The
 // plot must be written whole or not at all, its errors must be momentid's, and its panels must
 // carry their data ranges. Plots to adjust (the statistics, the engineering curves) are drawn
-// with matplotlib by the Python module (python/momentid/plots.py; docs/cli/validate.md, "Plot").
+// with matplotlib by the Python module as well (python/momentid/plots.py; docs/cli/validate.md,
+// "Plot").
 
 #include <algorithm>
 #include <cmath>
@@ -152,6 +153,22 @@ class Page {
           << "\" width=\"" << fixed(b - a) << "\" height=\"" << p.height
           << "\" fill=\"#000\" fill-opacity=\"0.08\"/>\n";
   }
+  // The area between `low` and `high` over `xs`.
+  void band(const Panel& p, const std::vector<double>& xs, const std::vector<double>& low,
+            const std::vector<double>& high, const std::string& cls) {
+    body_ << "<polygon class=\"" << cls << "\" fill=\"#1f77b4\" fill-opacity=\"0.3\" points=\"";
+    for (std::size_t k = 0; k < xs.size(); ++k) {
+      body_ << (k ? " " : "") << fixed(p.x(xs[k])) << "," << fixed(p.y(low[k]));
+    }
+    for (std::size_t k = xs.size(); k-- > 0;) {
+      body_ << " " << fixed(p.x(xs[k])) << "," << fixed(p.y(high[k]));
+    }
+    body_ << "\"/>\n";
+  }
+  void marker(const Panel& p, double x, double y, const std::string& cls, const std::string& fill) {
+    body_ << "<circle class=\"" << cls << "\" cx=\"" << fixed(p.x(x)) << "\" cy=\"" << fixed(p.y(y))
+          << "\" r=\"4\" fill=\"" << fill << "\"/>\n";
+  }
   void legend(const Panel& p, const std::vector<std::pair<std::string, std::string>>& entries) {
     double x = kLeft + kPlotWidth - 10;
     for (auto it = entries.rbegin(); it != entries.rend(); ++it) {
@@ -248,6 +265,68 @@ void draw_correlation(Page& page, const CorrelationCheck& c, const std::string& 
   }
 }
 
+// One statistic of the statistical validation (StatisticCheck) against its band: the runs'
+// smallest to largest shaded, their mean, the record's; a spectral density as its log10, and
+// a statistic at one or two points (a prediction error, its biases) as bars and marks.
+void draw_statistic(Page& page, const StatisticCheck& c) {
+  struct Kind {
+    const char* kind;
+    const char* xlabel;
+    const char* ylabel;
+  };
+  static constexpr Kind kKinds[] = {
+      {"psd", "frequency (Hz)", "log10 power spectral density"},
+      {"distribution", "probability", "quantile"},
+      {"crossings", "level", "up-crossing rate"},
+      {"prediction", "time ahead (s)", "rms prediction error"},
+      {"bias", "state predicted (index)", "slope of the prediction error"}};
+  const Kind* kind = std::find_if(std::begin(kKinds), std::end(kKinds),
+                                  [&](const Kind& k) { return c.kind == k.kind; });
+  if (kind == std::end(kKinds) || c.at.empty()) return;
+  const bool logarithmic = c.kind == "psd";
+  const auto scaled = [&](std::vector<double> v) {
+    if (!logarithmic) return v;
+    double floor = INFINITY;
+    for (const std::vector<double>* all : {&c.measured, &c.mean, &c.low, &c.high}) {
+      for (double x : *all) {
+        if (x > 0) floor = std::min(floor, x);
+      }
+    }
+    for (double& x : v) x = std::log10(std::max(x, floor));
+    return v;
+  };
+  const std::vector<double> measured = scaled(c.measured), mean = scaled(c.mean),
+                            low = scaled(c.low), high = scaled(c.high);
+  double y0 = INFINITY, y1 = -INFINITY, x0 = c.at.front(), x1 = c.at.back();
+  for (const std::vector<double>* v : {&measured, &mean, &low, &high}) range_of(*v, y0, y1);
+  const bool points = c.at.size() <= 2;
+  if (points) {
+    x0 -= 0.5;
+    x1 += 0.5;
+  }
+  // The verdict is the distance's (StatisticCheck): the record against the runs' mean, over the
+  // limit that the runs' own distances set, not whether each point lies in the shaded range.
+  char verdict[96];
+  std::snprintf(verdict, sizeof verdict, "distance %.3g, limit %.3g: %s", c.distance, c.limit,
+                c.inside() ? "inside" : "outside");
+  const Page::Panel p =
+      page.panel("statistic " + c.kind, c.output + " " + kind->ylabel + ": " + verdict,
+                 kind->xlabel, 150, x0, x1, y0, y1);
+  const std::string color = c.inside() ? "#333333" : "#d62728";
+  if (points) {
+    for (std::size_t k = 0; k < c.at.size(); ++k) {
+      page.line(p.x(c.at[k]), p.y(low[k]), p.x(c.at[k]), p.y(high[k]), "#9ecae1", 10, "band");
+      page.marker(p, c.at[k], mean[k], "mean", "#1f77b4");
+      page.marker(p, c.at[k], measured[k], "measured", color);
+    }
+  } else {
+    page.band(p, c.at, low, high, "band");
+    page.polyline(p, c.at, mean, "mean", "#1f77b4");
+    page.polyline(p, c.at, measured, "measured", color);
+  }
+  page.legend(p, {{"record", color}, {"runs: mean, smallest to largest", "#1f77b4"}});
+}
+
 }  // namespace
 
 void write_plot(const ValidateResult& result, const std::string& path,
@@ -317,6 +396,11 @@ void write_plot(const ValidateResult& result, const std::string& path,
     if (!fit.autocorrelation) continue;
     draw_correlation(page, *fit.autocorrelation, fit.name);
     for (const CorrelationCheck& c : fit.cross) draw_correlation(page, c, fit.name);
+  }
+  if (result.statistics.compared) {
+    page.heading("the response's statistics against " + std::to_string(result.statistics.runs) +
+                 " simulations");
+    for (const StatisticCheck& c : result.statistics.checks) draw_statistic(page, c);
   }
   write_whole_file(path, page.svg());
 }

@@ -20,6 +20,7 @@ import json
 import subprocess
 import sys
 import time
+import xml.etree.ElementTree as ET
 
 import numpy as np
 
@@ -99,12 +100,14 @@ def main():
         print("FAILED: centred, the true parameters must be inside again")
         failed = True
 
-    linear, seconds = validate(momentid, model, path, {**truth, cubic: 0.0})
+    plot = f"{workdir}/statistical_{case}_linear.svg"
+    linear, seconds = validate(momentid, model, path, {**truth, cubic: 0.0}, "--plot", plot)
     checks = summary(f"{cubic} = 0", linear, seconds)
     if linear["consistent"] or not any(not c["inside"] for c in checks) or \
             "fails" not in linear["verdict"]:
         print(f"FAILED: without {cubic} a statistic must be outside and the verdict must say so")
         failed = True
+    failed = check_statistics_plot(plot, checks) or failed
 
     off, seconds = validate(momentid, model, path,
                             {**truth, stiffness: truth[stiffness] * 1.1})
@@ -118,6 +121,47 @@ def main():
     if failed:
         sys.exit("FAILED")
     print("ok")
+
+
+def check_statistics_plot(plot, checks):
+    """The plot's statistics panels, one per check in its order and of its kind, the record's
+    values mapped back to the JSON's (a spectral density's as log10), drawn red where the check is
+    outside; True when something does not match."""
+    svg = "{http://www.w3.org/2000/svg}"
+    panels = [g for g in ET.parse(plot).getroot().iter(f"{svg}g")
+              if g.get("class", "").startswith("panel statistic")]
+    kinds = [g.get("class").split()[2] for g in panels]
+    print(f"plot: statistics panels {kinds}")
+    if kinds != [c["kind"] for c in checks]:
+        print("FAILED: one statistics panel per check, in order")
+        return True
+    failed = False
+    for panel, check in zip(panels, checks):
+        left, top = float(panel.get("data-left")), float(panel.get("data-top"))
+        width, height = float(panel.get("data-width")), float(panel.get("data-height"))
+        xmin, xmax = float(panel.get("data-xmin")), float(panel.get("data-xmax"))
+        ymin, ymax = float(panel.get("data-ymin")), float(panel.get("data-ymax"))
+        marks = [e for e in panel if e.get("class") == "measured"]
+        if len(check["at"]) <= 2:
+            points = [(float(m.get("cx")), float(m.get("cy"))) for m in marks]
+            color = marks[0].get("fill")
+        else:
+            points = [tuple(float(v) for v in p.split(","))
+                      for p in marks[0].get("points").split()]
+            color = marks[0].get("stroke")
+        measured = np.asarray(check["measured"], float)
+        if check["kind"] == "psd":
+            measured = np.log10(measured)
+        read = np.array([(xmin + (x - left) / width * (xmax - xmin),
+                          ymin + (top + height - y) / height * (ymax - ymin)) for x, y in points])
+        # Points are written to 0.01 px: about 1e-5 of the ranges.
+        off = (len(read) != len(measured) or
+               np.max(np.abs(read[:, 0] - np.asarray(check["at"]))) > 1e-4 * (xmax - xmin) or
+               np.max(np.abs(read[:, 1] - measured)) > 1e-4 * (ymax - ymin))
+        if off or (color == "#d62728") == check["inside"]:
+            print(f"FAILED: the {check['output']} {check['kind']} panel does not show the check")
+            failed = True
+    return failed
 
 
 if __name__ == "__main__":
