@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <numbers>
 
 #include "common/decimal.hpp"
@@ -20,6 +21,8 @@
 
 namespace {
 
+using momentid::testing::Directory;
+using momentid::testing::error_from;
 using momentid::testing::model_file;
 
 using momentid::Estimate;
@@ -640,6 +643,45 @@ TEST_SUITE("identify") {
     const double y = curves.displacement.back();
     CHECK(curves.force.back() == doctest::Approx(k * y + eps * y * y * y).epsilon(1e-6));
     CHECK(curves.force_se.back() > curves.force_se[20]);
+
+    // identify --plot: the two curves as SVG panels, every point drawn.
+    const Directory directory("momentid_engineering_plot");
+    const std::string plot = directory / "engineering.svg";
+    momentid::write_engineering_plot(r, plot);
+    std::ifstream in(plot);
+    const std::string svg((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const auto count = [&](const std::string& what) {
+      std::size_t n = 0;
+      for (std::size_t at = svg.find(what); at != std::string::npos; at = svg.find(what, at + 1)) {
+        ++n;
+      }
+      return n;
+    };
+    CHECK(count("<g class=\"panel restoring-force\"") == 1);
+    CHECK(count("<g class=\"panel backbone\"") == 1);
+    CHECK(count("<polygon class=\"band\"") == 2);
+    const std::size_t backbone = svg.find("<g class=\"panel backbone\"");
+    const auto points = [&](std::size_t from) {
+      const std::size_t at = svg.find("class=\"estimate\"", from);
+      const std::size_t begin = svg.find("points=\"", at) + 8;
+      const std::string list = svg.substr(begin, svg.find('"', begin) - begin);
+      return 1 + static_cast<std::size_t>(std::count(list.begin(), list.end(), ' '));
+    };
+    CHECK(points(0) == 41);
+    CHECK(points(backbone) == 20);
+  }
+
+  TEST_CASE("identify --plot refuses a model without a restoring force, saying why") {
+    const Model model = model_file("cubic_first_order.mom");
+    const momentid::IdentifyResult r =
+        identify_held(model, "ma:K=10,w=0.1,sigma=1", 20000, 0.01, 1, {});
+    const Directory directory("momentid_engineering_plot");
+    const auto e = error_from<momentid::UsageError>(
+        [&] { momentid::write_engineering_plot(r, directory / "none.svg"); });
+    CHECK(e.option() == "plot");
+    CHECK(std::string(e.what()).find("no restoring force or backbone to draw: ") !=
+          std::string::npos);
+    CHECK_FALSE(std::filesystem::exists(directory / "none.svg"));
   }
 
   TEST_CASE("a sign(v) term that switches at the equilibrium has no linearisation") {

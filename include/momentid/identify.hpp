@@ -260,6 +260,10 @@ struct NonlinearCurves {
   std::string unavailable;
 };
 NonlinearCurves nonlinear_curves(const IdentifyResult& result);
+// Draws the restoring force and the backbone of nonlinear_curves with their 95% bands as SVG
+// (docs/cli/identify.md, "The identified model"), written whole or not at all. Throws
+// UsageError naming `plot` when the model has no such curves, with the reason.
+void write_engineering_plot(const IdentifyResult& result, const std::string& path);
 
 // A table (parameter, estimate, standard error, 95% interval), the identified model, then the
 // diagnostics.

@@ -1,4 +1,5 @@
-// `validate --plot`: the comparison drawn as SVG, with no plotting library. Every panel is a
+// `validate --plot` and `identify --plot`: the comparison and the engineering curves drawn as
+// SVG, with no plotting library. Every panel is a
 // <g class="panel"> whose data-* attributes give its data ranges and its place on the page, so
 // that a reader (and the tests) can map the drawn points back to values.
 //
@@ -18,6 +19,7 @@
 #include "app/validate/fit.hpp"
 #include "common/json.hpp"
 #include "momentid/error.hpp"
+#include "momentid/identify.hpp"
 #include "momentid/validate.hpp"
 #include "momentid/writer.hpp"
 
@@ -327,7 +329,45 @@ void draw_statistic(Page& page, const StatisticCheck& c) {
   page.legend(p, {{"record", color}, {"runs: mean, smallest to largest", "#1f77b4"}});
 }
 
+// A curve with its 95% band (1.96 standard errors) over the points where both are finite.
+void draw_curve(Page& page, const std::string& cls, const std::string& title,
+                const std::string& xlabel, const std::vector<double>& at,
+                const std::vector<double>& value, const std::vector<double>& error) {
+  std::vector<double> xs, ys, low, high;
+  for (std::size_t k = 0; k < at.size(); ++k) {
+    if (!std::isfinite(value[k]) || !std::isfinite(error[k])) continue;
+    xs.push_back(at[k]);
+    ys.push_back(value[k]);
+    low.push_back(value[k] - 1.96 * error[k]);
+    high.push_back(value[k] + 1.96 * error[k]);
+  }
+  if (xs.empty()) return;
+  double y0 = INFINITY, y1 = -INFINITY;
+  range_of(low, y0, y1);
+  range_of(high, y0, y1);
+  const Page::Panel p = page.panel(cls, title, xlabel, 220, xs.front(), xs.back(), y0, y1);
+  page.band(p, xs, low, high, "band");
+  page.polyline(p, xs, ys, "estimate", "#333333");
+  page.legend(p, {{"estimate", "#333333"}, {"95% band", "#1f77b4"}});
+}
+
 }  // namespace
+
+void write_engineering_plot(const IdentifyResult& result, const std::string& path) {
+  const NonlinearCurves curves = nonlinear_curves(result);
+  if (curves.displacement.empty()) {
+    throw UsageError("plot", "no restoring force or backbone to draw: " + curves.unavailable);
+  }
+  Page page;
+  page.heading("identify " + result.model->name() + " on " + result.data_name);
+  draw_curve(page, "restoring-force",
+             "restoring force R(" + curves.state + ") = m times minus the acceleration at rest",
+             curves.state, curves.displacement, curves.force, curves.force_se);
+  draw_curve(page, "backbone", "backbone: frequency of free undamped oscillation (Hz)",
+             "amplitude of " + curves.state, curves.amplitude, curves.frequency_hz,
+             curves.frequency_se);
+  write_whole_file(path, page.svg());
+}
 
 void write_plot(const ValidateResult& result, const std::string& path,
                 std::optional<std::pair<double, double>> window) {

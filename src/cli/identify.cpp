@@ -20,6 +20,7 @@ struct IdentifyCommand {
   std::string weighting = to_string(Weighting::kAuto);
   std::string method = to_string(Method::kAuto);
   std::string extrapolate;
+  std::string plot;
 };
 
 int run_identify(IdentifyCommand& command) {
@@ -37,6 +38,7 @@ int run_identify(IdentifyCommand& command) {
   options.record.control.progress = progress.callback();
   const IdentifyResult result = identify(inputs.model, inputs.source, options);
   progress.finish();
+  if (!command.plot.empty()) write_engineering_plot(result, command.plot);
   write_whole_file("-", a.format == "json" ? format_json(result) : format_text(result));
   if (result.estimate.status == Status::kNothingIdentifiable) {
     std::cerr << "momentid: nothing identifiable: " << result.estimate.message << "\n";
@@ -71,6 +73,9 @@ Command add_identify(CLI::App& app) {
                   "dt: estimate the bias of sampling from every other sample, and remove it when "
                   "it exceeds its error (zero-lag equations, inputs sampled, not held)")
       ->check(CLI::IsMember({"dt"}));
+  sub->add_option("--plot", command->plot,
+                  "draw the restoring force and the backbone with their 95% bands into this SVG "
+                  "file (an oscillator with one nonlinear stiffness)");
   return {sub, [command] { return run_identify(*command); }};
 }
 
