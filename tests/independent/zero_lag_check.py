@@ -15,7 +15,12 @@ scipy run, not momentid: 10^5 samples at 1024 Hz, 3% white noise on y and v, no 
          record is (y(end) - y(start)) / T (it did on 4 of 40 before the ends' error was counted);
          the first record with v offset by 2% of its standard deviation does.
 
-Usage: zero_lag_check.py CASE MOMENTID WORKDIR
+  study  not a test: the check's p-values over DRAG seeds of the drag record with the
+         cubic-damping model (force clean and with 3% noise) and over TRUE seeds of the Duffing
+         record with the true model: the figures of docs/measured-data.md, "The zero-lag check"
+         (8 and 60).
+
+Usage: zero_lag_check.py CASE MOMENTID WORKDIR [DRAG TRUE]
 """
 import os
 import sys
@@ -135,9 +140,41 @@ def size(momentid, workdir):
     return failed
 
 
+def study(momentid, workdir, seeds, true_seeds):
+    cubic_model = write_model(workdir, "cubic", "c, c3, k", CUBIC_MODEL)
+    duffing = os.path.join(workdir, "duffing.mom")
+    with open(duffing, "w") as f:
+        f.write("state y, v\ninput x\nparam c, k, eps\ny' = v\nv' = -c*v - k*y - eps*y^3 + x\n")
+
+    def drag_record(seed):
+        rng = np.random.default_rng(seed)
+        record = nonsmooth_records.record("drag", rng, SAMPLES)
+        return [check_of(lab_records.identify(momentid, cubic_model,
+                                              measured(workdir, f"drag{seed}_{noise}", record,
+                                                       rng, force_noise=noise)))[1]["p_value"]
+                for noise in (0.0, NOISE)]
+
+    def duffing_record(seed):
+        rng = np.random.default_rng(20271600 + seed)
+        path = measured(workdir, f"duffing_study{seed}", lab_records.sdof(rng, 1024, SAMPLES), rng,
+                        force_noise=0.01)
+        return check_of(lab_records.identify(momentid, duffing, path))[1]["p_value"]
+
+    with ThreadPoolExecutor(2) as pool:
+        rejected = np.array([p for pair in pool.map(drag_record, range(1, seeds + 1))
+                             for p in pair])
+        true = np.array(list(pool.map(duffing_record, range(true_seeds))))
+    for name, p in (("drag, cubic-damping model", rejected), ("Duffing, true model", true)):
+        print(f"{name}: {len(p)} records, p < 0.01: {np.sum(p < 0.01)}, p < 0.05: "
+              f"{np.sum(p < 0.05)}, mean p {p.mean():.3f}")
+
+
 def main():
     case, momentid, workdir = sys.argv[1], sys.argv[2], os.path.join(sys.argv[3], "zero_lag_check")
     os.makedirs(workdir, exist_ok=True)
+    if case == "study":
+        study(momentid, workdir, *(int(n) for n in sys.argv[4:6]))
+        return 0
     failed = {"drag": drag, "cubic": cubic, "size": size}[case](momentid, workdir)
     for f in failed:
         print("FAILED:", f)

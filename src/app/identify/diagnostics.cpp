@@ -88,8 +88,8 @@ std::vector<std::string> doubts(const IdentifyResult& r) {
       check && check->pvalue && *check->pvalue < kJRejection) {
     out.push_back("the zero-lag check rejects the model (p = " + number(*check->pvalue, "%.2g") +
                   "): the zero-lag equations up to degree " + std::to_string(check->degree) +
-                  ", which weigh the tails of the states' distribution, give other estimates "
-                  "than the lagged ones, more different than their errors allow. A term may be "
+                  ", which weigh the tails of the states' distribution, give estimates that "
+                  "differ from the lagged ones by more than their errors allow. A term may be "
                   "missing or have the wrong form (a law of damping or stiffness), or an offset "
                   "not modelled: compare candidate models with 'momentid select'");
   }

@@ -207,6 +207,7 @@ void identify_lagged(IdentifyResult& result, const DataSource& source,
 struct ZeroLagCheckPlan {
   int degree = 0;
   std::vector<Monomial> moments;  // over the model's variables, with their noise corrections'
+  std::string unavailable;        // why no degree fits the check, when none does
 };
 
 // The plan of the zero-lag check (IdentifyResult::Lagged::ZeroLagCheck) when the defaults take

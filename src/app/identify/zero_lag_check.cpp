@@ -160,10 +160,18 @@ std::optional<ZeroLagCheckPlan> plan_zero_lag_check(const Model& model,
   }
   ZeroLagCheckPlan plan;
   for (int degree = 1; degree <= kCheckDegree; ++degree) {
-    if (check_system(model, degree).equations.size() > kCheckEquations) break;
+    const std::size_t equations = check_system(model, degree).equations.size();
+    if (equations > kCheckEquations) {
+      if (degree == 1) {
+        plan.unavailable = "the zero-lag equations of degree 1 number " +
+                           std::to_string(equations) + ", more than the check's " +
+                           std::to_string(kCheckEquations);
+      }
+      break;
+    }
     plan.degree = degree;
   }
-  if (plan.degree == 0) return std::nullopt;
+  if (plan.degree == 0) return plan;
   // The moments of the highest degree's equations, with the lower powers that their noise
   // correction reads (listed with every state noisy); those of a lower degree are among them.
   std::vector<double> noisy(model.variables().size(), 0.0);
@@ -188,6 +196,10 @@ void check_with_zero_lag(IdentifyResult& result, const ZeroLagCheckPlan& plan,
                          const IdentifyOptions& options) {
   const Model& model = *result.model;
   IdentifyResult::Lagged::ZeroLagCheck& check = result.lagged->zero_lag_check.emplace();
+  if (!plan.unavailable.empty()) {
+    check.unavailable = plan.unavailable;
+    return;
+  }
   if (result.data.hold == InputHold::kZeroOrderHold) {
     check.unavailable =
         "the input is held over each sample, whose kinks the zero-lag equations would need "
