@@ -56,7 +56,7 @@ std::optional<Model> with_measured(const Model& model, const std::string& name,
                                    const std::string& key, const std::string& item) {
   const std::string statement = "measured " + name + " = " + key;
   const std::string text = model.text() + "\n" + statement + "\n";
-  const std::size_t line = static_cast<std::size_t>(std::count(text.begin(), text.end(), '\n'));
+  const auto line = static_cast<int>(std::count(text.begin(), text.end(), '\n'));
   try {
     return parse_model(text, model.file());
   } catch (const ParseError& e) {

@@ -513,8 +513,8 @@ LaggedEquation lagged_equation(const Model& model, const LagDeriver& deriver, st
   for (const Term& t : eq.terms) {
     try {
       terms.push_back(deriver.lag_function(eq, t, instrument, columns));
-    } catch (const ModelError& e) {
-      cannot.push_back(e);
+    } catch (const ModelError& error) {
+      cannot.push_back(error);
     }
   }
   if (cannot.size() == 1) throw cannot.front();
@@ -522,7 +522,7 @@ LaggedEquation lagged_equation(const Model& model, const LagDeriver& deriver, st
     std::string message = std::to_string(cannot.size()) + " terms of equation " + eq.name() +
                           " cannot be read from the data's channels (leave them out, or record " +
                           "the channels they need):";
-    for (const ModelError& e : cannot) message += "\n  " + e.message();
+    for (const ModelError& error : cannot) message += "\n  " + error.message();
     throw ModelError(eq.where, message);
   }
   // A state read as the integral of a column (y'' = a) enters at a negative order: its

@@ -195,7 +195,10 @@ void check_with_zero_lag(IdentifyResult& result, const ZeroLagCheckPlan& plan,
                          const MomentEstimates& moments, const std::vector<int>& channel,
                          const IdentifyOptions& options) {
   const Model& model = *result.model;
-  IdentifyResult::Lagged::ZeroLagCheck& check = result.lagged->zero_lag_check.emplace();
+  // Assigned, not emplaced: clang cannot yet construct a nested class with default member
+  // initializers in place.
+  result.lagged->zero_lag_check = IdentifyResult::Lagged::ZeroLagCheck{};
+  IdentifyResult::Lagged::ZeroLagCheck& check = *result.lagged->zero_lag_check;
   if (!plan.unavailable.empty()) {
     check.unavailable = plan.unavailable;
     return;
