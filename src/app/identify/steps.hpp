@@ -212,7 +212,8 @@ struct ZeroLagCheckPlan {
 
 // The plan of the zero-lag check (IdentifyResult::Lagged::ZeroLagCheck) when the defaults take
 // the lagged equations for a record that shows every state and input (`measured`, per model
-// variable) in its own column; nullopt otherwise.
+// variable) in its own column (with `unavailable` set when even degree 1 exceeds the check's
+// budget of equations); nullopt otherwise.
 std::optional<ZeroLagCheckPlan> plan_zero_lag_check(const Model& model,
                                                     const IdentifyOptions& options,
                                                     const std::vector<bool>& measured);
