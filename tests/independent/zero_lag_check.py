@@ -5,7 +5,8 @@ scipy run, not momentid: 10^5 samples at 1024 Hz, 3% white noise on y and v, no 
   drag   an oscillator with quadratic drag c2 |v| v (nonsmooth_records.py), identified with a
          cubic-damping model c3 v^3: the lagged J test accepts it, the check must reject it
          (p < 0.01, status doubtful, the warning); the true drag model: no check (its zero-lag
-         equations hold abs(v) of the noisy v), status ok.
+         equations hold abs(v) of the noisy v), status ok; select with the library {y, y^3, v,
+         v^3, x}, which lacks the drag: the selection warns that the check rejects its choice.
   cubic  the generator's cubic-damping oscillator with the cubic-damping model: the check made
          and not rejecting, status ok, every parameter within 3 standard errors.
   size   the Duffing oscillator of lab_records.SDOF, 12 seeds, with 1% noise on the force too: under
@@ -22,7 +23,9 @@ scipy run, not momentid: 10^5 samples at 1024 Hz, 3% white noise on y and v, no 
 
 Usage: zero_lag_check.py CASE MOMENTID WORKDIR [DRAG TRUE]
 """
+import json
 import os
+import subprocess
 import sys
 from concurrent.futures import ThreadPoolExecutor
 
@@ -84,6 +87,15 @@ def drag(momentid, workdir):
     if not check or check["p_value"] is not None or "abs or sign of a noisy state" not in \
             check["unavailable"]:
         failed.append("the drag model's check is not left out for abs(v) of the noisy v")
+    library = os.path.join(workdir, "library.mom")
+    with open(library, "w") as f:
+        f.write("state y, v\ninput x\ny' = v\nv' = 0\nlibrary v': y, y^3, v, v^3, x\n")
+    result = subprocess.run([momentid, "select", library, path, "--format", "json"],
+                            capture_output=True, text=True)
+    warnings = json.loads(result.stdout)["selection"]["warnings"] if result.returncode == 0 else []
+    print(f"select: exit {result.returncode}, warnings {warnings}")
+    if not any(w.startswith("the zero-lag check rejects the chosen model") for w in warnings):
+        failed.append("select does not warn that the check rejects its choice")
     return failed
 
 

@@ -333,6 +333,16 @@ SelectResult select_terms(const Model& model, const DataSource& source,
                             "measured channel puts a constant into its equation: the library "
                             "term 1)");
   }
+  if (const auto& check = out.chosen.lagged ? out.chosen.lagged->zero_lag_check : std::nullopt;
+      check && check->pvalue && *check->pvalue < kRejected) {
+    out.warnings.insert(
+        out.warnings.begin(),
+        "the zero-lag check rejects the chosen model (p = " + number(*check->pvalue, "%.2g") +
+            "): the library may lack the right law of a term, one the lagged "
+            "equations cannot tell from the terms it has (abs(v)*v for a drag "
+            "that v^3 stands in for; docs/measured-data.md, \"The zero-lag "
+            "check\")");
+  }
   for (std::size_t p = 0; p < model.parameters().size(); ++p) {
     if (out.ranking.front().kept[p] && model.parameters()[p].candidate && constant(model, p)) {
       out.warnings.push_back(
