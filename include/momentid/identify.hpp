@@ -171,6 +171,8 @@ struct IdentifyResult {
       std::optional<double> statistic, pvalue;  // T^2, and its p-value from F(dof)
       std::pair<double, double> dof;
       std::string unavailable;
+      // Rejected at 1%, which makes the result doubtful.
+      bool rejects() const { return pvalue && *pvalue < 0.01; }
     };
     std::optional<ZeroLagCheck> zero_lag_check;
   };
@@ -212,6 +214,10 @@ struct IdentifyResult {
   // The main result: the optimally weighted estimate when it was asked for and could be
   // computed, otherwise least squares.
   const std::vector<ParameterEstimate>& parameters() const;
+  // The zero-lag check, when one was planned (Lagged::zero_lag_check); null otherwise.
+  const Lagged::ZeroLagCheck* zero_lag_check() const {
+    return lagged && lagged->zero_lag_check ? &*lagged->zero_lag_check : nullptr;
+  }
 };
 
 // Derives the moment equations of `model`, estimates the moments they need from `source` in one

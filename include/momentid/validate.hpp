@@ -251,7 +251,8 @@ std::string format_json(const ValidateResult& result);
 // Draws the comparison as SVG (docs/cli/validate.md, "Plot"): per output, the measured and
 // simulated series over the window [from, to] (times; nullopt: the first 2000 compared rows of the
 // first run) and their difference below; then the correlation checks with their bands, and the
-// statistics (when compared) against the runs' range. Written whole or not at all. Throws UsageError for a window that holds no compared row.
+// statistics (when compared) against the runs' range. Written whole or not at all. Throws
+// UsageError for a window that holds no compared row.
 void write_plot(const ValidateResult& result, const std::string& path,
                 std::optional<std::pair<double, double>> window = std::nullopt);
 

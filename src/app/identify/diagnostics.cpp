@@ -84,8 +84,7 @@ std::vector<std::string> doubts(const IdentifyResult& r) {
                   "before using them" +
                   seen);
   }
-  if (const auto& check = r.lagged ? r.lagged->zero_lag_check : std::nullopt;
-      check && check->pvalue && *check->pvalue < kJRejection) {
+  if (const auto* check = r.zero_lag_check(); check && check->rejects()) {
     out.push_back("the zero-lag check rejects the model (p = " + number(*check->pvalue, "%.2g") +
                   "): the zero-lag equations up to degree " + std::to_string(check->degree) +
                   ", which weigh the tails of the states' distribution, give estimates that "

@@ -159,13 +159,13 @@ void diagnostics_text(std::ostringstream& out, const IdentifyResult& r) {
         << " degrees of freedom, p = " << number(*e.j_pvalue, "%.3g")
         << (*e.j_pvalue < 0.01 ? " (the model does not fit the data)" : "") << "\n";
   }
-  if (const auto& check = r.lagged ? r.lagged->zero_lag_check : std::nullopt) {
+  if (const auto* check = r.zero_lag_check()) {
     out << "  zero-lag check: ";
     if (check->pvalue) {
       out << "T^2 = " << number(*check->statistic, "%.4g") << " on "
           << number(check->dof.first, "%.0f") << " and " << number(check->dof.second, "%.0f")
           << " degrees of freedom, p = " << number(*check->pvalue, "%.3g")
-          << (*check->pvalue < 0.01 ? " (the model does not fit the data)" : "") << "; the "
+          << (check->rejects() ? " (the model does not fit the data)" : "") << "; the "
           << check->equations << " zero-lag equations up to degree " << check->degree;
       if (check->left_out > 0) {
         out << " (" << check->left_out << " left out: they hold abs or sign of a noisy state)";
@@ -355,7 +355,7 @@ Json diagnostics_json(const IdentifyResult& r) {
               {"j_statistic", e.j_statistic ? json_value(*e.j_statistic) : Json()},
               {"j_dof", e.j_dof},
               {"j_pvalue", e.j_pvalue ? json_value(*e.j_pvalue) : Json()}};
-  if (const auto& check = r.lagged ? r.lagged->zero_lag_check : std::nullopt) {
+  if (const auto* check = r.zero_lag_check()) {
     Json estimates = Json::object();
     if (!check->estimates.empty()) estimates = by_parameter(r, check->estimates);
     out["zero_lag_check"] = {

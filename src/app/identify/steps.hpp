@@ -206,8 +206,9 @@ void identify_lagged(IdentifyResult& result, const DataSource& source,
 // The zero-lag check's highest degree and what the lagged pass reads for it.
 struct ZeroLagCheckPlan {
   int degree = 0;
-  std::vector<Monomial> moments;  // over the model's variables, with their noise corrections'
-  std::string unavailable;        // why no degree fits the check, when none does
+  std::optional<MomentSystem> system;  // the zero-lag equations at `degree`
+  std::vector<Monomial> moments;       // over the model's variables, with their noise corrections'
+  std::string unavailable;             // why no degree fits the check, when none does
 };
 
 // The plan of the zero-lag check (IdentifyResult::Lagged::ZeroLagCheck) when the defaults take

@@ -160,7 +160,8 @@ std::optional<ZeroLagCheckPlan> plan_zero_lag_check(const Model& model,
   }
   ZeroLagCheckPlan plan;
   for (int degree = 1; degree <= kCheckDegree; ++degree) {
-    const std::size_t equations = check_system(model, degree).equations.size();
+    MomentSystem system = check_system(model, degree);
+    const std::size_t equations = system.equations.size();
     if (equations > kCheckEquations) {
       if (degree == 1) {
         plan.unavailable = "the zero-lag equations of degree 1 number " +
@@ -170,6 +171,7 @@ std::optional<ZeroLagCheckPlan> plan_zero_lag_check(const Model& model,
       break;
     }
     plan.degree = degree;
+    plan.system = std::move(system);
   }
   if (plan.degree == 0) return plan;
   // The moments of the highest degree's equations, with the lower powers that their noise
@@ -179,7 +181,7 @@ std::optional<ZeroLagCheckPlan> plan_zero_lag_check(const Model& model,
     if (model.variables()[v].kind == VariableKind::kState) noisy[v] = 1;
   }
   std::set<Monomial> seen;
-  for (const Monomial& m : moments_to_estimate(check_system(model, plan.degree))) {
+  for (const Monomial& m : moments_to_estimate(*plan.system)) {
     if (m.rate()) {
       if (seen.insert(m).second) plan.moments.push_back(m);
       continue;
@@ -220,11 +222,12 @@ void check_with_zero_lag(IdentifyResult& result, const ZeroLagCheckPlan& plan,
   // The highest degree whose equations have their kBatchesPerEquation batches each.
   const std::size_t batches = moments.batch_means.size();
   int degree = plan.degree;
-  MomentSystem system = check_system(model, degree);
-  while (degree > 1 && kBatchesPerEquation * system.equations.size() > batches) {
-    system = check_system(model, --degree);
+  const MomentSystem* system = &*plan.system;
+  std::optional<MomentSystem> lower;
+  while (degree > 1 && kBatchesPerEquation * system->equations.size() > batches) {
+    system = &lower.emplace(check_system(model, --degree));
   }
-  if (kBatchesPerEquation * system.equations.size() > batches) {
+  if (kBatchesPerEquation * system->equations.size() > batches) {
     check.unavailable = "the record's " + std::to_string(batches) +
                         " batches are too few for the zero-lag equations (" +
                         std::to_string(kBatchesPerEquation) + " per equation)";
@@ -234,7 +237,7 @@ void check_with_zero_lag(IdentifyResult& result, const ZeroLagCheckPlan& plan,
   for (std::size_t k = 0; k < plan.moments.size(); ++k) index.emplace(plan.moments[k], k);
   MomentEstimates estimates = moments;
   increments_to_rates(plan.moments, result.data.time_step, estimates);
-  const MomentRows rows = corrected_rows(model, system, index, noise, check.left_out);
+  const MomentRows rows = corrected_rows(model, *system, index, noise, check.left_out);
   check.degree = degree;
   check.equations = rows.a.size();
   if (rows.a.empty()) {

@@ -333,8 +333,7 @@ SelectResult select_terms(const Model& model, const DataSource& source,
                             "measured channel puts a constant into its equation: the library "
                             "term 1)");
   }
-  if (const auto& check = out.chosen.lagged ? out.chosen.lagged->zero_lag_check : std::nullopt;
-      check && check->pvalue && *check->pvalue < kRejected) {
+  if (const auto* check = out.chosen.zero_lag_check(); check && check->rejects()) {
     out.warnings.insert(
         out.warnings.begin(),
         "the zero-lag check rejects the chosen model (p = " + number(*check->pvalue, "%.2g") +
