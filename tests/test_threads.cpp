@@ -1,6 +1,7 @@
 // Calls from several threads at once (momentid/algebra_lock.hpp): each thread parses its own
-// model and identifies, checks and validates records that all threads share; every result must
-// equal the one a single thread gets.
+// models and identifies, checks, validates and selects terms on records that all threads share;
+// every result must equal the one a single thread gets. An executable of its own, so that CI
+// builds it alone under ThreadSanitizer.
 
 #include <doctest/doctest.h>
 
@@ -59,9 +60,12 @@ struct Records {
 };
 
 // What one thread computes, as text: zero-lag identify on the held record, lagged identify on
-// the noisy one, check and validate. Two passes read on two threads of their own.
+// the noisy one, check, validate, and term selection from the polynomial library. Two passes
+// read on two threads of their own.
 std::vector<std::string> results(const Records& records) {
   const Model model = momentid::testing::model_file("duffing.mom");
+  const Model library =
+      momentid::parse_model_file(std::string(MOMENTID_SOURCE_DIR) + "/examples/select/library.mom");
   momentid::IdentifyOptions zero_lag{.degree = 3};
   zero_lag.method = momentid::Method::kZeroLag;
   zero_lag.record.control.threads = 2;
@@ -73,6 +77,7 @@ std::vector<std::string> results(const Records& records) {
       momentid::format_json(momentid::identify(model, records.displacement(), lagged)),
       momentid::format_text(momentid::check(records.held(false), &model, check)),
       momentid::format_json(momentid::validate(model, records.held(true), {})),
+      momentid::format_json(momentid::select_terms(library, records.held(false))),
   };
 }
 
@@ -104,7 +109,8 @@ void compare_threads(const Records& records, const std::vector<std::string>& ser
 }  // namespace
 
 TEST_SUITE("threads") {
-  TEST_CASE("identify, check and validate on several threads give the serial results exactly") {
+  TEST_CASE(
+      "identify, check, validate and select on several threads give the serial results exactly") {
     const Records records;
     const std::vector<std::string> serial = results(records);
     compare_threads(records, serial, 2, 3);

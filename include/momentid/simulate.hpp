@@ -31,7 +31,8 @@ class CompiledModel {
  public:
   // `parameters` holds one value per model parameter, in declaration order. Throws ModelError
   // when the model has not one equation per state, or when the equations cannot be solved for the
-  // derivatives with these values.
+  // derivatives with these values. Takes the AlgebraLock; the compiled model holds no GiNaC
+  // object (the caller's `parameters` are its own to guard).
   CompiledModel(const Model& model, const std::vector<GiNaC::numeric>& parameters);
 
   int states() const { return states_; }
@@ -382,7 +383,7 @@ class RecordSimulator {
 
  private:
   const Model& model_;
-  std::vector<GiNaC::numeric> parameters_;
+  std::string parameter_text_;  // the values, for messages (no GiNaC object kept)
   CompiledModel f_;
   std::vector<Interpolation> methods_;
   double dt_;

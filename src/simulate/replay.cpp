@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "common/decimal.hpp"
+#include "momentid/algebra_lock.hpp"
 #include "momentid/error.hpp"
 #include "momentid/simulate.hpp"
 #include "simulate/switching.hpp"
@@ -73,9 +74,16 @@ double Interpolator::operator()(const std::vector<double>& u, std::size_t n, std
 
 RecordSimulator::RecordSimulator(const Model& model, const ParameterValues& parameters,
                                  std::vector<Interpolation> methods, double dt, int substeps)
+    // Each GiNaC value made here is made and destroyed under the lock.
     : model_(model),
-      parameters_(parameter_vector(model, parameters)),
-      f_(model, parameters_),
+      parameter_text_([&] {
+        const AlgebraLock lock;
+        return parameter_list(model, parameter_vector(model, parameters));
+      }()),
+      f_([&] {
+        const AlgebraLock lock;
+        return CompiledModel(model, parameter_vector(model, parameters));
+      }()),
       methods_(std::move(methods)),
       dt_(dt),
       substeps_(substeps) {
@@ -129,7 +137,7 @@ std::vector<std::vector<double>> RecordSimulator::run(
   const auto fail = [&](const std::string& what, std::size_t row) {
     throw Error("the simulation " + what +
                 " at t = " + shortest_decimal(start + static_cast<double>(row) * dt_) + " in run " +
-                std::to_string(run_number) + " with " + parameter_list(model_, parameters_) +
+                std::to_string(run_number) + " with " + parameter_text_ +
                 ": the model is unstable for these values, or the sample interval is too "
                 "large for it");
   };

@@ -50,6 +50,7 @@ CompiledModel::CompiledModel(const Model& model, const std::vector<numeric>& par
     : states_(static_cast<int>(model.states().size())),
       channels_(static_cast<int>(model.states().size() + model.inputs().size())),
       variables_(static_cast<int>(model.variables().size())) {
+  const AlgebraLock lock;
   for (const VariableFunction& f : model.functions()) {
     Function& compiled = functions_.emplace_back();
     compiled.sign = f.kind == FunctionKind::kSign;
