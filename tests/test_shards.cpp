@@ -3,6 +3,7 @@
 
 #include <doctest/doctest.h>
 
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -256,6 +257,31 @@ TEST_SUITE("shards") {
     });
     CHECK(std::string(e.what()) ==
           dir / "short.csv" + ":1:1: the data have 3 rows; at least 10 are needed");
+  }
+  TEST_CASE("a source's passes read the file as it was first opened, or say that it changed") {
+    const Directory dir;
+    const std::string path = duffing_csv(dir);
+    const std::string copy = dir / "copy.csv";
+    fs::copy_file(path, copy);
+    const auto pass = [&](const DataSource& source) {
+      return momentid::moments_from_data(source, {"y", "v"}, {"x"}, some_moments(), DataOptions{})
+          .rows;
+    };
+    const DataSource source = DataSource::file(path);
+    const std::size_t rows = pass(source);
+    // The same bytes written again, between two passes of one source (and of its copies).
+    fs::copy_file(copy, path, fs::copy_options::overwrite_existing);
+    fs::last_write_time(path, fs::last_write_time(path) + std::chrono::seconds(1));
+    const DataSource later = source;
+    for (const DataSource* s : {&source, &later}) {
+      const auto e = momentid::testing::error_from<momentid::Error>([&] { pass(*s); });
+      CHECK(std::string(e.what()) ==
+            path +
+                ": the file changed while it was read (it was written to): read it when it is "
+                "complete");
+    }
+    // A new source reads the file as it is now.
+    CHECK(pass(DataSource::file(path)) == rows);
   }
   TEST_CASE("a file that changes while the pass reads it is an error naming it") {
     const Directory dir;

@@ -162,7 +162,10 @@ struct MemoryData {
 };
 
 // Where the data of an identification come from: a file (any format DataReader::open reads) or
-// columns in memory. A source is opened once per pass, with the columns the pass needs.
+// columns in memory. A source is opened once per pass, with the columns the pass needs. It
+// stands for its files as they are when it is first opened (and its copies with it): a pass
+// that finds one changed since is an error (check_unchanged), so that the passes of one call
+// read one record; make a new source to read a file that has changed.
 //
 // Example:
 //   DataSource source = DataSource::file("d.csv");
@@ -202,8 +205,16 @@ class DataSource {
   std::unique_ptr<DataReader> open(const Shard& shard, ColumnRequest request) const;
   // The files read (one for a file or standard input), none for columns in memory.
   std::vector<std::string> paths() const;
+  // Throws Error naming the file when a file of the source is not as it was when the source was
+  // first opened (its size, modification time or inode changed: an acquisition still writing
+  // it, a copy over it), as the rows read would be a mixture or cut short. Each pass calls it
+  // when it has read.
+  void check_unchanged() const;
 
  private:
+  struct Stamps;  // the files' sizes, modification times and inodes when first opened
+  // Takes the stamps, the first time.
+  void stamp() const;
   // `in` read to its end into a temporary file that the source owns, named `name`.
   static DataSource stored(std::FILE* in, const std::string& name);
 
@@ -211,6 +222,7 @@ class DataSource {
   std::optional<MemoryData> memory_;
   std::shared_ptr<const std::string> stored_;  // the file standard input or a pipe was stored in
   std::vector<std::string> paths_;             // several files
+  std::shared_ptr<Stamps> stamps_;             // for files, shared by the copies
 };
 
 }  // namespace momentid

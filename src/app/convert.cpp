@@ -54,6 +54,24 @@ std::optional<FileFormat> format_for_path(const std::string& path) {
   return std::nullopt;
 }
 
+namespace {
+
+// Hands every block of `reader` to `take`. A file of `source` that changed meanwhile is said as
+// such, also when the reader has met what a cut leaves (a malformed last row).
+template <class Take>
+void read_blocks(const DataSource& source, DataReader& reader, Take take) {
+  DataBlock block;
+  try {
+    while (reader.next(block, 1 << 16)) take(block);
+  } catch (const Error&) {
+    source.check_unchanged();
+    throw;
+  }
+  source.check_unchanged();
+}
+
+}  // namespace
+
 std::vector<std::string> convert(const DataSource& source, const std::string& path,
                                  FileFormat format, const FileLayout& layout,
                                  std::optional<double> dt) {
@@ -71,9 +89,7 @@ std::vector<std::string> convert(const DataSource& source, const std::string& pa
   std::size_t rows = 0;
   if (format != FileFormat::kCsv && format != FileFormat::kBinary) {
     const auto counter = source.open(request);
-    DataBlock block;
-    while (counter->next(block, 1 << 16)) {
-    }
+    read_blocks(source, *counter, [](const DataBlock&) {});
     rows = counter->rows_read();
   }
   const auto reader = source.open(request);
@@ -83,15 +99,14 @@ std::vector<std::string> convert(const DataSource& source, const std::string& pa
     metadata.add_line({{"dt", shortest_decimal(*interval)}});
   }
   std::vector<std::string> notes;
-  DataBlock block;
   if (format == FileFormat::kCsv || format == FileFormat::kBinary) {
     DataWriter out(
         path, format == FileFormat::kCsv ? DataWriter::Format::kCsv : DataWriter::Format::kBinary,
         metadata, columns);
-    while (reader->next(block, 1 << 16)) {
+    read_blocks(source, *reader, [&](const DataBlock& block) {
       for (std::size_t r = 0; r < block.rows; ++r)
         out.row(block.values.data() + r * columns.size());
-    }
+    });
     out.commit();
     return notes;
   }
@@ -114,7 +129,8 @@ std::vector<std::string> convert(const DataSource& source, const std::string& pa
       out = data::open_hdf5_writer(path, columns, metadata, rows);
       break;
   }
-  while (reader->next(block, 1 << 16)) out->rows(block.values.data(), block.rows);
+  read_blocks(source, *reader,
+              [&](const DataBlock& block) { out->rows(block.values.data(), block.rows); });
   out->commit();
   return notes;
 }

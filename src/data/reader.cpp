@@ -2,6 +2,7 @@
 
 #include "momentid/reader.hpp"
 
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -11,6 +12,8 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <mutex>
+#include <optional>
 #include <vector>
 
 #include "data/formats.hpp"
@@ -79,6 +82,61 @@ void MissingSummary::add(const MissingSummary& later) {
   joins += later.joins;
 }
 
+namespace {
+
+// What tells a file that changed from the one first read: its size, modification time and inode.
+struct FileStamp {
+  off_t size = 0;
+  timespec modified{};
+  ino_t inode = 0;
+  bool operator==(const FileStamp& o) const {
+    return size == o.size && modified.tv_sec == o.modified.tv_sec &&
+           modified.tv_nsec == o.modified.tv_nsec && inode == o.inode;
+  }
+};
+
+// The stamps of `paths`; a file that cannot be examined has none (its reader says why).
+std::vector<std::optional<FileStamp>> stamps_of(const std::vector<std::string>& paths) {
+  std::vector<std::optional<FileStamp>> out;
+  for (const std::string& path : paths) {
+    struct stat s {};
+    out.push_back(::stat(path.c_str(), &s) == 0
+                      ? std::optional<FileStamp>({s.st_size, s.st_mtim, s.st_ino})
+                      : std::nullopt);
+  }
+  return out;
+}
+
+}  // namespace
+
+struct DataSource::Stamps {
+  std::once_flag taken;  // calls on several threads may share a source
+  std::vector<std::optional<FileStamp>> files;
+};
+
+void DataSource::stamp() const {
+  if (stamps_) std::call_once(stamps_->taken, [&] { stamps_->files = stamps_of(paths()); });
+}
+
+void DataSource::check_unchanged() const {
+  if (!stamps_) return;
+  stamp();
+  const std::vector<std::string> files = paths();
+  const std::vector<std::optional<FileStamp>> now = stamps_of(files);
+  for (std::size_t f = 0; f < files.size(); ++f) {
+    const std::optional<FileStamp>& before = stamps_->files[f];
+    if (!before || now[f] == before) continue;
+    std::string what = "it was replaced or removed";
+    if (now[f] && now[f]->inode == before->inode) {
+      what = now[f]->size == before->size ? "it was written to"
+                                          : "its size went from " + std::to_string(before->size) +
+                                                " to " + std::to_string(now[f]->size) + " bytes";
+    }
+    throw Error((files.size() == 1 ? name_ : files[f]) + ": the file changed while it was read (" +
+                what + "): read it when it is complete");
+  }
+}
+
 DataSource DataSource::file(std::string path) {
   // A pipe (a FIFO, /dev/stdin, a shell's <(...)) can be read only once, and every pass opens
   // the source again: it is stored like standard input.
@@ -92,6 +150,7 @@ DataSource DataSource::file(std::string path) {
   }
   DataSource source;
   source.name_ = std::move(path);
+  source.stamps_ = std::make_shared<Stamps>();
   return source;
 }
 
@@ -102,6 +161,7 @@ DataSource DataSource::files(std::vector<std::string> paths) {
   source.name_ = paths.front() + " and " + std::to_string(paths.size() - 1) +
                  (paths.size() == 2 ? " more file" : " more files");
   source.paths_ = std::move(paths);
+  source.stamps_ = std::make_shared<Stamps>();
   return source;
 }
 
@@ -144,10 +204,12 @@ DataSource DataSource::stored(std::FILE* in, const std::string& name) {
   DataSource source;
   source.name_ = name;
   source.stored_ = std::move(stored);
+  source.stamps_ = std::make_shared<Stamps>();
   return source;
 }
 
 std::unique_ptr<DataReader> DataSource::open(const ColumnRequest& request) const {
+  stamp();
   if (memory_) return data::open_memory(*memory_, request);
   if (!paths_.empty()) return data::open_chain(paths_, request);
   if (stored_) return DataReader::open(*stored_, request, name_);
@@ -161,6 +223,7 @@ std::vector<std::string> DataSource::paths() const {
 }
 
 std::vector<DataSource::Shard> DataSource::shards(std::size_t bytes) const {
+  stamp();
   bytes = std::max<std::size_t>(bytes, 1);
   const auto cut = [&](std::uint64_t size) {
     return static_cast<std::size_t>(std::max<std::uint64_t>(1, (size + bytes - 1) / bytes));
@@ -194,6 +257,7 @@ std::vector<DataSource::Shard> DataSource::shards(std::size_t bytes) const {
 std::unique_ptr<DataReader> DataSource::open(const Shard& shard, ColumnRequest request) const {
   request.part.index = shard.index;
   request.part.count = shard.count;
+  stamp();
   if (memory_) return data::open_memory(*memory_, request);
   if (!paths_.empty()) return DataReader::open(paths_.at(shard.file), request);
   if (stored_) return DataReader::open(*stored_, request, name_);

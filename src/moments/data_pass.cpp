@@ -1,12 +1,11 @@
 #include "momentid/data_pass.hpp"
 
-#include <sys/stat.h>
-
 #include <algorithm>
 #include <chrono>
 #include <cstdint>
 #include <cstring>
 #include <exception>
+#include <filesystem>
 #include <limits>
 #include <stdexcept>
 
@@ -116,56 +115,14 @@ std::optional<double> check_file_intervals(const RangeResult& result,
   return first_step;
 }
 
-// What tells a file that changed from the one read: its size, modification time and inode.
-struct FileStamp {
-  off_t size = 0;
-  timespec modified{};
-  ino_t inode = 0;
-  bool operator==(const FileStamp& o) const {
-    return size == o.size && modified.tv_sec == o.modified.tv_sec &&
-           modified.tv_nsec == o.modified.tv_nsec && inode == o.inode;
-  }
-};
-
-// The stamps of `paths`; a file that cannot be examined has none (its reader says why).
-std::vector<std::optional<FileStamp>> stamps(const std::vector<std::string>& paths) {
-  std::vector<std::optional<FileStamp>> out;
-  for (const std::string& path : paths) {
-    struct stat s {};
-    out.push_back(::stat(path.c_str(), &s) == 0
-                      ? std::optional<FileStamp>({s.st_size, s.st_mtim, s.st_ino})
-                      : std::nullopt);
-  }
-  return out;
-}
-
-// Throws when a file of the record changed while the pass read it (an acquisition still
-// writing it, a copy over it): its rows would be a mixture, or cut short.
-void check_unchanged(const DataSource& source, const std::vector<std::string>& paths,
-                     const std::vector<std::optional<FileStamp>>& before) {
-  const std::vector<std::optional<FileStamp>> after = stamps(paths);
-  for (std::size_t f = 0; f < paths.size(); ++f) {
-    if (!before[f] || after[f] == before[f]) continue;
-    const std::string name = paths.size() == 1 ? source.name() : paths[f];
-    std::string what = "it was replaced or removed";
-    if (after[f] && after[f]->inode == before[f]->inode) {
-      what = after[f]->size == before[f]->size
-                 ? "it was written to"
-                 : "its size went from " + std::to_string(before[f]->size) + " to " +
-                       std::to_string(after[f]->size) + " bytes";
-    }
-    throw Error(name + ": the file changed while it was read (" + what +
-                "): read it when it is complete");
-  }
-}
-
 // In an MPI job, throws on every process alike unless each sees every file at the same size (a
 // stale copy on one node would give it other rows, or fewer).
-void check_same_files(const DataSource& source, const std::vector<std::string>& paths,
-                      const std::vector<std::optional<FileStamp>>& stamps) {
+void check_same_files(const DataSource& source, const std::vector<std::string>& paths) {
   std::vector<std::uint8_t> bytes;
-  for (const std::optional<FileStamp>& s : stamps) {
-    const std::int64_t size = s ? static_cast<std::int64_t>(s->size) : -1;
+  for (const std::string& path : paths) {
+    std::error_code error;
+    const std::uintmax_t file_size = std::filesystem::file_size(path, error);
+    const std::int64_t size = error ? -1 : static_cast<std::int64_t>(file_size);
     const auto* p = reinterpret_cast<const std::uint8_t*>(&size);
     bytes.insert(bytes.end(), p, p + sizeof size);
   }
@@ -296,9 +253,8 @@ DataMoments moments_from_data(const DataSource& source, const std::vector<std::s
                               const std::vector<std::string>& inputs, std::vector<Moment> keys,
                               const DataOptions& options) {
   const std::vector<std::string> paths = source.paths();
-  const std::vector<std::optional<FileStamp>> before = stamps(paths);
   if (options.record.control.across_processes && cluster::size() > 1) {
-    check_same_files(source, paths, before);
+    check_same_files(source, paths);
   }
   ColumnRequest request = column_request(states, inputs, options, paths.size() > 1);
   const std::size_t channels = request.names.size();
@@ -379,7 +335,7 @@ DataMoments moments_from_data(const DataSource& source, const std::vector<std::s
     }
   }
   // Before the readers' errors: a file cut short mid-row reads as a malformed row.
-  check_unchanged(source, paths, before);
+  source.check_unchanged();
   const std::optional<double> first_step = check_file_intervals(result, shards, paths, out);
   if (result.error) std::rethrow_exception(result.error);
 

@@ -41,21 +41,29 @@ Record read_record(const Model& model, const DataSource& source, const ReplayOpt
   const std::size_t first = record.has_time ? 1 : 0;
   const std::size_t width = names.size();
   DataBlock block;
-  while (reader->next(block, 65536)) {
-    if (block.run_starts || record.runs.empty()) {
-      record.runs.emplace_back();
-      record.runs.back().number = block.run;
-      record.runs.back().columns.resize(record.variables.size());
-    }
-    RecordRun& run = record.runs.back();
-    for (std::size_t r = 0; r < block.rows; ++r) {
-      const double* row = block.values.data() + r * width;
-      if (record.has_time) run.time.push_back(row[0]);
-      for (std::size_t c = 0; c < record.variables.size(); ++c) {
-        run.columns[c].push_back(row[first + c]);
+  // A file that changes while it is read is said as such, also when the reader has met what a
+  // cut leaves (a malformed last row).
+  try {
+    while (reader->next(block, 65536)) {
+      if (block.run_starts || record.runs.empty()) {
+        record.runs.emplace_back();
+        record.runs.back().number = block.run;
+        record.runs.back().columns.resize(record.variables.size());
+      }
+      RecordRun& run = record.runs.back();
+      for (std::size_t r = 0; r < block.rows; ++r) {
+        const double* row = block.values.data() + r * width;
+        if (record.has_time) run.time.push_back(row[0]);
+        for (std::size_t c = 0; c < record.variables.size(); ++c) {
+          run.columns[c].push_back(row[first + c]);
+        }
       }
     }
+  } catch (const Error&) {
+    source.check_unchanged();
+    throw;
   }
+  source.check_unchanged();
   record.metadata = reader->metadata();
   record.missing = reader->missing();
   const std::optional<double> dt = options.record.dt ? options.record.dt : reader->time_step();
