@@ -1,5 +1,7 @@
 #include "data/array_writers.hpp"
 
+#include <sys/resource.h>
+#include <sys/statvfs.h>
 #include <unistd.h>
 #ifdef MOMENTID_WITH_HDF5
 #include <hdf5.h>
@@ -48,6 +50,24 @@ class TemporaryPath {
     forget_temporary();
   }
   const std::string& path() const { return path_; }
+  // The error for a `kind` file (MATLAB, HDF5) that its library failed to write, with the cause
+  // when it is seen: the libraries say no more than that they failed.
+  Error failed(const std::string& kind) const {
+    constexpr std::uintmax_t kSlack = 64 * 1024;  // less than a write of the libraries' own
+    std::string why;
+    std::error_code error;
+    const std::uintmax_t size = std::filesystem::file_size(path_, error);
+    rlimit limit{};
+    struct statvfs disk {};
+    if (getrlimit(RLIMIT_FSIZE, &limit) == 0 && limit.rlim_cur != RLIM_INFINITY && !error &&
+        size + kSlack >= limit.rlim_cur) {
+      why = ": the file reached the size limit (ulimit -f)";
+    } else if (statvfs(path_.c_str(), &disk) == 0 &&
+               std::uintmax_t{disk.f_bavail} * disk.f_frsize < kSlack) {
+      why = ": no space left on the device";
+    }
+    return Error(target_ + ": cannot write the " + kind + " file" + why);
+  }
   void commit() {
     std::error_code error;
     const auto status = std::filesystem::status(target_, error);
@@ -182,7 +202,7 @@ class MatWriter final : public ArrayWriter {
       write("momentid_metadata", MAT_C_CHAR, MAT_T_UINT8, lines.size(), lines.data());
     }
     ok = Mat_Close(file) == 0 && ok;
-    if (!ok || !reads_back()) throw Error(target_ + ": cannot write the MATLAB file");
+    if (!ok || !reads_back()) throw temporary_.failed("MATLAB");
     temporary_.commit();
   }
 
@@ -281,7 +301,7 @@ class Hdf5Writer final : public ArrayWriter {
     std::vector<std::uint64_t> expected(names_.size(), ColumnHash().value());
     for (std::size_t c = 0; c < hashes_.size(); ++c) expected[c] = hashes_[c].value();
     if (!ok_ || !hdf5_holds(temporary_.path(), names_, rows_, expected)) {
-      throw Error(target_ + ": cannot write the HDF5 file");
+      throw temporary_.failed("HDF5");
     }
     temporary_.commit();
   }

@@ -188,6 +188,9 @@ class MatStore final : public ColumnStore {
       fail({path_, 1, static_cast<int>(channel) + 1, ""},
            "cannot read variable '" + c.variable + "'" + detail());
     }
+    if (!holds_all(*v)) {
+      fail({path_, 1, static_cast<int>(channel) + 1, ""}, damaged(*v));
+    }
     loaded_.emplace(c.variable, std::move(v));
   }
 
@@ -223,6 +226,7 @@ class MatStore final : public ColumnStore {
     const MatioCall call;
     Variable v{Mat_VarRead(file_.get(), name.c_str())};
     if (!v || v->data == nullptr) return std::nullopt;
+    if (!holds_all(*v)) fail({path_, 1, 1, ""}, damaged(*v));
     return first_value(*v);
   }
 
@@ -248,6 +252,24 @@ class MatStore final : public ColumnStore {
   static bool stated_name(const std::string& name) {
     return std::find_if(std::begin(kStatedIntervalNames), std::end(kStatedIntervalNames),
                         [&](const char* n) { return name == n; }) != std::end(kStatedIntervalNames);
+  }
+
+  // Whether matio read as many values as the variable's dimensions claim (it may read fewer from a
+  // damaged file, which are all that may be read).
+  static bool holds_all(const matvar_t& v) {
+    std::size_t count = 1;
+    for (int d = 0; d < v.rank; ++d) {
+      if (__builtin_mul_overflow(count, v.dims[d], &count)) return false;
+    }
+    // Numbers are read by their class, text by its stored width.
+    const std::size_t stored = static_cast<std::size_t>(std::max(v.data_size, 0));
+    const std::size_t size =
+        v.class_type == MAT_C_CHAR ? stored : std::max(stored, Mat_SizeOfClass(v.class_type));
+    return size > 0 && count <= v.nbytes / size;
+  }
+  std::string damaged(const matvar_t& v) const {
+    return "variable '" + std::string(v.name ? v.name : "") + "' holds fewer values than its " +
+           "dimensions claim: the file is damaged";
   }
 
   // The first value of a numeric variable, as a double.
@@ -285,6 +307,7 @@ class MatStore final : public ColumnStore {
     const MatioCall call;
     Variable v{Mat_VarRead(file_.get(), kMetadataVariable)};
     if (!v || v->data == nullptr || v->rank != 2) return;
+    if (!holds_all(*v)) fail({path_, 1, 1, ""}, damaged(*v));
     const std::size_t count = v->dims[0] * v->dims[1];
     std::string text;
     for (std::size_t i = 0; i < count; ++i) {
