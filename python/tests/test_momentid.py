@@ -546,6 +546,36 @@ def test_threads_calling_at_once_get_the_serial_results(duffing):
                 assert results[-1 - k] == checked
 
 
+def test_threads_calling_validate_and_select_beside_identify_get_the_serial_results(duffing):
+    """validate and select (which keep the GIL but for select's passes) on threads beside
+    identify (which lets go of it while it reads): every result is the serial one."""
+    library = momentid.Model.from_file(ROOT / "examples" / "select" / "library.mom")
+    record = momentid.simulate(duffing, samples=20_000, seed=3, inputs={"x": INPUT})
+    calls = {"identify": lambda: momentid.identify(duffing, record),
+             "validate": lambda: momentid.validate(duffing, record),
+             "select": lambda: momentid.select(library, record)}
+    serial = {name: str(call()) for name, call in calls.items()}
+    for _ in range(3):
+        results, errors = {}, []
+
+        def work(k, name):
+            try:
+                results[(k, name)] = str(calls[name]())
+            except Exception as error:  # reported below, with the thread
+                errors.append((k, name, error))
+
+        threads = [threading.Thread(target=work, args=(k, name))
+                   for k in range(2) for name in calls]
+        for thread in threads:
+            thread.start()
+        for thread in threads:
+            thread.join()
+        assert not errors
+        for (k, name), text in results.items():
+            assert text == serial[name], (k, name)
+        assert len(results) == 2 * len(calls)
+
+
 # --- 10. documentation ---------------------------------------------------------------------------
 
 def test_identify_has_help():
