@@ -2,8 +2,9 @@
 # mpirun -np 2 and 4 give the one-process result to the last bit, on a record cut into shards
 # and on a record in several files; a data error in a shard that another process reads stops
 # every process with the located error and exit status 2; an error every process finds is said
-# once; a file that one process sees shorter than the others is an error on every process; a
-# process that stops answering ends the job after a minute.
+# once; a file that one process sees shorter than the others, or of the same size with other
+# contents, is an error on every process; a process that stops answering ends the job after a
+# minute.
 # Usage: mpi.sh MPIRUN MOMENTID MODEL DIRECTORY
 set -euo pipefail
 mpirun=$1 momentid=$2 model=$3 dir=$4
@@ -82,6 +83,21 @@ if [[ $status -ne 2 ]] || [[ $(grep -cxF "$expected" "$dir/err.txt") -ne 1 ]] ||
   exit 1
 fi
 echo "one process seeing a shorter file: exit 2, $expected"
+
+# One process sees another record of the same size (a stale binary record of the same length).
+cp "$dir/part1.bin" "$dir/rank0/record.bin"
+cp "$dir/part2.bin" "$dir/rank1/record.bin"
+status=0
+# shellcheck disable=SC2016
+launch 2 bash -c 'cd "$1/rank$OMPI_COMM_WORLD_RANK" && exec "$2" identify "$3" record.bin' \
+  - "$dir" "$momentid" "$model" >"$dir/out.txt" 2>"$dir/err.txt" || status=$?
+expected="momentid: record.bin: the processes of the job see different files ($(stat -c %s "$dir/part1.bin") bytes each, other contents on process 1 than on process 0): give every process the same file"
+if [[ $status -ne 2 ]] || [[ $(grep -cxF "$expected" "$dir/err.txt") -ne 1 ]] || [[ -s $dir/out.txt ]]; then
+  echo "one process seeing another file of the same size: exit $status (expected 2), standard error:"
+  cat "$dir/err.txt"
+  exit 1
+fi
+echo "one process seeing another file of the same size: exit 2, $expected"
 
 # A process that stops answering (here it waits for a writer to a FIFO that never comes, before
 # the pass): the others give up after a minute, and the job ends with exit status 2.

@@ -1,8 +1,10 @@
 #include "momentid/data_pass.hpp"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
 #include <exception>
 #include <filesystem>
@@ -115,36 +117,65 @@ std::optional<double> check_file_intervals(const RangeResult& result,
   return first_step;
 }
 
-// In an MPI job, throws on every process alike unless each sees every file at the same size (a
-// stale copy on one node would give it other rows, or fewer).
+// The size of the file at `path` (-1 if it cannot be read) and an FNV-1a hash of its first and
+// last 64 kB: its header and metadata, and where two copies of one length would differ first.
+std::array<std::int64_t, 2> fingerprint(const std::string& path) {
+  constexpr long kEnd = 64 * 1024;
+  const data::File file(std::fopen(path.c_str(), "rb"));
+  std::error_code error;
+  const std::uintmax_t size = std::filesystem::file_size(path, error);
+  if (!file || error) return {-1, 0};
+  std::uint64_t hash = 14695981039346656037ULL;
+  std::vector<unsigned char> buffer(kEnd);
+  const auto add = [&](long from) {
+    if (std::fseek(file.get(), from, SEEK_SET) != 0) return;
+    const std::size_t got = std::fread(buffer.data(), 1, buffer.size(), file.get());
+    for (std::size_t i = 0; i < got; ++i) hash = (hash ^ buffer[i]) * 1099511628211ULL;
+  };
+  add(0);
+  if (size > static_cast<std::uintmax_t>(kEnd)) add(static_cast<long>(size) - kEnd);
+  return {static_cast<std::int64_t>(size), static_cast<std::int64_t>(hash)};
+}
+
+// In an MPI job, throws on every process alike unless each sees every file at the same size and
+// with the same beginning and end (a stale copy on one node would give it other rows, or fewer).
 void check_same_files(const DataSource& source, const std::vector<std::string>& paths) {
-  std::vector<std::uint8_t> bytes;
+  std::vector<std::int64_t> mine;
   for (const std::string& path : paths) {
-    std::error_code error;
-    const std::uintmax_t file_size = std::filesystem::file_size(path, error);
-    const std::int64_t size = error ? -1 : static_cast<std::int64_t>(file_size);
-    const auto* p = reinterpret_cast<const std::uint8_t*>(&size);
-    bytes.insert(bytes.end(), p, p + sizeof size);
+    const std::array<std::int64_t, 2> f = fingerprint(path);
+    mine.insert(mine.end(), f.begin(), f.end());
   }
+  std::vector<std::uint8_t> bytes(mine.size() * sizeof(std::int64_t));
+  std::memcpy(bytes.data(), mine.data(), bytes.size());
   const std::vector<std::vector<std::uint8_t>> all = cluster::all_gather(bytes, kMinimumPatience);
+  // Value k (0 the size, 1 the hash) of file f on process r.
+  const auto value = [&](std::size_t r, std::size_t f, std::size_t k) {
+    std::int64_t v = 0;
+    std::memcpy(&v, all[r].data() + (2 * f + k) * sizeof v, sizeof v);
+    return v;
+  };
   for (std::size_t f = 0; f < paths.size(); ++f) {
-    std::vector<std::int64_t> sizes;
-    for (const std::vector<std::uint8_t>& rank : all) {
-      std::int64_t size = 0;
-      std::memcpy(&size, rank.data() + f * sizeof size, sizeof size);
-      sizes.push_back(size);
+    const std::string name = paths.size() == 1 ? source.name() : paths[f];
+    const std::string advice = "): give every process the same file";
+    std::string sizes;
+    bool same_size = true;
+    for (std::size_t r = 0; r < all.size(); ++r) {
+      const std::int64_t size = value(r, f, 0);
+      sizes += (r ? ", " : "") + (size < 0 ? std::string("none") : std::to_string(size)) +
+               " on process " + std::to_string(r);
+      same_size = same_size && size == value(0, f, 0);
     }
-    if (std::all_of(sizes.begin(), sizes.end(), [&](std::int64_t v) { return v == sizes[0]; })) {
-      continue;
+    if (!same_size) {
+      throw Error(name + ": the processes of the job see different files (bytes: " + sizes +
+                  advice);
     }
-    std::string seen;
-    for (std::size_t r = 0; r < sizes.size(); ++r) {
-      seen += (r ? ", " : "") + (sizes[r] < 0 ? std::string("none") : std::to_string(sizes[r])) +
-              " on process " + std::to_string(r);
+    for (std::size_t r = 1; r < all.size(); ++r) {
+      if (value(r, f, 1) != value(0, f, 1)) {
+        throw Error(name + ": the processes of the job see different files (" +
+                    std::to_string(value(0, f, 0)) + " bytes each, other contents on process " +
+                    std::to_string(r) + " than on process 0" + advice);
+      }
     }
-    throw Error((paths.size() == 1 ? source.name() : paths[f]) +
-                ": the processes of the job see different files (bytes: " + seen +
-                "): give every process the same file");
   }
 }
 
