@@ -3,8 +3,8 @@
 # and on a record in several files; a data error in a shard that another process reads stops
 # every process with the located error and exit status 2; an error every process finds is said
 # once; a file that one process sees shorter than the others, or of the same size with other
-# contents, is an error on every process; a process that stops answering ends the job after a
-# minute.
+# contents, and a pattern that matches other files on one process, are an error on every
+# process; a process that stops answering ends the job after a minute.
 # Usage: mpi.sh MPIRUN MOMENTID MODEL DIRECTORY
 set -euo pipefail
 mpirun=$1 momentid=$2 model=$3 dir=$4
@@ -98,6 +98,21 @@ if [[ $status -ne 2 ]] || [[ $(grep -cxF "$expected" "$dir/err.txt") -ne 1 ]] ||
   exit 1
 fi
 echo "one process seeing another file of the same size: exit 2, $expected"
+
+# A pattern that matches other files on one process (two parts there, three on the other).
+cp "$dir"/part[12].bin "$dir/rank0/"
+cp "$dir"/part[123].bin "$dir/rank1/"
+status=0
+# shellcheck disable=SC2016
+launch 2 bash -c 'cd "$1/rank$OMPI_COMM_WORLD_RANK" && exec "$2" identify "$3" "part*.bin"' \
+  - "$dir" "$momentid" "$model" >"$dir/out.txt" 2>"$dir/err.txt" || status=$?
+expected="momentid: part1.bin and 1 more file: the processes of the job see different files (2 files on process 0, 3 on process 1): give every process the same files"
+if [[ $status -ne 2 ]] || [[ $(grep -cxF "$expected" "$dir/err.txt") -ne 1 ]] || [[ -s $dir/out.txt ]]; then
+  echo "a pattern matching other files on one process: exit $status (expected 2), standard error:"
+  cat "$dir/err.txt"
+  exit 1
+fi
+echo "a pattern matching other files on one process: exit 2, $expected"
 
 # A process that stops answering (here it waits for a writer to a FIFO that never comes, before
 # the pass): the others give up after a minute, and the job ends with exit status 2.

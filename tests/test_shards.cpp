@@ -14,6 +14,7 @@
 
 #include "momentid/convert.hpp"
 #include "momentid/data_pass.hpp"
+#include "momentid/validate.hpp"
 #include "test_support.hpp"
 
 namespace {
@@ -273,13 +274,24 @@ TEST_SUITE("shards") {
     fs::copy_file(copy, path, fs::copy_options::overwrite_existing);
     fs::last_write_time(path, fs::last_write_time(path) + std::chrono::seconds(1));
     const DataSource later = source;
+    const std::string changed =
+        path +
+        ": the file changed while it was read (it was written to): read it when it is "
+        "complete";
     for (const DataSource* s : {&source, &later}) {
       const auto e = momentid::testing::error_from<momentid::Error>([&] { pass(*s); });
-      CHECK(std::string(e.what()) ==
-            path +
-                ": the file changed while it was read (it was written to): read it when it is "
-                "complete");
+      CHECK(std::string(e.what()) == changed);
     }
+    // validate and convert, which read the record whole, say it too (and convert writes nothing).
+    const momentid::Model model = momentid::testing::model_file("duffing.mom");
+    CHECK(std::string(momentid::testing::error_from<momentid::Error>([&] {
+                        momentid::validate(model, source, {});
+                      }).what()) == changed);
+    CHECK(std::string(momentid::testing::error_from<momentid::Error>([&] {
+                        momentid::convert(source, dir / "out.csv", momentid::FileFormat::kCsv, {},
+                                          std::nullopt);
+                      }).what()) == changed);
+    CHECK(!fs::exists(dir / "out.csv"));
     // A new source reads the file as it is now.
     CHECK(pass(DataSource::file(path)) == rows);
   }

@@ -29,13 +29,19 @@ struct Columns : momentid::SampleSink {
 constexpr std::size_t kSamples = 20000;
 
 // The Duffing model under its held moving-average input: without noise, every channel (what
-// simulate writes, the input held over each sample); with noise on y, y and x alone.
+// simulate writes, the input held over each sample), in memory and in a CSV file that one source
+// (whose copies share the stamps of the file) reads for every thread; with noise on y, y and x
+// alone.
 struct Records {
   Columns clean{3}, noisy{3};
+  momentid::testing::Directory directory{"momentid_threads"};
+  momentid::DataSource file = momentid::DataSource::file(directory / "record.csv");
   Records() {
     const Model model = momentid::testing::model_file("duffing.mom");
     momentid::SimulationOptions options = momentid::testing::options_for(model, kSamples, 7);
     momentid::simulate(model, options, clean);
+    momentid::simulate_to_file(model, options, directory / "record.csv",
+                               momentid::DataWriter::Format::kCsv);
     options.noise = {{"y", 0.05}};
     momentid::simulate(model, options, noisy);
   }
@@ -59,9 +65,9 @@ struct Records {
   }
 };
 
-// What one thread computes, as text: zero-lag identify on the held record, lagged identify on
-// the noisy one, check, validate, and term selection from the polynomial library. Two passes
-// read on two threads of their own.
+// What one thread computes, as text: zero-lag identify on the held record in memory, identify
+// with the defaults on its file, lagged identify on the noisy one, check, validate, and term
+// selection from the polynomial library. Two passes read on two threads of their own.
 std::vector<std::string> results(const Records& records) {
   const Model model = momentid::testing::model_file("duffing.mom");
   const Model library =
@@ -74,6 +80,7 @@ std::vector<std::string> results(const Records& records) {
   check.record.control.threads = 2;
   return {
       momentid::format_json(momentid::identify(model, records.held(true), zero_lag)),
+      momentid::format_json(momentid::identify(model, records.file)),
       momentid::format_json(momentid::identify(model, records.displacement(), lagged)),
       momentid::format_text(momentid::check(records.held(false), &model, check)),
       momentid::format_json(momentid::validate(model, records.held(true), {})),

@@ -4,7 +4,8 @@
 // GiNaC (and CLN beneath it) count the references to its expressions and numbers without
 // atomics, and shares some of them between all expressions (the numbers 0, 1, -1, ...). Every
 // library call that makes, reads, copies or destroys such objects (parsing a model, deriving
-// equations, identify, check, simulate, validate, format_* of the equations) holds this lock;
+// equations, identify, check, select_terms, simulate, validate, format_* of the equations, the
+// constructors of CompiledModel and RecordSimulator) holds this lock;
 // identify and check let go of it while their data pass reads, so that calls from several threads
 // overlap there. A thread holds it at most once, however deeply the calls nest.
 //

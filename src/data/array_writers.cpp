@@ -51,9 +51,10 @@ class TemporaryPath {
   }
   const std::string& path() const { return path_; }
   // The error for a `kind` file (MATLAB, HDF5) that its library failed to write, with the cause
-  // when it is seen: the libraries say no more than that they failed.
+  // when it is seen (the libraries say no more than that they failed): a file within a write of
+  // the size limit, or a device with less than a write's room left.
   Error failed(const std::string& kind) const {
-    constexpr std::uintmax_t kSlack = 64 * 1024;  // less than a write of the libraries' own
+    constexpr std::uintmax_t kSlack = 64 * 1024;  // a write of the libraries' own, or more
     std::string why;
     std::error_code error;
     const std::uintmax_t size = std::filesystem::file_size(path_, error);
@@ -62,7 +63,7 @@ class TemporaryPath {
     if (getrlimit(RLIMIT_FSIZE, &limit) == 0 && limit.rlim_cur != RLIM_INFINITY && !error &&
         size + kSlack >= limit.rlim_cur) {
       why = ": the file reached the size limit (ulimit -f)";
-    } else if (statvfs(path_.c_str(), &disk) == 0 &&
+    } else if (statvfs(std::filesystem::absolute(path_, error).parent_path().c_str(), &disk) == 0 &&
                std::uintmax_t{disk.f_bavail} * disk.f_frsize < kSlack) {
       why = ": no space left on the device";
     }

@@ -1,5 +1,7 @@
 #include "momentid/data_pass.hpp"
 
+#include <sys/stat.h>
+
 #include <algorithm>
 #include <array>
 #include <chrono>
@@ -117,28 +119,30 @@ std::optional<double> check_file_intervals(const RangeResult& result,
   return first_step;
 }
 
-// The size of the file at `path` (-1 if it cannot be read) and an FNV-1a hash of its first and
-// last 64 kB: its header and metadata, and where two copies of one length would differ first.
+// The size of the regular file at `path` (-1 for anything else, or one that cannot be read,
+// which is never opened: a pipe would block) and an FNV-1a hash of its first and last 4 kB: its
+// header and metadata, and its last rows.
 std::array<std::int64_t, 2> fingerprint(const std::string& path) {
-  constexpr long kEnd = 64 * 1024;
+  constexpr off_t kEnd = 4096;
+  struct stat s {};
+  if (::stat(path.c_str(), &s) != 0 || !S_ISREG(s.st_mode)) return {-1, 0};
   const data::File file(std::fopen(path.c_str(), "rb"));
-  std::error_code error;
-  const std::uintmax_t size = std::filesystem::file_size(path, error);
-  if (!file || error) return {-1, 0};
+  if (!file) return {-1, 0};
   std::uint64_t hash = 14695981039346656037ULL;
-  std::vector<unsigned char> buffer(kEnd);
-  const auto add = [&](long from) {
-    if (std::fseek(file.get(), from, SEEK_SET) != 0) return;
+  std::array<unsigned char, kEnd> buffer{};
+  const auto add = [&](off_t from) {
+    if (fseeko(file.get(), from, SEEK_SET) != 0) return;
     const std::size_t got = std::fread(buffer.data(), 1, buffer.size(), file.get());
     for (std::size_t i = 0; i < got; ++i) hash = (hash ^ buffer[i]) * 1099511628211ULL;
   };
   add(0);
-  if (size > static_cast<std::uintmax_t>(kEnd)) add(static_cast<long>(size) - kEnd);
-  return {static_cast<std::int64_t>(size), static_cast<std::int64_t>(hash)};
+  if (s.st_size > kEnd) add(s.st_size - kEnd);
+  return {static_cast<std::int64_t>(s.st_size), static_cast<std::int64_t>(hash)};
 }
 
-// In an MPI job, throws on every process alike unless each sees every file at the same size and
-// with the same beginning and end (a stale copy on one node would give it other rows, or fewer).
+// In an MPI job, throws on every process alike unless each sees the same files, each of the same
+// size and with the same first and last 4 kB (a stale copy on one node would give it other rows,
+// or fewer).
 void check_same_files(const DataSource& source, const std::vector<std::string>& paths) {
   std::vector<std::int64_t> mine;
   for (const std::string& path : paths) {
@@ -148,6 +152,14 @@ void check_same_files(const DataSource& source, const std::vector<std::string>& 
   std::vector<std::uint8_t> bytes(mine.size() * sizeof(std::int64_t));
   std::memcpy(bytes.data(), mine.data(), bytes.size());
   const std::vector<std::vector<std::uint8_t>> all = cluster::all_gather(bytes, kMinimumPatience);
+  for (std::size_t r = 1; r < all.size(); ++r) {
+    if (all[r].size() != all[0].size()) {  // a pattern that matched other files
+      throw Error(source.name() + ": the processes of the job see different files (" +
+                  plural(all[0].size() / 16, "file") + " on process 0, " +
+                  std::to_string(all[r].size() / 16) + " on process " + std::to_string(r) +
+                  "): give every process the same files");
+    }
+  }
   // Value k (0 the size, 1 the hash) of file f on process r.
   const auto value = [&](std::size_t r, std::size_t f, std::size_t k) {
     std::int64_t v = 0;
@@ -177,6 +189,27 @@ void check_same_files(const DataSource& source, const std::vector<std::string>& 
       }
     }
   }
+}
+
+// Throws when a file of the record changed while it was read (DataSource::check_unchanged): in
+// an MPI job (`shared`) on every process alike, with the message of the first that saw it.
+void check_unchanged(const DataSource& source, bool shared) {
+  std::string changed;
+  try {
+    source.check_unchanged();
+  } catch (const Error& e) {
+    changed = e.what();
+  }
+  if (shared) {
+    for (const auto& said :
+         cluster::all_gather({changed.begin(), changed.end()}, kMinimumPatience)) {
+      if (!said.empty()) {
+        changed.assign(said.begin(), said.end());
+        break;
+      }
+    }
+  }
+  if (!changed.empty()) throw Error(changed);
 }
 
 // Throws when the record as a whole has too few rows, or no interval to average over.
@@ -284,9 +317,8 @@ DataMoments moments_from_data(const DataSource& source, const std::vector<std::s
                               const std::vector<std::string>& inputs, std::vector<Moment> keys,
                               const DataOptions& options) {
   const std::vector<std::string> paths = source.paths();
-  if (options.record.control.across_processes && cluster::size() > 1) {
-    check_same_files(source, paths);
-  }
+  const bool shared = options.record.control.across_processes && cluster::size() > 1;
+  if (shared) check_same_files(source, paths);
   ColumnRequest request = column_request(states, inputs, options, paths.size() > 1);
   const std::size_t channels = request.names.size();
   if (!options.offsets.empty() && options.offsets.size() != channels) {
@@ -364,9 +396,9 @@ DataMoments moments_from_data(const DataSource& source, const std::vector<std::s
     } else {
       read();
     }
+    // Before the readers' errors: a file cut short mid-row reads as a malformed row.
+    check_unchanged(source, shared);
   }
-  // Before the readers' errors: a file cut short mid-row reads as a malformed row.
-  source.check_unchanged();
   const std::optional<double> first_step = check_file_intervals(result, shards, paths, out);
   if (result.error) std::rethrow_exception(result.error);
 

@@ -31,6 +31,6 @@ fi
 # refuses the file with exit status 2; here an allocation above 128 MB fails instead, as matio
 # handles, rather than ending the run. Inputs of at most 4096 bytes need far less: the reader
 # refuses a variable that claims more than 1032 values per byte of its file (34 MB a column).
-export ASAN_OPTIONS=${ASAN_OPTIONS:-allocator_may_return_null=1:max_allocation_size_mb=128}
+export ASAN_OPTIONS=allocator_may_return_null=1:max_allocation_size_mb=128${ASAN_OPTIONS:+:$ASAN_OPTIONS}
 exec "build-fuzz/fuzz_$target" "$corpus" -max_total_time="$seconds" -timeout=10 \
   -rss_limit_mb=4096 -max_len=4096 -artifact_prefix="$findings/" -print_final_stats=1 "$@"
