@@ -66,53 +66,47 @@ if [[ $status -ne 1 ]] || [[ $(grep -c "run derive as one process" "$dir/err.txt
 fi
 echo "errors every process has: said once, exit 2 and 1"
 
-# One process sees a shorter copy of the record (a stale copy on one node): each process runs in
-# a directory of its own, where record.csv is the whole record or its first 90000 rows.
+# Each process runs in a directory of its own, rank0 or rank1, which the cases below fill.
 for r in 0 1; do mkdir -p "$dir/rank$r"; done
+
+# on_each_rank CASE EXPECTED DATA: identify DATA in each process's own directory under mpirun -np
+# 2 must end with exit status 2, print nothing, and say EXPECTED once.
+on_each_rank() {
+  local case=$1 expected=$2 data=$3 status=0
+  # shellcheck disable=SC2016  # the rank is the launched shell's to expand
+  launch 2 bash -c 'cd "$1/rank$OMPI_COMM_WORLD_RANK" && exec "$2" identify "$3" "$4"' \
+    - "$dir" "$momentid" "$model" "$data" >"$dir/out.txt" 2>"$dir/err.txt" || status=$?
+  if [[ $status -ne 2 ]] || [[ $(grep -cxF "$expected" "$dir/err.txt") -ne 1 ]] ||
+     [[ -s $dir/out.txt ]]; then
+    echo "$case: exit $status (expected 2), standard error:"
+    cat "$dir/err.txt"
+    exit 1
+  fi
+  echo "$case: exit 2, $expected"
+}
+
+# One process sees a shorter copy of the record (a stale copy on one node): the whole record or
+# its first 90000 rows.
 cp "$dir/record.csv" "$dir/rank0/record.csv"
 head -n 90000 "$dir/record.csv" >"$dir/rank1/record.csv"
-status=0
-# shellcheck disable=SC2016  # the rank is the launched shell's to expand
-launch 2 bash -c 'cd "$1/rank$OMPI_COMM_WORLD_RANK" && exec "$2" identify "$3" record.csv' \
-  - "$dir" "$momentid" "$model" >"$dir/out.txt" 2>"$dir/err.txt" || status=$?
 sizes="$(stat -c %s "$dir/rank0/record.csv") on process 0, $(stat -c %s "$dir/rank1/record.csv") on process 1"
-expected="momentid: record.csv: the processes of the job see different files (bytes: $sizes): give every process the same file"
-if [[ $status -ne 2 ]] || [[ $(grep -cxF "$expected" "$dir/err.txt") -ne 1 ]] || [[ -s $dir/out.txt ]]; then
-  echo "one process seeing a shorter file: exit $status (expected 2), standard error:"
-  cat "$dir/err.txt"
-  exit 1
-fi
-echo "one process seeing a shorter file: exit 2, $expected"
+on_each_rank "one process seeing a shorter file" \
+  "momentid: record.csv: the processes of the job see different files (bytes: $sizes): give every process the same file" \
+  record.csv
 
 # One process sees another record of the same size (a stale binary record of the same length).
 cp "$dir/part1.bin" "$dir/rank0/record.bin"
 cp "$dir/part2.bin" "$dir/rank1/record.bin"
-status=0
-# shellcheck disable=SC2016
-launch 2 bash -c 'cd "$1/rank$OMPI_COMM_WORLD_RANK" && exec "$2" identify "$3" record.bin' \
-  - "$dir" "$momentid" "$model" >"$dir/out.txt" 2>"$dir/err.txt" || status=$?
-expected="momentid: record.bin: the processes of the job see different files ($(stat -c %s "$dir/part1.bin") bytes each, other contents on process 1 than on process 0): give every process the same file"
-if [[ $status -ne 2 ]] || [[ $(grep -cxF "$expected" "$dir/err.txt") -ne 1 ]] || [[ -s $dir/out.txt ]]; then
-  echo "one process seeing another file of the same size: exit $status (expected 2), standard error:"
-  cat "$dir/err.txt"
-  exit 1
-fi
-echo "one process seeing another file of the same size: exit 2, $expected"
+on_each_rank "one process seeing another file of the same size" \
+  "momentid: record.bin: the processes of the job see different files ($(stat -c %s "$dir/part1.bin") bytes each, other contents on process 1 than on process 0): give every process the same file" \
+  record.bin
 
 # A pattern that matches other files on one process (two parts there, three on the other).
 cp "$dir"/part[12].bin "$dir/rank0/"
 cp "$dir"/part[123].bin "$dir/rank1/"
-status=0
-# shellcheck disable=SC2016
-launch 2 bash -c 'cd "$1/rank$OMPI_COMM_WORLD_RANK" && exec "$2" identify "$3" "part*.bin"' \
-  - "$dir" "$momentid" "$model" >"$dir/out.txt" 2>"$dir/err.txt" || status=$?
-expected="momentid: part1.bin and 1 more file: the processes of the job see different files (2 files on process 0, 3 on process 1): give every process the same files"
-if [[ $status -ne 2 ]] || [[ $(grep -cxF "$expected" "$dir/err.txt") -ne 1 ]] || [[ -s $dir/out.txt ]]; then
-  echo "a pattern matching other files on one process: exit $status (expected 2), standard error:"
-  cat "$dir/err.txt"
-  exit 1
-fi
-echo "a pattern matching other files on one process: exit 2, $expected"
+on_each_rank "a pattern matching other files on one process" \
+  "momentid: part1.bin and 1 more file: the processes of the job see different files (2 files on process 0, 3 on process 1): give every process the same files" \
+  "part*.bin"
 
 # A process that stops answering (here it waits for a writer to a FIFO that never comes, before
 # the pass): the others give up after a minute, and the job ends with exit status 2.

@@ -385,6 +385,10 @@ void ColumnHash::add(const double* values, std::size_t count) {
   }
 }
 
+void ColumnHash::add_bytes(const unsigned char* bytes, std::size_t count) {
+  for (std::size_t i = 0; i < count; ++i) hash_ = (hash_ ^ bytes[i]) * 1099511628211ULL;
+}
+
 #ifdef MOMENTID_WITH_HDF5
 bool hdf5_holds(const std::string& path, const std::vector<std::string>& names, std::size_t rows,
                 const std::vector<std::uint64_t>& hashes) {

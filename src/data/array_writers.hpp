@@ -39,10 +39,11 @@ std::unique_ptr<ArrayWriter> open_hdf5_writer(const std::string& path,
                                               const DataMetadata& metadata, std::size_t rows);
 
 // A fingerprint of a column's values (FNV-1a over their 64-bit patterns), taken as they are
-// written and again as they are read back.
+// written and again as they are read back; or of a file's bytes, one at a time.
 class ColumnHash {
  public:
   void add(const double* values, std::size_t count);
+  void add_bytes(const unsigned char* bytes, std::size_t count);
   std::uint64_t value() const { return hash_; }
 
  private:

@@ -13,6 +13,7 @@
 #include <stdexcept>
 
 #include "common/cluster.hpp"
+#include "data/array_writers.hpp"
 #include "data/formats.hpp"
 #include "data/text.hpp"
 #include "momentid/algebra_lock.hpp"
@@ -127,16 +128,15 @@ std::array<std::int64_t, 2> fingerprint(const std::string& path) {
   if (::stat(path.c_str(), &s) != 0 || !S_ISREG(s.st_mode)) return {-1, 0};
   const data::File file(std::fopen(path.c_str(), "rb"));
   if (!file) return {-1, 0};
-  std::uint64_t hash = 14695981039346656037ULL;
+  data::ColumnHash hash;
   std::array<unsigned char, kEnd> buffer{};
   const auto add = [&](off_t from) {
     if (fseeko(file.get(), from, SEEK_SET) != 0) return;
-    const std::size_t got = std::fread(buffer.data(), 1, buffer.size(), file.get());
-    for (std::size_t i = 0; i < got; ++i) hash = (hash ^ buffer[i]) * 1099511628211ULL;
+    hash.add_bytes(buffer.data(), std::fread(buffer.data(), 1, buffer.size(), file.get()));
   };
   add(0);
   if (s.st_size > kEnd) add(s.st_size - kEnd);
-  return {static_cast<std::int64_t>(s.st_size), static_cast<std::int64_t>(hash)};
+  return {static_cast<std::int64_t>(s.st_size), static_cast<std::int64_t>(hash.value())};
 }
 
 // In an MPI job, throws on every process alike unless each sees the same files, each of the same
