@@ -253,6 +253,17 @@ struct LinearisedModes {
 };
 LinearisedModes linearised_modes(const IdentifyResult& result);
 
+// The means that the inputs' means give the states of the identified model, to first order: its
+// linearisation at the origin, x' = A x + B u, at rest, E[x] = G E[u] with G = -A^-1 B; `gain`
+// holds G (a row per state, a column per input) to carry the inputs' standard errors. Empty
+// when the estimate is not usable, the model has no input, A is singular or an abs(...) or
+// sign(...) term switches at the origin.
+struct MeanResponse {
+  std::vector<double> mean;               // per state
+  std::vector<std::vector<double>> gain;  // per state, per input
+};
+MeanResponse mean_response(const IdentifyResult& result);
+
 // For an oscillator y' = v, m v' = -R(y) - ... + x with a constant mass m (two states): the
 // restoring force R (m times minus the acceleration at rest, inputs at 0) at 41 displacements over
 // the record's mean +- 3 standard deviations of y, and the backbone, the frequency (Hz) of free

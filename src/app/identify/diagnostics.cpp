@@ -37,32 +37,85 @@ bool symmetric(const Model& model) {
   return true;
 }
 
-// The states of a symmetric model whose means lie more than `z` standard errors from zero, while
-// no input's does: zero-mean inputs give such a model zero-mean states, so these are offsets.
-std::vector<const ChannelMean*> offsets(const IdentifyResult& r, double z) {
-  std::vector<const ChannelMean*> out;
+// A state whose mean lies off the mean the model gives it.
+struct Offset {
+  const ChannelMean* mean;
+  bool responds = false;  // the inputs' means are off zero: `expected` is the response to them
+  double expected = 0;    // the mean the model gives the state
+  double std_error = 0;   // of mean - expected
+  double spread = 0;      // the state's standard deviation (0 when unknown)
+};
+
+// The states of a symmetric model whose means lie more than `z` standard errors from the mean the
+// model gives them. Zero-mean inputs give such a model zero-mean states; when an input's mean is
+// off zero (a DAQ offset on the force), a state's mean may be off zero by the response to it,
+// which the linearisation gives to first order (mean_response): the state is named when its mean
+// lies further from that response than its error and the response itself together allow (the
+// response of a hardening spring is smaller than the linearisation's, of a softening one larger).
+std::vector<Offset> offsets(const IdentifyResult& r, double z) {
+  std::vector<Offset> out;
   if (!symmetric(*r.model)) return out;
   const auto& inputs = r.model->inputs();
-  const auto is_input = [&](const ChannelMean& m) {
-    return std::any_of(inputs.begin(), inputs.end(),
-                       [&](const auto& d) { return d.name == m.name; });
+  const auto input_of = [&](const ChannelMean& m) {
+    return std::find_if(inputs.begin(), inputs.end(),
+                        [&](const auto& d) { return d.name == m.name; });
   };
   const auto off = [&](const ChannelMean& m) {
     return m.std_error > 0 && std::abs(m.mean) > z * m.std_error;
   };
-  for (const ChannelMean& m : r.means) {
-    if (is_input(m) && off(m)) return {};
+  const bool inputs_off = std::any_of(r.means.begin(), r.means.end(), [&](const ChannelMean& m) {
+    return input_of(m) != inputs.end() && off(m);
+  });
+  MeanResponse response;
+  if (inputs_off) {
+    response = mean_response(r);
+    if (response.mean.empty()) return out;
   }
+  const auto& states = r.model->states();
   for (const ChannelMean& m : r.means) {
-    if (!is_input(m) && off(m)) out.push_back(&m);
+    if (input_of(m) != inputs.end() || !(m.std_error > 0)) continue;
+    Offset o{&m};
+    const auto state =
+        std::find_if(states.begin(), states.end(), [&](const auto& d) { return d.name == m.name; });
+    if (inputs_off) {
+      if (state == states.end()) continue;  // a derivative column: its response is not known
+      const auto s = static_cast<std::size_t>(state - states.begin());
+      o.responds = true;
+      o.expected = response.mean[s];
+      double variance = m.std_error * m.std_error;
+      for (const ChannelMean& u : r.means) {
+        const auto input = input_of(u);
+        if (input == inputs.end()) continue;
+        const double g = response.gain[s][static_cast<std::size_t>(input - inputs.begin())];
+        variance += g * g * u.std_error * u.std_error;
+      }
+      o.std_error = std::sqrt(variance);
+      if (!(std::abs(m.mean - o.expected) > z * o.std_error + std::abs(o.expected))) continue;
+    } else {
+      if (!off(m)) continue;
+      o.std_error = m.std_error;
+    }
+    for (const ChannelStatistics& c : r.data.channels) {
+      if (c.name == m.name && c.variance > 0) o.spread = std::sqrt(c.variance);
+    }
+    out.push_back(o);
   }
   return out;
 }
 
-// "'y' has the mean 0.0123 (5.1 standard errors from zero)".
-std::string mean_text(const ChannelMean& m) {
-  return "'" + m.name + "' has the mean " + number(m.mean, "%.3g") + " (" +
-         number(std::abs(m.mean) / m.std_error, "%.2g") + " standard errors from zero)";
+// "'y' has the mean 0.0123, 0.12 of its standard deviation (5.1 standard errors from zero)", or
+// "... (5.1 standard errors from the 0.0004 that the inputs' means give it)".
+std::string mean_text(const Offset& o) {
+  const ChannelMean& m = *o.mean;
+  std::string out = "'" + m.name + "' has the mean " + number(m.mean, "%.3g");
+  if (o.spread > 0)
+    out += ", " + number(std::abs(m.mean) / o.spread, "%.2g") + " of its standard deviation";
+  out += " (" + number(std::abs(m.mean - o.expected) / o.std_error, "%.2g") +
+         " standard errors from " +
+         (!o.responds ? std::string("zero")
+                      : "the " + number(o.expected, "%.3g") + " that the inputs' means give it") +
+         ")";
+  return out;
 }
 
 }  // namespace
@@ -73,9 +126,13 @@ std::vector<std::string> doubts(const IdentifyResult& r) {
   if (e.j_pvalue && *e.j_pvalue < kJRejection) {  // the J test comes with the optimal weighting
     // Offsets too small for a warning of their own may still be what the test sees.
     std::string seen;
-    for (const ChannelMean* m : offsets(r, kWeakOffsetZ)) {
-      seen += "; " + mean_text(*m) + ": an offset? remove it with --center " + m->name;
-      if (std::abs(m->mean) > kOffsetZ * m->std_error) seen += " (see below)";
+    const std::vector<Offset> strong = offsets(r, kOffsetZ);
+    for (const Offset& o : offsets(r, kWeakOffsetZ)) {
+      seen += "; " + mean_text(o) + ": an offset? remove it with --center " + o.mean->name;
+      if (std::any_of(strong.begin(), strong.end(),
+                      [&](const Offset& s) { return s.mean == o.mean; })) {
+        seen += " (see below)";
+      }
     }
     out.push_back("the J test rejects the model (p = " + number(*e.j_pvalue, "%.2g") +
                   "): its moment equations disagree with each other more than their errors "
@@ -100,12 +157,15 @@ std::vector<std::string> doubts(const IdentifyResult& r) {
                   "end to end), or its columns are not what the model's kinematic equations say "
                   "(v is not y', or the channels are shifted in time)");
   }
-  for (const ChannelMean* m : offsets(r, kOffsetZ)) {
-    out.push_back(mean_text(*m) + ", but model " + r.model->name() +
-                  " is symmetric (every term odd) and its inputs have no mean, so its states "
-                  "have none: a sensor offset? It biases the estimates; if it is one, remove it "
-                  "with --center " +
-                  m->name);
+  for (const Offset& o : offsets(r, kOffsetZ)) {
+    out.push_back(mean_text(o) + ", but model " + r.model->name() +
+                  " is symmetric (every term odd), " +
+                  (!o.responds ? "and its inputs have no mean, so its states have none"
+                               : "so its states have no mean but the response to the "
+                                 "inputs' means") +
+                  ": a sensor offset? It biases the estimates; if it is one, remove it with "
+                  "--center " +
+                  o.mean->name);
   }
   return out;
 }

@@ -2,11 +2,13 @@
 // frequencies and damping ratios, with standard errors by the delta method.
 
 #include <Eigen/Eigenvalues>
+#include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <numbers>
+#include <optional>
 
 #include "momentid/algebra_lock.hpp"
 #include "momentid/error.hpp"
@@ -24,9 +26,11 @@ class RightHandSide {
  public:
   RightHandSide(const Model& model, const std::vector<double>& theta, std::vector<double> u)
       : f_(model, numbers(theta)), u_(std::move(u)), n_(f_.states()) {}
-  VectorXd operator()(const VectorXd& y) const {
+  VectorXd operator()(const VectorXd& y) const { return at(y, u_); }
+  // f at y with the inputs at `u` instead.
+  VectorXd at(const VectorXd& y, const std::vector<double>& u) const {
     VectorXd out(n_);
-    if (!f_.derivative(y.data(), u_.data(), out.data())) out.setConstant(NAN);
+    if (!f_.derivative(y.data(), u.data(), out.data())) out.setConstant(NAN);
     return out;
   }
   int states() const { return n_; }
@@ -307,7 +311,60 @@ Result or_unavailable(const Compute& compute) {
   }
 }
 
+// The gains of mean_response: -A^-1 B of the linearisation at the origin, the inputs' columns
+// of B by central differences of a step of each input's standard deviation.
+std::optional<MatrixXd> mean_gains(const IdentifyResult& r) {
+  const Model& model = *r.model;
+  const std::size_t inputs = model.inputs().size();
+  const RightHandSide f(model, estimates_of(r), std::vector<double>(inputs, 0.0));
+  const VectorXd origin = VectorXd::Zero(f.states());
+  int kink = -1;
+  const MatrixXd a = jacobian(f, origin, kink);
+  if (kink >= 0 || !a.allFinite()) return std::nullopt;
+  MatrixXd b(f.states(), static_cast<Eigen::Index>(inputs));
+  for (std::size_t j = 0; j < inputs; ++j) {
+    const auto statistics =
+        std::find_if(r.data.channels.begin(), r.data.channels.end(),
+                     [&](const ChannelStatistics& c) { return c.name == model.inputs()[j].name; });
+    const double h = statistics == r.data.channels.end() || !(statistics->variance > 0)
+                         ? 1.0
+                         : std::sqrt(statistics->variance);
+    std::vector<double> up(inputs, 0.0), down(inputs, 0.0);
+    up[j] = h;
+    down[j] = -h;
+    b.col(static_cast<Eigen::Index>(j)) = (f.at(origin, up) - f.at(origin, down)) / (2 * h);
+  }
+  const Eigen::FullPivLU<MatrixXd> lu(a);
+  if (!lu.isInvertible() || !b.allFinite()) return std::nullopt;
+  return MatrixXd(-lu.solve(b));
+}
+
 }  // namespace
+
+MeanResponse mean_response(const IdentifyResult& r) {
+  MeanResponse out;
+  if (!r.estimate.usable() || r.model->inputs().empty()) return out;
+  const AlgebraLock lock;
+  std::optional<MatrixXd> gains;
+  try {
+    gains = mean_gains(r);
+  } catch (const Error&) {
+    return out;  // the estimates make no model to evaluate
+  }
+  if (!gains) return out;
+  const std::vector<double> u = input_means(r);
+  for (Eigen::Index s = 0; s < gains->rows(); ++s) {
+    std::vector<double> row;
+    double mean = 0;
+    for (Eigen::Index j = 0; j < gains->cols(); ++j) {
+      row.push_back((*gains)(s, j));
+      mean += row.back() * u[static_cast<std::size_t>(j)];
+    }
+    out.mean.push_back(mean);
+    out.gain.push_back(std::move(row));
+  }
+  return out;
+}
 
 LinearisedModes linearised_modes(const IdentifyResult& r) {
   const AlgebraLock lock;

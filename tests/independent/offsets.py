@@ -1,0 +1,119 @@
+#!/usr/bin/python3
+"""The mean test of identify's defaults on records of an independent generator (lab_records.py:
+the Duffing oscillator at 5 Hz under a shaker force, 1024 Hz, 10^5 samples): a sensor offset on
+the displacement is named, with its size in standard deviations and `--center`, on the paths
+that see the states' means, and no offset is named where there is none.
+
+  force_offset  y and the force, 3% noise, y offset 0.12 sd and a DAQ offset of 1% of the
+                force's sd: `doubtful`, a warning naming 'y', its size ("0.12 of its standard
+                deviation") and --center y; with --center y: `ok` within 3 standard errors.
+  sizes         y offsets of 0.02, 0.05 and 0.12 sd, with and without 3% noise, on records of
+                y and the force (the lagged equations) and of y, the acceleration a and the
+                force (models/duffing_accelerometer.mom): `doubtful`, the offset named (the
+                smallest lies about 10 standard errors from zero).
+  no_offset     RECORDS records (default 40) of y and the force with 3% noise and no offset
+                on y, half of them with a force offset of 1% of its sd: an offset named on at
+                most 5% of them.
+
+Usage: offsets.py CASE MOMENTID MODELS WORKDIR [RECORDS]
+(the files go to WORKDIR/offsets_CASE)
+"""
+import os
+import sys
+
+import numpy as np
+
+import lab_records as lab
+
+FS, SAMPLES = 1024, 100000
+
+
+def record(seed):
+    """The clean record of seed `seed`, with the acceleration `a` the equation gives."""
+    clean = lab.sdof(np.random.default_rng(seed), FS, SAMPLES)
+    p = lab.SDOF
+    clean["a"] = (clean["x"] - p["c"] * clean["v"] - p["k"] * clean["y"]
+                  - p["eps"] * clean["y"]**3)
+    return clean
+
+
+def write(path, clean, channels, noise, offsets, seed):
+    """The measured channels, with `t`, noise and offsets (fractions of each channel's sd)."""
+    rng = np.random.default_rng(seed + 1000)
+    columns = {"t": clean["t"]}
+    for name in channels:
+        columns[name] = lab.measured(rng, clean[name], noise, offsets.get(name, 0.0))
+    lab.write_csv(path, columns)
+
+
+def named(report, name):
+    """Whether a warning names an offset on `name` with its size and the --center remedy."""
+    return any(w.startswith(f"'{name}' has the mean") and "of its standard deviation" in w
+               and f"--center {name}" in w for w in report["diagnostics"]["warnings"])
+
+
+def identify(momentid, model, path, *options):
+    """Prints the command and the report; returns the status, the largest distance from the
+    truth in standard errors and the report."""
+    print(f"{os.path.basename(model)} on {os.path.basename(path)} {' '.join(options)}")
+    report = lab.identify(momentid, model, path, *options)
+    worst = lab.describe(report, lab.SDOF)
+    status = report["diagnostics"]["status"] if "diagnostics" in report else "failed"
+    return status, worst, report
+
+
+def force_offset(momentid, models, workdir, records):
+    path = f"{workdir}/record.csv"
+    write(path, record(20271201), ("y", "x"), 0.03, {"y": 0.12, "x": 0.01}, 20271201)
+    model = f"{models}/duffing.mom"
+    status, _, report = identify(momentid, model, path)
+    passed = status == "doubtful" and named(report, "y")
+    status, worst, _ = identify(momentid, model, path, "--center", "y")
+    return passed and status == "ok" and worst <= 3
+
+
+def sizes(momentid, models, workdir, records):
+    clean = record(20271202)
+    passed = True
+    for channels, model in ((("y", "x"), "duffing.mom"),
+                            (("y", "a", "x"), "duffing_accelerometer.mom")):
+        for noise in (0.0, 0.03):
+            for offset in (0.02, 0.05, 0.12):
+                path = f"{workdir}/{''.join(channels)}_{offset}_{noise}.csv"
+                write(path, clean, channels, noise, {"y": offset}, 20271202)
+                status, worst, report = identify(momentid, f"{models}/{model}", path)
+                good = status == "doubtful" and named(report, "y")
+                print(f"  offset {offset} sd, noise {noise:.0%}: {'as expected' if good else 'WRONG'}")
+                passed &= good
+    return passed
+
+
+def no_offset(momentid, models, workdir, records):
+    alarms = 0
+    for r in range(records):
+        seed = 20271300 + r
+        path = f"{workdir}/record.csv"
+        write(path, record(seed), ("y", "x"), 0.03, {"x": 0.01 if r % 2 else 0.0}, seed)
+        _, _, report = identify(momentid, f"{models}/duffing.mom", path)
+        alarm = "diagnostics" not in report or any(
+            "--center" in w for w in report["diagnostics"]["warnings"])
+        alarms += alarm
+    print(f"an offset named on {alarms} of {records} records without one")
+    return alarms <= 0.05 * records
+
+
+CASES = {case.__name__: case for case in (force_offset, sizes, no_offset)}
+
+
+def main():
+    case, momentid, models, workdir = sys.argv[1:5]
+    records = int(sys.argv[5]) if len(sys.argv) > 5 else 40
+    workdir = f"{workdir}/offsets_{case}"
+    os.makedirs(workdir, exist_ok=True)
+    passed = CASES[case](momentid, models, workdir, records)
+    print("passed" if passed else "FAILED")
+    sys.exit(0 if passed else 1)
+
+
+if __name__ == "__main__":
+    main()
