@@ -123,6 +123,10 @@ std::vector<std::pair<std::string, double>> assumed(const IdentifyResult& r) {
   return out;
 }
 
+// The errors' degrees of freedom as a reader uses them: above 10^5 their t quantiles are the
+// normal ones to four digits, and a noise-free record gives billions.
+std::string dof_text(double dof) { return dof > 1e5 ? "more than 10^5" : number(dof, "%.0f"); }
+
 // The status, the warnings, the system's and the errors' figures, the J test, the refinements and
 // the stationarity identities.
 void diagnostics_text(std::ostringstream& out, const IdentifyResult& r) {
@@ -140,10 +144,10 @@ void diagnostics_text(std::ostringstream& out, const IdentifyResult& r) {
     const bool ends =
         r.zero_lag && r.zero_lag->end_values && r.zero_lag->end_values->unavailable.empty();
     out << "; standard errors from their long-run covariance"
-        << (ends ? " and the record's ends" : "") << " on " << number(e.least_squares.dof, "%.0f")
+        << (ends ? " and the record's ends" : "") << " on " << dof_text(e.least_squares.dof)
         << " degrees of freedom";
     if (e.optimal) {
-      out << " (optimally weighted: " << number(e.optimal->dof, "%.0f") << ")";
+      out << " (optimally weighted: " << dof_text(e.optimal->dof) << ")";
     }
   }
   out << "\n";
