@@ -1,10 +1,12 @@
 // The channels' means and their standard errors, which tell a sensor offset from the mean a
 // finite record has by chance (docs/cli/identify.md, "Warnings").
 
+#include "app/identify/channel_means.hpp"
+
 #include <algorithm>
 #include <cmath>
 
-#include "app/identify/steps.hpp"
+#include "app/identify/moment_lists.hpp"
 #include "solve/delta_method.hpp"
 
 namespace momentid {

@@ -1,9 +1,11 @@
 // The record's ends: the zero-lag equations take the stationarity identities E[(g)'] = 0, which
 // a finite record meets only up to (g(end) - g(start)) / T (docs/uncertainty.md, "End values").
 
+#include "app/identify/end_values.hpp"
+
 #include <map>
 
-#include "app/identify/steps.hpp"
+#include "app/identify/moment_lists.hpp"
 
 namespace momentid {
 

@@ -1,13 +1,15 @@
 // The held-input correction of the zero-lag estimate: an input held over each sample puts kinks
 // into the states at the samples, which bias the moments whose derivative holds it.
 
+#include "app/identify/held_input.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <map>
 #include <optional>
 
-#include "app/identify/steps.hpp"
+#include "app/identify/moment_lists.hpp"
 
 namespace momentid {
 

@@ -2,7 +2,10 @@
 
 #include <memory>
 
-#include "app/identify/steps.hpp"
+#include "app/identify/integrate.hpp"
+#include "app/identify/lagged.hpp"
+#include "app/identify/plan.hpp"
+#include "app/identify/zero_lag.hpp"
 #include "momentid/algebra_lock.hpp"
 
 namespace momentid {

@@ -2,6 +2,8 @@
 // high-pass filter the pass puts every channel through, chosen from the record's band when not
 // given (docs/model-language.md, "Forming a state from its acceleration").
 
+#include "app/identify/integrate.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <complex>
@@ -9,8 +11,8 @@
 #include <stdexcept>
 #include <unsupported/Eigen/FFT>
 
-#include "app/identify/steps.hpp"
 #include "common/number.hpp"
+#include "momentid/lagged.hpp"
 #include "moments/integration.hpp"
 
 namespace momentid {

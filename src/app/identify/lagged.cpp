@@ -1,13 +1,20 @@
 // The lagged moment equations (docs/measured-data.md): an instrument at t - s times an
 // equation at t, for records that lack a state's column or carry sensor noise.
 
+#include "app/identify/lagged.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <map>
 #include <numeric>
 #include <tuple>
 
-#include "app/identify/steps.hpp"
+#include "app/identify/channel_means.hpp"
+#include "app/identify/lagged_window.hpp"
+#include "app/identify/moment_lists.hpp"
+#include "app/identify/pass.hpp"
+#include "app/identify/plan.hpp"
+#include "app/identify/zero_lag_check.hpp"
 #include "common/number.hpp"
 
 namespace momentid {
@@ -22,59 +29,6 @@ constexpr double kNoisyArgument = 0.02;
 bool function_holds(const VariableFunction& f, std::size_t c) {
   return std::any_of(f.argument.begin(), f.argument.end(),
                      [&](const auto& term) { return term.second[c] != 0; });
-}
-
-// Per measured (or formed) state that the lagged equations read, or derivative column that
-// stands for its unmeasured state: the lag at which its autocorrelation first falls below 1/e,
-// from the lagged moments C[y;y](s) of the pass; 0 when it stays above across the window.
-std::map<std::string, int> correlation_lags(const IdentifyResult& r,
-                                            const std::vector<int>& channel) {
-  const LaggedSystem& system = *r.lagged->system;
-  const Model& model = *r.model;
-  std::map<Moment, std::size_t> index;
-  for (std::size_t k = 0; k < r.lagged->moments.size(); ++k) index.emplace(r.lagged->moments[k], k);
-  std::map<std::string, int> out;
-  const std::vector<VariableReading> readings = variable_readings(model, system.measured);
-  const auto formed_from = [&](const std::string& column) {
-    return r.integration && std::any_of(r.integration->formed.begin(), r.integration->formed.end(),
-                                        [&](const auto& f) { return f.variable == column; });
-  };
-  for (std::size_t v = 0; v < model.channel_count(); ++v) {
-    const Variable& variable = model.variables()[v];
-    // A derivative column counts where its state is read through it, not formed from it.
-    const bool stands_for_state =
-        variable.kind == VariableKind::kState ||
-        (variable.kind == VariableKind::kDerivative && !formed_from(variable.name) &&
-         readings[static_cast<std::size_t>(
-                      model.measured_derivatives()[static_cast<std::size_t>(variable.index)].state)]
-                 .order < 0);
-    if (channel[v] < 0 || !system.measured[v] || !stands_for_state) continue;
-    const ChannelStatistics& c = r.data.channels[static_cast<std::size_t>(channel[v])];
-    if (!(c.variance > 0)) continue;
-    Monomial y(channel.size(), 0);
-    y[static_cast<std::size_t>(channel[v])] = 1;
-    int tau = 0;
-    for (int s = system.first_lag; s <= system.last_lag && tau == 0; ++s) {
-      const auto it = index.find(lagged_moment(y, y, s));
-      if (it == index.end()) continue;
-      const double rho = (r.data.estimates.mean[it->second] - c.mean * c.mean) / c.variance;
-      if (rho < std::exp(-1.0)) tau = s;
-    }
-    out[c.name] = tau;
-  }
-  return out;
-}
-
-// The last lag that spans five correlation times of the slowest measured state; four times the
-// window when a state stays correlated across it. Kept within the bounds of the lag options.
-int lag_window(const IdentifyResult& r) {
-  const LaggedSystem& system = *r.lagged->system;
-  int wanted = 0;
-  for (const auto& [name, tau] : r.lagged->correlation_lags) {
-    wanted = std::max(wanted, tau > 0 ? 5 * tau : 4 * system.last_lag);
-  }
-  if (wanted == 0) return system.last_lag;
-  return std::clamp(wanted, system.first_lag + LagOptions::kMinSpan - 1, LagOptions::kMaxLag);
 }
 
 // Multipliers, a degree and the sampling bias belong to the zero-lag equations.
@@ -96,48 +50,6 @@ void check_lagged_options(const Model& model, const IdentifyOptions& options,
     throw UsageError("multipliers and a degree choose zero-lag equations, but " + why +
                      ": the lagged equations take instruments instead");
   }
-}
-
-// The channels a lagged pass reads: the variables the equations need, states, inputs and
-// derivatives, as the pass numbers them, then the functions it computes from them.
-struct LaggedChannels {
-  std::vector<std::string> states, inputs, derivatives;
-  std::vector<ComputedChannel> computed;  // over the channels read
-  std::vector<int> channel;               // per model variable: its channel, or -1 when not read
-};
-
-LaggedChannels lagged_channels(const Model& model, const LaggedSystem& system) {
-  LaggedChannels out;
-  out.channel.assign(model.variables().size(), -1);
-  std::size_t next = 0;
-  for (std::size_t v = 0; v < model.variables().size(); ++v) {
-    const Variable& variable = model.variables()[v];
-    if (!variable.channel() || !system.needed[v]) continue;
-    (variable.kind == VariableKind::kState   ? out.states
-     : variable.kind == VariableKind::kInput ? out.inputs
-                                             : out.derivatives)
-        .push_back(variable.name);
-    // The pass numbers its channels in the variables' order.
-    out.channel[v] = static_cast<int>(next++);
-  }
-  if (model.functions().empty()) return out;
-  const std::vector<ComputedChannel> all = computed_channels(model);
-  for (std::size_t u = 0; u < model.variables().size(); ++u) {
-    const Variable& variable = model.variables()[u];
-    if (variable.channel() || !system.needed[u]) continue;
-    const ComputedChannel& function = all[static_cast<std::size_t>(variable.index)];
-    ComputedChannel c{.sign = function.sign, .argument = {}};
-    for (const auto& [coefficient, monomial] : function.argument) {
-      Monomial read(next, 0);
-      for (std::size_t v = 0; v < monomial.size(); ++v) {
-        if (monomial[v] != 0) read[static_cast<std::size_t>(out.channel[v])] = monomial[v];
-      }
-      c.argument.emplace_back(coefficient, std::move(read));
-    }
-    out.computed.push_back(std::move(c));
-    out.channel[u] = static_cast<int>(next + out.computed.size() - 1);
-  }
-  return out;
 }
 
 // The warnings for functions whose argument holds a noisy channel: the Hermite correction
@@ -169,135 +81,96 @@ std::vector<std::string> noisy_function_warnings(const IdentifyResult& result,
   return out;
 }
 
-// The moments the lagged equations for `lag_options` read.
-std::size_t moment_count(const Model& model, const LagOptions& lag_options) {
-  const LaggedSystem system = derive_lagged(model, lag_options);
-  return lagged_rows(system, 1.0, lagged_channels(model, system).channel, {}).moments.size();
-}
+// What the options and the record's survey decide before the pass, computed once and read by
+// every step (the window may still grow after the first pass: widen_window).
+struct LaggedPlan {
+  LagOptions lags;              // the window and instruments, fitted to the moment budget
+  std::string instruments_cut;  // "4 of the 10 instruments" when the budget cut them, or empty
+  std::optional<ZeroLagCheckPlan> check;
+  std::vector<std::optional<double>> fixed;  // per parameter (fixed_values)
+};
 
-// The last lag at which `count` moments over lags first..last would stay within the budget,
-// taking them to grow in proportion to the number of lags.
-int last_lag_within_budget(int first, int last, std::size_t count) {
-  const double per_lag = static_cast<double>(count) / (last - first + 1);
-  return first - 1 + static_cast<int>(IdentifyOptions::kMaxLaggedMoments / std::max(per_lag, 1.0));
-}
-
-// `all` cut to `keep` instruments: the linear ones (the measured states) before powers, spread
-// evenly over the states when they are more than `keep`.
-std::vector<Monomial> fewer_instruments(const std::vector<Monomial>& all, std::size_t keep) {
-  std::vector<Monomial> linear, powers;
-  for (const Monomial& m : all) {
-    (std::accumulate(m.begin(), m.end(), 0) == 1 ? linear : powers).push_back(m);
-  }
-  std::vector<Monomial> out;
-  if (keep <= linear.size()) {
-    for (std::size_t i = 0; i < keep; ++i) {
-      const std::size_t at = keep == 1 ? 0 : i * (linear.size() - 1) / (keep - 1);
-      out.push_back(linear[at]);
-    }
-    return out;
-  }
-  out = linear;
-  out.insert(out.end(), powers.begin(), powers.begin() + static_cast<long>(keep - linear.size()));
-  return out;
-}
-
-// Fits the lags and instruments of `lag_options` to IdentifyOptions::kMaxLaggedMoments where the
-// user left them to identify: the window shrinks first, to no fewer than LagOptions::kMinSpan
-// lags, then instruments go (powers first) until that window fits, which then grows again as
-// far as the budget allows. Returns the instruments cut ("4 of the 10 instruments"), or empty;
-// throws UsageError naming the options the user gave when these alone exceed the budget.
-std::string fit_to_budget(const Model& model, LagOptions& lag_options,
-                          const IdentifyOptions& options) {
-  const int first = lag_options.first_lag, default_last = lag_options.last_lag;
-  std::size_t count = moment_count(model, lag_options);
-  const std::size_t budget = IdentifyOptions::kMaxLaggedMoments;
-  if (count <= budget) return "";
-  if (!options.lags) {
-    lag_options.last_lag = std::max(first + LagOptions::kMinSpan - 1,
-                                    last_lag_within_budget(first, default_last, count));
-    count = moment_count(model, lag_options);
-  }
-  std::string cut;
-  if (count > budget && !options.instruments) {
-    const std::vector<Monomial> all = derive_lagged(model, lag_options).instruments;
-    lag_options.instruments = all;
-    for (std::size_t keep = all.size() - 1; keep >= 1 && count > budget; --keep) {
-      lag_options.instruments = fewer_instruments(all, keep);
-      count = moment_count(model, lag_options);
-    }
-    cut = std::to_string(lag_options.instruments->size()) + " of the " +
-          std::to_string(all.size()) + " instruments";
-    if (!options.lags && count <= budget) {
-      lag_options.last_lag =
-          std::min(default_last, last_lag_within_budget(first, lag_options.last_lag, count));
+LaggedPlan plan_lagged(const Model& model, const IdentifyOptions& options,
+                       const std::vector<bool>& measured,
+                       const std::optional<IdentifyResult::Integration>& integration) {
+  check_lagged_options(model, options, measured);
+  LaggedPlan plan;
+  if (options.lags) std::tie(plan.lags.first_lag, plan.lags.last_lag) = *options.lags;
+  plan.lags.instruments = options.instruments;
+  plan.lags.measured = measured;
+  if (integration && !options.instruments) {
+    // The formed states carry the integral of the column's noise, slow and correlated across
+    // every lag: the columns they are formed from are the instruments, their noise white.
+    std::vector<Monomial>& instruments = plan.lags.instruments.emplace();
+    for (const auto& formed : integration->formed) {
+      Monomial m(model.variables().size(), 0);
+      m[static_cast<std::size_t>(model.variable_index(formed.variable))] = 1;
+      if (std::find(instruments.begin(), instruments.end(), m) == instruments.end()) {
+        instruments.push_back(m);
+      }
     }
   }
-  if (count > budget && !options.lags && !options.instruments) {
-    throw Error("the lagged equations of model " + model.name() + " need " + std::to_string(count) +
-                " moments with one instrument at lags " + std::to_string(first) + ".." +
-                std::to_string(lag_options.last_lag) + ", more than " + std::to_string(budget));
-  }
-  if (count > budget) {
-    const std::string given = options.lags && options.instruments ? "lags and instruments"
-                              : options.lags                      ? "lags"
-                                                                  : "instruments";
-    throw UsageError(options.lags ? "lags" : "instruments",
-                     "the " + given + " given need " + std::to_string(count) +
-                         " moments, more than " + std::to_string(budget) +
-                         ": give fewer lags or instruments");
-  }
-  return cut;
+  plan.instruments_cut = fit_to_budget(model, plan.lags, options);
+  plan.check = plan_zero_lag_check(model, options, measured);
+  plan.fixed = fixed_values(model, options.fixed);
+  return plan;
 }
 
-// Derives the equations for the lags of `lag_options` and makes the pass over the data into
-// `result`, reading the zero-lag check's moments as well when `check` plans one (into
-// `check_moments`; the check is dropped when the pass does not read a variable it needs).
-LaggedChannels read_lagged(IdentifyResult& result, const LagOptions& lag_options,
-                           const DataSource& source, const IdentifyOptions& options,
-                           std::optional<ZeroLagCheckPlan>& check, MomentEstimates& check_moments) {
-  result.lagged = IdentifyResult::Lagged{};
-  result.lagged->system =
-      std::make_shared<const LaggedSystem>(derive_lagged(*result.model, lag_options));
-  LaggedChannels c = lagged_channels(*result.model, *result.lagged->system);
-  result.lagged->channels = c.states;
-  result.lagged->channels.insert(result.lagged->channels.end(), c.inputs.begin(), c.inputs.end());
-  result.lagged->channels.insert(result.lagged->channels.end(), c.derivatives.begin(),
-                                 c.derivatives.end());
-  // The rows need the sample interval, which the data give: accumulate, then build rows.
-  const LaggedRows probe = lagged_rows(*result.lagged->system, 1.0, c.channel, {});
-  result.lagged->moments = probe.moments;
-  // The channels' means come with the pass.
-  std::vector<Moment> moments = probe.moments;
-  std::vector<std::size_t> mean_index;
+// What a lagged pass read beside result.data: its channels, and the zero-lag check's moments
+// when the plan has a check and the pass reads every variable it needs.
+struct LaggedPass {
+  LaggedChannels channels;
+  std::optional<MomentEstimates> check_moments;
+};
+
+// What a lagged pass reads: the equations' moments, then the channels' means and the zero-lag
+// check's moments where these are not among them, with the index of each of these.
+struct PassMoments {
+  std::vector<Moment> moments;
+  std::vector<std::size_t> mean_index;   // per channel
+  std::vector<std::size_t> check_index;  // per moment of the check's plan
+  bool read_check = false;  // the plan has a check, and the pass reads every variable it needs
+};
+
+PassMoments pass_moments(const IdentifyResult& result, const LaggedChannels& c,
+                         const std::vector<Moment>& equations,
+                         const std::optional<ZeroLagCheckPlan>& check) {
+  PassMoments out{equations, {}, {}, false};
+  std::vector<Moment>& moments = out.moments;
   for (const Monomial& m : first_moments_of(result.lagged->channels.size())) {
     const Moment mean = Moment::from_monomial(m);
     const auto found = std::find(moments.begin(), moments.end(), mean);
-    mean_index.push_back(static_cast<std::size_t>(found - moments.begin()));
+    out.mean_index.push_back(static_cast<std::size_t>(found - moments.begin()));
     if (found == moments.end()) moments.push_back(mean);
   }
-  std::vector<std::size_t> check_index;
-  if (check && std::all_of(check->moments.begin(), check->moments.end(), [&](const Monomial& m) {
+  out.read_check =
+      check && std::all_of(check->moments.begin(), check->moments.end(), [&](const Monomial& m) {
         for (std::size_t v = 0; v < m.size(); ++v) {
           if (m[v] != 0 && c.channel[v] < 0) return false;
         }
         return true;
-      })) {
-    std::map<Moment, std::size_t> at;
-    for (std::size_t k = 0; k < moments.size(); ++k) at.emplace(moments[k], k);
-    for (const Monomial& m : check->moments) {
-      Monomial read(result.lagged->channels.size() + c.computed.size(), 0);
-      for (std::size_t v = 0; v < m.size(); ++v) {
-        if (m[v] != 0) read[static_cast<std::size_t>(c.channel[v])] = m[v];
-      }
-      const Moment moment = m.rate() ? Moment::increment_of(read) : Moment::from_monomial(read);
-      const auto [it, added] = at.emplace(moment, moments.size());
-      if (added) moments.push_back(it->first);
-      check_index.push_back(it->second);
+      });
+  if (!out.read_check) return out;
+  std::map<Moment, std::size_t> at;
+  for (std::size_t k = 0; k < moments.size(); ++k) at.emplace(moments[k], k);
+  for (const Monomial& m : check->moments) {
+    Monomial read(result.lagged->channels.size() + c.computed.size(), 0);
+    for (std::size_t v = 0; v < m.size(); ++v) {
+      if (m[v] != 0) read[static_cast<std::size_t>(c.channel[v])] = m[v];
     }
-  } else {
-    check.reset();
+    const Moment moment = m.rate() ? Moment::increment_of(read) : Moment::from_monomial(read);
+    const auto [it, added] = at.emplace(moment, moments.size());
+    if (added) moments.push_back(it->first);
+    out.check_index.push_back(it->second);
   }
+  return out;
+}
+
+// The options of the lagged pass: the derivative columns, the integration filter of the formed
+// states, the batches the optimal weighting needs for `equations` equations, the offsets.
+DataOptions lagged_pass_options(IdentifyResult& result, const LaggedChannels& c,
+                                std::size_t equations, const DataSource& source,
+                                const IdentifyOptions& options) {
   DataOptions data_options = pass_options(*result.model, options);
   data_options.derivatives = c.derivatives;
   if (const auto& integration = result.integration) {
@@ -316,22 +189,45 @@ LaggedChannels read_lagged(IdentifyResult& result, const LagOptions& lag_options
     }
   }
   // The optimal weighting estimates the equations' covariance from the batches.
-  data_options.min_batches = kBatchesPerEquation * probe.rows.a.size();
+  data_options.min_batches = kBatchesPerEquation * equations;
   data_options.offsets =
       channel_offsets(source, c.states, c.inputs, data_options, options.center, result.centered);
   data_options.computed = c.computed;
-  result.data = moments_from_data(source, c.states, c.inputs, moments, data_options);
-  result.means = channel_means(result.lagged->channels, result.data.estimates, mean_index);
+  return data_options;
+}
+
+// Derives the equations for the plan's lags and makes the pass over the data into `result`,
+// reading the zero-lag check's moments as well when the plan has a check.
+LaggedPass read_lagged(IdentifyResult& result, const LaggedPlan& plan, const DataSource& source,
+                       const IdentifyOptions& options) {
+  result.lagged = IdentifyResult::Lagged{};
+  result.lagged->system =
+      std::make_shared<const LaggedSystem>(derive_lagged(*result.model, plan.lags));
+  LaggedChannels c = lagged_channels(*result.model, *result.lagged->system);
+  result.lagged->channels = c.states;
+  result.lagged->channels.insert(result.lagged->channels.end(), c.inputs.begin(), c.inputs.end());
+  result.lagged->channels.insert(result.lagged->channels.end(), c.derivatives.begin(),
+                                 c.derivatives.end());
+  // The rows need the sample interval, which the data give: accumulate, then build rows.
+  const LaggedRows probe = lagged_rows(*result.lagged->system, 1.0, c.channel, {});
+  result.lagged->moments = probe.moments;
+  const PassMoments read = pass_moments(result, c, probe.moments, plan.check);
+  const DataOptions data_options =
+      lagged_pass_options(result, c, probe.rows.a.size(), source, options);
+  result.data = moments_from_data(source, c.states, c.inputs, read.moments, data_options);
+  // The channels' means come with the pass.
+  result.means = channel_means(result.lagged->channels, result.data.estimates, read.mean_index);
   add_end_errors(result.means, *result.model, result.data);
-  if (check) check_moments = moments_at(result.data.estimates, check_index);
+  LaggedPass pass{std::move(c), std::nullopt};
+  if (read.read_check) pass.check_moments = moments_at(result.data.estimates, read.check_index);
   result.data.estimates = first_moments(result.data.estimates, probe.moments.size());
   if (!result.data.time_step) {
     throw DataError({source.name(), 1, 1, ""},
                     "the lagged equations need the sample interval: give the data a 't' "
                     "column or a dt in the metadata");
   }
-  result.lagged->correlation_lags = correlation_lags(result, c.channel);
-  return c;
+  result.lagged->correlation_lags = correlation_lags(result, pass.channels.channel);
+  return pass;
 }
 
 // The noise on each channel of a state or a derivative: given, or estimated from its
@@ -411,63 +307,39 @@ MomentRows lagged_rows_of(const IdentifyResult& result, const LaggedSystem& syst
   return std::move(rows.rows);
 }
 
-void identify_lagged(IdentifyResult& result, const DataSource& source,
-                     const IdentifyOptions& options, const std::vector<bool>& measured) {
+namespace {
+
+// The default lags span about five correlation times of the measured states: when the first
+// pass shows them far from that (more than 1.5 times longer or 2 times shorter), a second pass
+// takes the lags the data call for, as far as the budget allows. Returns the window's cut
+// ("lags 3..300 (the correlation times call for ..600)") when the budget kept it short.
+std::string widen_window(IdentifyResult& result, LaggedPlan& plan, LaggedPass& pass,
+                         const DataSource& source, const IdentifyOptions& options) {
+  const LaggedSystem& system = *result.lagged->system;
+  const int wanted = lag_window(result);
+  const int most =
+      last_lag_within_budget(system.first_lag, system.last_lag, result.lagged->moments.size());
+  const int last = system.last_lag;
+  const int granted = std::max(std::min(wanted, most), system.first_lag + LagOptions::kMinSpan - 1);
+  if (2 * granted > 3 * last || 2 * granted < last) {
+    plan.lags.last_lag = granted;
+    pass = read_lagged(result, plan, source, options);
+  }
+  if (wanted <= 3 * result.lagged->system->last_lag / 2) return "";
+  return "lags " + std::to_string(result.lagged->system->first_lag) + ".." +
+         std::to_string(result.lagged->system->last_lag) + " (the correlation times call for .." +
+         std::to_string(wanted) + ")";
+}
+
+// The equations at the pass's moments, with the noise on each channel, solved into
+// result.estimate.
+void solve_lagged(IdentifyResult& result, const LaggedPlan& plan, const LaggedChannels& channels,
+                  const IdentifyOptions& options) {
   const Model& model = *result.model;
-  check_lagged_options(model, options, measured);
-  LagOptions lag_options;
-  if (options.lags) std::tie(lag_options.first_lag, lag_options.last_lag) = *options.lags;
-  lag_options.instruments = options.instruments;
-  lag_options.measured = measured;
-  if (result.integration && !options.instruments) {
-    // The formed states carry the integral of the column's noise, slow and correlated across
-    // every lag: the columns they are formed from are the instruments, their noise white.
-    lag_options.instruments.emplace();
-    for (const auto& formed : result.integration->formed) {
-      Monomial m(model.variables().size(), 0);
-      m[static_cast<std::size_t>(model.variable_index(formed.variable))] = 1;
-      if (std::find(lag_options.instruments->begin(), lag_options.instruments->end(), m) ==
-          lag_options.instruments->end()) {
-        lag_options.instruments->push_back(m);
-      }
-    }
-  }
-  const std::string instruments_cut = fit_to_budget(model, lag_options, options);
-  std::optional<ZeroLagCheckPlan> check = plan_zero_lag_check(model, options, measured);
-  MomentEstimates check_moments;
-  LaggedChannels channels = read_lagged(result, lag_options, source, options, check, check_moments);
-  // The default lags span about five correlation times of the measured states: when the
-  // first pass shows them far from that (more than 1.5 times longer or 2 times shorter), a
-  // second pass takes the lags the data call for, as far as the budget allows.
-  std::string window_cut;
-  if (!options.lags) {
-    const LaggedSystem& system = *result.lagged->system;
-    const int wanted = lag_window(result);
-    const int most =
-        last_lag_within_budget(system.first_lag, system.last_lag, result.lagged->moments.size());
-    const int last = system.last_lag;
-    const int granted =
-        std::max(std::min(wanted, most), system.first_lag + LagOptions::kMinSpan - 1);
-    if (2 * granted > 3 * last || 2 * granted < last) {
-      lag_options.last_lag = granted;
-      channels = read_lagged(result, lag_options, source, options, check, check_moments);
-    }
-    if (wanted > 3 * result.lagged->system->last_lag / 2) {
-      window_cut = "lags " + std::to_string(result.lagged->system->first_lag) + ".." +
-                   std::to_string(result.lagged->system->last_lag) +
-                   " (the correlation times call for .." + std::to_string(wanted) + ")";
-    }
-  }
-  if (!instruments_cut.empty() || !window_cut.empty()) {
-    result.lagged->cut = "cut to " + instruments_cut +
-                         (instruments_cut.empty() || window_cut.empty() ? "" : " and ") +
-                         window_cut + " to stay within " +
-                         std::to_string(IdentifyOptions::kMaxLaggedMoments) + " moments";
-  }
   result.lagged->noise = noise_variances(result, channels, options);
   // The moments name the computed channels after the channels read (lagged_moment_text).
   for (std::size_t v = 0; v < channels.channel.size(); ++v) {
-    const Variable& variable = result.model->variables()[v];
+    const Variable& variable = model.variables()[v];
     if (!variable.channel() && channels.channel[v] >= 0) {
       result.lagged->channels.push_back(variable.name);
     }
@@ -481,17 +353,18 @@ void identify_lagged(IdentifyResult& result, const DataSource& source,
                   result.lagged->noise, result.lagged->stencil_reach);
   std::vector<std::string> names;
   for (const Declaration& p : model.parameters()) names.push_back(p.name);
-  result.gmm = optimal_weighting(model, options, rows.rows.a.size());
+  result.gmm = optimal_weighting(options, plan.fixed, rows.rows.a.size());
   result.lagged->moment_variance =
       accuracy_floor(result.lagged->moments, result.data.estimates.mean);
   result.estimate = solve_rows(rows.rows, names, result.data.estimates,
                                {.gmm = result.gmm,
-                                .fixed = fixed_values(model, options.fixed),
+                                .fixed = plan.fixed,
                                 .normalise_rows = true,
                                 .moment_variance = result.lagged->moment_variance});
-  if (check && result.estimate.j_pvalue) {
-    check_with_zero_lag(result, *check, check_moments, channels.channel, options);
-  }
+}
+
+// The warnings of the lagged path: functions of noisy channels, states formed by integration.
+void add_lagged_warnings(IdentifyResult& result, const LaggedChannels& channels) {
   const std::vector<std::string> noisy = noisy_function_warnings(result, channels);
   result.estimate.warnings.insert(result.estimate.warnings.end(), noisy.begin(), noisy.end());
   if (const auto& integration = result.integration) {
@@ -505,6 +378,28 @@ void identify_lagged(IdentifyResult& result, const DataSource& source,
           "(docs/model-language.md, \"Forming a state from its acceleration\")");
     }
   }
+}
+
+}  // namespace
+
+void identify_lagged(IdentifyResult& result, const DataSource& source,
+                     const IdentifyOptions& options, const std::vector<bool>& measured) {
+  LaggedPlan plan = plan_lagged(*result.model, options, measured, result.integration);
+  LaggedPass pass = read_lagged(result, plan, source, options);
+  const std::string window_cut =
+      options.lags ? "" : widen_window(result, plan, pass, source, options);
+  if (!plan.instruments_cut.empty() || !window_cut.empty()) {
+    result.lagged->cut = "cut to " + plan.instruments_cut +
+                         (plan.instruments_cut.empty() || window_cut.empty() ? "" : " and ") +
+                         window_cut + " to stay within " +
+                         std::to_string(IdentifyOptions::kMaxLaggedMoments) + " moments";
+  }
+  solve_lagged(result, plan, pass.channels, options);
+  if (plan.check && pass.check_moments && result.estimate.j_pvalue) {
+    check_with_zero_lag(result, *plan.check, *pass.check_moments, pass.channels.channel,
+                        plan.fixed);
+  }
+  add_lagged_warnings(result, pass.channels);
 }
 
 }  // namespace momentid

@@ -1,10 +1,10 @@
 // The lists of moments a zero-lag pass reads: the increments for the rates of change, the
 // moments added for the refinements, and the system's own first.
 
+#include "app/identify/moment_lists.hpp"
+
 #include <algorithm>
 #include <set>
-
-#include "app/identify/steps.hpp"
 
 namespace momentid {
 

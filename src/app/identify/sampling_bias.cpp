@@ -1,10 +1,15 @@
 // The sampling bias of the zero-lag estimate (IdentifyOptions::extrapolate): the estimate again
 // from every other sample, and Richardson's extrapolation to dt = 0.
 
+#include "app/identify/sampling_bias.hpp"
+
 #include <algorithm>
 #include <cmath>
 
-#include "app/identify/steps.hpp"
+#include "app/identify/end_values.hpp"
+#include "app/identify/moment_lists.hpp"
+#include "app/identify/pass.hpp"
+#include "momentid/estimate.hpp"
 #include "solve/long_run.hpp"
 
 namespace momentid {
@@ -56,7 +61,8 @@ MomentEstimates every_other_sample(const IdentifyResult& result, const DataSourc
 }  // namespace
 
 void estimate_sampling_bias(IdentifyResult& result, const DataSource& source,
-                            DataOptions data_options, const IdentifyOptions& options) {
+                            DataOptions data_options,
+                            const std::vector<std::optional<double>>& fixed) {
   if (!result.model->inputs().empty() && result.data.hold == InputHold::kZeroOrderHold) {
     throw UsageError(
         "extrapolate",
@@ -68,9 +74,8 @@ void estimate_sampling_bias(IdentifyResult& result, const DataSource& source,
   const std::vector<std::vector<double>> fine_errors = fine.error_batches;
   if (fine_errors.empty() || fine.status != Status::kOk) return;
   const MomentEstimates coarse = every_other_sample(result, source, data_options, fine.batches);
-  const Estimate c =
-      solve(*result.zero_lag->system, result.zero_lag->moments, coarse,
-            {.gmm = result.gmm, .fixed = fixed_values(*result.model, options.fixed)});
+  const Estimate c = solve(*result.zero_lag->system, result.zero_lag->moments, coarse,
+                           {.gmm = result.gmm, .fixed = fixed});
   const std::vector<std::vector<double>>& coarse_errors = c.error_batches;
   Fit& fine_fit = fine.main();
   std::vector<ParameterEstimate>& list = fine_fit.parameters;

@@ -1,8 +1,16 @@
 // The zero-lag moment equations: derived once, their moments read in one pass, solved, refined.
 
+#include "app/identify/zero_lag.hpp"
+
 #include <algorithm>
 
-#include "app/identify/steps.hpp"
+#include "app/identify/channel_means.hpp"
+#include "app/identify/end_values.hpp"
+#include "app/identify/held_input.hpp"
+#include "app/identify/moment_lists.hpp"
+#include "app/identify/pass.hpp"
+#include "app/identify/plan.hpp"
+#include "app/identify/sampling_bias.hpp"
 
 namespace momentid {
 
@@ -13,6 +21,7 @@ ZeroLagPlan plan_zero_lag(const Model& model, const IdentifyOptions& options) {
   derive_options.degree = options.degree;
   derive_options.rates = true;
   plan.system = derive(model, derive_options);
+  plan.fixed = fixed_values(model, options.fixed);
   plan.moments = moments_to_estimate(plan.system);
   // A held input puts kinks into the states at the samples: the moments whose derivative
   // holds it are then corrected, with E[g''] from moments the pass adds (unless the data are
@@ -86,7 +95,7 @@ void identify_zero_lag(IdentifyResult& result, const DataSource& source,
   IdentifyResult::ZeroLag& zero_lag = result.zero_lag.emplace();
   zero_lag.system = std::make_shared<const MomentSystem>(plan.system);
   zero_lag.moments = plan.moments;
-  result.gmm = optimal_weighting(model, options, zero_lag.system->equations.size());
+  result.gmm = optimal_weighting(options, plan.fixed, zero_lag.system->equations.size());
   DataOptions data_options = pass_options(model, options);
   data_options.computed = computed_channels(model);
   // The optimal weighting estimates the equations' covariance from the batches.
@@ -104,7 +113,7 @@ void identify_zero_lag(IdentifyResult& result, const DataSource& source,
   result.means = channel_means(model.channel_names(), all, mean_index);
   add_end_errors(result.means, model, result.data);
 
-  SolveOptions solve_options{.gmm = result.gmm, .fixed = fixed_values(model, options.fixed)};
+  SolveOptions solve_options{.gmm = result.gmm, .fixed = plan.fixed};
   if (!plan.rated.empty()) {
     zero_lag.end_values.emplace().unavailable = plan.ends_unavailable;
     if (plan.ends_unavailable.empty() && result.data.estimates.intervals > 0) {
@@ -117,7 +126,7 @@ void identify_zero_lag(IdentifyResult& result, const DataSource& source,
   if (result.data.hold == InputHold::kZeroOrderHold) {
     correct_for_held_input(result, plan.held, plan.pass_moments, all, solve_options);
   }
-  if (options.extrapolate) estimate_sampling_bias(result, source, data_options, options);
+  if (options.extrapolate) estimate_sampling_bias(result, source, data_options, plan.fixed);
 }
 
 }  // namespace momentid

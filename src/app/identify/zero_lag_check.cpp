@@ -2,11 +2,14 @@
 // zero-lag equations of a higher degree, noise-corrected, solved from the same pass, and their
 // estimate compared with the lagged one.
 
+#include "app/identify/zero_lag_check.hpp"
+
 #include <algorithm>
 #include <map>
 #include <set>
 
-#include "app/identify/steps.hpp"
+#include "app/identify/end_values.hpp"
+#include "app/identify/plan.hpp"
 #include "solve/distributions.hpp"
 #include "solve/long_run.hpp"
 #include "solve/rows.hpp"
@@ -195,7 +198,7 @@ std::optional<ZeroLagCheckPlan> plan_zero_lag_check(const Model& model,
 
 void check_with_zero_lag(IdentifyResult& result, const ZeroLagCheckPlan& plan,
                          const MomentEstimates& moments, const std::vector<int>& channel,
-                         const IdentifyOptions& options) {
+                         const std::vector<std::optional<double>>& fixed) {
   const Model& model = *result.model;
   // Assigned, not emplaced: clang cannot yet construct a nested class with default member
   // initializers in place.
@@ -249,7 +252,7 @@ void check_with_zero_lag(IdentifyResult& result, const ZeroLagCheckPlan& plan,
   for (const Declaration& p : model.parameters()) names.push_back(p.name);
   const Estimate zero_lag = solve_rows(rows, names, estimates,
                                        {.gmm = rows.a.size() > names.size(),
-                                        .fixed = fixed_values(model, options.fixed),
+                                        .fixed = fixed,
                                         .normalise_rows = true,
                                         .moment_variance = {}});
   if (zero_lag.status != Status::kOk) {

@@ -8,7 +8,8 @@
 #include <limits>
 #include <numeric>
 
-#include "app/identify/steps.hpp"
+#include "app/identify/lagged.hpp"
+#include "app/identify/plan.hpp"
 #include "common/number.hpp"
 #include "momentid/algebra_lock.hpp"
 #include "momentid/validate.hpp"
@@ -189,13 +190,8 @@ void validate_best(SelectResult& out, const DataSource& source, const SelectOpti
   out.validation_name = options.validation->name();
 }
 
-}  // namespace
-
-SelectResult select_terms(const Model& model, const DataSource& source,
-                          const SelectOptions& options) {
-  // The validation record is opened now: a file that cannot be read ends the run before the pass.
-  if (options.validation) options.validation->open({});
-  const AlgebraLock lock;
+// Options that choose other equations than the lagged ones, and counts out of range.
+void check_options(const SelectOptions& options) {
   if (options.identify.method == Method::kZeroLag || options.identify.multipliers ||
       options.identify.degree > 0 || options.identify.extrapolate) {
     throw UsageError("method",
@@ -208,71 +204,89 @@ SelectResult select_terms(const Model& model, const DataSource& source,
                                        std::to_string(SelectOptions::kMaxExhaustive) +
                                        " candidates, found " + std::to_string(options.exhaustive));
   }
-  const std::vector<std::optional<double>> fixed = fixed_values(model, options.identify.fixed);
-  SelectResult out;
+}
+
+// The candidate parameters that are not fixed, or ModelError when there are none.
+std::vector<std::size_t> candidates_of(const Model& model,
+                                       const std::vector<std::optional<double>>& fixed) {
+  std::vector<std::size_t> out;
   for (std::size_t p = 0; p < model.parameters().size(); ++p) {
-    if (model.parameters()[p].candidate && !fixed[p]) out.candidates.push_back(p);
+    if (model.parameters()[p].candidate && !fixed[p]) out.push_back(p);
   }
-  if (out.candidates.empty()) {
+  if (out.empty()) {
     throw ModelError({model.file(), 1, 1, ""},
                      "model " + model.name() +
                          " has no candidate terms: mark parameters with 'candidate NAME, ...' or "
                          "add terms with 'library v': y^2, y^3' (docs/model-language.md)");
   }
+  return out;
+}
+
+// The whole library identified on the lagged equations with the optimal weighting.
+IdentifyResult identify_library(const Model& model, const DataSource& source,
+                                const SelectOptions& options) {
   IdentifyOptions identify_options = options.identify;
   identify_options.method = Method::kLagged;
   identify_options.weighting = Weighting::kGmm;
-  out.library = identify(model, source, identify_options);
-  out.library.why = "term selection scores the terms on them";
-  const IdentifyResult& library = out.library;
+  IdentifyResult library = identify(model, source, identify_options);
+  library.why = "term selection scores the terms on them";
   if (!library.estimate.usable()) {
     throw Error("the library of model " + model.name() + " cannot be estimated on " +
                 source.name() + ": " + library.estimate.message);
   }
+  return library;
+}
+
+// What scores subsets on any window of the library's pass: the free parameters that are not
+// candidates, the candidates among the free parameters, and the library's estimates.
+struct Scoring {
+  const Model& model;
+  const IdentifyResult& library;
+  const std::vector<std::optional<double>>& fixed;
   std::vector<bool> always;
   std::vector<std::size_t> free_candidates;
-  for (std::size_t p = 0; p < fixed.size(); ++p) {
-    if (fixed[p]) continue;
-    const bool candidate =
-        std::find(out.candidates.begin(), out.candidates.end(), p) != out.candidates.end();
-    if (candidate) free_candidates.push_back(always.size());
-    always.push_back(!candidate);
+  double penalty = 0;
+
+  Scoring(const Model& m, const SelectResult& out, const std::vector<std::optional<double>>& f)
+      : model(m), library(out.library), fixed(f), penalty(out.penalty) {
+    for (std::size_t p = 0; p < fixed.size(); ++p) {
+      if (fixed[p]) continue;
+      const bool candidate =
+          std::find(out.candidates.begin(), out.candidates.end(), p) != out.candidates.end();
+      if (candidate) free_candidates.push_back(always.size());
+      always.push_back(!candidate);
+    }
   }
-  out.penalty = std::log(static_cast<double>(std::max<std::size_t>(library.estimate.intervals, 2)));
-  out.exhaustive = out.candidates.size() <= options.exhaustive;
-  const std::string what = "term selection of model " + model.name();
-  // The weighting of the equations of `system`, and its scorer.
-  const auto weighting_of = [&](const LaggedSystem& system) {
+  // The fixed weighting of the equations of `system`.
+  FixedWeighting weighting(const LaggedSystem& system) const {
     return FixedWeighting(free_rows(library, system, fixed), always.size(), library.data.estimates,
-                          library.lagged->moment_variance, true, what);
-  };
-  const auto scorer_of = [&](const FixedWeighting& weighting) {
-    return Scorer{weighting, always, free_candidates, out.penalty,
-                  dispersion_of(weighting, always.size())};
-  };
-  const LaggedSystem& system = *library.lagged->system;
-  const FixedWeighting weighting = weighting_of(system);
-  const Scorer scorer = scorer_of(weighting);
-  out.dispersion = scorer.dispersion;
-  std::vector<SelectResult::Subset> ranking = search(scorer, out.exhaustive, out.scored);
-  // The tests at the chosen subset, over the candidates.
-  std::vector<bool> chosen(free_candidates.size());
-  for (std::size_t c = 0; c < chosen.size(); ++c) {
-    chosen[c] = ranking.front().kept[free_candidates[c]];
+                          library.lagged->moment_variance, true,
+                          "term selection of model " + model.name());
   }
-  const double j_best = ranking.front().j;
+  Scorer scorer(const FixedWeighting& w) const {
+    return Scorer{w, always, free_candidates, penalty, dispersion_of(w, always.size())};
+  }
+};
+
+// The difference-in-J test of each candidate at the best subset, then a warning for each pair
+// of candidates that are nearly collinear on the library.
+void test_candidates(SelectResult& out, const Scoring& scoring, const Scorer& scorer,
+                     const SelectResult::Subset& best) {
+  const std::vector<std::size_t>& free_candidates = scoring.free_candidates;
+  std::vector<bool> chosen(free_candidates.size());
+  for (std::size_t c = 0; c < chosen.size(); ++c) chosen[c] = best.kept[free_candidates[c]];
   for (std::size_t c = 0; c < chosen.size(); ++c) {
     std::vector<bool> other = chosen;
     other[c] = !other[c];
     const double j_other = scorer.score(other).j;
-    const double difference = chosen[c] ? j_other - j_best : j_best - j_other;
+    const double difference = chosen[c] ? j_other - best.j : best.j - j_other;
     const std::size_t p = out.candidates[c];
-    out.tests.push_back({model.parameters()[p].name, terms_of(model, p), chosen[c], difference,
-                         chi_square_upper_tail(difference / out.dispersion, 1)});
+    out.tests.push_back({scoring.model.parameters()[p].name, terms_of(scoring.model, p), chosen[c],
+                         difference, chi_square_upper_tail(difference / out.dispersion, 1)});
   }
   for (std::size_t a = 0; a < free_candidates.size(); ++a) {
     for (std::size_t b = a + 1; b < free_candidates.size(); ++b) {
-      const double rho = weighting.correlation(free_candidates[a], free_candidates[b]);
+      const double rho = scorer.weighting.correlation(free_candidates[a], free_candidates[b]);
       if (std::abs(rho) > kCollinear) {
         out.warnings.push_back("candidates " + out.tests[a].name + " (" + out.tests[a].terms +
                                ") and " + out.tests[b].name + " (" + out.tests[b].terms +
@@ -282,6 +296,10 @@ SelectResult select_terms(const Model& model, const DataSource& source,
       }
     }
   }
+}
+
+// The warnings of the ranking itself: a library the J test rejects, a close runner-up.
+void ranking_warnings(SelectResult& out, const std::vector<SelectResult::Subset>& ranking) {
   if (out.dispersion > 1) {
     out.warnings.push_back(
         "the J test rejects the whole library (J " + number(out.dispersion, "%.3g") +
@@ -293,10 +311,11 @@ SelectResult select_terms(const Model& model, const DataSource& source,
     out.warnings.push_back("the runner-up is within " + number(kCloseCriterion, "%g") +
                            " of the best subset's criterion: the data hardly prefer one of them");
   }
-  ranking.resize(std::min(ranking.size(), options.ranked));
-  for (SelectResult::Subset& s : ranking) s.kept = over_parameters(s.kept, fixed);
-  out.ranking = std::move(ranking);
-  // The same selection on narrower windows of the same pass: half and three quarters of the lags.
+}
+
+// The same selection on narrower windows of the same pass, half and three quarters of the lags,
+// and a warning when the chosen terms change with the window.
+void select_on_windows(SelectResult& out, const Scoring& scoring, const LaggedSystem& system) {
   out.windows.push_back({system.first_lag, system.last_lag, out.ranking.front().kept});
   for (const int quarters : {2, 3}) {
     const int last = system.first_lag + (system.last_lag - system.first_lag) * quarters / 4;
@@ -306,13 +325,13 @@ SelectResult select_terms(const Model& model, const DataSource& source,
     narrower.last_lag = last;
     narrower.instruments = system.instruments;
     narrower.measured = system.measured;
-    const LaggedSystem sub = derive_lagged(model, narrower);
-    const FixedWeighting sub_weighting = weighting_of(sub);
+    const LaggedSystem sub = derive_lagged(scoring.model, narrower);
+    const FixedWeighting weighting = scoring.weighting(sub);
     std::size_t scored = 0;
-    const std::vector<SelectResult::Subset> sub_ranking =
-        search(scorer_of(sub_weighting), out.exhaustive, scored);
+    const std::vector<SelectResult::Subset> ranking =
+        search(scoring.scorer(weighting), out.exhaustive, scored);
     out.windows.push_back(
-        {sub.first_lag, sub.last_lag, over_parameters(sub_ranking.front().kept, fixed)});
+        {sub.first_lag, sub.last_lag, over_parameters(ranking.front().kept, scoring.fixed)});
   }
   for (std::size_t w = 1; w < out.windows.size(); ++w) {
     if (out.windows[w].kept == out.windows[0].kept) continue;
@@ -321,10 +340,15 @@ SelectResult select_terms(const Model& model, const DataSource& source,
         "selection is not stable on this record");
     break;
   }
-  // The chosen model identified on its own equations, as identify takes the file it is
-  // written to: its instruments are its own, not the library's highest powers.
-  const Model written = parse_model(chosen_model_text(out), model.file());
-  out.chosen = identify(written, source, options.identify);
+}
+
+// The chosen model identified on its own equations, as identify takes the file it is written to
+// (its instruments are its own, not the library's highest powers), and the warnings its tests
+// and terms give, the tests' first.
+void identify_chosen(SelectResult& out, const Model& model, const DataSource& source,
+                     const SelectOptions& options) {
+  out.chosen =
+      identify(parse_model(chosen_model_text(out), model.file()), source, options.identify);
   if (out.chosen.estimate.j_pvalue && *out.chosen.estimate.j_pvalue < kRejected) {
     out.warnings.insert(out.warnings.begin(),
                         "the J test rejects the chosen model (p = " +
@@ -352,6 +376,36 @@ SelectResult select_terms(const Model& model, const DataSource& source,
           "(docs/cli/select.md, \"Offsets\")");
     }
   }
+}
+
+}  // namespace
+
+SelectResult select_terms(const Model& model, const DataSource& source,
+                          const SelectOptions& options) {
+  // The validation record is opened now: a file that cannot be read ends the run before the pass.
+  if (options.validation) options.validation->open({});
+  const AlgebraLock lock;
+  check_options(options);
+  const std::vector<std::optional<double>> fixed = fixed_values(model, options.identify.fixed);
+  SelectResult out;
+  out.candidates = candidates_of(model, fixed);
+  out.library = identify_library(model, source, options);
+  out.penalty =
+      std::log(static_cast<double>(std::max<std::size_t>(out.library.estimate.intervals, 2)));
+  out.exhaustive = out.candidates.size() <= options.exhaustive;
+  const Scoring scoring(model, out, fixed);
+  const LaggedSystem& system = *out.library.lagged->system;
+  const FixedWeighting weighting = scoring.weighting(system);
+  const Scorer scorer = scoring.scorer(weighting);
+  out.dispersion = scorer.dispersion;
+  std::vector<SelectResult::Subset> ranking = search(scorer, out.exhaustive, out.scored);
+  test_candidates(out, scoring, scorer, ranking.front());
+  ranking_warnings(out, ranking);
+  ranking.resize(std::min(ranking.size(), options.ranked));
+  for (SelectResult::Subset& s : ranking) s.kept = over_parameters(s.kept, fixed);
+  out.ranking = std::move(ranking);
+  select_on_windows(out, scoring, system);
+  identify_chosen(out, model, source, options);
   if (options.validation) validate_best(out, source, options);
   return out;
 }

@@ -1,0 +1,47 @@
+#pragma once
+
+// The channels of a lagged pass and the window of its lags: fitted to the moment budget before
+// the pass, to the correlation times the pass shows after it.
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include "momentid/data_pass.hpp"
+#include "momentid/identify.hpp"
+#include "momentid/lagged.hpp"
+
+namespace momentid {
+
+// The channels a lagged pass reads: the variables the equations need, states, inputs and
+// derivatives, as the pass numbers them, then the functions it computes from them.
+struct LaggedChannels {
+  std::vector<std::string> states, inputs, derivatives;
+  std::vector<ComputedChannel> computed;  // over the channels read
+  std::vector<int> channel;               // per model variable: its channel, or -1 when not read
+};
+LaggedChannels lagged_channels(const Model& model, const LaggedSystem& system);
+
+// Per measured (or formed) state that the lagged equations read, or derivative column that
+// stands for its unmeasured state: the lag at which its autocorrelation first falls below 1/e,
+// from the lagged moments C[y;y](s) of the pass; 0 when it stays above across the window.
+std::map<std::string, int> correlation_lags(const IdentifyResult& r,
+                                            const std::vector<int>& channel);
+
+// The last lag that spans five correlation times of the slowest measured state; four times the
+// window when a state stays correlated across it. Kept within the bounds of the lag options.
+int lag_window(const IdentifyResult& r);
+
+// The last lag at which `count` moments over lags first..last would stay within the budget,
+// taking them to grow in proportion to the number of lags.
+int last_lag_within_budget(int first, int last, std::size_t count);
+
+// Fits the lags and instruments of `lag_options` to IdentifyOptions::kMaxLaggedMoments where the
+// user left them to identify: the window shrinks first, to no fewer than LagOptions::kMinSpan
+// lags, then instruments go (powers first) until that window fits, which then grows again as
+// far as the budget allows. Returns the instruments cut ("4 of the 10 instruments"), or empty;
+// throws UsageError naming the options the user gave when these alone exceed the budget.
+std::string fit_to_budget(const Model& model, LagOptions& lag_options,
+                          const IdentifyOptions& options);
+
+}  // namespace momentid
