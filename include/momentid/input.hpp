@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "momentid/random.hpp"
+#include "momentid/types.hpp"
 
 namespace momentid {
 
@@ -43,7 +44,7 @@ namespace momentid {
 // mean (default 0). f2 must also be below the Nyquist frequency 1/(2 dt), which
 // SimulationOptions::validate checks.
 struct InputSpec {
-  enum class Kind { kMovingAverage, kOrnsteinUhlenbeck, kWhite, kMultisine };
+  using Kind = InputKind;
   Kind kind = Kind::kMovingAverage;
   std::vector<double> weights = std::vector<double>(10, 0.1);
   // ma:T=: the averaging window in seconds, 0 when `weights` are given; `weights` then holds the

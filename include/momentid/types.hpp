@@ -77,6 +77,11 @@ enum class Status { kOk, kUntested, kDoubtful, kRankDeficient, kNothingIdentifia
 // The formats DataWriter writes a row at a time (simulate's output). Names: csv, bin.
 enum class WriterFormat { kCsv, kBinary };
 
+// The random processes and signals that simulate drives an input with (InputSpec, docs/cli/
+// simulate.md): a moving average of white noise, an Ornstein-Uhlenbeck process, white noise, a
+// multisine. Names: ma, ou, white, multisine.
+enum class InputKind { kMovingAverage, kOrnsteinUhlenbeck, kWhite, kMultisine };
+
 std::string to_string(InputHold hold);
 std::string to_string(MissingValues missing);
 std::string to_string(Interpolation method);
@@ -85,6 +90,7 @@ std::string to_string(Method method);
 std::string to_string(FileFormat format);
 std::string to_string(WriterFormat format);
 std::string to_string(Status status);
+std::string to_string(InputKind process);
 
 InputHold parse_input_hold(std::string_view text, std::string_view option);
 MissingValues parse_missing_values(std::string_view text, std::string_view option);
@@ -94,6 +100,7 @@ Method parse_method(std::string_view text, std::string_view option);
 FileFormat parse_file_format(std::string_view text, std::string_view option);
 WriterFormat parse_writer_format(std::string_view text, std::string_view option);
 Status parse_status(std::string_view text, std::string_view option);
+InputKind parse_input_kind(std::string_view text, std::string_view option);
 
 template <class Enum>
 std::vector<std::string> names_of();
@@ -113,5 +120,7 @@ template <>
 std::vector<std::string> names_of<WriterFormat>();
 template <>
 std::vector<std::string> names_of<Status>();
+template <>
+std::vector<std::string> names_of<InputKind>();
 
 }  // namespace momentid

@@ -34,6 +34,10 @@ constexpr Names<Status> kStatuses = {{Status::kOk, "ok"},
                                      {Status::kDoubtful, "doubtful"},
                                      {Status::kRankDeficient, "rank-deficient"},
                                      {Status::kNothingIdentifiable, "nothing-identifiable"}};
+constexpr Names<InputKind> kInputKindes = {{InputKind::kMovingAverage, "ma"},
+                                           {InputKind::kOrnsteinUhlenbeck, "ou"},
+                                           {InputKind::kWhite, "white"},
+                                           {InputKind::kMultisine, "multisine"}};
 
 template <class Enum>
 std::string name_in(Names<Enum> names, Enum value) {
@@ -78,6 +82,7 @@ std::string to_string(FileFormat format) { return name_in(kFileFormats, format);
 std::string to_string(WriterFormat format) { return name_in(kWriterFormats, format); }
 std::string to_string(Method method) { return name_in(kMethods, method); }
 std::string to_string(Status status) { return name_in(kStatuses, status); }
+std::string to_string(InputKind process) { return name_in(kInputKindes, process); }
 
 InputHold parse_input_hold(std::string_view text, std::string_view option) {
   return parse_in(kInputHolds, text, option);
@@ -102,6 +107,9 @@ Method parse_method(std::string_view text, std::string_view option) {
 }
 Status parse_status(std::string_view text, std::string_view option) {
   return parse_in(kStatuses, text, option);
+}
+InputKind parse_input_kind(std::string_view text, std::string_view option) {
+  return parse_in(kInputKindes, text, option);
 }
 
 template <>
@@ -135,6 +143,10 @@ std::vector<std::string> names_of<Method>() {
 template <>
 std::vector<std::string> names_of<Status>() {
   return list(kStatuses);
+}
+template <>
+std::vector<std::string> names_of<InputKind>() {
+  return list(kInputKindes);
 }
 
 }  // namespace momentid

@@ -116,125 +116,171 @@ bool valid_band(const InputSpec& spec) {
 
 }  // namespace
 
-InputSpec InputSpec::parse(const std::string& text, const std::string& option) {
-  InputSpec spec;
-  const std::size_t colon = text.find(':');
-  const std::string kind = text.substr(0, colon);
-  const std::string rest = colon == std::string::npos ? "" : text.substr(colon + 1);
-  if (kind == "ma") {
-    spec.kind = Kind::kMovingAverage;
-  } else if (kind == "ou") {
-    spec.kind = Kind::kOrnsteinUhlenbeck;
-  } else if (kind == "white") {
-    spec.kind = Kind::kWhite;
-  } else if (kind == "multisine") {
-    spec.kind = Kind::kMultisine;
-  } else {
-    throw UsageError(option + ": unknown input process '" + kind +
-                     "' (expected ma:K=10,w=0.1, ou:tau=T, white or "
-                     "multisine:f1=F1,f2=F2,lines=L)");
-  }
+namespace {
+
+// What parse() has read of the settings besides the spec: the moving average's K and w, and
+// which settings were given.
+struct Given {
   double equal_weight = 0.1;
   long count = 10;
-  bool explicit_weights = false, has_count = false, has_w = false, has_tau = false;
-  bool has_window = false;
-  bool has_f1 = false, has_f2 = false, has_lines = false;
-  if (!rest.empty()) {
-    for (const std::string& item : split_items(rest)) {
-      const std::size_t eq = item.find('=');
-      if (eq == std::string::npos) {
-        throw UsageError(option + ": expected key=value, found '" + item + "'");
-      }
-      const std::string key = item.substr(0, eq), value = item.substr(eq + 1);
-      const bool ma = spec.kind == Kind::kMovingAverage;
-      const bool multisine = spec.kind == Kind::kMultisine;
-      if (!multisine && key == "sigma") {
-        spec.sigma = parse_number(value, "sigma", option);
-        if (spec.sigma < 0) throw UsageError(option + ": sigma must not be negative");
-      } else if (key == "mean") {
-        spec.mean = parse_number(value, "mean", option);
-      } else if (ma && key == "K") {
-        const double k = parse_number(value, "K", option);
-        if (k < 1 || k > 1000000 || k != std::floor(k)) {
-          throw UsageError(option + ": K must be a whole number from 1 to 1000000, found '" +
-                           value + "'");
-        }
-        count = static_cast<long>(k);
-        has_count = true;
-      } else if (ma && key == "T") {
-        spec.window = parse_number(value, "T", option);
-        if (!(spec.window > 0)) {
-          throw UsageError(option + ": T must be a positive number of seconds, found '" + value +
-                           "'");
-        }
-        has_window = true;
-      } else if (ma && key == "w") {
-        equal_weight = parse_number(value, "w", option);
-        has_w = true;
-      } else if (ma && key == "weights") {
-        if (value.size() < 2 || value.front() != '[' || value.back() != ']') {
-          throw UsageError(option + ": weights must be a list such as [0.3,0.4,0.3], found '" +
-                           value + "'");
-        }
-        spec.weights.clear();
-        for (const std::string& w : split_items(value.substr(1, value.size() - 2))) {
-          spec.weights.push_back(parse_number(w, "a weight", option));
-        }
-        explicit_weights = true;
-      } else if (spec.kind == Kind::kOrnsteinUhlenbeck && key == "tau") {
-        spec.tau = parse_number(value, "tau", option);
-        if (spec.tau <= 0) throw UsageError(option + ": tau must be positive");
-        has_tau = true;
-      } else if (multisine && key == "f1") {
-        spec.f1 = parse_number(value, "f1", option);
-        if (spec.f1 <= 0) throw UsageError(option + ": f1 must be positive");
-        has_f1 = true;
-      } else if (multisine && key == "f2") {
-        spec.f2 = parse_number(value, "f2", option);
-        if (spec.f2 <= 0) throw UsageError(option + ": f2 must be positive");
-        has_f2 = true;
-      } else if (multisine && key == "lines") {
-        const double lines = parse_number(value, "lines", option);
-        if (lines < 1 || lines > kMaxLines || lines != std::floor(lines)) {
-          throw UsageError(option + ": lines must be a whole number from 1 to " +
-                           std::to_string(kMaxLines) + ", found '" + value + "'");
-        }
-        spec.lines = static_cast<std::uint32_t>(lines);
-        has_lines = true;
-      } else if (multisine && key == "rms") {
-        spec.rms = parse_number(value, "rms", option);
-        if (spec.rms <= 0) throw UsageError(option + ": rms must be positive");
-      } else {
-        throw UsageError(option + ": unknown setting '" + key + "' for a " + kind + " input");
-      }
-    }
-  }
-  if (spec.kind == Kind::kMovingAverage) {
-    if (explicit_weights && (has_count || has_w)) {
+  bool weights = false, count_given = false, w = false, window = false, tau = false;
+  bool f1 = false, f2 = false, lines = false;
+};
+
+// One setting of the text form: its key, the processes that take it, and what it sets.
+struct Setting {
+  const char* key;
+  bool (*takes)(InputKind);
+  void (*apply)(InputSpec&, Given&, const std::string& value, const std::string& option);
+};
+
+bool moving_average(InputKind p) { return p == InputKind::kMovingAverage; }
+bool multisine(InputKind p) { return p == InputKind::kMultisine; }
+bool ornstein_uhlenbeck(InputKind p) { return p == InputKind::kOrnsteinUhlenbeck; }
+bool random(InputKind p) { return p != InputKind::kMultisine; }
+bool any(InputKind) { return true; }
+
+const Setting kSettings[] = {
+    {"sigma", random,
+     [](InputSpec& s, Given&, const std::string& value, const std::string& option) {
+       s.sigma = parse_number(value, "sigma", option);
+       if (s.sigma < 0) throw UsageError(option + ": sigma must not be negative");
+     }},
+    {"mean", any,
+     [](InputSpec& s, Given&, const std::string& value, const std::string& option) {
+       s.mean = parse_number(value, "mean", option);
+     }},
+    {"K", moving_average,
+     [](InputSpec&, Given& g, const std::string& value, const std::string& option) {
+       const double k = parse_number(value, "K", option);
+       if (k < 1 || k > 1000000 || k != std::floor(k)) {
+         throw UsageError(option + ": K must be a whole number from 1 to 1000000, found '" + value +
+                          "'");
+       }
+       g.count = static_cast<long>(k);
+       g.count_given = true;
+     }},
+    {"T", moving_average,
+     [](InputSpec& s, Given& g, const std::string& value, const std::string& option) {
+       s.window = parse_number(value, "T", option);
+       if (!(s.window > 0)) {
+         throw UsageError(option + ": T must be a positive number of seconds, found '" + value +
+                          "'");
+       }
+       g.window = true;
+     }},
+    {"w", moving_average,
+     [](InputSpec&, Given& g, const std::string& value, const std::string& option) {
+       g.equal_weight = parse_number(value, "w", option);
+       g.w = true;
+     }},
+    {"weights", moving_average,
+     [](InputSpec& s, Given& g, const std::string& value, const std::string& option) {
+       if (value.size() < 2 || value.front() != '[' || value.back() != ']') {
+         throw UsageError(option + ": weights must be a list such as [0.3,0.4,0.3], found '" +
+                          value + "'");
+       }
+       s.weights.clear();
+       for (const std::string& w : split_items(value.substr(1, value.size() - 2))) {
+         s.weights.push_back(parse_number(w, "a weight", option));
+       }
+       g.weights = true;
+     }},
+    {"tau", ornstein_uhlenbeck,
+     [](InputSpec& s, Given& g, const std::string& value, const std::string& option) {
+       s.tau = parse_number(value, "tau", option);
+       if (s.tau <= 0) throw UsageError(option + ": tau must be positive");
+       g.tau = true;
+     }},
+    {"f1", multisine,
+     [](InputSpec& s, Given& g, const std::string& value, const std::string& option) {
+       s.f1 = parse_number(value, "f1", option);
+       if (s.f1 <= 0) throw UsageError(option + ": f1 must be positive");
+       g.f1 = true;
+     }},
+    {"f2", multisine,
+     [](InputSpec& s, Given& g, const std::string& value, const std::string& option) {
+       s.f2 = parse_number(value, "f2", option);
+       if (s.f2 <= 0) throw UsageError(option + ": f2 must be positive");
+       g.f2 = true;
+     }},
+    {"lines", multisine,
+     [](InputSpec& s, Given& g, const std::string& value, const std::string& option) {
+       const double lines = parse_number(value, "lines", option);
+       if (lines < 1 || lines > InputSpec::kMaxLines || lines != std::floor(lines)) {
+         throw UsageError(option + ": lines must be a whole number from 1 to " +
+                          std::to_string(InputSpec::kMaxLines) + ", found '" + value + "'");
+       }
+       s.lines = static_cast<std::uint32_t>(lines);
+       g.lines = true;
+     }},
+    {"rms", multisine,
+     [](InputSpec& s, Given&, const std::string& value, const std::string& option) {
+       s.rms = parse_number(value, "rms", option);
+       if (s.rms <= 0) throw UsageError(option + ": rms must be positive");
+     }},
+};
+
+// The settings' joint rules: a moving average's window in samples or seconds, not both; the
+// settings an ou or multisine input cannot do without.
+void complete(InputSpec& spec, const Given& g, const std::string& option) {
+  if (spec.kind == InputKind::kMovingAverage) {
+    if (g.weights && (g.count_given || g.w)) {
       throw UsageError(option + ": give either K and w, or weights, not both");
     }
-    if (has_window && (has_count || explicit_weights)) {
+    if (g.window && (g.count_given || g.weights)) {
       throw UsageError(option + ": give the window either in seconds (T) or in samples (K or " +
                        "weights), not both");
     }
-    if (has_window) {
+    if (g.window) {
       spec.weights.clear();
-      if (has_w) spec.weights.push_back(equal_weight);
-    } else if (!explicit_weights) {
-      spec.weights.assign(static_cast<std::size_t>(count), equal_weight);
+      if (g.w) spec.weights.push_back(g.equal_weight);
+    } else if (!g.weights) {
+      spec.weights.assign(static_cast<std::size_t>(g.count), g.equal_weight);
     }
   }
-  if (spec.kind == Kind::kOrnsteinUhlenbeck && !has_tau) {
+  if (spec.kind == InputKind::kOrnsteinUhlenbeck && !g.tau) {
     throw UsageError(option + ": an ou input needs its correlation time, e.g. ou:tau=0.5");
   }
-  if (spec.kind == Kind::kMultisine) {
-    if (!has_f1 || !has_f2 || !has_lines) {
+  if (spec.kind == InputKind::kMultisine) {
+    if (!g.f1 || !g.f2 || !g.lines) {
       throw UsageError(option +
                        ": a multisine input needs f1, f2 and lines, e.g. "
                        "multisine:f1=0.5,f2=5,lines=10");
     }
     check_values(spec, option);
   }
+}
+
+}  // namespace
+
+InputSpec InputSpec::parse(const std::string& text, const std::string& option) {
+  InputSpec spec;
+  const std::size_t colon = text.find(':');
+  const std::string kind = text.substr(0, colon);
+  const std::string rest = colon == std::string::npos ? "" : text.substr(colon + 1);
+  const std::vector<std::string> kinds = names_of<InputKind>();
+  if (std::find(kinds.begin(), kinds.end(), kind) == kinds.end()) {
+    throw UsageError(option + ": unknown input process '" + kind +
+                     "' (expected ma:K=10,w=0.1, ou:tau=T, white or "
+                     "multisine:f1=F1,f2=F2,lines=L)");
+  }
+  spec.kind = parse_input_kind(kind, option);
+  Given given;
+  for (const std::string& item : rest.empty() ? std::vector<std::string>{} : split_items(rest)) {
+    const std::size_t eq = item.find('=');
+    if (eq == std::string::npos) {
+      throw UsageError(option + ": expected key=value, found '" + item + "'");
+    }
+    const std::string key = item.substr(0, eq), value = item.substr(eq + 1);
+    const auto setting = std::find_if(std::begin(kSettings), std::end(kSettings),
+                                      [&](const Setting& s) { return key == s.key; });
+    if (setting == std::end(kSettings) || !setting->takes(spec.kind)) {
+      throw UsageError(option + ": unknown setting '" + key + "' for a " + kind + " input");
+    }
+    setting->apply(spec, given, value, option);
+  }
+  complete(spec, given, option);
   return spec;
 }
 
