@@ -4,6 +4,7 @@
 #include <doctest/doctest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -445,6 +446,58 @@ TEST_SUITE("app") {
       }
       CHECK(rho[lag - 1] == doctest::Approx(products / pairs / variance).epsilon(1e-12));
       CHECK(std::abs(rho[lag - 1]) <= 1);
+    }
+  }
+
+  TEST_CASE("check's JSON value holds the result's numbers, null where there is none") {
+    SineArrays arrays(500);
+    std::fill(arrays.x.begin(), arrays.x.end(), 1.0);  // constant: no autocorrelation
+    const momentid::Model model = model_file("duffing.mom");
+    const auto source = momentid::DataSource::memory(arrays.data);
+    for (const momentid::Model* with : {static_cast<const momentid::Model*>(nullptr), &model}) {
+      CAPTURE(with != nullptr);
+      const momentid::CheckResult r = momentid::check(source, with, {.lags = 4});
+      const nlohmann::ordered_json value = momentid::json_value(r);
+      CHECK(nlohmann::ordered_json::parse(momentid::format_json(r)) == value);
+      CHECK(value["data"] == "arrays");
+      CHECK(value["rows"] == 500);
+      CHECK(value["runs"] == 1);
+      CHECK(value["dt"].is_null());  // neither a time column nor metadata
+      CHECK(value["lags"] == 4);
+      CHECK(value["with_model"] == (with != nullptr));
+      CHECK(value["missing_inputs"].get<std::vector<std::string>>() == r.missing_inputs);
+      CHECK(value["missing_states"].get<std::vector<std::string>>() == r.missing_states);
+      CHECK(value["warnings"].get<std::vector<std::string>>() == r.warnings);
+      REQUIRE(value["channels"].size() == 2);
+      for (const momentid::ChannelStatistics& c : r.data.channels) {
+        CAPTURE(c.name);
+        const nlohmann::ordered_json& json = value["channels"][c.name];
+        CHECK(json["input"] == c.is_input);
+        CHECK(json["mean"].get<double>() == c.mean);
+        CHECK(json["variance"].get<double>() == c.variance);
+        REQUIRE(json["autocorrelation"].size() == 4);
+        for (std::size_t l = 0; l < 4; ++l) {
+          const double rho = c.autocorrelation[l];
+          CHECK((std::isfinite(rho) ? json["autocorrelation"][l].get<double>() == rho
+                                    : json["autocorrelation"][l].is_null()));
+        }
+        CHECK(json["correlation_time"] == c.correlation_time);
+        CHECK((c.noise_variance ? json["noise_variance"].get<double>() == *c.noise_variance
+                                : json["noise_variance"].is_null()));
+        CHECK((c.noise_fraction() ? json["noise_fraction"].get<double>() == *c.noise_fraction()
+                                  : json["noise_fraction"].is_null()));
+      }
+      const nlohmann::ordered_json& x = value["channels"]["x"];
+      CHECK(x["variance"].get<double>() == 0);
+      CHECK(x["autocorrelation"][0].is_null());
+      CHECK(x["noise_fraction"].is_null());
+      CHECK(value["channels"]["y"]["noise_fraction"].is_number());
+      REQUIRE(value["identities"].size() == r.identities.size());
+      for (std::size_t i = 0; i < r.identities.size(); ++i) {
+        CHECK(value["identities"][i]["identity"] == r.identities[i].identity);
+        CHECK(value["identities"][i]["violation"].get<double>() == r.identities[i].violation);
+        CHECK(value["identities"][i]["z"].get<double>() == r.identities[i].z);
+      }
     }
   }
 

@@ -47,5 +47,7 @@ CheckResult check(const DataSource& source, const Model* model, const CheckOptio
 
 // The report `momentid check` prints.
 std::string format_text(const CheckResult& result);
+// The JSON layout (docs/json.md, "check").
+std::string format_json(const CheckResult& result);
 
 }  // namespace momentid

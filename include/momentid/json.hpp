@@ -12,6 +12,7 @@
 
 namespace momentid {
 
+struct CheckResult;
 struct IdentifyResult;
 struct LaggedSystem;
 struct MomentSystem;
@@ -26,6 +27,8 @@ nlohmann::ordered_json json_value(const LaggedSystem& system);
 nlohmann::ordered_json json_value(const IdentifyResult& result);
 // docs/json.md, "select".
 nlohmann::ordered_json json_value(const SelectResult& result);
+// docs/json.md, "check".
+nlohmann::ordered_json json_value(const CheckResult& result);
 // docs/json.md, "validate".
 nlohmann::ordered_json json_value(const ValidateResult& result);
 

@@ -263,7 +263,8 @@ class SelectResult(IdentifyResult):
 
 class CheckResult:
     """What check() found: `channels` {name: statistics}, `identities` (with a model),
-    `warnings`, `to_dict()`, and str() the report of `momentid check`."""
+    `warnings`, `to_dict()` (the JSON of `momentid check --format json` as Python objects,
+    `json` as text), and str() the report of `momentid check`."""
 
     def __init__(self, text: str, values: dict) -> None:
         self.text = text
@@ -272,8 +273,13 @@ class CheckResult:
         self.identities = values["identities"]
         self.warnings = values["warnings"]
 
+    @property
+    def json(self) -> str:
+        """The JSON of `momentid check --format json`, as text."""
+        return _json_text(self._dict)
+
     def to_dict(self) -> dict:
-        return dict(self._dict)
+        return _copy.deepcopy(self._dict)
 
     def __str__(self) -> str:
         return self.text

@@ -266,41 +266,6 @@ IdentifyOptions identify_options(const Model& model, const py::dict& options) {
   return out;
 }
 
-// --- check ----------------------------------------------------------------------------------
-
-py::dict check_dict(const CheckResult& r) {
-  py::dict out;
-  out["data"] = r.data_name;
-  out["rows"] = r.data.rows;
-  out["runs"] = r.data.runs;
-  out["dt"] = r.data.time_step ? py::cast(*r.data.time_step) : py::none();
-  py::dict channels;
-  for (const ChannelStatistics& c : r.data.channels) {
-    py::dict channel;
-    channel["input"] = c.is_input;
-    channel["mean"] = c.mean;
-    channel["variance"] = c.variance;
-    channel["autocorrelation"] = c.autocorrelation;
-    channel["correlation_time"] = c.correlation_time;
-    channel["noise_fraction"] = c.noise_fraction() ? py::cast(*c.noise_fraction()) : py::none();
-    channels[py::str(c.name)] = channel;
-  }
-  out["channels"] = channels;
-  py::list identities;
-  for (const IdentityCheck& i : r.identities) {
-    py::dict identity;
-    identity["identity"] = i.identity;
-    identity["violation"] = i.violation;
-    identity["z"] = i.z;
-    identities.append(identity);
-  }
-  out["identities"] = identities;
-  out["missing_inputs"] = r.missing_inputs;
-  out["missing_states"] = r.missing_states;
-  out["warnings"] = r.warnings;
-  return out;
-}
-
 // --- simulate -------------------------------------------------------------------------------
 
 // Writes the samples into arrays, one per channel, run after run.
@@ -623,7 +588,7 @@ PYBIND11_MODULE(_momentid, m) {
       with = declare_derivative_columns(model.cast<const Model&>(), check_with.record, source);
     }
     const CheckResult result = check(source, with ? &*with : nullptr, check_with);
-    return py::make_tuple(format_text(result), check_dict(result));
+    return py::make_tuple(format_text(result), to_python(json_value(result)));
   });
 
   m.def("_simulate", &simulate_record);

@@ -8,7 +8,9 @@ What they cover:
 - the keywords renamed in this release (rename=, columns= as a list, extrapolate="dt") still
   work and warn; monomial lists are lists or strings alike;
 - validate's series: their lengths, the rows compared, and the fit and errors recomputed from
-  them equal those of `momentid validate`.
+  them equal those of `momentid validate`;
+- check's values equal the JSON (and text) of `momentid check` on the same file, with and
+  without a model.
 """
 
 import json
@@ -19,7 +21,7 @@ import pytest
 
 import momentid
 
-from conftest import DUFFING, INPUT, TRUE, read_csv, sines
+from conftest import DUFFING, INPUT, ROOT, TRUE, read_csv, sines
 
 # The arrays are the JSON's numbers, or computed from them by a few operations.
 REL = 1e-12
@@ -385,3 +387,33 @@ def test_a_column_of_a_derivative_is_named_as_the_command_line_names_it():
         assert abs(result.estimates[name] - truth) < 3 * result.std_errors[name], result.text
     with pytest.raises(momentid.UsageError, match=r"^columns: x'=acc: x is not a state"):
         momentid.identify(model, data, columns={"x'": "acc", "F": "shaker", "t": "time"})
+
+
+# --- 6. check against the program's JSON ---------------------------------------------------------
+
+# (the record, with the model, check()'s keywords, the program's options)
+CHECKS = {
+    "model": ("simulated", True, {}, []),
+    "no-model": ("simulated", False, {"lags": 4}, ["--lags", 4]),
+    "runs": (ROOT / "tests" / "data" / "two_runs.csv", True, {"lags": 4}, ["--lags", 4]),
+    "gaps": (ROOT / "tests" / "data" / "gaps.csv", False, {"lags": 2, "missing": "split-run"},
+             ["--lags", 2, "--missing", "split-run"]),
+}
+
+
+@pytest.mark.parametrize("case", list(CHECKS))
+def test_check_values_are_the_programs_json(case, cli, cli_csv, duffing):
+    """check() gives the value `momentid check --format json` prints: every number the same
+    double, every key in its place; and the same text report."""
+    path, with_model, keywords, options = CHECKS[case]
+    path = str(cli_csv if path == "simulated" else path)
+    files = [path, DUFFING] if with_model else [path]
+    expected = json.loads(cli("check", *files, *options, "--format", "json"))
+    result = momentid.check(path, duffing if with_model else None, **keywords)
+    assert result.to_dict() == expected
+    assert list(json.loads(result.json)) == list(expected)
+    assert result.channels == expected["channels"]
+    assert result.identities == expected["identities"]
+    assert result.warnings == expected["warnings"]
+    assert bool(result.identities) == with_model
+    assert str(result) == cli("check", *files, *options)

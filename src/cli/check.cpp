@@ -1,4 +1,5 @@
 // momentid check DATA [MODEL] [--lags L] [--input-hold H] [--columns NAME=COLUMN,...]
+//                [--format text|json]
 
 #include "momentid/check.hpp"
 
@@ -19,6 +20,7 @@ struct CheckCommand {
   CheckOptions options;
   std::string hold;
   std::vector<std::string> columns;
+  std::string format = "text";
 };
 
 int run_check(CheckCommand& command) {
@@ -40,11 +42,11 @@ int run_check(CheckCommand& command) {
   // Once: a pipe or standard input is read whole into a file of its own.
   const DataSource source = data_sources(files);
   if (model) model = declare_derivative_columns(*model, command.options.record, source);
-  TerminalProgress progress(!command.quiet);
+  TerminalProgress progress(!command.quiet && command.format != "json");
   command.options.record.control.progress = progress.callback();
   const CheckResult result = check(source, model ? &*model : nullptr, command.options);
   progress.finish();
-  write_whole_file("-", format_text(result));
+  write_whole_file("-", command.format == "json" ? format_json(result) : format_text(result));
   return 0;
 }
 
@@ -66,6 +68,8 @@ Command add_check(CLI::App& app) {
                   "sample interval, overriding the data's: the time column is then not read")
       ->check(CLI::PositiveNumber);
   sub->add_option("--columns", command->columns, "NAME=COLUMN: where a model variable is");
+  sub->add_option("--format", command->format, "output format")
+      ->check(CLI::IsMember({"text", "json"}));
   add_layout_options(sub, command->options.record.layout);
   add_pass_options(sub, command->options.record.control);
   sub->add_flag("-q,--quiet", command->quiet,
