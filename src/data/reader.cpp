@@ -82,9 +82,8 @@ void MissingSummary::add(const MissingSummary& later) {
   joins += later.joins;
 }
 
-namespace {
-
-// What tells a file that changed from the one first read: its size, modification time and inode.
+// What tells a file that changed from the one first read: its size, modification time and inode
+// (outside the anonymous namespace: DataSource::Stamps holds it).
 struct FileStamp {
   off_t size = 0;
   timespec modified{};
@@ -94,6 +93,8 @@ struct FileStamp {
            modified.tv_nsec == o.modified.tv_nsec && inode == o.inode;
   }
 };
+
+namespace {
 
 // The stamps of `paths`; a file that cannot be examined has none (its reader says why).
 std::vector<std::optional<FileStamp>> stamps_of(const std::vector<std::string>& paths) {

@@ -93,18 +93,18 @@ void check_derivatives_determined(const Model& model) {
 // kinematic (y' = f(y, u)), whose right side the stationarity identities substitute, and they
 // need polynomials there.
 void check_functions_have_parameters(const Model& model) {
-  std::vector<bool> held(model.functions().size(), false);
+  std::vector<bool> appears(model.functions().size(), false);
   for (const Equation& eq : model.equations()) {
     for (const Term& t : eq.terms) {
       for (std::size_t i = 0; i < t.monomial.size(); ++i) {
         const Variable& variable = model.variables()[i];
-        if (!variable.channel() && t.monomial[i] != 0) held[variable.index] = true;
+        if (!variable.channel() && t.monomial[i] != 0) appears[variable.index] = true;
       }
     }
   }
   // One that cancels (abs(v) - abs(v)) would still be a variable, and a data channel to compute.
-  for (std::size_t k = 0; k < held.size(); ++k) {
-    if (!held[k]) {
+  for (std::size_t k = 0; k < appears.size(); ++k) {
+    if (!appears[k]) {
       throw ModelError(model.functions()[k].where, model.functions()[k].name +
                                                        " cancels out of every equation: write the "
                                                        "equations without it");

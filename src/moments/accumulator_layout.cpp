@@ -13,15 +13,10 @@
 #include "momentid/accumulator.hpp"
 
 namespace momentid {
-namespace {
-
-// Kinds in working order: products with a held input, increments, the other products.
-enum Kind { kHeld, kIncrement, kPlain };
-
-}  // namespace
-
 // A moment's factors as (lag, power-table index), state factors first.
 struct MomentAccumulator::Layout {
+  // Kinds in working order: products with a held input, increments, the other products.
+  enum Kind { kHeld, kIncrement, kPlain };
   Kind kind = kPlain;
   std::size_t state_factors = 0;
   std::vector<std::size_t> indices, lags;
@@ -79,10 +74,10 @@ std::vector<MomentAccumulator::Layout> MomentAccumulator::layouts() const {
       if (state_part) l.state_factors = l.indices.size();
     }
     if (moments_[i].is_increment()) {
-      l.kind = kIncrement;  // the whole product at each row, kept in the rings
+      l.kind = Layout::kIncrement;  // the whole product at each row, kept in the rings
       l.state_factors = l.indices.size();
     } else if (hold_ == InputHold::kZeroOrderHold && has_input) {
-      l.kind = kHeld;
+      l.kind = Layout::kHeld;
     }
   }
   return out;
@@ -102,12 +97,12 @@ void MomentAccumulator::lay_out() {
     return std::tie(a.state_factors, a.indices, a.lags) <
            std::tie(b.state_factors, b.indices, b.lags);
   });
-  const auto count = [&](Kind kind) {
+  const auto count = [&](Layout::Kind kind) {
     return static_cast<std::size_t>(
         std::count_if(all.begin(), all.end(), [&](const Layout& l) { return l.kind == kind; }));
   };
-  increments_begin_ = count(kHeld);
-  ringed_count_ = increments_begin_ + count(kIncrement);
+  increments_begin_ = count(Layout::kHeld);
+  ringed_count_ = increments_begin_ + count(Layout::kIncrement);
   group_blocks(all);
   choose_singles();
   const std::size_t k = moments_.size();

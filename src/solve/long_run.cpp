@@ -21,7 +21,7 @@ constexpr Index kFirstOrdinate = 2;
 constexpr int kMaxOrder = 4;
 
 // Whittle fit of a moving average of order q to the periodogram `s` at frequencies `w`.
-struct Fit {
+struct WhittleFit {
   int order = 0;
   double criterion = 0;
   MatrixXd design;  // ordinates x (q + 1): 1, 2 cos w, ..., 2 cos q w
@@ -29,9 +29,9 @@ struct Fit {
   VectorXd spectrum;
 };
 
-Fit whittle(const VectorXd& s, const VectorXd& w, int q) {
+WhittleFit whittle(const VectorXd& s, const VectorXd& w, int q) {
   const Index m = s.size();
-  Fit fit{q, 0, MatrixXd(m, q + 1), VectorXd::Ones(m), VectorXd()};
+  WhittleFit fit{q, 0, MatrixXd(m, q + 1), VectorXd::Ones(m), VectorXd()};
   fit.design.col(0).setOnes();
   for (int h = 1; h <= q; ++h) fit.design.col(h) = 2 * (h * w.array()).cos();
   // A floor keeps the weights finite where a fit dips to zero.
@@ -113,9 +113,9 @@ LongRunCovariance long_run_covariance(const MatrixXd& batches) {
   for (Index j = 0; j < m; ++j) {
     w(j) = 2 * std::numbers::pi * static_cast<double>(j + kFirstOrdinate) / bd;
   }
-  Fit best;
+  WhittleFit best;
   for (int q = 1; q <= kMaxOrder && 4 * (q + 1) <= m; ++q) {
-    Fit fit = whittle(s, w, q);
+    WhittleFit fit = whittle(s, w, q);
     if (best.order == 0 || fit.criterion < best.criterion) best = std::move(fit);
   }
 

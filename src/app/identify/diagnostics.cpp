@@ -108,8 +108,9 @@ std::vector<Offset> offsets(const IdentifyResult& r, double z) {
 std::string mean_text(const Offset& o) {
   const ChannelMean& m = *o.mean;
   std::string out = "'" + m.name + "' has the mean " + number(m.mean, "%.3g");
-  if (o.spread > 0)
+  if (o.spread > 0) {
     out += ", " + number(std::abs(m.mean) / o.spread, "%.2g") + " of its standard deviation";
+  }
   out += " (" + number(std::abs(m.mean - o.expected) / o.std_error, "%.2g") +
          " standard errors from " +
          (!o.responds ? std::string("zero")

@@ -26,10 +26,6 @@ void add(Sum<Key>& into, const Key& key, double c) {
   }
 }
 
-bool constant(const Monomial& m) {
-  return std::all_of(m.begin(), m.end(), [](int e) { return e == 0; });
-}
-
 // `term` with a sign that joins it to the text before it: "-x" first, " - x" after.
 std::string joined(const std::string& before, double c, const std::string& term) {
   return before + (before.empty() ? (c < 0 ? "-" : "") : (c < 0 ? " - " : " + ")) + term;
@@ -58,7 +54,7 @@ std::string sum_text(const Model& model, Sum<Monomial> sum) {
   for (const auto& [m, c] : sum) {
     if (c == 0) continue;
     const std::string magnitude = number(std::abs(c), "%.6g");
-    const std::string term = constant(m)        ? magnitude
+    const std::string term = m.degree() == 0    ? magnitude
                              : magnitude == "1" ? format_monomial(model, m)
                                                 : magnitude + "*" + format_monomial(model, m);
     out = joined(out, c, term);
@@ -75,7 +71,7 @@ std::string derivatives_text(const Model& model, Sum<std::pair<int, Monomial>> d
     if (c == 0) continue;
     const std::string name = model.states()[static_cast<std::size_t>(key.first)].name + "'";
     const std::string factor =
-        constant(key.second) ? name : format_monomial(model, key.second) + "*" + name;
+        key.second.degree() == 0 ? name : format_monomial(model, key.second) + "*" + name;
     const std::string magnitude = number(std::abs(c), "%.6g");
     out = joined(out, c, magnitude == "1" ? factor : magnitude + "*" + factor);
   }
@@ -98,7 +94,7 @@ std::string equation_text(const Model& model, const Equation& eq,
       add(derivatives, std::make_pair(t.derivative, t.monomial), c);
     }
   }
-  if (derivatives.size() == 1 && constant(derivatives[0].first.second) &&
+  if (derivatives.size() == 1 && derivatives[0].first.second.degree() == 0 &&
       derivatives[0].second != 0) {
     for (auto& [m, c] : rest) c /= derivatives[0].second;
     return model.states()[static_cast<std::size_t>(derivatives[0].first.first)].name +

@@ -29,10 +29,6 @@ constexpr std::size_t kCheckEquations = 32;
 // hold the correlation between neighbouring batches.
 constexpr Eigen::Index kGroups = 50;
 
-bool constant(const Monomial& m) {
-  return std::all_of(m.begin(), m.end(), [](int e) { return e == 0; });
-}
-
 // The zero-lag system at `degree`, with the rates of change E[(g)'] kept: each batch's own, read
 // as increments, take the part of its errors that telescopes out of the batch series (which
 // would otherwise swamp the batch covariance that the weighting inverts); the record's are its
@@ -74,7 +70,7 @@ MomentRows corrected_rows(const Model& model, const MomentSystem& system,
         continue;
       }
       for (const auto& [term, weight] : noise_corrected(needed[k], noise)) {
-        if (constant(term)) {
+        if (term.degree() == 0) {
           out.constant += w * weight;
         } else {
           out.moments.emplace_back(index.at(term), w * weight);
@@ -190,7 +186,7 @@ std::optional<ZeroLagCheckPlan> plan_zero_lag_check(const Model& model,
       continue;
     }
     for (const auto& [term, weight] : noise_corrected(m, noisy)) {
-      if (!constant(term) && seen.insert(term).second) plan.moments.push_back(term);
+      if (term.degree() != 0 && seen.insert(term).second) plan.moments.push_back(term);
     }
   }
   return plan;
