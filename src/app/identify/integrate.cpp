@@ -18,6 +18,12 @@
 namespace momentid {
 namespace {
 
+// The record's column of a model variable (IdentifyOptions' record columns rename it).
+std::string column_of(const std::string& variable, const IdentifyOptions& options) {
+  const auto renamed = options.record.columns.find(variable);
+  return renamed == options.record.columns.end() ? variable : renamed->second;
+}
+
 // The band is read from the first rows of the record, in Welch segments of at most kSegment
 // rows (0.25 Hz at 2048 Hz): its lower edge is where the power below it reaches kEdge of the
 // whole, and the corner is half of that.
@@ -93,17 +99,13 @@ std::pair<double, std::string> band_corner(const DataSource& source, const std::
                          share + " (" + spectrum + ")"};
 }
 
-}  // namespace
-
-IdentifyResult::Integration plan_integration(const Model& model, const DataSource& source,
-                                             const IdentifyOptions& options,
-                                             std::vector<bool>& present) {
-  IdentifyResult::Integration out;
+// The states IdentifyOptions::integrate names, each with the column it is formed from, which
+// must show it only as its integral (with coefficient 1); marks them present.
+std::vector<IdentifyResult::Integration::Formed> formed_states(const Model& model,
+                                                               const IdentifyOptions& options,
+                                                               std::vector<bool>& present) {
+  std::vector<IdentifyResult::Integration::Formed> out;
   const std::vector<VariableReading> readings = variable_readings(model, present);
-  const auto column_of = [&](const std::string& variable) {
-    const auto renamed = options.record.columns.find(variable);
-    return renamed == options.record.columns.end() ? variable : renamed->second;
-  };
   for (const std::string& name : options.integrate) {
     const auto v = static_cast<std::size_t>(model.variable_index(name));
     const VariableReading& r = readings[v];
@@ -121,33 +123,24 @@ IdentifyResult::Integration plan_integration(const Model& model, const DataSourc
                                         "write its kinematic equation with coefficient 1");
     }
     const std::string& base = model.variables()[static_cast<std::size_t>(r.base)].name;
-    out.formed.push_back({name, base, column_of(base), -r.order});
+    out.push_back({name, base, column_of(base, options), -r.order});
   }
   for (const std::string& name : options.integrate) {
     present[static_cast<std::size_t>(model.variable_index(name))] = true;
   }
-  // The corner from the band of the force, the first input with a column, else of the column
-  // integrated.
-  std::string guide = out.formed.front().variable;
-  for (std::size_t i = 0; i < model.inputs().size(); ++i) {
-    if (present[model.states().size() + i]) {
-      guide = model.inputs()[i].name;
-      break;
-    }
-  }
-  const auto [rows, dt] = first_rows(source, guide, options.record);
-  if (!dt) {
-    throw DataError({source.name(), 1, 1, ""},
-                    "forming a state (" + UsageError::mention("integrate") +
-                        ") needs the sample interval: give the data a 't' column or a dt in the "
-                        "metadata, or give " +
-                        UsageError::mention("dt"));
-  }
-  out.dt = *dt;
+  return out;
+}
+
+// The filter's corner (given, or from the band of `rows` of the guide column) and length, raised
+// until the filter fills at most a quarter of a first run read to its end, and the formed
+// states' noise gains; DataError when the filter would take half of that run.
+void fit_filter(IdentifyResult::Integration& out, const DataSource& source,
+                const std::vector<double>& rows, const std::string& column,
+                const IdentifyOptions& options) {
   if (options.integrate_corner) {
     out.corner = *options.integrate_corner;
   } else {
-    std::tie(out.corner, out.band) = band_corner(source, rows, column_of(guide), *dt);
+    std::tie(out.corner, out.band) = band_corner(source, rows, column, out.dt);
     out.corner_chosen = true;
   }
   if (!(out.corner * out.dt < 0.25)) {
@@ -195,6 +188,34 @@ IdentifyResult::Integration plan_integration(const Model& model, const DataSourc
                         std::to_string(rows.size()) + " rows: give a longer record or a higher " +
                         UsageError::mention("integrate_corner"));
   }
+}
+
+}  // namespace
+
+IdentifyResult::Integration plan_integration(const Model& model, const DataSource& source,
+                                             const IdentifyOptions& options,
+                                             std::vector<bool>& present) {
+  IdentifyResult::Integration out;
+  out.formed = formed_states(model, options, present);
+  // The corner from the band of the force, the first input with a column, else of the column
+  // integrated.
+  std::string guide = out.formed.front().variable;
+  for (std::size_t i = 0; i < model.inputs().size(); ++i) {
+    if (present[model.states().size() + i]) {
+      guide = model.inputs()[i].name;
+      break;
+    }
+  }
+  const auto [rows, dt] = first_rows(source, guide, options.record);
+  if (!dt) {
+    throw DataError({source.name(), 1, 1, ""},
+                    "forming a state (" + UsageError::mention("integrate") +
+                        ") needs the sample interval: give the data a 't' column or a dt in the "
+                        "metadata, or give " +
+                        UsageError::mention("dt"));
+  }
+  out.dt = *dt;
+  fit_filter(out, source, rows, column_of(guide, options), options);
   return out;
 }
 
