@@ -127,6 +127,14 @@ struct Given {
   bool f1 = false, f2 = false, lines = false;
 };
 
+// A setting that must be a positive number: "OPTION: KEY must be positive" otherwise.
+double positive_number(const std::string& value, const std::string& key,
+                       const std::string& option) {
+  const double x = parse_number(value, key, option);
+  if (x <= 0) throw UsageError(option + ": " + key + " must be positive");
+  return x;
+}
+
 // One setting of the text form: its key, the processes that take it, and what it sets.
 struct Setting {
   const char* key;
@@ -188,20 +196,17 @@ const Setting kSettings[] = {
      }},
     {"tau", ornstein_uhlenbeck,
      [](InputSpec& s, Given& g, const std::string& value, const std::string& option) {
-       s.tau = parse_number(value, "tau", option);
-       if (s.tau <= 0) throw UsageError(option + ": tau must be positive");
+       s.tau = positive_number(value, "tau", option);
        g.tau = true;
      }},
     {"f1", multisine,
      [](InputSpec& s, Given& g, const std::string& value, const std::string& option) {
-       s.f1 = parse_number(value, "f1", option);
-       if (s.f1 <= 0) throw UsageError(option + ": f1 must be positive");
+       s.f1 = positive_number(value, "f1", option);
        g.f1 = true;
      }},
     {"f2", multisine,
      [](InputSpec& s, Given& g, const std::string& value, const std::string& option) {
-       s.f2 = parse_number(value, "f2", option);
-       if (s.f2 <= 0) throw UsageError(option + ": f2 must be positive");
+       s.f2 = positive_number(value, "f2", option);
        g.f2 = true;
      }},
     {"lines", multisine,
@@ -216,8 +221,7 @@ const Setting kSettings[] = {
      }},
     {"rms", multisine,
      [](InputSpec& s, Given&, const std::string& value, const std::string& option) {
-       s.rms = parse_number(value, "rms", option);
-       if (s.rms <= 0) throw UsageError(option + ": rms must be positive");
+       s.rms = positive_number(value, "rms", option);
      }},
 };
 
