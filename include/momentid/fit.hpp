@@ -65,6 +65,15 @@ struct Fit {
   std::vector<std::vector<double>> covariance() const;
 };
 
+// The law of the J test's p-value (solve/j_test.cpp): J / j_dof times `scale` (the shrinking of
+// weights estimated from the batches that also give the errors) is taken as F(dof,
+// denominator_dof), where dof counts the effective directions of the residual's long-run
+// variance (Satterthwaite) and denominator_dof the degrees of freedom that variance and the
+// weights are known to.
+struct JLaw {
+  double dof = 0, denominator_dof = 0, scale = 1;
+};
+
 // The result of an identification: the least-squares fit and, when asked for and possible, the
 // optimally weighted one, with the diagnostics that say when to distrust them. Like a solver
 // summary, it is a value even when the answer is poor: `status` and `warnings` say so.
@@ -81,6 +90,7 @@ struct Estimate {
   std::size_t intervals = 0;  // sample intervals the moments average over
   std::optional<double> j_statistic, j_pvalue;
   int j_dof = 0;
+  JLaw j_law;  // of j_pvalue
   // The batch series of the main fit's first-order errors, batches x parameters, whose long-run
   // covariance gives its standard errors (zero columns for fixed parameters); empty when nothing
   // is identifiable. As solve computed it: identify's extrapolation of the sampling bias leaves

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <cmath>
 #include <cstddef>
 #include <map>
 #include <memory>
@@ -263,6 +264,23 @@ struct MeanResponse {
   std::vector<std::vector<double>> gain;  // per state, per input
 };
 MeanResponse mean_response(const IdentifyResult& result);
+
+// An identified model that runs away from its equilibrium, which no stationary record comes
+// from: its linearisation there (under the inputs' means, Newton from the origin) has an
+// eigenvalue of positive real part, and its free response, started a thousandth of the measured
+// states' standard deviations off along that eigenvalue's direction and followed for 4 ln(10^6)
+// e-folding times, leaves a thousand of them or still grows at the end (its largest size in the
+// last quarter of that time is more than twice that in the third). A model that its nonlinear
+// terms hold (a Van der Pol limit cycle, a double well) settles. Empty when the model is stable
+// at its equilibrium or held, has no equilibrium or no linearisation there (an abs or sign term
+// switching), or no state has a channel to scale it by. `time` is NaN when the response did not
+// leave the bound (it kept growing, or a million steps did not reach the end).
+struct Runaway {
+  double growth_rate = 0;   // the largest real part of the eigenvalues, per unit of time
+  double frequency_hz = 0;  // of that eigenvalue (0 for a real one)
+  double time = NAN;        // when the free response left the bound
+};
+std::optional<Runaway> runaway(const IdentifyResult& result);
 
 // For an oscillator y' = v, m v' = -R(y) - ... + x with a constant mass m (two states): the
 // restoring force R (m times minus the acceleration at rest, inputs at 0) at 41 displacements over

@@ -65,8 +65,9 @@ JTest j_test(const LinearSystem& system, const LeastSquares& first, const Optima
   const double k = trace * trace / trace_square;
   const double rho = trace / d;
   out.statistic = j * out.dof / trace;
-  out.pvalue = f_upper_tail(j / trace * (n - d) / (n - d + d * rho), k,
-                            std::max(1.0, 1 / (rho / (n - d + 1) + 1 / (k * nu))));
+  out.law = {k, std::max(1.0, 1 / (rho / (n - d + 1) + 1 / (k * nu))), (n - d) / (n - d + d * rho)};
+  out.pvalue =
+      f_upper_tail(*out.statistic / d * out.law.scale, out.law.dof, out.law.denominator_dof);
   return out;
 }
 

@@ -4,6 +4,7 @@
 #include <optional>
 #include <string>
 
+#include "momentid/fit.hpp"
 #include "solve/gmm.hpp"
 #include "solve/least_squares.hpp"
 #include "solve/linear_system.hpp"
@@ -16,6 +17,7 @@ namespace momentid {
 struct JTest {
   std::optional<double> statistic, pvalue;
   int dof = 0;  // the equations the weighting counts less the parameters
+  JLaw law;     // of the p-value
   std::string warning;
 };
 

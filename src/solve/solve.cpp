@@ -85,6 +85,7 @@ void report_gmm(Estimate& out, const LinearSystem& system, const LeastSquares& l
   out.j_dof = test.dof;
   out.j_statistic = test.statistic;
   out.j_pvalue = test.pvalue;
+  out.j_law = test.law;
   if (!test.warning.empty()) out.warnings.push_back(test.warning);
 }
 

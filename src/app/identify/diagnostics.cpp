@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 
 #include "common/number.hpp"
 #include "momentid/identify.hpp"
@@ -21,6 +22,7 @@ constexpr double kJRejection = 0.01;  // p-value of the J test
 constexpr double kOffsetZ = 3;        // |mean| / its standard error, of a channel
 constexpr double kWeakOffsetZ = 2;    // the same, named when the J test rejects the model
 constexpr double kWeakRelativeError = 0.1;
+constexpr double kUndeterminedZ = 2;  // |estimate| / its standard error, of every free parameter
 constexpr double kStrongCorrelation = 0.95;
 
 // Whether every term of every equation is odd, counting a derivative as an odd factor: then the
@@ -119,6 +121,45 @@ std::string mean_text(const Offset& o) {
   return out;
 }
 
+// "the identified model is unstable: ..." (Runaway), with the damping ratio of the growing mode
+// and its standard error when it oscillates.
+std::string runaway_text(const IdentifyResult& r, const Runaway& away) {
+  std::string growth = "grows as exp(" + number(away.growth_rate, "%.3g") + " t)";
+  if (away.frequency_hz > 0) {
+    const double omega = 2 * std::numbers::pi * away.frequency_hz;
+    growth += ", a mode at " +
+              number(std::hypot(omega, away.growth_rate) / (2 * std::numbers::pi), "%.3g") + " Hz";
+    const LinearisedModes linear = linearised_modes(r);
+    const auto mode = std::min_element(
+        linear.modes.begin(), linear.modes.end(),
+        [](const auto& a, const auto& b) { return a.damping_ratio < b.damping_ratio; });
+    if (mode != linear.modes.end() && mode->damping_ratio < 0) {
+      growth += " with the damping ratio " + number(mode->damping_ratio, "%.2g");
+      if (std::isfinite(mode->damping_se)) {
+        growth += " (standard error " + number(mode->damping_se, "%.2g") + ")";
+      }
+    }
+  }
+  return "the identified model is unstable: linearised at its equilibrium it " + growth +
+         ", and its free response " +
+         (std::isnan(away.time) ? std::string("keeps growing for as long as it was followed")
+                                : "leaves a thousand standard deviations of the states at t = " +
+                                      number(away.time, "%.3g")) +
+         ", which no stationary record comes from. A term or an instrument may be missing, or "
+         "the data not determine the damping: do not simulate with these estimates";
+}
+
+// Whether no free parameter lies further than kUndeterminedZ standard errors from zero.
+bool undetermined(const IdentifyResult& r) {
+  bool any = false;
+  for (const ParameterEstimate& p : r.parameters()) {
+    if (p.fixed || !p.identifiable) continue;
+    if (!(std::abs(p.estimate) <= kUndeterminedZ * p.std_error)) return false;
+    any = true;
+  }
+  return any;
+}
+
 }  // namespace
 
 std::vector<std::string> doubts(const IdentifyResult& r) {
@@ -157,6 +198,13 @@ std::vector<std::string> doubts(const IdentifyResult& r) {
                   "): the record is not stationary (a drift, a start-up transient, runs joined "
                   "end to end), or its columns are not what the model's kinematic equations say "
                   "(v is not y', or the channels are shifted in time)");
+  }
+  if (const std::optional<Runaway> away = runaway(r)) out.push_back(runaway_text(r, *away));
+  if (undetermined(r)) {
+    out.push_back("no parameter is determined: every estimate lies within " +
+                  number(kUndeterminedZ, "%g") +
+                  " standard errors of zero, so the data do not tell this model from one without "
+                  "any of its terms. Excite the system more, measure longer, or remove terms");
   }
   for (const Offset& o : offsets(r, kOffsetZ)) {
     out.push_back(mean_text(o) + ", but model " + r.model->name() +

@@ -4,6 +4,7 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 #include <algorithm>
+#include <boost/numeric/odeint.hpp>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -77,15 +78,9 @@ MatrixXd jacobian(const RightHandSide& f, const VectorXd& y, int& kink) {
   return out;
 }
 
-// The modes of the linearisation at `theta`: (frequency in Hz, damping ratio) of each complex
-// pair of eigenvalues, by frequency; `why` says why there are none.
-std::vector<std::pair<double, double>> modes_at(const Model& model,
-                                                const std::vector<double>& theta,
-                                                const std::vector<double>& u, VectorXd& y,
-                                                std::string& why) {
-  const RightHandSide f(model, theta, u);
-  y = VectorXd::Zero(f.states());
-  // Newton from the origin to the equilibrium f(y) = 0.
+// The equilibrium under the inputs' means (Newton from the origin), or nullopt when none is found.
+std::optional<VectorXd> equilibrium(const RightHandSide& f) {
+  VectorXd y = VectorXd::Zero(f.states());
   int kink = -1;
   for (int iteration = 0; iteration < 50; ++iteration) {
     const VectorXd residual = f(y);
@@ -95,9 +90,25 @@ std::vector<std::pair<double, double>> modes_at(const Model& model,
   }
   const VectorXd residual = f(y);
   if (!residual.allFinite() || residual.norm() > 1e-8 * std::max(1.0, y.norm())) {
+    return std::nullopt;
+  }
+  return y;
+}
+
+// The modes of the linearisation at `theta`: (frequency in Hz, damping ratio) of each complex
+// pair of eigenvalues, by frequency; `why` says why there are none.
+std::vector<std::pair<double, double>> modes_at(const Model& model,
+                                                const std::vector<double>& theta,
+                                                const std::vector<double>& u, VectorXd& y,
+                                                std::string& why) {
+  const RightHandSide f(model, theta, u);
+  const std::optional<VectorXd> at = equilibrium(f);
+  if (!at) {
     why = "no equilibrium was found near the origin under the inputs' means";
     return {};
   }
+  y = *at;
+  int kink = -1;
   const MatrixXd a = jacobian(f, y, kink);
   if (kink >= 0 && !model.functions().empty()) {
     why = "the model has no linearisation at its equilibrium: an abs(...) or sign(...) term " +
@@ -339,6 +350,86 @@ std::optional<MatrixXd> mean_gains(const IdentifyResult& r) {
   return MatrixXd(-lu.solve(b));
 }
 
+// Runaway (identify.hpp): the start and the bound of the free response, in standard deviations of
+// the measured states, and the longest it is followed, in steps.
+constexpr double kRunawayStart = 1e-3, kRunawayBound = 1e3;
+constexpr long kRunawaySteps = 1'000'000;
+
+std::optional<Runaway> runaway_of(const IdentifyResult& r) {
+  const Model& model = *r.model;
+  const RightHandSide f(model, estimates_of(r), input_means(r));
+  const std::optional<VectorXd> y0 = equilibrium(f);
+  if (!y0) return std::nullopt;
+  int kink = -1;
+  const MatrixXd a = jacobian(f, *y0, kink);
+  if ((kink >= 0 && !model.functions().empty()) || !a.allFinite()) return std::nullopt;
+  const Eigen::EigenSolver<MatrixXd> eigen(a);
+  const Eigen::VectorXcd lambda = eigen.eigenvalues();
+  Eigen::Index fastest = 0, growing = 0;
+  lambda.real().maxCoeff(&growing);
+  lambda.cwiseAbs().maxCoeff(&fastest);
+  const double sigma = lambda(growing).real();
+  if (!(sigma > 0)) return std::nullopt;
+  // The scale of each state: its standard deviation where the record has it.
+  VectorXd scale = VectorXd::Zero(f.states());
+  for (std::size_t s = 0; s < model.states().size(); ++s) {
+    for (const ChannelStatistics& c : r.data.channels) {
+      if (c.name == model.states()[s].name && c.variance > 0) {
+        scale(static_cast<Eigen::Index>(s)) = std::sqrt(c.variance);
+      }
+    }
+  }
+  const auto size = [&](const VectorXd& d) {
+    double out = 0;
+    for (Eigen::Index i = 0; i < d.size(); ++i) {
+      if (scale(i) > 0) out = std::max(out, std::abs(d(i)) / scale(i));
+    }
+    return out;
+  };
+  // Of a complex eigenvector, the real or imaginary part, whichever moves the measured states more.
+  const VectorXd re = eigen.eigenvectors().col(growing).real();
+  const VectorXd im = eigen.eigenvectors().col(growing).imag();
+  const VectorXd direction = size(re) >= size(im) ? re : im;
+  if (!(size(direction) > 0)) return std::nullopt;
+  Runaway out;
+  out.growth_rate = sigma;
+  out.frequency_hz = std::abs(lambda(growing).imag()) / (2 * std::numbers::pi);
+  // Dormand-Prince steps (Boost.Odeint, error controlled) for 4 ln(bound / start) e-folding
+  // times: the linear growth reaches the bound in a quarter of them, a limit cycle or another
+  // equilibrium in about as long. Held: the response's largest size in the last quarter is less
+  // than twice that in the third. A response that grows faster than the linear one runs into the
+  // bound, and one that a hardening spring slows (energy growing as exp(2 sigma t) under a y^4
+  // potential is an amplitude growing as exp(sigma t / 2)) still grows 1000-fold in a quarter.
+  namespace odeint = boost::numeric::odeint;
+  using State = std::vector<double>;
+  const auto rates = [&](const State& x, State& dxdt, double) {
+    const VectorXd d = f(Eigen::Map<const VectorXd>(x.data(), f.states()));
+    dxdt.assign(d.data(), d.data() + d.size());
+  };
+  auto stepper = odeint::make_controlled<odeint::runge_kutta_dopri5<State>>(1e-9, 1e-6);
+  const double horizon = 4 * std::log(kRunawayBound / kRunawayStart) / sigma;
+  const VectorXd start = *y0 + kRunawayStart / size(direction) * direction;
+  State x(start.data(), start.data() + start.size());
+  double t = 0, dt = 0.05 / std::abs(lambda(fastest)), third = 0, last = 0;
+  for (long step = 0; step < kRunawaySteps && t < horizon; ++step) {
+    const bool taken = stepper.try_step(rates, x, t, dt) == odeint::success;
+    const double now = size(Eigen::Map<const VectorXd>(x.data(), f.states()) - *y0);
+    // A step that shrinks to nothing: the response leaves in finite time.
+    if (!std::isfinite(now) || now > kRunawayBound || !(dt > 1e-12 * horizon)) {
+      out.time = t;
+      return out;
+    }
+    if (!taken) continue;
+    if (4 * t > 3 * horizon) {
+      last = std::max(last, now);
+    } else if (2 * t > horizon) {
+      third = std::max(third, now);
+    }
+  }
+  if (t < horizon || last > 2 * third) return out;
+  return std::nullopt;  // held by its nonlinear terms
+}
+
 }  // namespace
 
 MeanResponse mean_response(const IdentifyResult& r) {
@@ -364,6 +455,16 @@ MeanResponse mean_response(const IdentifyResult& r) {
     out.gain.push_back(std::move(row));
   }
   return out;
+}
+
+std::optional<Runaway> runaway(const IdentifyResult& r) {
+  if (!r.estimate.usable()) return std::nullopt;
+  const AlgebraLock lock;
+  try {
+    return runaway_of(r);
+  } catch (const Error&) {
+    return std::nullopt;  // the estimates make no model to evaluate
+  }
 }
 
 LinearisedModes linearised_modes(const IdentifyResult& r) {

@@ -162,6 +162,10 @@ void diagnostics_text(std::ostringstream& out, const IdentifyResult& r) {
     out << "  J test: J = " << number(*e.j_statistic, "%.4g") << " on " << e.j_dof
         << " degrees of freedom, p = " << number(*e.j_pvalue, "%.3g")
         << (*e.j_pvalue < 0.01 ? " (the model does not fit the data)" : "") << "\n";
+    out << "    its law: J/" << e.j_dof << " x " << number(e.j_law.scale, "%.3g") << " ~ F("
+        << number(e.j_law.dof, "%.3g") << ", " << number(e.j_law.denominator_dof, "%.3g")
+        << "), the residual's variance on " << number(e.j_law.dof, "%.3g")
+        << " effective directions (docs/uncertainty.md)\n";
   }
   if (const auto* check = r.zero_lag_check()) {
     out << "  zero-lag check: ";
@@ -358,7 +362,11 @@ Json diagnostics_json(const IdentifyResult& r) {
               {"input_hold", to_string(r.data.hold)},
               {"j_statistic", e.j_statistic ? json_value(*e.j_statistic) : Json()},
               {"j_dof", e.j_dof},
-              {"j_pvalue", e.j_pvalue ? json_value(*e.j_pvalue) : Json()}};
+              {"j_pvalue", e.j_pvalue ? json_value(*e.j_pvalue) : Json()},
+              {"j_law", e.j_pvalue ? Json{{"dof", json_value(e.j_law.dof)},
+                                          {"denominator_dof", json_value(e.j_law.denominator_dof)},
+                                          {"scale", json_value(e.j_law.scale)}}
+                                   : Json()}};
   if (const auto* check = r.zero_lag_check()) {
     Json estimates = Json::object();
     if (!check->estimates.empty()) estimates = by_parameter(r, check->estimates);
