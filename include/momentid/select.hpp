@@ -85,6 +85,14 @@ struct SelectResult {
   std::vector<CandidateTest> tests;  // per candidate
   std::vector<Window> windows;       // the library's window first
   std::vector<std::string> warnings;
+  // Why the chosen structure is uncertain, one short reason each: the J test rejects the whole
+  // library, the runner-up lies within the criterion's noise, the chosen terms change with the
+  // lag window, or a kept candidate is nearly collinear with another. Any of them makes the
+  // selection doubtful (status) and has the runner-up identified beside the chosen model.
+  std::vector<std::string> uncertain;
+  // The runner-up subset (ranking[1]) identified as the chosen one is, when the structure is
+  // uncertain.
+  std::optional<IdentifyResult> runner_up;
   // With SelectOptions::validation: its name and the best subsets on it, best first.
   std::string validation_name;
   std::vector<Validated> validated;
@@ -102,8 +110,13 @@ struct SelectResult {
 SelectResult select_terms(const Model& model, const DataSource& source,
                           const SelectOptions& options = {});
 
-// The ranking, the candidates' tests, the windows and the warnings, then the chosen model's
-// identify report.
+// The chosen model's status (identify.hpp), doubtful when it is ok but the structure is
+// uncertain (SelectResult::uncertain).
+Status status(const SelectResult& result);
+
+// The ranking, the candidates' tests, the windows and the warnings, the selection's status with
+// the runner-up's estimates beside the chosen ones when the structure is uncertain, then the
+// chosen model's identify report.
 std::string format_text(const SelectResult& result);
 // The chosen model's identify JSON with `selected` and `dropped` (candidate names) and
 // `selection` (docs/json.md, "select").

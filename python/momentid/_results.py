@@ -238,6 +238,10 @@ class SelectResult(IdentifyResult):
       "selected", "criterion", "j", "dof" and "pvalue"; tests: per candidate, "candidate",
       "terms", "kept", "j_change" and "pvalue" (the difference-in-J test at the chosen subset);
       windows: the chosen candidates on narrower lag windows; selection_warnings;
+      status: the selection's, "doubtful" when the chosen model's fit is ok but the structure
+      is uncertain; uncertain: why (the library rejected, a close runner-up, terms that change
+      with the lag window, collinear candidates); runner_up: then the runner-up subset's
+      "selected", "status" and "parameters" (as to_dict()'s), else None;
       validation: with select(validate=...), the best subsets on the second record, each a dict
       with "rank", "selected", "outputs" ({state: {"fit", "rms"}}) and "consistent" (else []).
     model_text: the chosen model as a model file; write_model(path) writes it.
@@ -252,6 +256,8 @@ class SelectResult(IdentifyResult):
         self.tests = selection["tests"]
         self.windows = selection["windows"]
         self.selection_warnings = selection["warnings"]
+        self.uncertain = list(selection["uncertain"])
+        self.runner_up = selection["runner_up"]
         self.validation = selection.get("validation", {}).get("subsets", [])
         self.model_text = model_text
 

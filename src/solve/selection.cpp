@@ -43,6 +43,7 @@ FixedWeighting::FixedWeighting(const MomentRows& rows, std::size_t parameters,
                 (test.warning.empty() ? std::string("no residual") : test.warning) + ")");
   }
   library_j_ = *test.statistic;
+  library_pvalue_ = *test.pvalue;
   rank_ = gmm.rank;
   theta_ = gmm.theta;
   covariance_ = gmm_errors(system, ls, gmm, deviations, known, batches).errors.covariance;

@@ -36,6 +36,8 @@ class FixedWeighting {
   int dof(const std::vector<bool>& kept) const;
   // The correlation between the estimates of parameters p and q on the library.
   double correlation(std::size_t p, std::size_t q) const;
+  // The p-value of the library's own J test, on its law (JLaw, fit.hpp).
+  double library_pvalue() const { return library_pvalue_; }
 
  private:
   // The library's estimate and its covariance, and its calibrated J: a subset's J is the
@@ -43,7 +45,7 @@ class FixedWeighting {
   // against b' W b (records without noise).
   Eigen::VectorXd theta_;
   Eigen::MatrixXd covariance_;
-  double library_j_ = 0;
+  double library_j_ = 0, library_pvalue_ = 1;
   Eigen::Index rank_ = 0;
 };
 

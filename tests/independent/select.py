@@ -31,6 +31,13 @@ J test does not reject it at 1%, and that its estimates lie within 3 standard er
   written      duffing's chosen model written by -o: identify takes it as it is, `ok`, with the
                same terms and estimates within 3 standard errors of the truth
   no_candidates  a model without candidates: exit 2, naming 'candidate' and 'library'
+  uncertain    duffing's oscillator driven gently (a force of RMS 200, where y^3 and y^5 are
+               nearly proportional over the record), 5% noise on y, against the library
+               {y, y^3, y^5, v, x}: the selection cannot tell y^3 from y^5, so its status is
+               `doubtful` with the reasons, and the runner-up's estimates are beside the chosen
+               model's, in the JSON and in the text
+  clear        duffing's record against the same library: the data prefer y^3 clearly, the
+               selection's status is `ok` with no reason for doubt and no runner-up identified
 
 Usage: select.py CASE MOMENTID WORKDIR
 """
@@ -271,10 +278,55 @@ def no_candidates(momentid, workdir):
             and "'library" in result.stderr and result.stdout == "")
 
 
+CUBIC_OR_QUINTIC = """model cubic_or_quintic
+state y, v
+input x
+y' = v
+v' = 0
+library v': y, y^3, y^5, v, x
+"""
+
+
+def uncertain(momentid, workdir):
+    p = lab.SDOF
+    clean = oscillator(20271207, lambda s, x: (s[1], x - p["c"] * s[1] - p["k"] * s[0]
+                                                 - p["eps"] * s[0]**3), 200.0)
+    path = f"{workdir}/gentle.csv"
+    write(20271207, clean, 0.05, path)
+    model = library(workdir, CUBIC_OR_QUINTIC)
+    report = select(momentid, model, path)
+    if report is None:
+        return False
+    selection = report["selection"]
+    print(f"  status {report['diagnostics']['status']}; uncertain: {selection['uncertain']}")
+    runner_up = selection["runner_up"]
+    print(f"  runner-up: {runner_up and runner_up['selected']}")
+    text = subprocess.run([momentid, "select", model, path, "--quiet"], capture_output=True,
+                          text=True).stdout
+    return (report["diagnostics"]["status"] == "doubtful" and bool(selection["uncertain"])
+            and runner_up is not None and runner_up["selected"] != report["selected"]
+            and "selection status: doubtful, the structure is uncertain" in text
+            and "runner-up (rank 2)" in text)
+
+
+def clear(momentid, workdir):
+    path, _ = duffing_record(workdir)
+    report = select(momentid, library(workdir, CUBIC_OR_QUINTIC), path)
+    if report is None:
+        return False
+    selection = report["selection"]
+    print(f"  selected {report['selected']}; status {report['diagnostics']['status']}; "
+          f"uncertain: {selection['uncertain']}")
+    return (sorted(report["selected"]) == ["v_v", "v_x", "v_y", "v_y3"]
+            and report["diagnostics"]["status"] == "ok" and selection["uncertain"] == []
+            and selection["runner_up"] is None)
+
+
 CASES = {"duffing": duffing, "clean": clean, "asymmetric": asymmetric,
          "van_der_pol": van_der_pol, "damping": damping, "offset": offset, "validated": validated,
          "blows_up": blows_up,
-         "written": written, "no_candidates": no_candidates}
+         "written": written, "no_candidates": no_candidates, "uncertain": uncertain,
+         "clear": clear}
 
 if __name__ == "__main__":
     case, momentid, workdir = sys.argv[1:4]

@@ -34,6 +34,44 @@ std::vector<std::string> kept_names(const SelectResult& r, const std::vector<boo
 
 std::string pvalue_text(double p) { return p < 1e-16 ? "<1e-16" : number(p, "%.2g"); }
 
+// "0.502 +- 0.0068", or "(dropped)" for a parameter the result lacks.
+std::string estimate_text(const IdentifyResult& r, const std::string& name) {
+  for (const ParameterEstimate& p : r.parameters()) {
+    if (p.name == name) {
+      return number(p.estimate, "%.6g") +
+             (p.fixed ? " fixed" : " +- " + number(p.std_error, "%.3g"));
+    }
+  }
+  return "(dropped)";
+}
+
+// The selection's status, and when the structure is uncertain why, with the chosen and the
+// runner-up's estimates side by side.
+void status_text(std::ostream& out, const SelectResult& r) {
+  out << "selection status: " << to_string(status(r));
+  if (r.uncertain.empty()) {
+    out << "\n";
+    return;
+  }
+  out << ", the structure is uncertain (";
+  for (std::size_t i = 0; i < r.uncertain.size(); ++i) out << (i ? "; " : "") << r.uncertain[i];
+  out << "): compare the runner-up before using the chosen model\n";
+  if (!r.runner_up) return;
+  char line[512];
+  std::snprintf(line, sizeof line, "  %-12s  %-28s  %s\n", "parameter", "chosen (rank 1)",
+                "runner-up (rank 2)");
+  out << line;
+  for (const Declaration& p : r.library.model->parameters()) {
+    const std::string chosen = estimate_text(r.chosen, p.name);
+    const std::string runner_up = estimate_text(*r.runner_up, p.name);
+    if (chosen == "(dropped)" && runner_up == "(dropped)") continue;
+    std::snprintf(line, sizeof line, "  %-12s  %-28s  %s\n", p.name.c_str(), chosen.c_str(),
+                  runner_up.c_str());
+    out << line;
+  }
+  out << "  runner-up's status: " << to_string(status(*r.runner_up)) << "\n";
+}
+
 }  // namespace
 
 std::string format_text(const SelectResult& r) {
@@ -100,6 +138,7 @@ std::string format_text(const SelectResult& r) {
   out << "\n";
   if (r.warnings.empty()) out << "selection warnings: none\n";
   for (const std::string& w : r.warnings) out << "selection warning: " << w << "\n";
+  status_text(out, r);
   out << "\nthe chosen model, identified on its own equations\n\n" << format_text(r.chosen);
   return out.str();
 }
@@ -142,7 +181,18 @@ nlohmann::ordered_json json_value(const SelectResult& r) {
                          {"consistent", v.consistent}});
     if (!v.failed.empty()) validated.back()["failed"] = v.failed;
   }
-  out["selection"] = {{"search", r.exhaustive ? "exhaustive" : "backward"},
+  out["diagnostics"]["status"] = to_string(status(r));
+  Json runner_up;
+  if (r.runner_up) {
+    runner_up = json_value(*r.runner_up);
+    runner_up = {{"selected", kept_names(r, r.ranking[1].kept, true)},
+                 {"status", runner_up["diagnostics"]["status"]},
+                 {"parameters", runner_up["parameters"]}};
+  }
+  out["selection"] = {{"status", to_string(status(r))},
+                      {"uncertain", r.uncertain},
+                      {"runner_up", runner_up},
+                      {"search", r.exhaustive ? "exhaustive" : "backward"},
                       {"scored", r.scored},
                       {"penalty", json_value(r.penalty)},
                       {"dispersion", json_value(r.dispersion)},

@@ -58,15 +58,16 @@ struct Scorer {
   }
 };
 
-// The library's J over its degrees of freedom when its J test rejects it, else 1: the misfit
-// that no candidate explains (a noise or an offset not modelled, a law outside the library),
-// by which every J of the selection is divided, as quasi-likelihood criteria divide deviances.
+// The library's J over its degrees of freedom when its J test rejects it (on the test's own law,
+// whose effective degrees of freedom may be far fewer than J's: docs/uncertainty.md), else 1:
+// the misfit that no candidate explains (a noise or an offset not modelled, a law outside the
+// library), by which every J of the selection is divided, as quasi-likelihood criteria divide
+// deviances.
 double dispersion_of(const FixedWeighting& weighting, std::size_t parameters) {
   const std::vector<bool> all(parameters, true);
-  const double j = weighting.j(all);
   const int dof = weighting.dof(all);
-  if (dof <= 0 || chi_square_upper_tail(j, dof) >= kRejected) return 1;
-  return j / dof;
+  if (dof <= 0 || weighting.library_pvalue() >= kRejected) return 1;
+  return weighting.j(all) / dof;
 }
 
 // Every subset, or the path of backward elimination, best first; `scored` counts them.
@@ -164,7 +165,9 @@ void validate_best(SelectResult& out, const DataSource& source, const SelectOpti
   const std::size_t count = std::min(out.ranking.size(), SelectOptions::kValidated);
   for (std::size_t rank = 0; rank < count; ++rank) {
     IdentifyResult identified;
-    if (rank > 0) {
+    if (rank == 1 && out.runner_up) {
+      identified = *out.runner_up;
+    } else if (rank > 0) {
       const Model subset =
           parse_model(subset_model_text(out, out.ranking[rank].kept, out.library), library.file());
       identified = identify(subset, source, options.identify);
@@ -293,6 +296,10 @@ void test_candidates(SelectResult& out, const Scoring& scoring, const Scorer& sc
                                ") are nearly collinear on these data (their estimates correlate " +
                                number(rho, "%.4f") +
                                " on the library): the selection between them is uncertain");
+        if (out.tests[a].kept || out.tests[b].kept) {
+          out.uncertain.push_back(out.tests[a].name + " and " + out.tests[b].name +
+                                  " nearly collinear");
+        }
       }
     }
   }
@@ -306,10 +313,13 @@ void ranking_warnings(SelectResult& out, const std::vector<SelectResult::Subset>
         " times its degrees of freedom): the record holds a misfit that no candidate explains "
         "(a noise or an offset not modelled, a law outside the library), "
         "and the selection divides every J by that factor");
+    out.uncertain.push_back("the library rejected");
   }
   if (ranking.size() > 1 && ranking[1].criterion - ranking[0].criterion < kCloseCriterion) {
     out.warnings.push_back("the runner-up is within " + number(kCloseCriterion, "%g") +
                            " of the best subset's criterion: the data hardly prefer one of them");
+    out.uncertain.push_back(
+        "the runner-up " + number(ranking[1].criterion - ranking[0].criterion, "%.2g") + " behind");
   }
 }
 
@@ -338,6 +348,7 @@ void select_on_windows(SelectResult& out, const Scoring& scoring, const LaggedSy
     out.warnings.push_back(
         "the chosen terms change with the lag window (see 'windows'): the "
         "selection is not stable on this record");
+    out.uncertain.push_back("the terms change with the lag window");
     break;
   }
 }
@@ -378,7 +389,22 @@ void identify_chosen(SelectResult& out, const Model& model, const DataSource& so
   }
 }
 
+// The runner-up subset identified on the record, as the chosen one is, when the structure is
+// uncertain.
+void identify_runner_up(SelectResult& out, const DataSource& source, const SelectOptions& options) {
+  if (out.uncertain.empty() || out.ranking.size() < 2) return;
+  const Model& library = *out.library.model;
+  out.runner_up = identify(
+      parse_model(subset_model_text(out, out.ranking[1].kept, out.library), library.file()), source,
+      options.identify);
+}
+
 }  // namespace
+
+Status status(const SelectResult& r) {
+  const Status chosen = status(r.chosen);
+  return chosen == Status::kOk && !r.uncertain.empty() ? Status::kDoubtful : chosen;
+}
 
 SelectResult select_terms(const Model& model, const DataSource& source,
                           const SelectOptions& options) {
@@ -406,6 +432,7 @@ SelectResult select_terms(const Model& model, const DataSource& source,
   out.ranking = std::move(ranking);
   select_on_windows(out, scoring, system);
   identify_chosen(out, model, source, options);
+  identify_runner_up(out, source, options);
   if (options.validation) validate_best(out, source, options);
   return out;
 }
