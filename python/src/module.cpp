@@ -17,6 +17,7 @@
 
 #include "json_value.hpp"
 #include "momentid/momentid.hpp"
+#include "options.hpp"
 
 namespace py = pybind11;
 
@@ -37,15 +38,12 @@ void raise(const char* kind, const std::string& message, const SourceLocation* w
   PyErr_SetObject(type.ptr(), error.ptr());
 }
 
-// The keyword argument that sets the options field `field` (UsageError::option()): "fixed" is
-// `fix`; a field without its own entry is its own keyword ("dt").
+// The keyword argument that sets the options field `field` (UsageError::option()): the keyword
+// of option_table()'s entry for the field ("fixed" is `fix`), else the field itself ("dt").
 std::string keyword_of(const std::string& field) {
-  static const std::map<std::string, std::string> kKeywords = {{"fixed", "fix"},
-                                                               {"parameters", "params"},
-                                                               {"hold", "input_hold"},
-                                                               {"column_names", "names"}};
-  const auto found = kKeywords.find(field);
-  return found != kKeywords.end() ? found->second : field;
+  if (field == "parameters") return "params";
+  if (const OptionDescription* option = option_of_field(field)) return std::string(option->keyword);
+  return field;
 }
 
 void translate(std::exception_ptr thrown) {
@@ -166,13 +164,7 @@ RecordOptions record_options(const py::dict& options) {
   out.layout = layout_of(options);
   out.hold = hold_of(options);
   if (auto threads = get<std::size_t>(options, "threads")) out.control.threads = *threads;
-  // Other Python threads run while the data are read; the rest of a call keeps the GIL. The
-  // library lets go of its algebra lock before this and takes it back after, so the GIL is
-  // always taken first.
-  out.control.around_pass = [](const std::function<void()>& read) {
-    py::gil_scoped_release release;
-    read();
-  };
+  release_during_pass(out.control);
   return out;
 }
 
@@ -231,39 +223,15 @@ Derivation derive_equations(const Model& model, const py::dict& options) {
           system.equations.size()};
 }
 
-// --- identify -------------------------------------------------------------------------------
+// --- identify and select -------------------------------------------------------------------
 
-IdentifyOptions identify_options(const Model& model, const py::dict& options) {
-  IdentifyOptions out;
-  if (auto text = get<std::string>(options, "multipliers")) {
-    out.multipliers = parse_multiplier_list(model, *text, "multipliers");
-  }
-  if (auto degree = get<int>(options, "degree")) out.degree = *degree;
-  out.record = record_options(options);
-  out.batches = get<std::size_t>(options, "batches");
-  if (auto extrapolate = get<std::string>(options, "extrapolate")) {
-    if (*extrapolate != "dt") {
-      throw UsageError("extrapolate: expected 'dt', found '" + *extrapolate + "'");
-    }
-    out.extrapolate = true;
-  }
-  if (auto text = get<std::string>(options, "weighting")) {
-    out.weighting = parse_weighting(*text, "weighting");
-  }
-  if (auto text = get<std::string>(options, "method")) out.method = parse_method(*text, "method");
-  if (auto shift = get<long>(options, "input_shift")) out.input_shift = *shift;
-  out.lags = get<std::pair<int, int>>(options, "lags");
-  if (auto text = get<std::string>(options, "instruments")) {
-    out.instruments = parse_instrument_list(model, *text, "instruments");
-  }
-  out.noise = get<std::map<std::string, double>>(options, "noise");
-  if (auto fixed = get<std::map<std::string, double>>(options, "fix")) out.fixed = *fixed;
-  if (auto center = get<std::vector<std::string>>(options, "center")) out.center = *center;
-  if (auto integrate = get<std::vector<std::string>>(options, "integrate")) {
-    out.integrate = *integrate;
-  }
-  out.integrate_corner = get<double>(options, "integrate_corner");
-  return out;
+// The options of `command` set from `options` through the option table, against `model`
+// completed by the columns of states' derivatives, which is returned.
+Model set_options(const Model& model, const DataSource& source, const py::dict& options,
+                  const std::string& command, SelectOptions& into) {
+  Model completed = apply_options(given_options(options, command), model, source, into);
+  release_during_pass(into.identify.record.control);
+  return completed;
 }
 
 // --- simulate -------------------------------------------------------------------------------
@@ -549,13 +517,15 @@ PYBIND11_MODULE(_momentid, m) {
     return py::make_tuple(d.text, d.latex, d.json, d.equations);
   });
 
+  m.def("_options", &option_list, py::arg("command"));
+
   m.def("_identify",
         [](const Model& model, const py::object& data, const std::string& name,
            const std::map<std::string, std::string>& metadata, const py::dict& options) {
-          IdentifyOptions identify_with = identify_options(model, options);
           const DataSource source = data_source(data, name, metadata);
-          const Model with = declare_derivative_columns(model, identify_with.record, source);
-          const IdentifyResult result = identify(with, source, identify_with);
+          SelectOptions with;
+          const Model completed = set_options(model, source, options, "identify", with);
+          const IdentifyResult result = identify(completed, source, with.identify);
           return py::make_tuple(format_text(result), to_python(json_value(result)));
         });
 
@@ -563,16 +533,13 @@ PYBIND11_MODULE(_momentid, m) {
                       const std::map<std::string, std::string>& metadata, const py::dict& options,
                       const py::object& validation, const std::string& validation_name,
                       const std::map<std::string, std::string>& validation_metadata) {
-    SelectOptions select_with;
-    if (!validation.is_none()) {
-      select_with.validation = data_source(validation, validation_name, validation_metadata);
-    }
-    select_with.identify = identify_options(model, options);
-    if (auto n = get<std::size_t>(options, "exhaustive")) select_with.exhaustive = *n;
-    if (auto n = get<std::size_t>(options, "ranked")) select_with.ranked = *n;
     const DataSource source = data_source(data, name, metadata);
-    const Model with = declare_derivative_columns(model, select_with.identify.record, source);
-    const SelectResult result = select_terms(with, source, select_with);
+    SelectOptions with;
+    const Model completed = set_options(model, source, options, "select", with);
+    if (!validation.is_none()) {
+      with.validation = data_source(validation, validation_name, validation_metadata);
+    }
+    const SelectResult result = select_terms(completed, source, with);
     return py::make_tuple(format_text(result), to_python(json_value(result)),
                           chosen_model_text(result));
   });
