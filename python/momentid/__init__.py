@@ -26,9 +26,7 @@ from __future__ import annotations
 
 import copy as _copy
 import functools as _functools
-import inspect as _inspect
 import os as _os
-import textwrap as _textwrap
 import warnings as _warnings
 from typing import Any, Mapping, Optional, Sequence, Union
 
@@ -74,12 +72,11 @@ from . import _momentid  # noqa: E402  (the exceptions above must exist before i
 
 __version__: str = _momentid.__version__
 
+from ._options import Monomials, _takes_options  # noqa: E402
 from ._results import (CheckResult, Fit, IdentifyResult, SelectResult,  # noqa: E402
                        ValidateResult, _json_text)
 
 PathLike = Union[str, "_os.PathLike[str]"]
-# Monomials: a list (["y", "y*v^2"]) or the command line's list in one string ("y, y*v^2").
-Monomials = Union[None, str, Sequence[str]]
 
 
 def _monomials(values: Monomials) -> Optional[str]:
@@ -223,69 +220,6 @@ class Record(dict):
     def __init__(self, columns: dict, metadata: dict) -> None:
         super().__init__(columns)
         self.metadata = metadata
-
-
-def _takes_options(command: str):
-    """Gives `function` (model, data, **options) the keyword arguments of `command` from the
-    option table of the library (`_momentid._options(command)`): its signature lists them, its
-    docstring's `<options>` describes them, and any other keyword raises TypeError."""
-
-    table = _momentid._options(command)
-    keywords = [option["keyword"] for option in table]
-
-    def decorate(function):
-        @_functools.wraps(function)
-        def with_options(model, data, **options):
-            for keyword in options:
-                if keyword not in keywords:
-                    raise TypeError(f"{function.__name__}() got an unexpected keyword argument "
-                                    f"{keyword!r}")
-            return function(model, data, **options)
-
-        del with_options.__wrapped__  # the signature is the table's, below
-        signature = _inspect.signature(function)
-        leading = [p for p in signature.parameters.values() if p.kind != p.VAR_KEYWORD]
-        with_options.__signature__ = signature.replace(parameters=leading + [
-            _inspect.Parameter(option["keyword"], _inspect.Parameter.KEYWORD_ONLY,
-                               default=False if option["value"] == "switch" else None,
-                               annotation=_ANNOTATIONS[option["value"]])
-            for option in table])
-        with_options.__doc__ = function.__doc__.replace("<options>", _option_lines(table))
-        return with_options
-
-    return decorate
-
-
-# The annotation of an option's keyword argument, by the kind of its value.
-_ANNOTATIONS = {
-    "count": Optional[int], "whole": Optional[int], "number": Optional[float],
-    "text": Optional[str], "choice": Optional[str], "names": Union[None, str, Sequence[str]],
-    "monomials": Monomials, "pairs": Optional[Mapping[str, Any]],
-    "range": Optional[tuple[int, int]], "switch": bool, "size": Union[None, int, str],
-    "record": Any,
-}
-
-# How a Python value is written for an option, by the kind of its value.
-_VALUES = {
-    "count": "int", "whole": "int", "number": "float", "text": "str", "choice": "str",
-    "names": "a name or a list of names", "monomials": "monomials, a list or one string",
-    "pairs": "{name: value}", "range": "(first, last)", "switch": "True or False",
-    "size": "int or str such as '16M'", "record": "a path or a mapping of columns",
-}
-
-
-def _option_lines(table: list) -> str:
-    """The options of a command as its docstring lists them, from the option table."""
-    lines = []
-    for option in table:
-        value = _VALUES[option["value"]]
-        if option["value"] == "choice":
-            value = " | ".join(repr(c) for c in option["value_name"].split("|"))
-        default = f"; default {option['default']}" if option["default"] else ""
-        text = (f"{option['keyword']} ({value}{default}): {option['help']}, as "
-                f"`{option['flag']} {option['value_name']}`.")
-        lines += _textwrap.wrap(text, 96, initial_indent="    ", subsequent_indent="      ")
-    return "\n".join(lines).strip()
 
 
 @_older_keywords
