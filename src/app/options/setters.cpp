@@ -16,9 +16,9 @@
 namespace momentid {
 namespace {
 
-// `text` whole as T by std::from_chars.
+// The whole of `text` as T, by std::from_chars.
 template <class T>
-bool read_whole(const std::string& text, T& value) {
+bool read_exactly(const std::string& text, T& value) {
   const char* end = text.data() + text.size();
   const auto [stop, error] = std::from_chars(text.data(), end, value);
   return !text.empty() && error == std::errc() && stop == end;
@@ -50,8 +50,8 @@ std::string option_number_text(double value) {
 std::pair<int, int> parse_lag_range(const std::string& text, const std::string& name) {
   const std::size_t dots = text.find("..");
   int first = 0, last = 0;
-  if (dots == std::string::npos || !read_whole(text.substr(0, dots), first) ||
-      !read_whole(text.substr(dots + 2), last)) {
+  if (dots == std::string::npos || !read_exactly(text.substr(0, dots), first) ||
+      !read_exactly(text.substr(dots + 2), last)) {
     throw UsageError(name, "expected FIRST..LAST in samples, e.g. 3..40, found '" + text + "'");
   }
   return {first, last};
@@ -90,7 +90,7 @@ namespace {
 
 long whole(const std::string& text, const std::string& name) {
   long value = 0;
-  if (!read_whole(text, value)) {
+  if (!read_exactly(text, value)) {
     throw UsageError(name, "expected a whole number, found '" + text + "'");
   }
   return value;
@@ -116,7 +116,7 @@ std::size_t size_in_bytes(const std::string& text, const std::string& name) {
   while (!digits.empty() && digits.back() == ' ') digits.pop_back();
   std::size_t value = 1;  // a unit alone is one of it
   if (power == kPowers.end() ||
-      (!(digits.empty() && !unit.empty()) && !read_whole(digits, value)) ||
+      (!(digits.empty() && !unit.empty()) && !read_exactly(digits, value)) ||
       value > (std::numeric_limits<std::size_t>::max() >> (10 * power->second))) {
     throw UsageError(
         name, "expected a size in bytes, with k, M or G for powers of 1024, found '" + text + "'");
@@ -128,7 +128,7 @@ std::size_t size_in_bytes(const std::string& text, const std::string& name) {
 
 std::size_t count(const std::string& text, const std::string& name) {
   std::size_t value = 0;
-  if (!read_whole(text, value)) {
+  if (!read_exactly(text, value)) {
     throw UsageError(name, "expected a whole number, 0 or more, found '" + text + "'");
   }
   return value;
@@ -137,7 +137,7 @@ std::size_t count(const std::string& text, const std::string& name) {
 std::size_t count_in(const std::string& text, const std::string& name, std::size_t low,
                      std::size_t high) {
   std::size_t value = 0;
-  if (!read_whole(text, value) || value < low || value > high) {
+  if (!read_exactly(text, value) || value < low || value > high) {
     throw UsageError(name, "expected a whole number from " + std::to_string(low) + " to " +
                                std::to_string(high) + ", found '" + text + "'");
   }
@@ -242,15 +242,20 @@ void set_noise(SelectOptions& o, const Model& m, const std::string& text, const 
     return;
   }
   std::map<std::string, double> out;
-  for (const auto& [state, value] : text == "none" ? std::map<std::string, std::string>{}
-                                                   : parse_option_pairs(text, n, "NAME=VARIANCE")) {
+  const std::map<std::string, std::string> given =
+      text == "none" ? std::map<std::string, std::string>{}
+                     : parse_option_pairs(text, n, "NAME=VARIANCE");
+  for (const auto& item : given) {
+    // Named, not bound: clang 14 lets no lambda capture a structured binding.
+    const std::string& state = item.first;
+    const std::string& value = item.second;
     const auto& states = m.states();
     if (std::none_of(states.begin(), states.end(),
                      [&](const Declaration& d) { return d.name == state; })) {
       throw UsageError(n, "'" + state + "' is not a state of model " + m.name());
     }
     double variance = 0;
-    if (!read_whole(value, variance) || !std::isfinite(variance) || variance < 0) {
+    if (!read_exactly(value, variance) || !std::isfinite(variance) || variance < 0) {
       throw UsageError(
           n, "expected a variance of at least 0 for '" + state + "', found '" + value + "'");
     }

@@ -12,55 +12,50 @@
 
 namespace momentid::options {
 
-// A whole number, 0 or more; within [low, high] when given.
+// A whole number, 0 or more; count_in: one from low to high.
 std::size_t count(const std::string& text, const std::string& name);
 std::size_t count_in(const std::string& text, const std::string& name, std::size_t low,
                      std::size_t high);
 // Names separated by commas; an empty text is none.
 std::vector<std::string> names(const std::string& text);
 
+// A setter, as OptionDescription::set takes it: (options, model, text, name).
+using Setter = void(SelectOptions&, const Model&, const std::string&, const std::string&);
+
 // The record and how a pass reads it.
-void set_columns(SelectOptions& o, const Model& m, const std::string& text, const std::string& n);
-void set_dt(SelectOptions& o, const Model& m, const std::string& text, const std::string& n);
-void set_hold(SelectOptions& o, const Model& m, const std::string& text, const std::string& n);
-void set_input_shift(SelectOptions& o, const Model& m, const std::string& text,
-                     const std::string& n);
-void set_batches(SelectOptions& o, const Model& m, const std::string& text, const std::string& n);
-void set_lags(SelectOptions& o, const Model& m, const std::string& text, const std::string& n);
-void set_integrate(SelectOptions& o, const Model& m, const std::string& text, const std::string& n);
-void set_integrate_corner(SelectOptions& o, const Model& m, const std::string& text,
-                          const std::string& n);
-void set_skip_rows(SelectOptions& o, const Model& m, const std::string& text, const std::string& n);
-void set_decimal(SelectOptions& o, const Model& m, const std::string& text, const std::string& n);
-void set_missing(SelectOptions& o, const Model& m, const std::string& text, const std::string& n);
-void set_names(SelectOptions& o, const Model& m, const std::string& text, const std::string& n);
-void set_runs(SelectOptions& o, const Model& m, const std::string& text, const std::string& n);
-void set_dt_from(SelectOptions& o, const Model& m, const std::string& text, const std::string& n);
-void set_threads(SelectOptions& o, const Model& m, const std::string& text, const std::string& n);
-void set_shard_size(SelectOptions& o, const Model& m, const std::string& text,
-                    const std::string& n);
+Setter set_columns;
+Setter set_dt;
+Setter set_hold;
+Setter set_input_shift;
+Setter set_batches;
+Setter set_lags;
+Setter set_integrate;
+Setter set_integrate_corner;
+Setter set_skip_rows;
+Setter set_decimal;
+Setter set_missing;
+Setter set_names;
+Setter set_runs;
+Setter set_dt_from;
+Setter set_threads;
+Setter set_shard_size;
 
 // Against the completed model.
-void set_instruments(SelectOptions& o, const Model& m, const std::string& text,
-                     const std::string& n);
-void set_noise(SelectOptions& o, const Model& m, const std::string& text, const std::string& n);
-void set_fix(SelectOptions& o, const Model& m, const std::string& text, const std::string& n);
-void set_center(SelectOptions& o, const Model& m, const std::string& text, const std::string& n);
-void set_multipliers(SelectOptions& o, const Model& m, const std::string& text,
-                     const std::string& n);
+Setter set_instruments;
+Setter set_noise;
+Setter set_fix;
+Setter set_center;
+Setter set_multipliers;
 
 // identify's own.
-void set_degree(SelectOptions& o, const Model& m, const std::string& text, const std::string& n);
-void set_method(SelectOptions& o, const Model& m, const std::string& text, const std::string& n);
-void set_weighting(SelectOptions& o, const Model& m, const std::string& text, const std::string& n);
-void set_extrapolate(SelectOptions& o, const Model& m, const std::string& text,
-                     const std::string& n);
+Setter set_degree;
+Setter set_method;
+Setter set_weighting;
+Setter set_extrapolate;
 
 // select's own.
-void set_exhaustive(SelectOptions& o, const Model& m, const std::string& text,
-                    const std::string& n);
-void set_ranked(SelectOptions& o, const Model& m, const std::string& text, const std::string& n);
-void set_validation(SelectOptions& o, const Model& m, const std::string& text,
-                    const std::string& n);
+Setter set_exhaustive;
+Setter set_ranked;
+Setter set_validation;
 
 }  // namespace momentid::options
