@@ -28,6 +28,7 @@
 #include "momentid/model.hpp"
 #include "momentid/model_file.hpp"
 #include "momentid/moment.hpp"
+#include "momentid/option_table.hpp"
 #include "momentid/parameters.hpp"
 #include "momentid/random.hpp"
 #include "momentid/reader.hpp"

@@ -72,12 +72,11 @@ from . import _momentid  # noqa: E402  (the exceptions above must exist before i
 
 __version__: str = _momentid.__version__
 
+from ._options import Monomials, _takes_options  # noqa: E402
 from ._results import (CheckResult, Fit, IdentifyResult, SelectResult,  # noqa: E402
                        ValidateResult, _json_text)
 
 PathLike = Union[str, "_os.PathLike[str]"]
-# Monomials: a list (["y", "y*v^2"]) or the command line's list in one string ("y, y*v^2").
-Monomials = Union[None, str, Sequence[str]]
 
 
 def _monomials(values: Monomials) -> Optional[str]:
@@ -224,19 +223,8 @@ class Record(dict):
 
 
 @_older_keywords
-def identify(model: Union[Model, PathLike], data: Any, *,
-             columns: Optional[Mapping[str, str]] = None, names: Optional[Sequence[str]] = None,
-             dt: Optional[float] = None, multipliers: Monomials = None,
-             degree: Optional[int] = None, batches: Optional[int] = None,
-             method: Optional[str] = None, weighting: Optional[str] = None, lags: Optional[tuple[int, int]] = None,
-             instruments: Monomials = None, noise: Optional[Mapping[str, float]] = None,
-             fix: Optional[Mapping[str, float]] = None,
-             center: Union[None, str, Sequence[str]] = None, input_hold: Optional[str] = None,
-             input_shift: Optional[int] = None, missing: Optional[str] = None,
-             skip_rows: Optional[int] = None, decimal: Optional[str] = None,
-             dt_from: Optional[str] = None, threads: Optional[int] = None,
-             extrapolate: bool = False, integrate: Union[None, str, Sequence[str]] = None,
-             integrate_corner: Optional[float] = None) -> IdentifyResult:
+@_takes_options("identify")
+def identify(model: Union[Model, PathLike], data: Any, **options: Any) -> IdentifyResult:
     """Estimates the model's parameters from a record, as `momentid identify MODEL DATA`.
 
     model: a Model or a model file's path.
@@ -248,70 +236,35 @@ def identify(model: Union[Model, PathLike], data: Any, *,
       dtypes are converted. Without a `t` column give `dt`. A path may name a CSV, binary,
       .npy, .mat or HDF5 file (`names` for a 2-D .npy array's columns too, `dt_from` for the
       interval stored in a .mat or HDF5 file: "Ts", or "1/fs" for a rate).
-    columns: {model variable: data column} for data whose columns have other names, as
-      `--columns NAME=COLUMN` ({"y": "disp"} reads state y from column disp); a state's
-      derivative names a column of it ({"v'": "accel"}), as a `measured` statement would.
-    integrate, integrate_corner: states formed from the column of their derivative, inside a
-      high-pass filter of that corner (Hz; by default from the record's band), as
-      `--integrate y --integrate-corner HZ`.
-    dt: the sample interval (overrides the `t` column).
-    method ("auto", "zero-lag", "lagged"): which moment equations (`--method`); by default the
-      lagged ones, unbiased under white sensor noise, unless the record is simulated without
-      noise (its metadata say so) or zero-lag options are given.
-    multipliers, degree: the zero-lag equations (as `derive`); lags=(first, last),
-      instruments (monomials, as multipliers), noise ({state: variance}; None estimates it):
-      the lagged equations.
-    batches, weighting ("auto", "ls", "gmm"): the standard errors and the optimal weighting
-      (by default whenever the equations outnumber the parameters, with the J test).
-    fix: {parameter: value} taken as known. center: variables (or "all") whose mean is removed.
-    input_hold ("zoh" or "sample"), input_shift, and for files missing ("error", "drop-row", "split-run"), skip_rows, decimal: as on the command line.
-    threads: threads reading the data at once (default: one per core); the result is the same
-      to the last bit with any number.
-    extrapolate: the bias of sampling (`--extrapolate dt`), estimated from every other sample
-      and removed when it exceeds its error (zero-lag equations, inputs sampled, not held).
+
+    The options are the command line's (docs/cli/identify.md), as keyword arguments; None (or
+    False) leaves an option at its default. The result is the same to the last bit with any
+    number of threads.
+    <options>
 
     Returns an IdentifyResult: params, bse, cov_params(), conf_int(alpha), summary(), the
-    least-squares fit as .ls beside an optimally weighted one, and to_frame() for pandas. Raises ModelError, DataError or UsageError with the command
-    line's messages. The GIL is released during the pass over the data.
+    least-squares fit as .ls beside an optimally weighted one, and to_frame() for pandas. Raises
+    ModelError, DataError or UsageError with the command line's messages, each naming its
+    keyword. The GIL is released during the pass over the data.
     """
     model = _model_of(model)
-    source, name, metadata, keep, names = _data_of(data, names)
-    center, integrate = _channel_lists(model, center), _names(integrate)
-    if not isinstance(extrapolate, bool):
-        raise UsageError(f"extrapolate: expected True or False, found {extrapolate!r}")
-    options = _options(multipliers=_monomials(multipliers), degree=degree, batches=batches,
-                       method=method, weighting=weighting, lags=lags, instruments=_monomials(instruments),
-                       noise=noise, fix=fix, center=center, input_hold=input_hold,
-                       input_shift=input_shift, columns=columns, dt=dt, missing=missing,
-                       skip_rows=skip_rows, decimal=decimal, names=names, dt_from=dt_from,
-                       threads=threads, extrapolate="dt" if extrapolate else None,
-                       integrate=integrate, integrate_corner=integrate_corner)
-    text, value = _momentid._identify(model._model, source, name, metadata, options)
+    source, name, metadata, keep, options["names"] = _data_of(data, options.get("names"))
+    text, value = _momentid._identify(model._model, source, name, metadata, _options(**options))
     del keep
     return IdentifyResult(text, value)
 
 
-def select(model: Union[Model, PathLike], data: Any, *,
-           columns: Optional[Mapping[str, str]] = None, names: Optional[Sequence[str]] = None,
-           dt: Optional[float] = None, batches: Optional[int] = None,
-           lags: Optional[tuple[int, int]] = None, instruments: Monomials = None,
-           noise: Optional[Mapping[str, float]] = None, fix: Optional[Mapping[str, float]] = None,
-           center: Union[None, str, Sequence[str]] = None, input_hold: Optional[str] = None,
-           input_shift: Optional[int] = None, missing: Optional[str] = None,
-           skip_rows: Optional[int] = None, decimal: Optional[str] = None,
-           dt_from: Optional[str] = None, threads: Optional[int] = None,
-           integrate: Union[None, str, Sequence[str]] = None,
-           integrate_corner: Optional[float] = None, exhaustive: Optional[int] = None,
-           ranked: Optional[int] = None, validate: Any = None) -> SelectResult:
+@_takes_options("select")
+def select(model: Union[Model, PathLike], data: Any, **options: Any) -> SelectResult:
     """Chooses the terms of a library model that the record wants, as `momentid select MODEL
     DATA` (docs/cli/select.md): the model's candidates (`candidate` and `library` statements)
     scored on the lagged equations of one pass, and the chosen model identified.
 
-    The options are identify()'s for the record and the lagged equations; exhaustive: every
-    subset is scored up to this many candidates (default 16, at most 20), backward elimination
-    beyond; ranked: the subsets the ranking keeps (default 5); validate: a second record (a
-    path or a mapping of columns) on which the best three subsets, each identified on `data`,
-    are simulated through its inputs and compared with it, as validate() does.
+    `data` as for identify(). The options are identify()'s for the record and the lagged
+    equations, and select's own; None leaves an option at its default. validate: a second record
+    (a path or a mapping of columns) on which the best three subsets, each identified on
+    `data`, are simulated through its inputs and compared with it, as validate() does.
+    <options>
 
     Returns a SelectResult: the chosen model's IdentifyResult (params, bse, jtest(), ...) with
     selected and dropped (candidate names), ranking, tests, windows, selection_warnings,
@@ -319,17 +272,11 @@ def select(model: Union[Model, PathLike], data: Any, *,
     model without candidates, and what identify() raises.
     """
     model = _model_of(model)
-    source, name, metadata, keep, names = _data_of(data, names)
-    center, integrate = _channel_lists(model, center), _names(integrate)
-    options = _options(batches=batches, lags=lags, instruments=_monomials(instruments),
-                       noise=noise, fix=fix, center=center, input_hold=input_hold,
-                       input_shift=input_shift, columns=columns, dt=dt, missing=missing,
-                       skip_rows=skip_rows, decimal=decimal, names=names, dt_from=dt_from,
-                       threads=threads, integrate=integrate, integrate_corner=integrate_corner,
-                       exhaustive=exhaustive, ranked=ranked)
+    source, name, metadata, keep, options["names"] = _data_of(data, options.get("names"))
+    validate = options.pop("validate", None)
     second = (None, "", {}, None) if validate is None else _data_of(validate, None)[:4]
-    text, value, model_text = _momentid._select(model._model, source, name, metadata, options,
-                                                *second[:3])
+    text, value, model_text = _momentid._select(model._model, source, name, metadata,
+                                                _options(**options), *second[:3])
     del keep, second
     return SelectResult(text, value, model_text)
 
@@ -450,10 +397,6 @@ def _channel_lists(model: Model, center: Union[None, str, Sequence[str]]) -> Opt
     if isinstance(center, str):
         return model.states + model.inputs if center == "all" else [center]
     return None if center is None else list(center)
-
-
-def _names(names: Union[None, str, Sequence[str]]) -> Optional[list]:
-    return [names] if isinstance(names, str) else None if names is None else list(names)
 
 
 def _options(**options: Any) -> dict:

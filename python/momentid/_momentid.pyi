@@ -28,6 +28,9 @@ _Source = Union[str, list[tuple[str, Any]]]
 
 # The text, the LaTeX, the JSON value (as Python objects) and the number of equations.
 def _derive(model: Model, options: dict[str, Any]) -> tuple[str, str, dict[str, Any], int]: ...
+# The options of "identify" or "select" from the library's option table, one dict each: flag,
+# keyword, value_name, value (the kind), default, help, commands and stage.
+def _options(command: str) -> list[dict[str, Any]]: ...
 # The text report and the JSON value, as Python objects.
 def _identify(model: Model, data: _Source, name: str, metadata: dict[str, str],
               options: dict[str, Any]) -> tuple[str, dict[str, Any]]: ...

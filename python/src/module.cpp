@@ -15,8 +15,10 @@
 #include <type_traits>
 #include <vector>
 
+#include "arrays.hpp"
 #include "json_value.hpp"
 #include "momentid/momentid.hpp"
+#include "options.hpp"
 
 namespace py = pybind11;
 
@@ -37,15 +39,12 @@ void raise(const char* kind, const std::string& message, const SourceLocation* w
   PyErr_SetObject(type.ptr(), error.ptr());
 }
 
-// The keyword argument that sets the options field `field` (UsageError::option()): "fixed" is
-// `fix`; a field without its own entry is its own keyword ("dt").
+// The keyword argument that sets the options field `field` (UsageError::option()): the keyword
+// of option_table()'s entry for the field ("fixed" is `fix`), else the field itself ("dt").
 std::string keyword_of(const std::string& field) {
-  static const std::map<std::string, std::string> kKeywords = {{"fixed", "fix"},
-                                                               {"parameters", "params"},
-                                                               {"hold", "input_hold"},
-                                                               {"column_names", "names"}};
-  const auto found = kKeywords.find(field);
-  return found != kKeywords.end() ? found->second : field;
+  if (field == "parameters") return "params";
+  if (const OptionDescription* option = option_of_field(field)) return std::string(option->keyword);
+  return field;
 }
 
 void translate(std::exception_ptr thrown) {
@@ -60,47 +59,6 @@ void translate(std::exception_ptr thrown) {
   } catch (const Error& e) {
     raise("Error", e.what());
   }
-}
-
-// A record handed over from Python: a file path, or columns of numbers that are read in place.
-// The arrays (float64, one dimension, any stride that is a whole number of values) are kept
-// alive by the caller for as long as the source is used.
-DataSource data_source(const py::object& data, const std::string& name,
-                       const std::map<std::string, std::string>& metadata) {
-  if (py::isinstance<py::str>(data)) return DataSource::file(data.cast<std::string>());
-  const auto items = data.cast<py::list>();
-  if (!items.empty() && py::isinstance<py::str>(items[0])) {
-    return DataSource::files(data.cast<std::vector<std::string>>());
-  }
-  MemoryData memory;
-  memory.name = name;
-  DataMetadata::Line line(metadata.begin(), metadata.end());
-  if (!line.empty()) memory.metadata.add_line(std::move(line));
-  bool first = true;
-  for (const py::handle item : items) {
-    const auto pair = item.cast<py::tuple>();
-    const std::string column = pair[0].cast<std::string>();
-    const auto array = pair[1].cast<py::array>();
-    if (array.ndim() != 1 || !array.dtype().is(py::dtype::of<double>()) || array.strides(0) < 0 ||
-        array.strides(0) % static_cast<py::ssize_t>(sizeof(double)) != 0) {
-      throw UsageError("column '" + column +
-                       "': expected a one-dimensional float64 array with a forward stride");
-    }
-    const auto rows = static_cast<std::size_t>(array.shape(0));
-    if (first) {
-      memory.rows = rows;
-      first = false;
-    } else if (rows != memory.rows) {
-      throw UsageError("column '" + column + "' has " + std::to_string(rows) + " values, but '" +
-                       memory.columns.front().name + "' has " + std::to_string(memory.rows) +
-                       ": every column needs one value per sample");
-    }
-    memory.columns.push_back(
-        {column, static_cast<const double*>(array.data()),
-         static_cast<std::size_t>(array.strides(0) / static_cast<py::ssize_t>(sizeof(double)))});
-  }
-  if (first) throw UsageError("the data have no columns");
-  return DataSource::memory(std::move(memory));
 }
 
 // What a value of type T is, for messages.
@@ -166,13 +124,7 @@ RecordOptions record_options(const py::dict& options) {
   out.layout = layout_of(options);
   out.hold = hold_of(options);
   if (auto threads = get<std::size_t>(options, "threads")) out.control.threads = *threads;
-  // Other Python threads run while the data are read; the rest of a call keeps the GIL. The
-  // library lets go of its algebra lock before this and takes it back after, so the GIL is
-  // always taken first.
-  out.control.around_pass = [](const std::function<void()>& read) {
-    py::gil_scoped_release release;
-    read();
-  };
+  release_during_pass(out.control);
   return out;
 }
 
@@ -231,70 +183,18 @@ Derivation derive_equations(const Model& model, const py::dict& options) {
           system.equations.size()};
 }
 
-// --- identify -------------------------------------------------------------------------------
+// --- identify and select -------------------------------------------------------------------
 
-IdentifyOptions identify_options(const Model& model, const py::dict& options) {
-  IdentifyOptions out;
-  if (auto text = get<std::string>(options, "multipliers")) {
-    out.multipliers = parse_multiplier_list(model, *text, "multipliers");
-  }
-  if (auto degree = get<int>(options, "degree")) out.degree = *degree;
-  out.record = record_options(options);
-  out.batches = get<std::size_t>(options, "batches");
-  if (auto extrapolate = get<std::string>(options, "extrapolate")) {
-    if (*extrapolate != "dt") {
-      throw UsageError("extrapolate: expected 'dt', found '" + *extrapolate + "'");
-    }
-    out.extrapolate = true;
-  }
-  if (auto text = get<std::string>(options, "weighting")) {
-    out.weighting = parse_weighting(*text, "weighting");
-  }
-  if (auto text = get<std::string>(options, "method")) out.method = parse_method(*text, "method");
-  if (auto shift = get<long>(options, "input_shift")) out.input_shift = *shift;
-  out.lags = get<std::pair<int, int>>(options, "lags");
-  if (auto text = get<std::string>(options, "instruments")) {
-    out.instruments = parse_instrument_list(model, *text, "instruments");
-  }
-  out.noise = get<std::map<std::string, double>>(options, "noise");
-  if (auto fixed = get<std::map<std::string, double>>(options, "fix")) out.fixed = *fixed;
-  if (auto center = get<std::vector<std::string>>(options, "center")) out.center = *center;
-  if (auto integrate = get<std::vector<std::string>>(options, "integrate")) {
-    out.integrate = *integrate;
-  }
-  out.integrate_corner = get<double>(options, "integrate_corner");
-  return out;
+// The options of `command` set from `options` through the option table, against `model`
+// completed by the columns of states' derivatives, which is returned.
+Model set_options(const Model& model, const DataSource& source, const py::dict& options,
+                  const std::string& command, SelectOptions& into) {
+  Model completed = apply_options(given_options(options, command), model, source, into);
+  release_during_pass(into.identify.record.control);
+  return completed;
 }
 
 // --- simulate -------------------------------------------------------------------------------
-
-// Writes the samples into arrays, one per channel, run after run.
-class ArraySink : public SampleSink {
- public:
-  ArraySink(std::vector<double*> columns, std::vector<std::size_t> channels, double* time,
-            double* run, std::size_t samples)
-      : columns_(std::move(columns)),
-        channels_(std::move(channels)),
-        time_(time),
-        run_(run),
-        samples_(samples) {}
-  void sample(double t, const double* values, std::size_t run) override {
-    if (run != run_index_) {
-      run_index_ = run;
-      row_in_run_ = 0;
-    }
-    const std::size_t row = run * samples_ + row_in_run_++;
-    time_[row] = t;
-    if (run_ != nullptr) run_[row] = static_cast<double>(run + 1);
-    for (std::size_t c = 0; c < channels_.size(); ++c) columns_[c][row] = values[channels_[c]];
-  }
-
- private:
-  std::vector<double*> columns_;
-  std::vector<std::size_t> channels_;
-  double *time_, *run_;
-  std::size_t samples_, run_index_ = 0, row_in_run_ = 0;
-};
 
 SimulationOptions simulation_options(const Model& model, const py::dict& options) {
   SimulationOptions out;
@@ -392,60 +292,6 @@ ValidateOptions validate_options(const Model& model, const py::dict& options) {
   return out;
 }
 
-// One array of every run's rows, one run after the other, from value_at(run, row).
-template <class ValueAt>
-py::array_t<double> concatenated(const Record& record, ValueAt value_at) {
-  std::size_t rows = 0;
-  for (const RecordRun& run : record.runs) rows += run.rows();
-  py::array_t<double> out(static_cast<py::ssize_t>(rows));
-  double* into = out.mutable_data();
-  for (std::size_t r = 0; r < record.runs.size(); ++r) {
-    for (std::size_t n = 0; n < record.runs[r].rows(); ++n) *into++ = value_at(r, n);
-  }
-  return out;
-}
-
-// The recorded column of model variable v, every run's rows.
-py::array_t<double> recorded(const Record& record, std::size_t v) {
-  const auto c = static_cast<std::size_t>(record.column_of(v));
-  return concatenated(record,
-                      [&](std::size_t r, std::size_t n) { return record.runs[r].columns[c][n]; });
-}
-
-// The record's sample times, and its runs' numbers (1, 2, ... for runs without a `run` column).
-py::array_t<double> times(const Record& record) {
-  return concatenated(record, [&](std::size_t r, std::size_t n) {
-    const RecordRun& run = record.runs[r];
-    return run.time.empty() ? static_cast<double>(n) * record.dt : run.time[n];
-  });
-}
-py::array_t<double> run_numbers(const Record& record) {
-  return concatenated(record, [&](std::size_t r, std::size_t) {
-    return static_cast<double>(record.has_run ? record.runs[r].number : static_cast<long>(r) + 1);
-  });
-}
-
-// State j as the replay simulated it, every run's rows.
-py::array_t<double> simulated(const Replay& done, std::size_t j) {
-  return concatenated(done.record,
-                      [&](std::size_t r, std::size_t n) { return done.simulated[r][j][n]; });
-}
-
-// The replay as `simulate --input-file` writes it: t, every state (simulated) and the inputs
-// (recorded), run when there are several.
-py::dict replay_columns(const Model& model, const Replay& done) {
-  py::dict out;
-  out["t"] = times(done.record);
-  const std::size_t states = model.states().size();
-  for (std::size_t j = 0; j < states; ++j)
-    out[py::str(model.states()[j].name)] = simulated(done, j);
-  for (std::size_t v = states; v < states + model.inputs().size(); ++v) {
-    out[py::str(model.variables()[v].name)] = recorded(done.record, v);
-  }
-  if (done.record.runs.size() > 1) out["run"] = run_numbers(done.record);
-  return out;
-}
-
 // The model's response to a record's inputs (replay_columns) and the metadata.
 py::tuple replay_record(const Model& model, const DataSource& source, const py::dict& options) {
   const ValidateOptions with = validate_options(model, options);
@@ -455,40 +301,6 @@ py::tuple replay_record(const Model& model, const DataSource& source, const py::
   metadata["dt"] = py::str(py::repr(py::float_(done->record.dt)));
   if (auto hold = done->record.metadata.get("input-hold")) metadata["input-hold"] = *hold;
   return py::make_tuple(replay_columns(model, *done), metadata, std::vector<std::string>{});
-}
-
-// The series validate compared, every run's rows one run after the other: t, run (None for one
-// run), every state as simulated, the measured states and the inputs as recorded, and whether a
-// row is past its run's skip, so among those the fit and the errors are over.
-py::dict validate_series(const ValidateResult& result) {
-  const Model& model = *result.model;
-  const Record& record = result.replay.record;
-  py::dict states, measured, inputs;
-  for (std::size_t j = 0; j < model.states().size(); ++j) {
-    states[py::str(model.states()[j].name)] = simulated(result.replay, j);
-  }
-  for (const OutputFit& output : result.outputs) {
-    measured[py::str(output.name)] = recorded(record, output_variable(model, output.state));
-  }
-  for (std::size_t v = model.states().size(); v < model.states().size() + model.inputs().size();
-       ++v) {
-    inputs[py::str(model.variables()[v].name)] = recorded(record, v);
-  }
-  std::size_t rows = 0;
-  for (const RecordRun& run : record.runs) rows += run.rows();
-  py::array_t<bool> compared(static_cast<py::ssize_t>(rows));
-  bool* into = compared.mutable_data();
-  for (std::size_t r = 0; r < record.runs.size(); ++r) {
-    for (std::size_t n = 0; n < record.runs[r].rows(); ++n) *into++ = n >= result.skip[r];
-  }
-  py::dict out;
-  out["t"] = times(record);
-  out["run"] = record.runs.size() > 1 ? py::object(run_numbers(record)) : py::none();
-  out["simulated"] = states;
-  out["measured"] = measured;
-  out["inputs"] = inputs;
-  out["compared"] = compared;
-  return out;
 }
 
 }  // namespace
@@ -549,13 +361,15 @@ PYBIND11_MODULE(_momentid, m) {
     return py::make_tuple(d.text, d.latex, d.json, d.equations);
   });
 
+  m.def("_options", &option_list, py::arg("command"));
+
   m.def("_identify",
         [](const Model& model, const py::object& data, const std::string& name,
            const std::map<std::string, std::string>& metadata, const py::dict& options) {
-          IdentifyOptions identify_with = identify_options(model, options);
           const DataSource source = data_source(data, name, metadata);
-          const Model with = declare_derivative_columns(model, identify_with.record, source);
-          const IdentifyResult result = identify(with, source, identify_with);
+          SelectOptions with;
+          const Model completed = set_options(model, source, options, "identify", with);
+          const IdentifyResult result = identify(completed, source, with.identify);
           return py::make_tuple(format_text(result), to_python(json_value(result)));
         });
 
@@ -563,16 +377,13 @@ PYBIND11_MODULE(_momentid, m) {
                       const std::map<std::string, std::string>& metadata, const py::dict& options,
                       const py::object& validation, const std::string& validation_name,
                       const std::map<std::string, std::string>& validation_metadata) {
-    SelectOptions select_with;
-    if (!validation.is_none()) {
-      select_with.validation = data_source(validation, validation_name, validation_metadata);
-    }
-    select_with.identify = identify_options(model, options);
-    if (auto n = get<std::size_t>(options, "exhaustive")) select_with.exhaustive = *n;
-    if (auto n = get<std::size_t>(options, "ranked")) select_with.ranked = *n;
     const DataSource source = data_source(data, name, metadata);
-    const Model with = declare_derivative_columns(model, select_with.identify.record, source);
-    const SelectResult result = select_terms(with, source, select_with);
+    SelectOptions with;
+    const Model completed = set_options(model, source, options, "select", with);
+    if (!validation.is_none()) {
+      with.validation = data_source(validation, validation_name, validation_metadata);
+    }
+    const SelectResult result = select_terms(completed, source, with);
     return py::make_tuple(format_text(result), to_python(json_value(result)),
                           chosen_model_text(result));
   });

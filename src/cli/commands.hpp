@@ -32,9 +32,10 @@ Command add_check(CLI::App& app);
 Command add_validate(CLI::App& app);
 Command add_convert(CLI::App& app);
 
-// The command-line option that sets the options field `field` (UsageError::option()):
-// "fixed" is `--fix`, "hold" `--input-hold`; a field without its own entry is its name with
-// `-` for `_`, "dt_from" `--dt-from`.
+// The command-line option that sets the options field `field` (UsageError::option()): the flag
+// of option_table()'s entry for the field ("fixed" is `--fix`, "hold" `--input-hold`), a flag
+// as it is (`--lags`, the name a setter was given), or the field with `-` for `_`
+// ("dt_from" `--dt-from`).
 std::string flag_of(const std::string& field);
 
 // Whether `path` is a readable model file (small enough to be one: at most 1 MB).
@@ -43,7 +44,8 @@ bool is_model_file(const std::string& path);
 // files of `usage` (e.g. "identify MODEL DATA") were given in the wrong order.
 Model model_argument(const std::string& model, const std::string& data, const std::string& usage);
 
-// --skip-rows and --decimal, into `layout`.
+// The layout options of option_table() (--skip-rows, --decimal, --missing, --names, --runs,
+// --dt-from) for the commands that do not take identify's options, into `layout`.
 void add_layout_options(CLI::App* command, FileLayout& layout);
 
 // --threads and --shard-size, into `control`.

@@ -1,28 +1,26 @@
 #include <glob.h>
 
 #include <algorithm>
-#include <charconv>
 #include <filesystem>
 #include <fstream>
-#include <limits>
-#include <string_view>
 
 #include "cli/commands.hpp"
 #include "momentid/error.hpp"
+#include "momentid/option_table.hpp"
 
 namespace momentid::cli {
 
 std::string flag_of(const std::string& field) {
-  // The fields whose option has another name; one table for every command.
+  // A name that a setter of the option table was given is spelled already.
+  if (field.starts_with("-")) return field;
+  // The fields of other commands' options that have another name.
   static const std::map<std::string, std::string> kFlags = {
-      {"column_names", "--names"},
-      {"fixed", "--fix"},
-      {"hold", "--input-hold"},
       {"inputs", "--input"},
       {"parameters", "--set"},
       // Its messages (that the data do not allow it) have always named it bare.
       {"extrapolate", "extrapolate"}};
   if (const auto found = kFlags.find(field); found != kFlags.end()) return found->second;
+  if (const OptionDescription* option = option_of_field(field)) return std::string(option->flag);
   std::string flag = "--" + field;
   std::replace(flag.begin(), flag.end(), '_', '-');
   return flag;
@@ -165,29 +163,7 @@ std::map<std::string, std::string> column_map(const std::vector<std::string>& en
 
 std::map<std::string, std::string> column_map_of(const std::string& text, const std::string& option,
                                                  const std::string& expected) {
-  std::map<std::string, std::string> out;
-  // The next ',' outside brackets: `y=V[:, 0]` names a matrix column.
-  const auto next_comma = [&](std::size_t from) {
-    int depth = 0;
-    for (std::size_t i = from; i < text.size(); ++i) {
-      if (text[i] == '[') ++depth;
-      if (text[i] == ']') --depth;
-      if (text[i] == ',' && depth <= 0) return i;
-    }
-    return text.size();
-  };
-  std::size_t begin = 0;
-  while (begin <= text.size()) {
-    const std::size_t end = next_comma(begin);
-    const std::string e = text.substr(begin, end - begin);
-    const std::size_t eq = e.find('=');
-    if (eq == std::string::npos || eq == 0 || eq + 1 == e.size()) {
-      throw UsageError(option + ": expected " + expected + ", found '" + e + "'");
-    }
-    out[e.substr(0, eq)] = e.substr(eq + 1);
-    begin = end + 1;
-  }
-  return out;
+  return parse_option_pairs(text, option, expected);
 }
 
 std::optional<InputHold> hold_option(const std::string& text) {
@@ -195,19 +171,7 @@ std::optional<InputHold> hold_option(const std::string& text) {
   return parse_input_hold(text, "hold");
 }
 
-std::pair<int, int> lag_range(const std::string& text) {
-  const std::size_t dots = text.find("..");
-  int first = 0, last = 0;
-  const auto number = [&](std::string_view digits, int& value) {
-    const auto [end, error] = std::from_chars(digits.data(), digits.data() + digits.size(), value);
-    return error == std::errc() && end == digits.data() + digits.size() && !digits.empty();
-  };
-  if (dots == std::string::npos || !number(std::string_view(text).substr(0, dots), first) ||
-      !number(std::string_view(text).substr(dots + 2), last)) {
-    throw UsageError("--lags: expected FIRST..LAST in samples, e.g. 3..40, found '" + text + "'");
-  }
-  return {first, last};
-}
+std::pair<int, int> lag_range(const std::string& text) { return parse_lag_range(text, "--lags"); }
 
 std::vector<bool> variable_flags(const Model& model, const std::vector<std::string>& names,
                                  const std::string& option) {
