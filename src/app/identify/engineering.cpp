@@ -4,13 +4,13 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 #include <algorithm>
-#include <boost/numeric/odeint.hpp>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <numbers>
 #include <optional>
 
+#include "app/identify/linearise.hpp"
 #include "momentid/algebra_lock.hpp"
 #include "momentid/error.hpp"
 #include "momentid/identify.hpp"
@@ -21,79 +21,6 @@ namespace {
 
 using Eigen::MatrixXd;
 using Eigen::VectorXd;
-
-// The right-hand side f(y) at the estimates `theta`, the inputs at `u`.
-class RightHandSide {
- public:
-  RightHandSide(const Model& model, const std::vector<double>& theta, std::vector<double> u)
-      : f_(model, numbers(theta)), u_(std::move(u)), n_(f_.states()) {}
-  VectorXd operator()(const VectorXd& y) const { return at(y, u_); }
-  // f at y with the inputs at `u` instead.
-  VectorXd at(const VectorXd& y, const std::vector<double>& u) const {
-    VectorXd out(n_);
-    if (!f_.derivative(y.data(), u.data(), out.data())) out.setConstant(NAN);
-    return out;
-  }
-  int states() const { return n_; }
-
- private:
-  static std::vector<GiNaC::numeric> numbers(const std::vector<double>& theta) {
-    std::vector<GiNaC::numeric> out;
-    for (double v : theta) out.emplace_back(v);
-    return out;
-  }
-  CompiledModel f_;
-  std::vector<double> u_;
-  int n_;
-};
-
-// The step of a difference in y: small against the states' spread, large against rounding.
-constexpr double kStep = 1e-6;
-
-// The Jacobian of f at y by central differences; `kink` names the first state in which f is not
-// differentiable at y (an abs or sign switching there), or is -1: its one-sided derivatives
-// differ (a kink), or its difference quotient halves as the step doubles (a jump).
-MatrixXd jacobian(const RightHandSide& f, const VectorXd& y, int& kink) {
-  const int n = f.states();
-  MatrixXd out(n, n);
-  const VectorXd at = f(y);
-  kink = -1;
-  for (int j = 0; j < n; ++j) {
-    const double h = kStep * std::max(1.0, std::abs(y(j)));
-    const auto at_offset = [&](double d) {
-      VectorXd shifted = y;
-      shifted(j) += d;
-      return f(shifted);
-    };
-    const VectorXd forward = (at_offset(h) - at) / h, backward = (at - at_offset(-h)) / h;
-    const VectorXd central = (forward + backward) / 2;
-    const VectorXd wide = (at_offset(2 * h) - at_offset(-2 * h)) / (4 * h);
-    const double scale = std::max({forward.cwiseAbs().maxCoeff(), backward.cwiseAbs().maxCoeff(),
-                                   wide.cwiseAbs().maxCoeff(), 1e-300});
-    const double mismatch = std::max((forward - backward).cwiseAbs().maxCoeff(),
-                                     (central - wide).cwiseAbs().maxCoeff());
-    if (kink < 0 && mismatch > 1e-3 * scale) kink = j;
-    out.col(j) = central;
-  }
-  return out;
-}
-
-// The equilibrium under the inputs' means (Newton from the origin), or nullopt when none is found.
-std::optional<VectorXd> equilibrium(const RightHandSide& f) {
-  VectorXd y = VectorXd::Zero(f.states());
-  int kink = -1;
-  for (int iteration = 0; iteration < 50; ++iteration) {
-    const VectorXd residual = f(y);
-    if (!residual.allFinite()) break;
-    if (residual.norm() <= 1e-12 * std::max(1.0, y.norm())) break;
-    y -= jacobian(f, y, kink).fullPivLu().solve(residual);
-  }
-  const VectorXd residual = f(y);
-  if (!residual.allFinite() || residual.norm() > 1e-8 * std::max(1.0, y.norm())) {
-    return std::nullopt;
-  }
-  return y;
-}
 
 // The modes of the linearisation at `theta`: (frequency in Hz, damping ratio) of each complex
 // pair of eigenvalues, by frequency; `why` says why there are none.
@@ -123,23 +50,6 @@ std::vector<std::pair<double, double>> modes_at(const Model& model,
   }
   std::sort(out.begin(), out.end());
   if (out.empty()) why = "the linearised model has no oscillating mode (its eigenvalues are real)";
-  return out;
-}
-
-// The estimates of every parameter (fixed ones at their values) and the inputs' means.
-std::vector<double> estimates_of(const IdentifyResult& r) {
-  std::vector<double> out;
-  for (const ParameterEstimate& p : r.parameters()) out.push_back(p.estimate);
-  return out;
-}
-
-std::vector<double> input_means(const IdentifyResult& r) {
-  std::vector<double> out;
-  for (const Declaration& input : r.model->inputs()) {
-    const auto it = std::find_if(r.means.begin(), r.means.end(),
-                                 [&](const ChannelMean& m) { return m.name == input.name; });
-    out.push_back(it == r.means.end() ? 0.0 : it->mean);
-  }
   return out;
 }
 
@@ -350,86 +260,6 @@ std::optional<MatrixXd> mean_gains(const IdentifyResult& r) {
   return MatrixXd(-lu.solve(b));
 }
 
-// Runaway (identify.hpp): the start and the bound of the free response, in standard deviations of
-// the measured states, and the longest it is followed, in steps.
-constexpr double kRunawayStart = 1e-3, kRunawayBound = 1e3;
-constexpr long kRunawaySteps = 1'000'000;
-
-std::optional<Runaway> runaway_of(const IdentifyResult& r) {
-  const Model& model = *r.model;
-  const RightHandSide f(model, estimates_of(r), input_means(r));
-  const std::optional<VectorXd> y0 = equilibrium(f);
-  if (!y0) return std::nullopt;
-  int kink = -1;
-  const MatrixXd a = jacobian(f, *y0, kink);
-  if ((kink >= 0 && !model.functions().empty()) || !a.allFinite()) return std::nullopt;
-  const Eigen::EigenSolver<MatrixXd> eigen(a);
-  const Eigen::VectorXcd lambda = eigen.eigenvalues();
-  Eigen::Index fastest = 0, growing = 0;
-  lambda.real().maxCoeff(&growing);
-  lambda.cwiseAbs().maxCoeff(&fastest);
-  const double sigma = lambda(growing).real();
-  if (!(sigma > 0)) return std::nullopt;
-  // The scale of each state: its standard deviation where the record has it.
-  VectorXd scale = VectorXd::Zero(f.states());
-  for (std::size_t s = 0; s < model.states().size(); ++s) {
-    for (const ChannelStatistics& c : r.data.channels) {
-      if (c.name == model.states()[s].name && c.variance > 0) {
-        scale(static_cast<Eigen::Index>(s)) = std::sqrt(c.variance);
-      }
-    }
-  }
-  const auto size = [&](const VectorXd& d) {
-    double out = 0;
-    for (Eigen::Index i = 0; i < d.size(); ++i) {
-      if (scale(i) > 0) out = std::max(out, std::abs(d(i)) / scale(i));
-    }
-    return out;
-  };
-  // Of a complex eigenvector, the real or imaginary part, whichever moves the measured states more.
-  const VectorXd re = eigen.eigenvectors().col(growing).real();
-  const VectorXd im = eigen.eigenvectors().col(growing).imag();
-  const VectorXd direction = size(re) >= size(im) ? re : im;
-  if (!(size(direction) > 0)) return std::nullopt;
-  Runaway out;
-  out.growth_rate = sigma;
-  out.frequency_hz = std::abs(lambda(growing).imag()) / (2 * std::numbers::pi);
-  // Dormand-Prince steps (Boost.Odeint, error controlled) for 4 ln(bound / start) e-folding
-  // times: the linear growth reaches the bound in a quarter of them, a limit cycle or another
-  // equilibrium in about as long. Held: the response's largest size in the last quarter is less
-  // than twice that in the third. A response that grows faster than the linear one runs into the
-  // bound, and one that a hardening spring slows (energy growing as exp(2 sigma t) under a y^4
-  // potential is an amplitude growing as exp(sigma t / 2)) still grows 1000-fold in a quarter.
-  namespace odeint = boost::numeric::odeint;
-  using State = std::vector<double>;
-  const auto rates = [&](const State& x, State& dxdt, double) {
-    const VectorXd d = f(Eigen::Map<const VectorXd>(x.data(), f.states()));
-    dxdt.assign(d.data(), d.data() + d.size());
-  };
-  auto stepper = odeint::make_controlled<odeint::runge_kutta_dopri5<State>>(1e-9, 1e-6);
-  const double horizon = 4 * std::log(kRunawayBound / kRunawayStart) / sigma;
-  const VectorXd start = *y0 + kRunawayStart / size(direction) * direction;
-  State x(start.data(), start.data() + start.size());
-  double t = 0, dt = 0.05 / std::abs(lambda(fastest)), third = 0, last = 0;
-  for (long step = 0; step < kRunawaySteps && t < horizon; ++step) {
-    const bool taken = stepper.try_step(rates, x, t, dt) == odeint::success;
-    const double now = size(Eigen::Map<const VectorXd>(x.data(), f.states()) - *y0);
-    // A step that shrinks to nothing: the response leaves in finite time.
-    if (!std::isfinite(now) || now > kRunawayBound || !(dt > 1e-12 * horizon)) {
-      out.time = t;
-      return out;
-    }
-    if (!taken) continue;
-    if (4 * t > 3 * horizon) {
-      last = std::max(last, now);
-    } else if (2 * t > horizon) {
-      third = std::max(third, now);
-    }
-  }
-  if (t < horizon || last > 2 * third) return out;
-  return std::nullopt;  // held by its nonlinear terms
-}
-
 }  // namespace
 
 MeanResponse mean_response(const IdentifyResult& r) {
@@ -455,16 +285,6 @@ MeanResponse mean_response(const IdentifyResult& r) {
     out.gain.push_back(std::move(row));
   }
   return out;
-}
-
-std::optional<Runaway> runaway(const IdentifyResult& r) {
-  if (!r.estimate.usable()) return std::nullopt;
-  const AlgebraLock lock;
-  try {
-    return runaway_of(r);
-  } catch (const Error&) {
-    return std::nullopt;  // the estimates make no model to evaluate
-  }
 }
 
 LinearisedModes linearised_modes(const IdentifyResult& r) {
