@@ -101,6 +101,22 @@ struct ChannelMean {
   double std_error = 0;
 };
 
+// An identified model that runs away from its equilibrium, which no stationary record comes
+// from: its linearisation there (under the inputs' means, Newton from the origin) has an
+// eigenvalue of positive real part, and its free response, started a thousandth of the measured
+// states' standard deviations off along that eigenvalue's direction and followed for 4 ln(10^6)
+// e-folding times, leaves a thousand of them or still grows at the end (its largest size in the
+// last quarter of that time is more than twice that in the third). A model that its nonlinear
+// terms hold (a Van der Pol limit cycle, a double well) settles. Empty when the model is stable
+// at its equilibrium or held, has no equilibrium or no linearisation there (an abs or sign term
+// switching), or no state has a channel to scale it by. `time` is NaN when the response did not
+// leave the bound (it kept growing, or 200,000 steps did not reach the end: the growth is too
+// slow).
+struct Runaway {
+  double growth_rate = 0;   // the largest real part of the eigenvalues, per unit of time
+  double frequency_hz = 0;  // of that eigenvalue (0 for a real one)
+  double time = NAN;        // when the free response left the bound
+};
 // What an identification yields: the moment equations (zero-lag or lagged, whichever the data
 // called for), the moments estimated from the data, and the estimate with its diagnostics. The
 // result owns everything it holds, a copy of the model included, so it stays valid after the
@@ -209,6 +225,8 @@ struct IdentifyResult {
     std::size_t settle = 0;  // rows at the start of each run that fill the filter
   };
   std::optional<Integration> integration;
+  // The identified model runs away from its equilibrium (runaway()): a doubt.
+  std::optional<Runaway> runaway;
   // The means of the channels read (after `centered` was removed), states then inputs.
   std::vector<ChannelMean> means;
 
@@ -265,21 +283,8 @@ struct MeanResponse {
 };
 MeanResponse mean_response(const IdentifyResult& result);
 
-// An identified model that runs away from its equilibrium, which no stationary record comes
-// from: its linearisation there (under the inputs' means, Newton from the origin) has an
-// eigenvalue of positive real part, and its free response, started a thousandth of the measured
-// states' standard deviations off along that eigenvalue's direction and followed for 4 ln(10^6)
-// e-folding times, leaves a thousand of them or still grows at the end (its largest size in the
-// last quarter of that time is more than twice that in the third). A model that its nonlinear
-// terms hold (a Van der Pol limit cycle, a double well) settles. Empty when the model is stable
-// at its equilibrium or held, has no equilibrium or no linearisation there (an abs or sign term
-// switching), or no state has a channel to scale it by. `time` is NaN when the response did not
-// leave the bound (it kept growing, or a million steps did not reach the end).
-struct Runaway {
-  double growth_rate = 0;   // the largest real part of the eigenvalues, per unit of time
-  double frequency_hz = 0;  // of that eigenvalue (0 for a real one)
-  double time = NAN;        // when the free response left the bound
-};
+// Whether the identified model runs away (Runaway, above); identify sets IdentifyResult::runaway
+// from it.
 std::optional<Runaway> runaway(const IdentifyResult& result);
 
 // For an oscillator y' = v, m v' = -R(y) - ... + x with a constant mass m (two states): the

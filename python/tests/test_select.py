@@ -1,10 +1,11 @@
 """momentid.select on a Van der Pol record that scipy integrates: the chosen terms, the report and
-JSON the command line gives, and the chosen model written for identify()."""
+JSON the command line gives, and the chosen model written for identify(); and a selection that
+the data cannot make, doubtful with its runner-up."""
 import numpy as np
 import pytest
 
 import momentid
-from conftest import sines
+from conftest import DUFFING, sines
 
 LIBRARY = """model library
 state y, v
@@ -46,6 +47,7 @@ def test_select_chooses_the_true_terms_and_writes_the_model(record, tmp_path):
     for name, value in truth.items():
         assert abs(result.estimates[name] - value) < 3 * result.std_errors[name], result.text
     assert result.jtest()[1] >= 0.01
+    assert result.status == "ok" and result.uncertain == [] and result.runner_up is None
     path = tmp_path / "chosen.mom"
     result.write_model(path)
     again = momentid.identify(path, data)
@@ -75,3 +77,19 @@ def test_the_best_subsets_are_validated_on_a_second_record(record):
     assert sorted(chosen["selected"]) == sorted(truth)
     assert chosen["outputs"]["y"]["fit"] > 80, result.text
     assert "validation on <arrays>" in result.text
+
+
+def test_an_uncertain_structure_is_doubtful_with_the_runner_up():
+    """A Duffing oscillator driven so gently that y, y^3 and y^5 are nearly proportional (5%
+    noise on y), against {y, y^3, y^5, v, x}: the selection cannot tell the linear spring from
+    the cubic, so it is doubtful, says why, and identifies the runner-up beside the chosen model."""
+    duffing = momentid.Model.from_file(DUFFING)
+    data = momentid.simulate(duffing, samples=50_000, seed=1,
+                             inputs={"x": "ma:K=10,w=0.1,sigma=0.3"}, noise={"y": 0.05},
+                             observe=["y", "x"])
+    library = LIBRARY.replace("monomials(y, 3), v, y^2*v, x", "y, y^3, y^5, v, x")
+    result = momentid.select(momentid.Model(library), data)
+    assert result.status == "doubtful" and result.uncertain, result.text
+    assert result.runner_up["selected"] != result.selected
+    assert set(result.runner_up["parameters"]) == set(result.runner_up["selected"])
+    assert "selection status: doubtful, the structure is uncertain" in result.text

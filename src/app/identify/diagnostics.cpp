@@ -74,8 +74,14 @@ std::vector<Offset> offsets(const IdentifyResult& r, double z) {
     if (response.mean.empty()) return out;
   }
   const auto& states = r.model->states();
+  // A state formed by integrating its derivative's column went through the high-pass filter,
+  // which removes its mean whatever the sensor's offset: its mean tells nothing.
+  const auto formed = [&](const ChannelMean& m) {
+    return r.integration && std::any_of(r.integration->formed.begin(), r.integration->formed.end(),
+                                        [&](const auto& f) { return f.state == m.name; });
+  };
   for (const ChannelMean& m : r.means) {
-    if (input_of(m) != inputs.end() || !(m.std_error > 0)) continue;
+    if (input_of(m) != inputs.end() || !(m.std_error > 0) || formed(m)) continue;
     Offset o{&m};
     const auto state =
         std::find_if(states.begin(), states.end(), [&](const auto& d) { return d.name == m.name; });
@@ -199,7 +205,7 @@ std::vector<std::string> doubts(const IdentifyResult& r) {
                   "end to end), or its columns are not what the model's kinematic equations say "
                   "(v is not y', or the channels are shifted in time)");
   }
-  if (const std::optional<Runaway> away = runaway(r)) out.push_back(runaway_text(r, *away));
+  if (r.runaway) out.push_back(runaway_text(r, *r.runaway));
   if (undetermined(r)) {
     out.push_back("no parameter is determined: every estimate lies within " +
                   number(kUndeterminedZ, "%g") +

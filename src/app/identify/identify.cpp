@@ -31,6 +31,7 @@ IdentifyResult identify(const Model& model, const DataSource& source,
       identify_lagged(result, source, options, record.present);
       break;
   }
+  result.runaway = runaway(result);
   return result;
 }
 

@@ -18,7 +18,7 @@ using Eigen::VectorXd;
 // Runaway (identify.hpp): the start and the bound of the free response, in standard deviations of
 // the measured states, and the longest it is followed, in steps.
 constexpr double kRunawayStart = 1e-3, kRunawayBound = 1e3;
-constexpr long kRunawaySteps = 1'000'000;
+constexpr long kRunawaySteps = 200'000;
 
 std::optional<Runaway> runaway_of(const IdentifyResult& r) {
   const Model& model = *r.model;
