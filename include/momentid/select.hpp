@@ -86,9 +86,11 @@ struct SelectResult {
   std::vector<Window> windows;       // the library's window first
   std::vector<std::string> warnings;
   // Why the chosen structure is uncertain, one short reason each: the J test rejects the whole
-  // library, the runner-up lies within the criterion's noise, the chosen terms change with the
-  // lag window, or a kept candidate is nearly collinear with another. Any of them makes the
-  // selection doubtful (status) and has the runner-up identified beside the chosen model.
+  // library, the runner-up lies within the criterion's noise, or the chosen terms change with the
+  // lag window. Any of them makes the selection doubtful (status) and has the runner-up
+  // identified beside the chosen model. Candidates collinear on the library draw a warning
+  // alone: the monomials of a polynomial library correlate beyond 0.995 on most records, and
+  // where the data cannot choose between two of them the runner-up is close.
   std::vector<std::string> uncertain;
   // The runner-up subset (ranking[1]) identified as the chosen one is, when the structure is
   // uncertain.

@@ -240,7 +240,7 @@ class SelectResult(IdentifyResult):
       windows: the chosen candidates on narrower lag windows; selection_warnings;
       status: the selection's, "doubtful" when the chosen model's fit is ok but the structure
       is uncertain; uncertain: why (the library rejected, a close runner-up, terms that change
-      with the lag window, collinear candidates); runner_up: then the runner-up subset's
+      with the lag window); runner_up: then the runner-up subset's
       "selected", "status" and "parameters" (as to_dict()'s), else None;
       validation: with select(validate=...), the best subsets on the second record, each a dict
       with "rank", "selected", "outputs" ({state: {"fit", "rms"}}) and "consistent" (else []).

@@ -80,12 +80,12 @@ def test_the_best_subsets_are_validated_on_a_second_record(record):
 
 
 def test_an_uncertain_structure_is_doubtful_with_the_runner_up():
-    """A Duffing oscillator driven so gently that y, y^3 and y^5 are nearly proportional (5%
-    noise on y), against {y, y^3, y^5, v, x}: the selection cannot tell the linear spring from
-    the cubic, so it is doubtful, says why, and identifies the runner-up beside the chosen model."""
+    """A Duffing oscillator driven gently (5% noise on y), against {y, y^3, y^5, v, x}: the linear
+    spring is chosen 1.9 ahead of the true cubic one, within the criterion's noise, so the
+    selection is doubtful, says why, and identifies the runner-up beside the chosen model."""
     duffing = momentid.Model.from_file(DUFFING)
-    data = momentid.simulate(duffing, samples=50_000, seed=1,
-                             inputs={"x": "ma:K=10,w=0.1,sigma=0.3"}, noise={"y": 0.05},
+    data = momentid.simulate(duffing, samples=50_000, seed=2,
+                             inputs={"x": "ma:K=10,w=0.1,sigma=2"}, noise={"y": 0.05},
                              observe=["y", "x"])
     library = LIBRARY.replace("monomials(y, 3), v, y^2*v, x", "y, y^3, y^5, v, x")
     result = momentid.select(momentid.Model(library), data)

@@ -296,10 +296,6 @@ void test_candidates(SelectResult& out, const Scoring& scoring, const Scorer& sc
                                ") are nearly collinear on these data (their estimates correlate " +
                                number(rho, "%.4f") +
                                " on the library): the selection between them is uncertain");
-        if (out.tests[a].kept || out.tests[b].kept) {
-          out.uncertain.push_back(out.tests[a].name + " and " + out.tests[b].name +
-                                  " nearly collinear");
-        }
       }
     }
   }
