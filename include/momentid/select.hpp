@@ -39,9 +39,9 @@ struct SelectResult {
   struct Subset {
     std::vector<bool> kept;
     double criterion = 0;
-    double j = 0;  // calibrated; chi-square(dof) for the right model
+    double j = 0;  // calibrated as the J test is: of mean dof for the right model
     int dof = 0;
-    double pvalue = 0;
+    double pvalue = 0;  // on the J test's law (solve/selection.hpp, FixedWeighting::pvalue)
   };
   // A candidate at the chosen subset: J without it less J with it, chi-square(1) when its
   // parameter is 0.

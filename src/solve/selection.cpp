@@ -5,6 +5,7 @@
 
 #include "momentid/error.hpp"
 #include "solve/delta_method.hpp"
+#include "solve/distributions.hpp"
 #include "solve/gmm.hpp"
 #include "solve/j_test.hpp"
 #include "solve/least_squares.hpp"
@@ -43,7 +44,7 @@ FixedWeighting::FixedWeighting(const MomentRows& rows, std::size_t parameters,
                 (test.warning.empty() ? std::string("no residual") : test.warning) + ")");
   }
   library_j_ = *test.statistic;
-  library_pvalue_ = *test.pvalue;
+  library_law_ = test.law;
   rank_ = gmm.rank;
   theta_ = gmm.theta;
   covariance_ = gmm_errors(system, ls, gmm, deviations, known, batches).errors.covariance;
@@ -70,6 +71,13 @@ double FixedWeighting::j(const std::vector<bool>& kept) const {
 
 int FixedWeighting::dof(const std::vector<bool>& kept) const {
   return static_cast<int>(rank_) - static_cast<int>(std::count(kept.begin(), kept.end(), true));
+}
+
+double FixedWeighting::pvalue(const std::vector<bool>& kept) const {
+  const double d = static_cast<double>(dof(std::vector<bool>(kept.size(), true)));
+  const double q = static_cast<double>(std::count(kept.begin(), kept.end(), false));
+  const double k = (d + q) * (d + q) / (d * d / library_law_.dof + q);
+  return f_upper_tail(j(kept) / (d + q) * library_law_.scale, k, library_law_.denominator_dof);
 }
 
 double FixedWeighting::correlation(std::size_t p, std::size_t q) const {

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "momentid/estimate.hpp"
+#include "momentid/fit.hpp"
 
 namespace momentid {
 
@@ -36,8 +37,11 @@ class FixedWeighting {
   int dof(const std::vector<bool>& kept) const;
   // The correlation between the estimates of parameters p and q on the library.
   double correlation(std::size_t p, std::size_t q) const;
-  // The p-value of the library's own J test, on its law (JLaw, fit.hpp).
-  double library_pvalue() const { return library_pvalue_; }
+  // The p-value of J(kept) on the J test's law (JLaw, fit.hpp): the library's J, of mean d on k
+  // effective directions, plus a Wald statistic of chi-square(q) for the q parameters dropped,
+  // matched in mean and variance by an F of k' = (d + q)^2 / (d^2 / k + q) degrees of freedom
+  // (Satterthwaite) over the library's denominator; for the library itself its J test's p-value.
+  double pvalue(const std::vector<bool>& kept) const;
 
  private:
   // The library's estimate and its covariance, and its calibrated J: a subset's J is the
@@ -45,7 +49,8 @@ class FixedWeighting {
   // against b' W b (records without noise).
   Eigen::VectorXd theta_;
   Eigen::MatrixXd covariance_;
-  double library_j_ = 0, library_pvalue_ = 1;
+  double library_j_ = 0;
+  JLaw library_law_;
   Eigen::Index rank_ = 0;
 };
 

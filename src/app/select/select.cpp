@@ -52,8 +52,7 @@ struct Scorer {
     s.dof = weighting.dof(s.kept);
     s.criterion = s.j / dispersion +
                   penalty * static_cast<double>(std::count(chosen.begin(), chosen.end(), true));
-    s.pvalue =
-        s.dof > 0 ? chi_square_upper_tail(s.j, s.dof) : std::numeric_limits<double>::quiet_NaN();
+    s.pvalue = s.dof > 0 ? weighting.pvalue(s.kept) : std::numeric_limits<double>::quiet_NaN();
     return s;
   }
 };
@@ -66,7 +65,7 @@ struct Scorer {
 double dispersion_of(const FixedWeighting& weighting, std::size_t parameters) {
   const std::vector<bool> all(parameters, true);
   const int dof = weighting.dof(all);
-  if (dof <= 0 || weighting.library_pvalue() >= kRejected) return 1;
+  if (dof <= 0 || weighting.pvalue(all) >= kRejected) return 1;
   return weighting.j(all) / dof;
 }
 
