@@ -115,7 +115,10 @@ struct ChannelMean {
 struct Runaway {
   double growth_rate = 0;   // the largest real part of the eigenvalues, per unit of time
   double frequency_hz = 0;  // of that eigenvalue (0 for a real one)
-  double time = NAN;        // when the free response left the bound
+  // Of an oscillating mode, its (negative) damping ratio and standard error (linearised_modes);
+  // NaN for a real eigenvalue.
+  double damping_ratio = NAN, damping_se = NAN;
+  double time = NAN;  // when the free response left the bound
 };
 // What an identification yields: the moment equations (zero-lag or lagged, whichever the data
 // called for), the moments estimated from the data, and the estimate with its diagnostics. The

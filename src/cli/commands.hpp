@@ -59,13 +59,8 @@ DataSource data_source(const std::string& path);
 DataSource data_sources(const std::vector<std::string>& arguments);
 // `--columns v=velocity,x=force`: the model's names mapped to the data's columns.
 std::map<std::string, std::string> column_map(const std::vector<std::string>& entries);
-// `NAME=VALUE,NAME=VALUE` for `option`, whose entries are described as `expected`.
-std::map<std::string, std::string> column_map_of(const std::string& text, const std::string& option,
-                                                 const std::string& expected);
 // `--input-hold`: nullopt when not given (empty).
 std::optional<InputHold> hold_option(const std::string& text);
-// `--lags 3..40`: the first and last lag.
-std::pair<int, int> lag_range(const std::string& text);
 // `--measured y,x`: flags over the model's variables.
 std::vector<bool> variable_flags(const Model& model, const std::vector<std::string>& names,
                                  const std::string& option);

@@ -9,6 +9,7 @@
 #include "cli/commands.hpp"
 #include "momentid/lagged.hpp"
 #include "momentid/model.hpp"
+#include "momentid/option_table.hpp"
 #include "momentid/writer.hpp"
 
 namespace momentid::cli {
@@ -26,7 +27,7 @@ struct DeriveCommand {
 
 int run_lagged(const DeriveCommand& command, const Model& model) {
   LagOptions options;
-  std::tie(options.first_lag, options.last_lag) = lag_range(*command.lags);
+  std::tie(options.first_lag, options.last_lag) = parse_lag_range(*command.lags, "--lags");
   if (command.instruments) {
     options.instruments = parse_instrument_list(model, *command.instruments, "--instruments");
   }

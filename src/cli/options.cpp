@@ -155,23 +155,16 @@ DataSource data_sources(const std::vector<std::string>& arguments) {
 std::map<std::string, std::string> column_map(const std::vector<std::string>& entries) {
   std::map<std::string, std::string> out;
   for (const std::string& e : entries) {
-    for (const auto& pair : column_map_of(e, "--columns", "NAME=COLUMN"))
+    for (const auto& pair : parse_option_pairs(e, "--columns", "NAME=COLUMN"))
       out.insert_or_assign(pair.first, pair.second);
   }
   return out;
-}
-
-std::map<std::string, std::string> column_map_of(const std::string& text, const std::string& option,
-                                                 const std::string& expected) {
-  return parse_option_pairs(text, option, expected);
 }
 
 std::optional<InputHold> hold_option(const std::string& text) {
   if (text.empty()) return std::nullopt;
   return parse_input_hold(text, "hold");
 }
-
-std::pair<int, int> lag_range(const std::string& text) { return parse_lag_range(text, "--lags"); }
 
 std::vector<bool> variable_flags(const Model& model, const std::vector<std::string>& names,
                                  const std::string& option) {

@@ -74,7 +74,7 @@ int FixedWeighting::dof(const std::vector<bool>& kept) const {
 }
 
 double FixedWeighting::pvalue(const std::vector<bool>& kept) const {
-  const double d = static_cast<double>(dof(std::vector<bool>(kept.size(), true)));
+  const double d = static_cast<double>(rank_) - static_cast<double>(kept.size());
   const double q = static_cast<double>(std::count(kept.begin(), kept.end(), false));
   const double k = (d + q) * (d + q) / (d * d / library_law_.dof + q);
   return f_upper_tail(j(kept) / (d + q) * library_law_.scale, k, library_law_.denominator_dof);

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <numbers>
 
+#include "app/identify/linearise.hpp"
 #include "common/number.hpp"
 #include "momentid/identify.hpp"
 #include "momentid/lagged.hpp"
@@ -103,9 +104,7 @@ std::vector<Offset> offsets(const IdentifyResult& r, double z) {
       if (!off(m)) continue;
       o.std_error = m.std_error;
     }
-    for (const ChannelStatistics& c : r.data.channels) {
-      if (c.name == m.name && c.variance > 0) o.spread = std::sqrt(c.variance);
-    }
+    o.spread = spread_of(r, m.name);
     out.push_back(o);
   }
   return out;
@@ -129,20 +128,16 @@ std::string mean_text(const Offset& o) {
 
 // "the identified model is unstable: ..." (Runaway), with the damping ratio of the growing mode
 // and its standard error when it oscillates.
-std::string runaway_text(const IdentifyResult& r, const Runaway& away) {
+std::string runaway_text(const Runaway& away) {
   std::string growth = "grows as exp(" + number(away.growth_rate, "%.3g") + " t)";
   if (away.frequency_hz > 0) {
     const double omega = 2 * std::numbers::pi * away.frequency_hz;
     growth += ", a mode at " +
               number(std::hypot(omega, away.growth_rate) / (2 * std::numbers::pi), "%.3g") + " Hz";
-    const LinearisedModes linear = linearised_modes(r);
-    const auto mode = std::min_element(
-        linear.modes.begin(), linear.modes.end(),
-        [](const auto& a, const auto& b) { return a.damping_ratio < b.damping_ratio; });
-    if (mode != linear.modes.end() && mode->damping_ratio < 0) {
-      growth += " with the damping ratio " + number(mode->damping_ratio, "%.2g");
-      if (std::isfinite(mode->damping_se)) {
-        growth += " (standard error " + number(mode->damping_se, "%.2g") + ")";
+    if (away.damping_ratio < 0) {
+      growth += " with the damping ratio " + number(away.damping_ratio, "%.2g");
+      if (std::isfinite(away.damping_se)) {
+        growth += " (standard error " + number(away.damping_se, "%.2g") + ")";
       }
     }
   }
@@ -205,7 +200,7 @@ std::vector<std::string> doubts(const IdentifyResult& r) {
                   "end to end), or its columns are not what the model's kinematic equations say "
                   "(v is not y', or the channels are shifted in time)");
   }
-  if (r.runaway) out.push_back(runaway_text(r, *r.runaway));
+  if (r.runaway) out.push_back(runaway_text(*r.runaway));
   if (undetermined(r)) {
     out.push_back("no parameter is determined: every estimate lies within " +
                   number(kUndeterminedZ, "%g") +

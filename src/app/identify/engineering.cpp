@@ -244,12 +244,8 @@ std::optional<MatrixXd> mean_gains(const IdentifyResult& r) {
   if (kink >= 0 || !a.allFinite()) return std::nullopt;
   MatrixXd b(f.states(), static_cast<Eigen::Index>(inputs));
   for (std::size_t j = 0; j < inputs; ++j) {
-    const auto statistics =
-        std::find_if(r.data.channels.begin(), r.data.channels.end(),
-                     [&](const ChannelStatistics& c) { return c.name == model.inputs()[j].name; });
-    const double h = statistics == r.data.channels.end() || !(statistics->variance > 0)
-                         ? 1.0
-                         : std::sqrt(statistics->variance);
+    const double spread = spread_of(r, model.inputs()[j].name);
+    const double h = spread > 0 ? spread : 1.0;
     std::vector<double> up(inputs, 0.0), down(inputs, 0.0);
     up[j] = h;
     down[j] = -h;

@@ -57,6 +57,13 @@ std::optional<VectorXd> equilibrium(const RightHandSide& f) {
   return y;
 }
 
+double spread_of(const IdentifyResult& r, const std::string& name) {
+  for (const ChannelStatistics& c : r.data.channels) {
+    if (c.name == name && c.variance > 0) return std::sqrt(c.variance);
+  }
+  return 0;
+}
+
 std::vector<double> estimates_of(const IdentifyResult& r) {
   std::vector<double> out;
   for (const ParameterEstimate& p : r.parameters()) out.push_back(p.estimate);

@@ -6,6 +6,7 @@
 #include <Eigen/Dense>
 #include <cmath>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "momentid/identify.hpp"
@@ -45,6 +46,9 @@ Eigen::MatrixXd jacobian(const RightHandSide& f, const Eigen::VectorXd& y, int& 
 
 // The equilibrium f(y) = 0 near the origin (Newton from it), or nullopt when none is found.
 std::optional<Eigen::VectorXd> equilibrium(const RightHandSide& f);
+
+// The record's standard deviation of the channel `name`, 0 when it has none.
+double spread_of(const IdentifyResult& r, const std::string& name);
 
 // The estimates of every parameter (fixed ones at their values), and the inputs' means.
 std::vector<double> estimates_of(const IdentifyResult& r);

@@ -1,5 +1,6 @@
 // Whether the identified model runs away from its equilibrium (identify.hpp, Runaway).
 
+#include <algorithm>
 #include <boost/numeric/odeint.hpp>
 #include <cmath>
 #include <numbers>
@@ -36,13 +37,9 @@ std::optional<Runaway> runaway_of(const IdentifyResult& r) {
   const double sigma = lambda(growing).real();
   if (!(sigma > 0)) return std::nullopt;
   // The scale of each state: its standard deviation where the record has it.
-  VectorXd scale = VectorXd::Zero(f.states());
+  VectorXd scale(f.states());
   for (std::size_t s = 0; s < model.states().size(); ++s) {
-    for (const ChannelStatistics& c : r.data.channels) {
-      if (c.name == model.states()[s].name && c.variance > 0) {
-        scale(static_cast<Eigen::Index>(s)) = std::sqrt(c.variance);
-      }
-    }
+    scale(static_cast<Eigen::Index>(s)) = spread_of(r, model.states()[s].name);
   }
   const auto size = [&](const VectorXd& d) {
     double out = 0;
@@ -100,11 +97,23 @@ std::optional<Runaway> runaway_of(const IdentifyResult& r) {
 std::optional<Runaway> runaway(const IdentifyResult& r) {
   if (!r.estimate.usable()) return std::nullopt;
   const AlgebraLock lock;
+  std::optional<Runaway> out;
   try {
-    return runaway_of(r);
+    out = runaway_of(r);
   } catch (const Error&) {
     return std::nullopt;  // the estimates make no model to evaluate
   }
+  if (out && out->frequency_hz > 0) {
+    const LinearisedModes linear = linearised_modes(r);
+    const auto mode = std::min_element(
+        linear.modes.begin(), linear.modes.end(),
+        [](const auto& a, const auto& b) { return a.damping_ratio < b.damping_ratio; });
+    if (mode != linear.modes.end() && mode->damping_ratio < 0) {
+      out->damping_ratio = mode->damping_ratio;
+      out->damping_se = mode->damping_se;
+    }
+  }
+  return out;
 }
 
 }  // namespace momentid

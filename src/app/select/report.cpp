@@ -184,10 +184,9 @@ nlohmann::ordered_json json_value(const SelectResult& r) {
   out["diagnostics"]["status"] = to_string(status(r));
   Json runner_up;
   if (r.runner_up) {
-    runner_up = json_value(*r.runner_up);
     runner_up = {{"selected", kept_names(r, r.ranking[1].kept, true)},
-                 {"status", runner_up["diagnostics"]["status"]},
-                 {"parameters", runner_up["parameters"]}};
+                 {"status", to_string(status(*r.runner_up))},
+                 {"parameters", json_value(*r.runner_up)["parameters"]}};
   }
   out["selection"] = {{"status", to_string(status(r))},
                       {"uncertain", r.uncertain},
