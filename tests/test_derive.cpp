@@ -542,13 +542,17 @@ TEST_SUITE("derive lagged abs and sign") {
   TEST_CASE("a clearance spring abs(y)*y needs only y and the force") {
     const Model model = oscillator("a*abs(y)*y");
     const auto system = momentid::derive_lagged(model, {.measured = {true, false, true}});
-    // The cube of y as well, which tells abs(y)*y from y.
-    CHECK(system.instruments == std::vector<momentid::Monomial>{{1, 0, 0, 0}, {3, 0, 0, 0}});
-    REQUIRE(system.equations.size() == 2);
+    // The cube of y as well, which tells abs(y)*y from y, and the term's own abs(y)*y.
+    CHECK(system.instruments ==
+          std::vector<momentid::Monomial>{{1, 0, 0, 0}, {3, 0, 0, 0}, {1, 0, 0, 1}});
+    REQUIRE(system.equations.size() == 3);
     CHECK(lagged_equation_text(system, 0) ==
           "c*C'[y;y](s) + a*C[y;y*abs(y)](s) + k*C[y;y](s) = C[y;x](s) - C''[y;y](s)");
     CHECK(lagged_equation_text(system, 1) ==
           "c*C'[y^3;y](s) + a*C[y^3;y*abs(y)](s) + k*C[y^3;y](s) = C[y^3;x](s) - C''[y^3;y](s)");
+    CHECK(lagged_equation_text(system, 2) ==
+          "c*C'[y*abs(y);y](s) + a*C[y*abs(y);y*abs(y)](s) + k*C[y*abs(y);y](s) = "
+          "C[y*abs(y);x](s) - C''[y*abs(y);y](s)");
     CHECK(system.needed == std::vector<bool>{true, false, true, true});
     CHECK(system.derivatives == std::vector<std::string>{"v = y'"});
   }

@@ -179,14 +179,14 @@ struct IdentifyResult {
     std::string cut;
     // The zero-lag check (docs/measured-data.md, "The zero-lag check"), made when the defaults
     // chose the lagged equations for a record with every state measured: the zero-lag equations
-    // with multipliers up to `degree` (their moments noise-corrected, those that hold abs or
-    // sign of a noisy state left out), solved from the same pass, and Hotelling's test of the
-    // difference of their estimate from the lagged one. The zero-lag equations weigh the tails
+    // with multipliers up to `degree` (their moments noise-corrected, save the channels inside
+    // an abs or sign factor of the same moment), solved from the same pass, and Hotelling's test of
+    // the difference of their estimate from the lagged one. The zero-lag equations weigh the tails
     // of the states' distribution, where a wrong law of damping or stiffness shows that the
     // lagged equations' instruments cannot see. `unavailable` says why there is no test.
     struct ZeroLagCheck {
       int degree = 0;
-      std::size_t equations = 0, left_out = 0;  // zero-lag equations taken and left out
+      std::size_t equations = 0;                // zero-lag equations taken
       std::vector<double> estimates;            // theirs, per parameter
       std::optional<double> statistic, pvalue;  // T^2, and its p-value from F(dof)
       std::pair<double, double> dof;

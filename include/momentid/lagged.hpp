@@ -55,9 +55,10 @@ struct LagOptions {
   // white sensor noise on a channel biases its autocorrelation at lag 0 only.
   int first_lag = 3;
   int last_lag = 300;
-  // Instruments, monomials in the measured channels; nullopt: each measured state and its
-  // highest power in the equations (y and y^3 for the Duffing oscillator), and its cube when
-  // the model has abs or sign terms.
+  // Instruments, monomials in the measured channels and the model's abs and sign factors of
+  // them; nullopt: each measured state and its highest power in the equations (y and y^3 for
+  // the Duffing oscillator), and when the model has abs or sign terms, its cube and each such
+  // term the data have (abs(v)*v).
   std::optional<std::vector<Monomial>> instruments;
   // Per channel (states, then inputs) or per model variable: whether the data have it. Empty:
   // all. An abs or sign of channels counts as measured when they all are (the pass computes

@@ -318,7 +318,13 @@ std::vector<Monomial> parse_monomial_list(const Model& model, std::string_view t
   const TermBuilder terms(where, symbols);
   std::vector<Monomial> out;
   for (const SyntaxNode& item : items) {
-    if (item.kind == SyntaxKind::kMultiplier) terms.add_monomial(item, out, inputs);
+    if (item.kind != SyntaxKind::kMultiplier) continue;
+    terms.add_monomial(item, out, inputs);
+    if (symbols.variables().size() > model.variables().size()) {
+      where.fail(item, "instrument '" + std::string(item.text) +
+                           "' holds a function that no equation of the model holds: an "
+                           "instrument's abs(...) and sign(...) are the model's own");
+    }
   }
   return out;
 }

@@ -136,11 +136,11 @@ void TermBuilder::add_monomial_checked(const SyntaxNode& n, std::vector<Monomial
                                  text + "'");
   }
   const Monomial& m = terms[0].variables;
-  if (function_factor(terms[0])) {
-    source_.fail(n, std::string(inputs ? "an instrument" : "a multiplier") +
-                        " cannot hold abs(...) or sign(...), found '" + text +
+  if (function_factor(terms[0]) && !inputs) {
+    source_.fail(n, "a multiplier cannot hold abs(...) or sign(...), found '" + text +
                         "': the stationarity identities need polynomials");
   }
+
   if (inputs) {
     if (std::find(out.begin(), out.end(), m) == out.end()) out.push_back(m);
     return;

@@ -175,9 +175,6 @@ void diagnostics_text(std::ostringstream& out, const IdentifyResult& r) {
           << " degrees of freedom, p = " << number(*check->pvalue, "%.3g")
           << (check->rejects() ? " (the model does not fit the data)" : "") << "; the "
           << check->equations << " zero-lag equations up to degree " << check->degree;
-      if (check->left_out > 0) {
-        out << " (" << check->left_out << " left out: they hold abs or sign of a noisy state)";
-      }
       out << " give";
       const auto& list = r.parameters();
       for (std::size_t p = 0; p < list.size(); ++p) {
@@ -373,7 +370,6 @@ Json diagnostics_json(const IdentifyResult& r) {
     out["zero_lag_check"] = {
         {"degree", check->degree},
         {"equations", check->equations},
-        {"left_out", check->left_out},
         {"estimates", estimates},
         {"statistic", check->statistic ? json_value(*check->statistic) : Json()},
         {"dof", check->pvalue ? Json{json_value(check->dof.first), json_value(check->dof.second)}
