@@ -20,6 +20,12 @@ struct SolveOptions {
   // Each row divided by the length of its coefficients (at the estimated moments), so that
   // equations of different sizes count alike; the delta method takes these weights as fixed.
   bool normalise_rows = false;
+  // With gmm: the weights taken a second time, at the first weighted estimate, and the errors
+  // widened by what that estimate's errors bring through them (docs/uncertainty.md, "Optimal
+  // weighting and the J test"). For the lagged equations, many and correlated, whose two-step
+  // intervals were too narrow; the zero-lag equations keep the two-step weights, whose intervals
+  // the calibration study measured.
+  bool iterate_weights = false;
   // solve() only: the covariance of the record's rates of change (the system's rate moments,
   // rate_key, in the order of moments_to_estimate), known from elsewhere, which is added to the
   // errors (docs/uncertainty.md, "End values").

@@ -31,8 +31,8 @@ struct IdentityCheck {
   double z = 0;
 };
 
-// One estimate of the parameters with its errors: the least-squares fit, or the two-step
-// optimally weighted (GMM) one.
+// One estimate of the parameters with its errors: the least-squares fit, or the optimally
+// weighted (GMM) one (SolveOptions::iterate_weights: its weights taken a second time).
 struct Fit {
   std::vector<ParameterEstimate> parameters;
   // The estimates' correlation matrix, parameter by parameter (NaN where a parameter is not
@@ -82,7 +82,7 @@ struct Estimate {
   std::string message;          // what went wrong, for kRankDeficient and kNothingIdentifiable
 
   Fit least_squares;
-  std::optional<Fit> optimal;  // two-step optimal weighting (SolveOptions::gmm), when computed
+  std::optional<Fit> optimal;  // optimal weighting (SolveOptions::gmm), when computed
   std::size_t rows = 0;        // equations in the system
   std::size_t rank = 0;
   double condition = 0;  // of the column-scaled coefficient matrix

@@ -43,7 +43,7 @@ struct IdentifyOptions {
   // a degree, extrapolate) are given, or the data give no sample interval; IdentifyResult::why
   // says which was taken and why.
   Method method = Method::kAuto;
-  // The main estimate: kAuto takes the two-step optimally weighted one (GMM), with the J test
+  // The main estimate: kAuto takes the optimally weighted one (GMM), with the J test
   // that gives `ok` its meaning, whenever the equations outnumber the free parameters; least
   // squares is always computed beside it.
   Weighting weighting = Weighting::kAuto;

@@ -49,7 +49,7 @@ enum class MissingValues {
 enum class Interpolation { kHold, kLinear, kCubic, kSinc };
 
 // Which estimate identify reports as its main result (IdentifyOptions::weighting): kAuto, the
-// two-step optimally weighted one with the J test whenever the equations outnumber the
+// optimally weighted one (GMM) with the J test whenever the equations outnumber the
 // parameters, else least squares; kLeastSquares; kGmm, the optimally weighted one.
 // Names: auto, ls, gmm.
 enum class Weighting { kAuto, kLeastSquares, kGmm };

@@ -57,7 +57,7 @@ def _pandas():
 
 class Fit:
     """One estimate of the model's parameters with its errors: the least-squares one or the
-    optimally weighted (two-step GMM) one. Every array is in the order of `param_names` (the
+    optimally weighted (GMM) one. Every array is in the order of `param_names` (the
     model's parameters in declaration order) and read-only.
 
     params, bse: the estimates and their standard errors. A parameter taken as known (`fix=`, or

@@ -37,7 +37,7 @@ FixedWeighting::FixedWeighting(const MomentRows& rows, std::size_t parameters,
   }
   const MatrixXd deviations = batch_deviations(estimates);
   const KnownCovariance known = diagonal_covariance(moment_variance, estimates);
-  const OptimalWeighting gmm = optimal_weighting(system, ls, deviations, known);
+  const OptimalWeighting gmm = optimal_weighting(system, ls, deviations, known, ls.theta);
   const JTest test = j_test(system, ls, gmm, deviations, known, batches);
   if (!test.statistic || !(gmm.objective > 0)) {
     throw Error(what + ": the library's J statistic cannot be calibrated (" +

@@ -63,13 +63,19 @@ void report_least_squares(Estimate& out, const LinearSystem& system, const Least
 
 // The optimally weighted estimate's parameters, errors and objective, and the J test.
 void report_gmm(Estimate& out, const LinearSystem& system, const LeastSquares& ls,
-                const std::vector<bool>& identifiable, const MomentErrors& moments) {
-  const OptimalWeighting gmm = optimal_weighting(system, ls, moments.deviations, moments.known);
-  const auto [series, errors] =
-      gmm_errors(system, ls, gmm, moments.deviations, moments.known, out.batches);
+                const std::vector<bool>& identifiable, const MomentErrors& moments, bool iterate) {
+  const IteratedWeighting steps =
+      iterated_weighting(system, ls, moments.deviations, moments.known, iterate);
+  const OptimalWeighting& gmm = steps.weighted;
+  const auto [series, errors] = gmm_errors(system, ls, gmm, moments.deviations, moments.known,
+                                           out.batches, iterate ? &steps.pilot : nullptr);
   out.error_batches = rows_of(series);
   Fit& fit = out.optimal.emplace();
-  fit.objective = out.intervals > 0 ? gmm.objective / static_cast<double>(out.intervals) : kNaN;
+  // The objective and the J test at the pilot: the two-step J, whose law and power the studies
+  // measured (docs/uncertainty.md); at weights taken from a wrong model's estimate its residual
+  // inflates S, and J lost a third of its power against a wrong damping law.
+  const OptimalWeighting& pilot = steps.pilot;
+  fit.objective = out.intervals > 0 ? pilot.objective / static_cast<double>(out.intervals) : kNaN;
   fit.dof = errors.dof;
   const double t975 = errors.t975();
   for (std::size_t p = 0; p < out.least_squares.parameters.size(); ++p) {
@@ -81,7 +87,7 @@ void report_gmm(Estimate& out, const LinearSystem& system, const LeastSquares& l
   }
   fit.correlation = correlation_of(errors.covariance, identifiable);
 
-  const JTest test = j_test(system, ls, gmm, moments.deviations, moments.known, out.batches);
+  const JTest test = j_test(system, ls, pilot, moments.deviations, moments.known, out.batches);
   out.j_dof = test.dof;
   out.j_statistic = test.statistic;
   out.j_pvalue = test.pvalue;
@@ -146,7 +152,7 @@ Estimate solve_free(const MomentRows& rows, const std::vector<std::string>& name
     out.warnings.push_back(why);
     return out;
   }
-  report_gmm(out, system, ls, identified.identifiable, moments);
+  report_gmm(out, system, ls, identified.identifiable, moments, options.iterate_weights);
   return out;
 }
 

@@ -360,6 +360,7 @@ void solve_lagged(IdentifyResult& result, const LaggedPlan& plan, const LaggedCh
                                {.gmm = result.gmm,
                                 .fixed = plan.fixed,
                                 .normalise_rows = true,
+                                .iterate_weights = true,
                                 .moment_variance = result.lagged->moment_variance});
 }
 

@@ -438,7 +438,7 @@ std::string format_text(const IdentifyResult& r) {
   }
   out << "\n";
   if (e.optimal) {
-    out << "optimally weighted estimate (two-step GMM)\n";
+    out << "optimally weighted estimate (GMM)\n";
     table(out, e.optimal->parameters);
     out << "\nleast-squares estimate (first step)\n";
   } else {

@@ -39,7 +39,7 @@ constexpr std::array kOptions = {
     "zero-lag for records simulated without noise", C::kIdentify, S::kRecord, false, {}, "",
     set_method},
   OptionDescription{"--weighting", "weighting", "weighting", "auto|ls|gmm", V::kChoice, "auto",
-    "ls (least squares), gmm (two-step optimal, with the J test), or auto: gmm when the "
+    "ls (least squares), gmm (optimal weights, with the J test), or auto: gmm when the "
     "equations outnumber the parameters", C::kIdentify, S::kRecord, false, {}, "",
     set_weighting},
   OptionDescription{"--columns", "columns", "columns", "NAME=COLUMN,...", V::kPairs, "",
