@@ -36,9 +36,8 @@ class TemporaryPath {
  public:
   explicit TemporaryPath(const std::string& target) : target_(target) {
     path_ = target + ".partial-XXXXXX";
-    const int fd = mkstemp(path_.data());
+    const int fd = create_temporary(path_);
     if (fd < 0) throw Error(target + ": cannot write the output file: " + std::strerror(errno));
-    remember_temporary(path_);
     ::close(fd);
     std::remove(path_.c_str());  // the library creates it afresh
   }

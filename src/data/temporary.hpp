@@ -10,5 +10,8 @@ namespace momentid::data {
 void remember_temporary(const std::string& path);
 // Once the file is moved into place or removed.
 void forget_temporary();
+// Creates a file named by the template `path` (ending in XXXXXX, which it fills in, as mkstemp)
+// and remembers it, no interrupt arriving in between; its descriptor, or -1 with errno set.
+int create_temporary(std::string& path);
 
 }  // namespace momentid::data

@@ -45,15 +45,7 @@ OutputFile::OutputFile(const std::string& path) : path_(path) {
       path_ = (target.is_absolute() ? target : link.parent_path() / target).string();
     }
     temporary_ = path_ + ".partial-XXXXXX";
-    // An interrupt between creating the temporary file and remembering it would leave the file
-    // behind: hold the signals that remove it until it is remembered.
-    sigset_t interrupts, previous;
-    sigemptyset(&interrupts);
-    for (int signal : {SIGINT, SIGTERM, SIGHUP}) sigaddset(&interrupts, signal);
-    pthread_sigmask(SIG_BLOCK, &interrupts, &previous);
-    const int fd = mkstemp(temporary_.data());
-    if (fd >= 0) data::remember_temporary(temporary_);
-    pthread_sigmask(SIG_SETMASK, &previous, nullptr);
+    const int fd = data::create_temporary(temporary_);
     if (fd < 0) throw Error(path_ + ": cannot create the output file: " + std::strerror(errno));
     file_ = fdopen(fd, "wb");
     if (file_ == nullptr) {
@@ -196,6 +188,21 @@ void remember_temporary(const std::string& path) {
 }
 
 void forget_temporary() { g_has_temporary = 0; }
+
+int create_temporary(std::string& path) {
+  // An interrupt between creating the file and remembering it would leave the file behind: the
+  // signals that remove it are held until it is remembered.
+  sigset_t interrupts, previous;
+  sigemptyset(&interrupts);
+  for (int signal : {SIGINT, SIGTERM, SIGHUP}) sigaddset(&interrupts, signal);
+  pthread_sigmask(SIG_BLOCK, &interrupts, &previous);
+  const int fd = mkstemp(path.data());
+  const int error = errno;
+  if (fd >= 0) remember_temporary(path);
+  pthread_sigmask(SIG_SETMASK, &previous, nullptr);
+  errno = error;
+  return fd;
+}
 
 }  // namespace data
 

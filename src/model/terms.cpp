@@ -140,7 +140,6 @@ void TermBuilder::add_monomial_checked(const SyntaxNode& n, std::vector<Monomial
     source_.fail(n, "a multiplier cannot hold abs(...) or sign(...), found '" + text +
                         "': the stationarity identities need polynomials");
   }
-
   if (inputs) {
     if (std::find(out.begin(), out.end(), m) == out.end()) out.push_back(m);
     return;

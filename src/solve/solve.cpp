@@ -71,11 +71,7 @@ void report_gmm(Estimate& out, const LinearSystem& system, const LeastSquares& l
                                            out.batches, iterate ? &steps.pilot : nullptr);
   out.error_batches = rows_of(series);
   Fit& fit = out.optimal.emplace();
-  // The objective and the J test at the pilot: the two-step J, whose law and power the studies
-  // measured (docs/uncertainty.md); at weights taken from a wrong model's estimate its residual
-  // inflates S, and J lost a third of its power against a wrong damping law.
-  const OptimalWeighting& pilot = steps.pilot;
-  fit.objective = out.intervals > 0 ? pilot.objective / static_cast<double>(out.intervals) : kNaN;
+  fit.objective = out.intervals > 0 ? gmm.objective / static_cast<double>(out.intervals) : kNaN;
   fit.dof = errors.dof;
   const double t975 = errors.t975();
   for (std::size_t p = 0; p < out.least_squares.parameters.size(); ++p) {
@@ -87,7 +83,11 @@ void report_gmm(Estimate& out, const LinearSystem& system, const LeastSquares& l
   }
   fit.correlation = correlation_of(errors.covariance, identifiable);
 
-  const JTest test = j_test(system, ls, pilot, moments.deviations, moments.known, out.batches);
+  // The J test at the pilot: the two-step J, whose law and power the studies measured
+  // (docs/uncertainty.md); at weights taken from a wrong model's estimate its residual inflates
+  // S, and J lost a third of its power against a wrong damping law.
+  const JTest test =
+      j_test(system, ls, steps.pilot, moments.deviations, moments.known, out.batches);
   out.j_dof = test.dof;
   out.j_statistic = test.statistic;
   out.j_pvalue = test.pvalue;

@@ -22,10 +22,10 @@ were taken twice, and right on seeds 5550-5649.) Seeds FIRST.. FIRST + SEEDS - 1
 
 Usage: coverage.py CASE MOMENTID WORKDIR [SEEDS [FIRST]]
 """
+import json
 import os
 import subprocess
 import sys
-import json
 from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
