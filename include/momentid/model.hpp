@@ -210,6 +210,9 @@ class Model {
 enum class Parity { kEven, kOdd, kNone };
 Parity parity(const Model& model, const Monomial& monomial);
 
+// Whether a monomial over `variables` has a factor that is a function (abs or sign) of others.
+bool holds_function(const std::vector<Variable>& variables, const Monomial& monomial);
+
 // Reads and checks a model file. Throws ParseError or ModelError naming file, line and column,
 // or Error when the file cannot be read.
 Model parse_model_file(const std::string& path);

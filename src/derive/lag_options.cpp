@@ -44,13 +44,6 @@ int read_power(const LagDeriver& deriver, const Equation& eq, const Term& t, std
   }
 }
 
-bool has_function(const Model& model, const Monomial& m) {
-  for (std::size_t v = 0; v < m.size(); ++v) {
-    if (m[v] != 0 && !model.variables()[v].channel()) return true;
-  }
-  return false;
-}
-
 }  // namespace
 
 // Each measured state, and its highest power in the functions the equations' terms are read as
@@ -93,7 +86,7 @@ std::vector<Monomial> default_instruments(const Model& model, const std::vector<
   }
   for (const Equation& eq : model.equations()) {
     for (const Term& t : eq.terms) {
-      if (t.parameter < 0 || !has_function(model, t.monomial)) continue;
+      if (t.parameter < 0 || !holds_function(model.variables(), t.monomial)) continue;
       bool have = true;
       for (std::size_t v = 0; v < t.monomial.size(); ++v) have &= t.monomial[v] == 0 || measured[v];
       if (have && std::find(out.begin(), out.end(), t.monomial) == out.end()) {

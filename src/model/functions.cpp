@@ -47,4 +47,11 @@ Parity parity(const Model& model, const Monomial& monomial) {
   return odd ? Parity::kOdd : Parity::kEven;
 }
 
+bool holds_function(const std::vector<Variable>& variables, const Monomial& monomial) {
+  for (std::size_t v = 0; v < monomial.size(); ++v) {
+    if (monomial[v] != 0 && !variables[v].channel()) return true;
+  }
+  return false;
+}
+
 }  // namespace momentid

@@ -369,10 +369,7 @@ std::string TermBuilder::format_polynomial(
 }
 
 bool TermBuilder::function_factor(const SplitTerm& t) const {
-  for (std::size_t i = 0; i < t.variables.size(); ++i) {
-    if (t.variables[i] != 0 && !symbols_.variables()[i].channel()) return true;
-  }
-  return false;
+  return holds_function(symbols_.variables(), t.variables);
 }
 
 // `top_level`: each product of the sum is a term of the equation as written, so it is checked

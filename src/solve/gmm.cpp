@@ -68,16 +68,20 @@ MatrixXd sensitivity_of(const LinearSystem& system, const LeastSquares& first,
                      gmm.weight * gmm.residual, gmm.theta_scaled);
 }
 
-// d a_p / d mu: how column p of A moves with the moments (rows x moments).
-Eigen::SparseMatrix<double> column_jacobian(const LinearSystem& system, Index p) {
-  std::vector<Eigen::Triplet<double>> entries;
+// d a_p / d mu for each column p of A: how it moves with the moments (rows x moments).
+std::vector<Eigen::SparseMatrix<double>> column_jacobians(const LinearSystem& system) {
+  std::vector<std::vector<Eigen::Triplet<double>>> entries(
+      static_cast<std::size_t>(system.a.cols()));
   for (std::size_t k = 0; k < system.uses.size(); ++k) {
     for (const auto& [r, q, w] : system.uses[k].a) {
-      if (q == p) entries.emplace_back(r, static_cast<Index>(k), w);
+      entries[static_cast<std::size_t>(q)].emplace_back(r, static_cast<Index>(k), w);
     }
   }
-  Eigen::SparseMatrix<double> out(system.a.rows(), static_cast<Index>(system.uses.size()));
-  out.setFromTriplets(entries.begin(), entries.end());
+  std::vector<Eigen::SparseMatrix<double>> out;
+  for (const auto& column : entries) {
+    out.emplace_back(system.a.rows(), static_cast<Index>(system.uses.size()));
+    out.back().setFromTriplets(column.begin(), column.end());
+  }
   return out;
 }
 
@@ -96,9 +100,10 @@ MatrixXd weight_sensitivity(const LinearSystem& system, const LeastSquares& firs
   const VectorXd h = -(gmm.weight * gmm.residual);  // W g
   const VectorXd uh = u * h;
   const VectorXd known_h = known * (g_mu.transpose() * h);
+  const std::vector<Eigen::SparseMatrix<double>> columns = column_jacobians(system);
   MatrixXd out(system.a.cols(), system.a.cols());
   for (Index j = 0; j < system.a.cols(); ++j) {
-    const Eigen::SparseMatrix<double> g_j = column_jacobian(system, j);
+    const Eigen::SparseMatrix<double>& g_j = columns[static_cast<std::size_t>(j)];
     const MatrixXd a_j = centred(deviations * g_j.transpose());
     const VectorXd ds_h = (a_j.transpose() * uh + u.transpose() * (a_j * h)) / (b * (b - 1)) +
                           g_j * known_h + g_mu * (known * (g_j.transpose() * h));

@@ -11,47 +11,6 @@
 #include "solve/rows.hpp"
 
 namespace momentid {
-namespace {
-
-// Per channel read: the channels its values are computed from, for an abs or sign of them
-// (empty for a channel of the record).
-std::vector<std::vector<std::size_t>> computed_from(const Model& model,
-                                                    const std::vector<int>& channel) {
-  const int last = channel.empty() ? -1 : *std::max_element(channel.begin(), channel.end());
-  std::vector<std::vector<std::size_t>> out(static_cast<std::size_t>(last + 1));
-  for (std::size_t u = 0; u < model.variables().size(); ++u) {
-    const Variable& variable = model.variables()[u];
-    const int read = channel[u];
-    if (variable.channel() || read < 0) continue;
-    const VariableFunction& f = model.function_of(variable);
-    for (const auto& [coefficient, monomial] : f.argument) {
-      for (std::size_t v = 0; v < monomial.size(); ++v) {
-        if (monomial[v] != 0 && channel[v] >= 0) {
-          out[static_cast<std::size_t>(read)].push_back(static_cast<std::size_t>(channel[v]));
-        }
-      }
-    }
-  }
-  return out;
-}
-
-// The noise variances by which to correct a monomial at one time: none for a channel that is
-// also inside one of its abs or sign factors, whose noise no polynomial removes, so that the
-// correction of its power would not be right either (E[(v + e)^2 sign(v + e)] is not
-// E[v^2 sign(v)] plus a multiple of E[sign(v + e)]); the other channels' noise is independent
-// of the factor and corrected as ever.
-std::vector<double> correctable_noise(const Monomial& m, std::vector<double> noise,
-                                      const std::vector<std::vector<std::size_t>>& from) {
-  for (std::size_t c = 0; c < m.size() && c < from.size(); ++c) {
-    if (m[c] == 0) continue;
-    for (std::size_t inside : from[c]) {
-      if (inside < noise.size()) noise[inside] = 0;
-    }
-  }
-  return noise;
-}
-
-}  // namespace
 
 LaggedRows lagged_rows(const LaggedSystem& system, double dt, const std::vector<int>& channel,
                        const std::vector<double>& noise, int stencil) {

@@ -1,5 +1,6 @@
 #include "solve/rows.hpp"
 
+#include <algorithm>
 #include <set>
 #include <stdexcept>
 #include <string>
@@ -54,6 +55,37 @@ std::vector<Monomial> moments_to_estimate(const MomentSystem& system) {
     for (const auto& [m, w] : id.value) add(m);
   }
   return out;
+}
+
+std::vector<std::vector<std::size_t>> computed_from(const Model& model,
+                                                    const std::vector<int>& channel) {
+  const int last = channel.empty() ? -1 : *std::max_element(channel.begin(), channel.end());
+  std::vector<std::vector<std::size_t>> out(static_cast<std::size_t>(last + 1));
+  for (std::size_t u = 0; u < model.variables().size(); ++u) {
+    const Variable& variable = model.variables()[u];
+    const int read = channel[u];
+    if (variable.channel() || read < 0) continue;
+    const VariableFunction& f = model.function_of(variable);
+    for (const auto& [coefficient, monomial] : f.argument) {
+      for (std::size_t v = 0; v < monomial.size(); ++v) {
+        if (monomial[v] != 0 && channel[v] >= 0) {
+          out[static_cast<std::size_t>(read)].push_back(static_cast<std::size_t>(channel[v]));
+        }
+      }
+    }
+  }
+  return out;
+}
+
+std::vector<double> correctable_noise(const Monomial& m, std::vector<double> noise,
+                                      const std::vector<std::vector<std::size_t>>& from) {
+  for (std::size_t c = 0; c < m.size() && c < from.size(); ++c) {
+    if (m[c] == 0) continue;
+    for (std::size_t inside : from[c]) {
+      if (inside < noise.size()) noise[inside] = 0;
+    }
+  }
+  return noise;
 }
 
 std::map<Monomial, std::size_t> positions(const std::vector<Monomial>& moments) {

@@ -20,6 +20,20 @@ namespace momentid {
 std::vector<std::pair<Monomial, double>> noise_corrected(const Monomial& m,
                                                          const std::vector<double>& noise);
 
+// Per channel read (channel[u]: where variables()[u] is read, or -1), the channels its values
+// are computed from, for an abs or sign of them (empty for a channel of the record). With
+// channel[u] = u, over the model's variables.
+std::vector<std::vector<std::size_t>> computed_from(const Model& model,
+                                                    const std::vector<int>& channel);
+
+// The noise variances by which to correct a monomial at one time: none for a channel that is
+// also inside one of its abs or sign factors (`from`, of computed_from), whose noise no
+// polynomial removes, so that the correction of its power would not be right either
+// (E[(v + e)^2 sign(v + e)] is not E[v^2 sign(v)] plus a multiple of E[sign(v + e)]); the other
+// channels' noise is independent of the factor and corrected as ever.
+std::vector<double> correctable_noise(const Monomial& m, std::vector<double> noise,
+                                      const std::vector<std::vector<std::size_t>>& from);
+
 // Each moment's position in `moments`.
 std::map<Monomial, std::size_t> positions(const std::vector<Monomial>& moments);
 

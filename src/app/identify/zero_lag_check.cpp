@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <map>
+#include <numeric>
 #include <set>
 
 #include "app/identify/end_values.hpp"
@@ -40,25 +41,6 @@ MomentSystem check_system(const Model& model, int degree) {
   return derive(model, derive_options);
 }
 
-// The noise variances by which to correct the moment `m`: none for a channel inside one of its
-// abs or sign factors, whose noise no polynomial removes, as in the lagged equations
-// (solve/lagged_rows.cpp). What is left is a bias of the order of the noise's variance relative
-// to the channel's (E[sign(v + e) | v] differs from sign(v) only within a few noise deviations
-// of 0): 4e-4 of the moment at 2% noise, 2.5e-3 at 5%, far below the check's sampling errors.
-std::vector<double> correctable_noise(const Model& model, const Monomial& m,
-                                      std::vector<double> noise) {
-  for (std::size_t u = 0; u < m.size(); ++u) {
-    const Variable& variable = model.variables()[u];
-    if (m[u] == 0 || variable.kind != VariableKind::kFunction) continue;
-    for (const auto& [coefficient, argument] : model.function_of(variable).argument) {
-      for (std::size_t v = 0; v < argument.size(); ++v) {
-        if (argument[v] != 0) noise[v] = 0;
-      }
-    }
-  }
-  return noise;
-}
-
 // The zero-lag equations of `system` over the moments at `index`, each moment by its
 // noise-corrected terms (rates as they are).
 MomentRows corrected_rows(const Model& model, const MomentSystem& system,
@@ -66,6 +48,13 @@ MomentRows corrected_rows(const Model& model, const MomentSystem& system,
                           const std::vector<double>& noise) {
   const std::vector<Monomial> needed = moments_to_estimate(system);
   const MomentRows rows = moment_rows(system, positions(needed));
+  // The channels inside an abs or sign factor are left uncorrected, as in the lagged equations:
+  // what is left is a bias of the order of the noise's variance relative to the channel's
+  // (E[sign(v + e) | v] differs from sign(v) only within a few noise deviations of 0), 4e-4 of
+  // the moment at 2% noise, 2.5e-3 at 5%, far below the check's sampling errors.
+  std::vector<int> variable(model.variables().size());
+  std::iota(variable.begin(), variable.end(), 0);
+  const std::vector<std::vector<std::size_t>> from = computed_from(model, variable);
   const auto corrected = [&](const MomentRows::Entry& entry) {
     MomentRows::Entry out{.constant = entry.constant, .moments = {}};
     for (const auto& [k, w] : entry.moments) {
@@ -74,7 +63,7 @@ MomentRows corrected_rows(const Model& model, const MomentSystem& system,
         continue;
       }
       for (const auto& [term, weight] :
-           noise_corrected(needed[k], correctable_noise(model, needed[k], noise))) {
+           noise_corrected(needed[k], correctable_noise(needed[k], noise, from))) {
         if (term.degree() == 0) {
           out.constant += w * weight;
         } else {
