@@ -144,6 +144,9 @@ class MomentAccumulator {
   // The per-row work (accumulator_rows.cpp).
   void store_powers(const double* row);
   void push_rows(const double* rows, std::size_t count);
+  void push_row(const double* row, std::size_t chunk_row);
+  void form_chunk(const double* rows, std::size_t count);
+  void add_chunk_row(std::size_t chunk_row);
   bool owns(std::size_t n) const;
   void close_interval(std::size_t n);
   void close_stretch();
@@ -182,7 +185,15 @@ class MomentAccumulator {
   };
   std::vector<Single> held_singles_, plain_singles_;
   std::vector<std::size_t> held_blocks_, plain_blocks_;
-  // The product of factors [first, last) (at least one) of a single.
+  // Without lags every moment is a single (when each has at most four factors): their products
+  // are formed kChunk rows at a time, factor column by factor column (form_chunk), into tables
+  // of kChunk values per moment that the per-row loops read: the state and input parts of the
+  // ringed moments, the products of the others. `columns_`: per power-table index, its values
+  // at the chunk's rows.
+  static constexpr std::size_t kChunk = 32;
+  bool chunked_ = false;
+  std::vector<double> columns_, state_rows_, input_rows_, plain_rows_;
+  // The product of factors [first, last) (1 without any) of a single.
   static double single_product(const Single& one, const double* history, std::uint32_t first,
                                std::uint32_t last);
   static void product(double* out, const Block& b, const double* history, std::size_t first,

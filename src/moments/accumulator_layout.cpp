@@ -111,6 +111,13 @@ void MomentAccumulator::lay_out() {
   row_.assign(k, 0.0);
   previous_row_.assign(k, 0.0);
   open_sums_.assign(k, 0.0);
+  chunked_ = max_lag_ == 0 && held_blocks_.empty() && plain_blocks_.empty();
+  if (chunked_) {
+    columns_.assign(history_.size() / 4 * kChunk, 1.0);
+    state_rows_.assign(kChunk * ringed_count_, 0.0);
+    input_rows_.assign(kChunk * ringed_count_, 0.0);
+    plain_rows_.assign(kChunk * (k - ringed_count_), 0.0);
+  }
 }
 
 // Runs of moments in working order with the same kind and factors, whose lags step by -1, 0 or
@@ -153,13 +160,10 @@ void MomentAccumulator::choose_singles() {
     const Block& b = blocks_[i];
     const bool ringed = b.begin < ringed_count_;
     const std::size_t n = b.factors.size();
-    // A held moment needs both parts; one without an input factor is not held. An increment
-    // (all state part) is computed by blocks.
     const bool fits = std::all_of(b.factors.begin(), b.factors.end(), [](const BlockFactor& f) {
       return f.offset <= std::numeric_limits<std::uint32_t>::max();
     });
-    if (b.size == 1 && n >= 1 && n <= 4 && fits &&
-        (!ringed || (b.state_factors > 0 && b.state_factors < n))) {
+    if (b.size == 1 && n >= 1 && n <= 4 && fits) {
       Single single{static_cast<std::uint32_t>(b.begin),
                     static_cast<std::uint32_t>(b.state_factors),
                     static_cast<std::uint32_t>(n),

@@ -87,13 +87,13 @@ template <bool Add>
 
 }  // namespace
 
-// In the order of the block loops below.
+// In the order of the block loops below (1 times the first factor is that factor).
 [[gnu::always_inline]] inline double MomentAccumulator::single_product(const Single& one,
                                                                        const double* history,
                                                                        std::uint32_t first,
                                                                        std::uint32_t last) {
-  double p = history[one.offsets[first]];
-  for (std::uint32_t f = first + 1; f < last; ++f) p *= history[one.offsets[f]];
+  double p = 1.0;
+  for (std::uint32_t f = first; f < last; ++f) p *= history[one.offsets[f]];
   return p;
 }
 
@@ -135,17 +135,92 @@ inline void MomentAccumulator::store_powers(const double* row) {
 
 void MomentAccumulator::push_rows(const double* rows, std::size_t count) {
   const std::size_t variables = states_ + inputs_;
-  for (std::size_t r = 0; r < count; ++r) {
-    store_powers(rows + r * variables);
-    ++seen_rows_;
-    // The first max_lag_ rows of a run only fill the history.
-    if (seen_rows_ <= max_lag_) continue;
-    const std::size_t m = run_rows_;
-    const double* history = history_.data() + history_pos_;
-    // A held moment keeps its state and input parts apart (the state part is integrated over
-    // the interval, the input held), in the rings for close_interval.
-    double* state = state_ring_.data() + (m % 4) * ringed_count_;
-    double* input = input_ring_.data() + (m % 4) * ringed_count_;
+  for (std::size_t first = 0; first < count; first += kChunk) {
+    const std::size_t n = std::min(kChunk, count - first);
+    if (chunked_) form_chunk(rows + first * variables, n);
+    for (std::size_t r = 0; r < n; ++r) push_row(rows + (first + r) * variables, r);
+  }
+}
+
+namespace {
+
+// out[r] = the product of the columns factors[0 .. count) at row r (1 with none), in the order
+// single_product multiplies them, for r < rows.
+[[gnu::always_inline]] inline void column_product(double* out,
+                                                  const std::array<const double*, 4>& f,
+                                                  std::uint32_t count, std::size_t rows) {
+  switch (count) {
+    case 0:
+      for (std::size_t r = 0; r < rows; ++r) out[r] = 1.0;
+      break;
+    case 1:
+      for (std::size_t r = 0; r < rows; ++r) out[r] = f[0][r];
+      break;
+    case 2:
+      for (std::size_t r = 0; r < rows; ++r) out[r] = f[0][r] * f[1][r];
+      break;
+    case 3:
+      for (std::size_t r = 0; r < rows; ++r) out[r] = f[0][r] * f[1][r] * f[2][r];
+      break;
+    default:
+      for (std::size_t r = 0; r < rows; ++r) {
+        out[r] = f[0][r] * f[1][r] * f[2][r] * f[3][r];
+      }
+  }
+}
+
+}  // namespace
+
+// The powers of `count` (at most kChunk) rows, column by column as store_powers forms them, and
+// the products of every single from them.
+MOMENTID_KERNEL void MomentAccumulator::form_chunk(const double* rows, std::size_t count) {
+  const std::size_t variables = states_ + inputs_;
+  const auto column = [&](std::size_t index) { return columns_.data() + index * kChunk; };
+  for (std::size_t v = 0; v < variables; ++v) {
+    double* power = column(power_offset_[v] + 1);
+    for (std::size_t r = 0; r < count; ++r) power[r] = rows[r * variables + v];
+    for (int e = 2; e <= max_power_[v]; ++e, power += kChunk) {
+      for (std::size_t r = 0; r < count; ++r)
+        power[kChunk + r] = power[r] * rows[r * variables + v];
+    }
+  }
+  // A factor's history offset is its power-table index times the history's span, 4 without lags.
+  const auto factors = [&](const Single& one, std::uint32_t first, std::uint32_t last) {
+    std::array<const double*, 4> out{};
+    for (std::uint32_t f = first; f < last; ++f) out[f - first] = column(one.offsets[f] / 4);
+    return out;
+  };
+  for (const Single& one : held_singles_) {
+    column_product(state_rows_.data() + one.position * kChunk, factors(one, 0, one.state_factors),
+                   one.state_factors, count);
+    column_product(input_rows_.data() + one.position * kChunk,
+                   factors(one, one.state_factors, one.factors), one.factors - one.state_factors,
+                   count);
+  }
+  for (const Single& one : plain_singles_) {
+    column_product(plain_rows_.data() + (one.position - ringed_count_) * kChunk,
+                   factors(one, 0, one.factors), one.factors, count);
+  }
+}
+
+// Row `chunk_row` of the chunk form_chunk formed (unless the accumulator is not chunked_).
+void MomentAccumulator::push_row(const double* row, std::size_t chunk_row) {
+  store_powers(row);
+  ++seen_rows_;
+  // The first max_lag_ rows of a run only fill the history.
+  if (seen_rows_ <= max_lag_) return;
+  const std::size_t m = run_rows_;
+  const double* history = history_.data() + history_pos_;
+  // A held moment keeps its state and input parts apart (the state part is integrated over
+  // the interval, the input held), in the rings for close_interval.
+  double* state = state_ring_.data() + (m % 4) * ringed_count_;
+  double* input = input_ring_.data() + (m % 4) * ringed_count_;
+  if (chunked_) {
+    for (std::size_t i = 0; i < ringed_count_; ++i) {
+      state[i] = state_rows_[i * kChunk + chunk_row];
+      input[i] = input_rows_[i * kChunk + chunk_row];
+    }
+  } else {
     for (const Single& one : held_singles_) {
       state[one.position] = single_product(one, history, 0, one.state_factors);
       input[one.position] = single_product(one, history, one.state_factors, one.factors);
@@ -155,25 +230,37 @@ void MomentAccumulator::push_rows(const double* rows, std::size_t count) {
       product(state + b.begin, b, history, 0, b.state_factors);
       product(input + b.begin, b, history, b.state_factors, b.factors.size());
     }
-    // Any other moment is the product of all its factors, averaged over the intervals by the
-    // trapezoidal rule as the rows arrive: over consecutive intervals added to the same sums,
-    // each row but the first and the last has weight 1. Row m ends interval m - 1.
-    if (m >= 1 && owns(m - 1)) {
-      if (!plain_open_) {
-        plain_products(previous_row_.data(), history + 1);
-        add_plain(previous_row_, 0.5);
-        plain_open_ = true;
-      }
-      add_plain_products(history);
-    } else if (plain_open_) {
-      plain_products(previous_row_.data(), history + 1);
-      add_plain(previous_row_, -0.5);
-      plain_open_ = false;
-    }
-    ++run_rows_;
-    // With rows up to m known, the interval [m - 2, m - 1] can be closed.
-    if (m >= 2) close_interval(m - 2);
   }
+  // Any other moment is the product of all its factors, averaged over the intervals by the
+  // trapezoidal rule as the rows arrive: over consecutive intervals added to the same sums,
+  // each row but the first and the last has weight 1. Row m ends interval m - 1.
+  if (m >= 1 && owns(m - 1)) {
+    if (!plain_open_) {
+      plain_products(previous_row_.data(), history + 1);
+      add_plain(previous_row_, 0.5);
+      plain_open_ = true;
+    }
+    if (chunked_) {
+      add_chunk_row(chunk_row);
+    } else {
+      add_plain_products(history);
+    }
+  } else if (plain_open_) {
+    plain_products(previous_row_.data(), history + 1);
+    add_plain(previous_row_, -0.5);
+    plain_open_ = false;
+  }
+  ++run_rows_;
+  // With rows up to m known, the interval [m - 2, m - 1] can be closed.
+  if (m >= 2) close_interval(m - 2);
+}
+
+// Adds the plain products of row `chunk_row` of the chunk to the open sums.
+MOMENTID_KERNEL void MomentAccumulator::add_chunk_row(std::size_t chunk_row) {
+  const std::size_t plain = moments_.size() - ringed_count_;
+  const double* products = plain_rows_.data() + chunk_row;
+  double* sums = open_sums_.data() + ringed_count_;
+  for (std::size_t i = 0; i < plain; ++i) sums[i] += products[i * kChunk];
 }
 
 // Adds the products of the moments without a held input at the row `history` starts at to the
@@ -253,8 +340,15 @@ MOMENTID_KERNEL void MomentAccumulator::close_interval(std::size_t n) {
   const double* gm = n >= 1 ? state(n - 1) : g0;
   const double* g2 = n + 2 < rows ? state(n + 2) : g1;
   double* sums = open_sums_.data();
-  for (std::size_t i = 0; i < increments_begin_; ++i) {
-    sums[i] += h0[i] * (w[0] * gm[i] + w[1] * g0[i] + w[2] * g1[i] + w[3] * g2[i]);
+  if (w[0] == 0 && w[3] == 0) {
+    // The trapezoidal rule: the same sums, the terms that add 0 left out.
+    for (std::size_t i = 0; i < increments_begin_; ++i) {
+      sums[i] += h0[i] * (w[1] * g0[i] + w[2] * g1[i]);
+    }
+  } else {
+    for (std::size_t i = 0; i < increments_begin_; ++i) {
+      sums[i] += h0[i] * (w[0] * gm[i] + w[1] * g0[i] + w[2] * g1[i] + w[3] * g2[i]);
+    }
   }
   for (std::size_t i = increments_begin_; i < ringed_count_; ++i) sums[i] += g1[i] - g0[i];
   Stretch& stretch = stretches_.back();

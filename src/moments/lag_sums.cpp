@@ -14,7 +14,8 @@ std::optional<double> ChannelStatistics::noise_fraction() const {
 LagSums::LagSums(std::size_t channels, std::size_t lags)
     : channels_(channels),
       lags_(lags),
-      history_(lags * channels, 0.0),
+      history_(2 * lags * channels, 0.0),
+      repeated_(lags * channels, 0.0),
       sum_(channels, 0.0),
       sum_squares_(channels, 0.0),
       products_(lags * channels, 0.0),
@@ -29,25 +30,27 @@ void LagSums::add_history(const double* rows, std::size_t count) {
 void LagSums::add(const double* rows, std::size_t count) {
   for (std::size_t r = 0; r < count; ++r) {
     const double* const row = rows + r * channels_;
-    if (count_ == 0) offset_.assign(row, row + channels_);
+    if (count_ == 0) {
+      offset_.assign(row, row + channels_);
+      // The rows before the shard, remembered as read, less the offset now known.
+      for (std::size_t k = 0; k < history_.size(); ++k) history_[k] -= offset_[k % channels_];
+    }
     for (std::size_t c = 0; c < channels_; ++c) {
       const double x = row[c] - offset_[c];
       sum_[c] += x;
       sum_squares_[c] += x * x;
+      for (std::size_t l = 0; l < lags_; ++l) repeated_[l * channels_ + c] = x;
     }
-    // history_ holds the previous `lags_` rows, newest first at `head_`.
-    for (std::size_t l = 0, slot = head_; l < std::min(filled_, lags_); ++l) {
-      const double* past = &history_[slot * channels_];
-      if (++slot == lags_) slot = 0;
-      for (std::size_t c = 0; c < channels_; ++c) {
-        const double x = row[c] - offset_[c], y = past[c] - offset_[c];
-        products_[l * channels_ + c] += x * y;
-        lead_[l * channels_ + c] += x;
-        lagged_[l * channels_ + c] += y;
-      }
-      ++pairs_[l];
+    // The previous rows, newest first, against this one: every lag and channel in one sweep.
+    const double* past = &history_[head_ * channels_];
+    const std::size_t paired = std::min(filled_, lags_) * channels_;
+    for (std::size_t k = 0; k < paired; ++k) {
+      products_[k] += repeated_[k] * past[k];
+      lead_[k] += repeated_[k];
+      lagged_[k] += past[k];
     }
-    remember(row);
+    for (std::size_t l = 0; l < std::min(filled_, lags_); ++l) ++pairs_[l];
+    remember(repeated_.data());
     ++count_;
   }
 }
@@ -132,6 +135,7 @@ void LagSums::remember(const double* row) {
   if (lags_ > 0) {
     head_ = head_ == 0 ? lags_ - 1 : head_ - 1;
     std::copy(row, row + channels_, &history_[head_ * channels_]);
+    std::copy(row, row + channels_, &history_[(head_ + lags_) * channels_]);
   }
   ++filled_;
 }

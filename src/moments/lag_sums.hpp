@@ -36,7 +36,10 @@ class LagSums {
   void remember(const double* row);
 
   std::size_t channels_, lags_;
-  std::vector<double> history_, offset_, sum_, sum_squares_, products_;
+  // The previous `lags_` rows less the offset, newest first from head_, stored twice in a row so
+  // that they are contiguous from any head; this row less the offset, once per lag.
+  std::vector<double> history_, repeated_;
+  std::vector<double> offset_, sum_, sum_squares_, products_;
   // Per lag and channel: the sums of the later and of the earlier values of the pairs.
   std::vector<double> lead_, lagged_;
   std::vector<std::size_t> pairs_;
