@@ -213,13 +213,23 @@ class Equations:
 class Record(dict):
     """The columns simulate() returns ({name: array}), with the `metadata` of the file the
     program would write ({"dt": "0.01", "input-hold": "zoh", ...}), which identify(), check()
-    and validate() read as they read a file's: a held input is known to be held."""
+    and validate() read as they read a file's: a held input is known to be held, a record
+    simulated without noise takes the zero-lag equations as its file would."""
 
     metadata: dict
 
     def __init__(self, columns: dict, metadata: dict) -> None:
         super().__init__(columns)
         self.metadata = metadata
+
+    def to_frame(self):
+        """The columns as a pandas DataFrame whose attrs["momentid"] holds the metadata, which
+        identify(), check() and validate() read from it as from the Record."""
+        import pandas as pd
+
+        frame = pd.DataFrame(dict(self))
+        frame.attrs["momentid"] = dict(self.metadata)
+        return frame
 
 
 @_older_keywords
@@ -230,7 +240,9 @@ def identify(model: Union[Model, PathLike], data: Any, **options: Any) -> Identi
     model: a Model or a model file's path.
     data: a mapping of column name to 1-D array (a dict of numpy arrays, a pandas DataFrame),
       a 2-D array with `names` naming its columns, a data file's path, or a list of paths
-      (read one after the other as one record whose files are never joined).
+      (read one after the other as one record whose files are never joined). A Record's
+      metadata, or a DataFrame's attrs["momentid"], are read as a file's `# momentid:` lines:
+      arrays without them are taken as measured (see the result's `why`).
       Columns are named as in a file: the model's variables, `t` for the sample times and `run`
       to separate records. float64 arrays are read in place, strided ones too; other real
       dtypes are converted. Without a `t` column give `dt`. A path may name a CSV, binary,
@@ -439,7 +451,11 @@ def _data_of(data: Any, names: Optional[Sequence[str]]):
             and all(isinstance(d, (str, _os.PathLike)) for d in data)):
         # Several files: one record whose files are never joined.
         return [_os.fspath(d) for d in data], "", {}, None, names
-    metadata = dict(getattr(data, "metadata", None) or {})
+    # A Record's metadata, or a DataFrame's attrs["momentid"] (Record.to_frame()).
+    metadata = getattr(data, "metadata", None)
+    if metadata is None:
+        metadata = getattr(data, "attrs", {}).get("momentid") if hasattr(data, "attrs") else None
+    metadata = {str(k): str(v) for k, v in (metadata or {}).items()}
     if isinstance(data, _np.ndarray) and data.ndim == 2:
         if names is None or len(names) != data.shape[1]:
             raise UsageError(f"names: a 2-D array of {data.shape[1]} columns needs as many "

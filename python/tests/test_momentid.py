@@ -93,6 +93,23 @@ def test_simulate_equals_cli_file(duffing, cli_csv, cli_json):
     assert without(result.to_dict(), "data") == without(cli_json, "data")
 
 
+def test_data_frame_carries_the_metadata_and_arrays_say_why_they_are_measured(duffing, cli_json):
+    simulated = momentid.simulate(duffing, seed=3, samples=100000, inputs={"x": INPUT})
+    # A DataFrame made by Record.to_frame() keeps the metadata in attrs["momentid"]: the same
+    # equations, estimates and report as the file.
+    frame = simulated.to_frame()
+    assert frame.attrs["momentid"] == simulated.metadata
+    from_frame = momentid.identify(duffing, frame)
+    assert without(from_frame.to_dict(), "data") == without(cli_json, "data")
+    # Plain arrays carry nothing: the lagged equations, and the report says why and how a record
+    # known to be free of noise takes the faster ones.
+    plain = {name: np.asarray(values) for name, values in simulated.items()}
+    method = momentid.identify(duffing, plain).to_dict()["method"]
+    assert method["name"] == "lagged"
+    assert method["why"].startswith("a record without metadata is taken as measured")
+    assert "--method zero-lag" in method["why"]
+
+
 # --- 2. array layouts ----------------------------------------------------------------------------
 
 def test_2d_array_columns_are_views(duffing, record):

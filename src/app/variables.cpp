@@ -49,6 +49,7 @@ RecordSurvey survey_record(const Model& model, const DataSource& source,
   const DataMetadata& metadata = reader->metadata();
   // simulate writes the model's name, and noise.NAME or noise-sd.NAME for the noise it adds.
   out.noise_free = metadata.get("model").has_value();
+  out.described = !metadata.lines().empty();
   for (const auto& line : metadata.lines()) {
     for (const auto& [key, value] : line) {
       if (key.starts_with("noise")) out.noise_free = false;

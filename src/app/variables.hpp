@@ -24,6 +24,8 @@ struct RecordSurvey {
   std::vector<bool> present;  // per model variable, as variables_present
   // The metadata say that `momentid simulate` wrote the record and added no measurement noise.
   bool noise_free = false;
+  // The record carries metadata (a file's `# momentid:` lines, a Python Record's).
+  bool described = false;
   // The record gives a sample interval: RecordOptions::dt, the metadata or a time column.
   bool timed = false;
 };

@@ -43,6 +43,13 @@ EquationChoice choose_equations(const Model& model, const RecordSurvey& record,
   if (!record.timed) {
     return {kZeroLag, "the record gives no sample interval, which the lagged equations need"};
   }
+  if (!record.described) {
+    // Arrays and most instruments' files say nothing of how they were made.
+    return {kLagged,
+            "a record without metadata is taken as measured: they stay unbiased under white "
+            "sensor noise (a record known to be free of noise takes the zero-lag ones, several "
+            "times faster, with --method zero-lag or simulate's metadata)"};
+  }
   return {kLagged, "a measured record: they stay unbiased under white sensor noise"};
 }
 
