@@ -31,34 +31,76 @@ LaggedRows lagged_rows(const LaggedSystem& system, double dt, const std::vector<
   // that the five-point stencil of a state it drives sees.) Each C with ψ and F noise-corrected.
   // Every lag of the window is listed, zero weights too: the moments enter in the same order
   // whatever the noise variances and the stencil, so that the list can be made before the pass.
-  const auto entry = [&](const LagCombination& c, const LagTestFunction& phi) {
-    MomentRows::Entry e;
-    for (const auto& [f, weight] : c) {
-      const std::vector<double> w = stencil_weights(f.order, stencil);
-      const int reach = stencil_reach(f.order, stencil);
-      const double scale = weight.to_double() / std::pow(dt, f.order);
-      const auto instruments = noise_corrected(remap(f.instrument), noise);
-      // The instrument, at an earlier time, carries noise independent of the function's.
-      const Monomial read = remap(f.function);
-      const auto functions = noise_corrected(read, correctable_noise(read, noise, from));
+  // Per (instrument, function) as read, the positions of its moments at lags first..last: the
+  // index is searched once per pair, not once per lag.
+  std::map<std::pair<Monomial, Monomial>, std::vector<std::size_t>> lag_positions;
+  const auto lags = static_cast<std::size_t>(system.last_lag - system.first_lag + 1);
+  // Per test function, the stencil of each derivative order applied to it at each lag.
+  std::map<int, std::vector<double>> stenciled;
+  const auto stencil_at = [&](int order, const LagTestFunction& phi) -> const std::vector<double>& {
+    const auto [it, inserted] = stenciled.try_emplace(order);
+    if (inserted) {
+      const std::vector<double> w = stencil_weights(order, stencil);
+      const int reach = stencil_reach(order, stencil);
       for (int s = system.first_lag; s <= system.last_lag; ++s) {
         double ws = 0;
         for (int j = -reach; j <= reach; ++j) {
           ws += w[static_cast<std::size_t>(j + reach)] * phi(s - j);
         }
+        it->second.push_back(ws);
+      }
+    }
+    return it->second;
+  };
+  const auto entry = [&](const LagCombination& c, const LagTestFunction& phi) {
+    MomentRows::Entry e;
+    for (const auto& [f, weight] : c) {
+      const std::vector<double>& ws = stencil_at(f.order, phi);
+      const double scale = weight.to_double() / std::pow(dt, f.order);
+      const auto instruments = noise_corrected(remap(f.instrument), noise);
+      // The instrument, at an earlier time, carries noise independent of the function's.
+      const Monomial read = remap(f.function);
+      const auto functions = noise_corrected(read, correctable_noise(read, noise, from));
+      // The pairs of terms (a constant pair has none): those first met here enter the index in
+      // the order of the loops below, lag by lag.
+      std::vector<const std::vector<std::size_t>*> pairs;
+      std::vector<std::vector<std::size_t>*> met;
+      std::vector<std::pair<const Monomial*, const Monomial*>> met_terms;
+      for (const auto& [instrument, wi] : instruments) {
+        for (const auto& [function, wf] : functions) {
+          const bool constant =
+              std::all_of(instrument.begin(), instrument.end(), [](int p) { return p == 0; }) &&
+              std::all_of(function.begin(), function.end(), [](int p) { return p == 0; });
+          if (constant) {
+            pairs.push_back(nullptr);
+            continue;
+          }
+          const auto [it, inserted] = lag_positions.try_emplace({instrument, function});
+          if (inserted) {
+            met.push_back(&it->second);
+            met_terms.emplace_back(&instrument, &function);
+          }
+          pairs.push_back(&it->second);
+        }
+      }
+      for (int s = system.first_lag; s <= system.last_lag; ++s) {
+        for (std::size_t k = 0; k < met.size(); ++k) {
+          const Moment m = lagged_moment(*met_terms[k].first, *met_terms[k].second, s);
+          const auto [it, inserted] = index.emplace(m, out.moments.size());
+          if (inserted) out.moments.push_back(m);
+          met[k]->push_back(it->second);
+        }
+      }
+      for (std::size_t l = 0; l < lags; ++l) {
+        std::size_t k = 0;
         for (const auto& [instrument, wi] : instruments) {
           for (const auto& [function, wf] : functions) {
-            const bool constant =
-                std::all_of(instrument.begin(), instrument.end(), [](int p) { return p == 0; }) &&
-                std::all_of(function.begin(), function.end(), [](int p) { return p == 0; });
-            if (constant) {
-              e.constant += scale * ws * wi * wf;
-              continue;
+            const double w = scale * ws[l] * wi * wf;
+            if (const std::vector<std::size_t>* at = pairs[k++]) {
+              e.moments.emplace_back((*at)[l], w);
+            } else {
+              e.constant += w;
             }
-            const Moment m = lagged_moment(instrument, function, s);
-            const auto [it, inserted] = index.emplace(m, out.moments.size());
-            if (inserted) out.moments.push_back(m);
-            e.moments.emplace_back(it->second, scale * ws * wi * wf);
           }
         }
       }
@@ -66,6 +108,7 @@ LaggedRows lagged_rows(const LaggedSystem& system, double dt, const std::vector<
     return e;
   };
   for (const LagTestFunction& phi : system.test_functions) {
+    stenciled.clear();
     for (const LaggedEquation& eq : system.equations) {
       std::vector<MomentRows::Entry> a;
       for (const LagCombination& c : eq.coefficients) a.push_back(entry(c, phi));
