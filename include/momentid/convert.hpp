@@ -13,6 +13,14 @@ namespace momentid {
 // another. Level 7.3 .mat files are asked for by name: "mat73".
 std::optional<FileFormat> format_for_path(const std::string& path);
 
+// The format simulate writes `path` in: `asked` (--format), else the path's extension (.bin:
+// binary, otherwise CSV; standard output "-": CSV). Throws UsageError, under `output_option`, for
+// the name of a format simulate does not write (.mat, .h5, .npy), and, under `format_option`, when
+// `asked` contradicts the name: nothing is written as something else than its name says.
+WriterFormat simulation_format(const std::string& path, std::optional<WriterFormat> asked,
+                               const std::string& format_option = "format",
+                               const std::string& output_option = "output");
+
 // Copies every column of `source` (`t` and `run` included), read with `layout` and the sample
 // interval `dt` when given, into `path` in `format`, whole or not at all, with the metadata
 // (and `dt` when the interval came from elsewhere than a time column). Returns what the reader

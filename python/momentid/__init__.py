@@ -319,7 +319,7 @@ def simulate(model: Union[Model, PathLike], params: Optional[Mapping[str, float]
              seed: int = 1, runs: int = 1, burn_in: int = 10000,
              noise: Optional[Mapping[str, float]] = None,
              observe: Optional[Sequence[str]] = None, path: Optional[PathLike] = None,
-             format: str = "csv", interpolation: Optional[str] = None,
+             format: Optional[str] = None, interpolation: Optional[str] = None,
              substeps: Optional[int] = None,
              columns: Optional[Mapping[str, str]] = None) -> Optional[Record]:
     """Simulates the model with known parameters, as `momentid simulate`.
@@ -337,8 +337,9 @@ def simulate(model: Union[Model, PathLike], params: Optional[Mapping[str, float]
 
     Returns a Record, {"t": array, channel: array, ..., "run": array (with several runs)},
     the same numbers the program writes, with the file's metadata; or, with `path`, writes that
-    file ("csv" or "bin") and returns None. A step too coarse for the dynamics gives a
-    MomentidWarning.
+    file and returns None: `format` "csv" or "bin", by default the path's extension (.bin binary,
+    otherwise CSV; another format's name, or a format the name contradicts, is a UsageError).
+    A step too coarse for the dynamics gives a MomentidWarning.
     """
     model = _model_of(model)
     if inputs is not None and (isinstance(inputs, (str, _os.PathLike)) or

@@ -17,6 +17,7 @@
 
 #include "arrays.hpp"
 #include "json_value.hpp"
+#include "momentid/convert.hpp"
 #include "momentid/momentid.hpp"
 #include "options.hpp"
 
@@ -238,8 +239,10 @@ SimulationOptions simulation_options(const Model& model, const py::dict& options
 py::tuple simulate_record(const Model& model, const py::dict& options) {
   const SimulationOptions simulation = simulation_options(model, options);
   if (auto path = get<std::string>(options, "path")) {
-    const WriterFormat format = parse_writer_format(
-        get<std::string>(options, "format").value_or(to_string(WriterFormat::kCsv)), "format");
+    const std::optional<std::string> asked = get<std::string>(options, "format");
+    const WriterFormat format = simulation_format(
+        *path, asked ? std::optional(parse_writer_format(*asked, "format")) : std::nullopt,
+        "format", "path");
     return py::make_tuple(py::none(), py::none(),
                           simulate_to_file(model, simulation, *path, format));
   }

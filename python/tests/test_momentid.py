@@ -386,6 +386,19 @@ def test_simulate_path_equals_cli_bytes(duffing, cli, tmp_path, fmt):
     assert ours.read_bytes() == theirs.read_bytes()
 
 
+def test_simulate_path_name_chooses_the_format(duffing, tmp_path):
+    # Without `format`, a .bin path is written in binary, as `simulate -o FILE.bin` does.
+    momentid.simulate(duffing, samples=10, path=tmp_path / "named.bin")
+    assert (tmp_path / "named.bin").read_bytes()[:8] == b"MOMNTID1"
+    # A name of a format simulate does not write, or one `format` contradicts: refused, and no
+    # file is written.
+    with pytest.raises(momentid.UsageError, match=r"^path: simulate writes CSV .* found '.*x\.mat'"):
+        momentid.simulate(duffing, samples=10, path=tmp_path / "x.mat")
+    with pytest.raises(momentid.UsageError, match="^format: csv contradicts the output file's name"):
+        momentid.simulate(duffing, samples=10, path=tmp_path / "y.bin", format="csv")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["named.bin"]
+
+
 def test_simulate_coarse_step_warns(duffing):
     with pytest.warns(momentid.MomentidWarning, match="coarse"):
         simulated = momentid.simulate(duffing, dt=0.3, inputs={"x": "ma:K=1,sigma=3"},

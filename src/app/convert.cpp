@@ -54,6 +54,26 @@ std::optional<FileFormat> format_for_path(const std::string& path) {
   return std::nullopt;
 }
 
+WriterFormat simulation_format(const std::string& path, std::optional<WriterFormat> asked,
+                               const std::string& format_option, const std::string& output_option) {
+  if (path == "-") return asked.value_or(WriterFormat::kCsv);
+  const std::optional<FileFormat> named = format_for_path(path);
+  std::optional<WriterFormat> by_name;
+  if (named == FileFormat::kCsv) by_name = WriterFormat::kCsv;
+  if (named == FileFormat::kBinary) by_name = WriterFormat::kBinary;
+  if (named && !by_name) {
+    throw UsageError(output_option,
+                     "simulate writes CSV (.csv, .txt) or binary (.bin) files, found '" + path +
+                         "' (" + to_string(*named) +
+                         "): write a .bin file and convert it with `momentid convert`");
+  }
+  if (asked && by_name && *asked != *by_name) {
+    throw UsageError(format_option, to_string(*asked) + " contradicts the output file's name '" +
+                                        path + "' (" + to_string(*by_name) + "): give one of them");
+  }
+  return asked.value_or(by_name.value_or(WriterFormat::kCsv));
+}
+
 namespace {
 
 // Hands every block of `reader` to `take`. A file of `source` that changed meanwhile is said as

@@ -7,6 +7,7 @@
 #include <memory>
 
 #include "cli/commands.hpp"
+#include "momentid/convert.hpp"
 #include "momentid/model.hpp"
 #include "momentid/validate.hpp"
 
@@ -59,9 +60,11 @@ std::vector<InputSpec> input_specs(const Model& model, const std::vector<std::st
   return specs;
 }
 
-int run_simulate(SimulateCommand& command) {
+int run_simulate(SimulateCommand& command, bool format_given) {
   const Model model = parse_model_file(command.model);
-  const WriterFormat format = parse_writer_format(command.format, "format");
+  const WriterFormat format = simulation_format(
+      command.output,
+      format_given ? std::optional(parse_writer_format(command.format, "format")) : std::nullopt);
   if (!command.input_file.empty()) {
     ReplayOptions options;
     options.parameters = parse_parameter_values(model, command.set);
@@ -150,7 +153,9 @@ Command add_simulate(CLI::App& app) {
   sub->add_option("--seed", options.seed, "random seed");
   sub->add_option("--format", command->format, "output format")
       ->check(CLI::IsMember(names_of<WriterFormat>()));
-  sub->add_option("-o,--output", command->output, "output file, - for standard output");
+  sub->add_option("-o,--output", command->output,
+                  "output file, - for standard output; without --format its extension (.csv, .txt "
+                  "or .bin) chooses the format");
   for (const char* name : {"--input", "--noise", "--observe", "--samples", "--burn-in", "--runs",
                            "--continue", "--seed"}) {
     sub->get_option(name)->excludes(input_file);
@@ -159,7 +164,7 @@ Command add_simulate(CLI::App& app) {
             if (!command->input_file.empty() && sub->count("--dt") > 0) {
               command->record_dt = command->options.dt;
             }
-            return run_simulate(*command);
+            return run_simulate(*command, sub->count("--format") > 0);
           }};
 }
 
