@@ -192,7 +192,7 @@ class MomentAccumulator {
   // at the chunk's rows.
   static constexpr std::size_t kChunk = 32;
   bool chunked_ = false;
-  std::vector<double> columns_, state_rows_, input_rows_, plain_rows_;
+  std::vector<double> columns_, state_chunk_, input_chunk_, plain_chunk_;
   // The product of factors [first, last) (1 without any) of a single.
   static double single_product(const Single& one, const double* history, std::uint32_t first,
                                std::uint32_t last);

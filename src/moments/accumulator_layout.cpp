@@ -113,10 +113,11 @@ void MomentAccumulator::lay_out() {
   open_sums_.assign(k, 0.0);
   chunked_ = max_lag_ == 0 && held_blocks_.empty() && plain_blocks_.empty();
   if (chunked_) {
+    // The history holds 2 (max_lag_ + 2) = 4 values per power-table index without lags.
     columns_.assign(history_.size() / 4 * kChunk, 1.0);
-    state_rows_.assign(kChunk * ringed_count_, 0.0);
-    input_rows_.assign(kChunk * ringed_count_, 0.0);
-    plain_rows_.assign(kChunk * (k - ringed_count_), 0.0);
+    state_chunk_.assign(kChunk * ringed_count_, 0.0);
+    input_chunk_.assign(kChunk * ringed_count_, 0.0);
+    plain_chunk_.assign(kChunk * (k - ringed_count_), 0.0);
   }
 }
 

@@ -191,14 +191,14 @@ MOMENTID_KERNEL void MomentAccumulator::form_chunk(const double* rows, std::size
     return out;
   };
   for (const Single& one : held_singles_) {
-    column_product(state_rows_.data() + one.position * kChunk, factors(one, 0, one.state_factors),
+    column_product(state_chunk_.data() + one.position * kChunk, factors(one, 0, one.state_factors),
                    one.state_factors, count);
-    column_product(input_rows_.data() + one.position * kChunk,
+    column_product(input_chunk_.data() + one.position * kChunk,
                    factors(one, one.state_factors, one.factors), one.factors - one.state_factors,
                    count);
   }
   for (const Single& one : plain_singles_) {
-    column_product(plain_rows_.data() + (one.position - ringed_count_) * kChunk,
+    column_product(plain_chunk_.data() + (one.position - ringed_count_) * kChunk,
                    factors(one, 0, one.factors), one.factors, count);
   }
 }
@@ -217,8 +217,8 @@ void MomentAccumulator::push_row(const double* row, std::size_t chunk_row) {
   double* input = input_ring_.data() + (m % 4) * ringed_count_;
   if (chunked_) {
     for (std::size_t i = 0; i < ringed_count_; ++i) {
-      state[i] = state_rows_[i * kChunk + chunk_row];
-      input[i] = input_rows_[i * kChunk + chunk_row];
+      state[i] = state_chunk_[i * kChunk + chunk_row];
+      input[i] = input_chunk_[i * kChunk + chunk_row];
     }
   } else {
     for (const Single& one : held_singles_) {
@@ -258,7 +258,7 @@ void MomentAccumulator::push_row(const double* row, std::size_t chunk_row) {
 // Adds the plain products of row `chunk_row` of the chunk to the open sums.
 MOMENTID_KERNEL void MomentAccumulator::add_chunk_row(std::size_t chunk_row) {
   const std::size_t plain = moments_.size() - ringed_count_;
-  const double* products = plain_rows_.data() + chunk_row;
+  const double* products = plain_chunk_.data() + chunk_row;
   double* sums = open_sums_.data() + ringed_count_;
   for (std::size_t i = 0; i < plain; ++i) sums[i] += products[i * kChunk];
 }
