@@ -346,7 +346,8 @@ def simulate(model: Union[Model, PathLike], params: Optional[Mapping[str, float]
                                any(not isinstance(v, str) for v in inputs.values())):
         source, name, metadata, keep, _ = _data_of(inputs, None)
         options = _options(params=_numbers(params), interpolation=interpolation,
-                           substeps=substeps, dt=dt, columns=columns)
+                           substeps=substeps, dt=dt, columns=columns,
+                           path=None if path is None else _os.fspath(path), format=format)
         columns, metadata, warnings = _momentid._replay(model._model, source, name, metadata,
                                                         options)
         del keep

@@ -295,10 +295,23 @@ ValidateOptions validate_options(const Model& model, const py::dict& options) {
   return out;
 }
 
-// The model's response to a record's inputs (replay_columns) and the metadata.
+// The model's response to a record's inputs (replay_columns) and the metadata; or, with
+// `path`, the file written (as simulate --input-file writes it).
 py::tuple replay_record(const Model& model, const DataSource& source, const py::dict& options) {
   const ValidateOptions with = validate_options(model, options);
+  const std::optional<std::string> path = get<std::string>(options, "path");
+  std::optional<WriterFormat> format;
+  if (path) {
+    const std::optional<std::string> asked = get<std::string>(options, "format");
+    format = simulation_format(
+        *path, asked ? std::optional(parse_writer_format(*asked, "format")) : std::nullopt,
+        "format", "path");
+  }
   const std::optional<Replay> done = replay(model, source, with.replay);
+  if (path) {
+    write_replay(model, *done, *path, *format);
+    return py::make_tuple(py::none(), py::none(), std::vector<std::string>{});
+  }
   // What the record says of its sampling holds for the response too; its parameters do not.
   py::dict metadata;
   metadata["dt"] = py::str(py::repr(py::float_(done->record.dt)));

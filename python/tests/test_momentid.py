@@ -399,6 +399,18 @@ def test_simulate_path_name_chooses_the_format(duffing, tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["named.bin"]
 
 
+def test_simulate_driven_by_a_record_writes_its_path_as_the_cli(duffing, cli, tmp_path):
+    record = tmp_path / "record.csv"
+    momentid.simulate(duffing, samples=500, seed=4, inputs={"x": INPUT}, path=record)
+    ours, theirs = tmp_path / "ours.bin", tmp_path / "cli.bin"
+    # The response to the record's inputs, written where `path` says (it used to be returned
+    # and `path` ignored), in the format its name says.
+    assert momentid.simulate(duffing, {"c": 0.7}, inputs=record, path=ours) is None
+    cli("simulate", DUFFING, "--set", "c=0.7", "--input-file", record, "-o", theirs)
+    assert ours.read_bytes()[:8] == b"MOMNTID1"
+    assert ours.read_bytes() == theirs.read_bytes()
+
+
 def test_simulate_coarse_step_warns(duffing):
     with pytest.warns(momentid.MomentidWarning, match="coarse"):
         simulated = momentid.simulate(duffing, dt=0.3, inputs={"x": "ma:K=1,sigma=3"},
