@@ -38,6 +38,13 @@ TEST_SUITE("options") {
       CHECK(refusal({.dt = dt}, &model, "dt") == "dt: expected a positive number");
     }
     CHECK_NOTHROW(RecordOptions{.dt = 0.01}.validate(&model));
+    // Where the equations' powers of dt would leave the normal numbers (1e-320: 1/dt^2 is
+    // infinite), it is refused with the range.
+    CHECK(refusal({.dt = 1e-320}, &model, "dt") ==
+          "dt: expected a sample interval from 1e-12 to 1e+12, found 1e-320");
+    CHECK(refusal({.dt = 1e13}, nullptr, "dt") ==
+          "dt: expected a sample interval from 1e-12 to 1e+12, found 1e+13");
+    CHECK_NOTHROW(RecordOptions{.dt = 1e-12}.validate(&model));
   }
 
   TEST_CASE("a record's columns map the model's variables or t, checked when there is a model") {

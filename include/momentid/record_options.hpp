@@ -54,8 +54,12 @@ struct PassControl {
 struct RecordOptions {
   // Model variable (or `t`, the time) -> data column, for data whose columns have other names.
   std::map<std::string, std::string> columns;
-  // The sample interval, overriding the data's: the time column is then not read.
+  // The sample interval, overriding the data's: the time column is then not read. Within
+  // [kMinInterval, kMaxInterval], where the equations' powers of it (up to dt^-8) stay normal
+  // numbers.
   std::optional<double> dt;
+  static constexpr double kMinInterval = 1e-12;
+  static constexpr double kMaxInterval = 1e12;
   // How the file departs from the usual layout: units rows, decimal comma, missing values, ...
   FileLayout layout;
   // How the inputs were sampled; nullopt: the data's `input-hold` metadata, else kSample.
@@ -63,7 +67,8 @@ struct RecordOptions {
   // Threads, shards and progress of each pass over the data.
   PassControl control;
 
-  // Throws UsageError for a dt that is not a positive finite number ("dt") and, with a model,
+  // Throws UsageError for a dt that is not a positive finite number or outside [kMinInterval,
+  // kMaxInterval] ("dt") and, with a model,
   // for a column mapped from a name that is neither `t` nor a state or input of the model
   // ("columns").
   void validate(const Model* model) const;

@@ -290,6 +290,11 @@ def test_bad_dt_is_the_same_error_for_arrays_and_files(duffing, record, cli_csv)
     for data in (record, cli_csv):
         with pytest.raises(momentid.UsageError, match="^dt: expected a positive number$"):
             momentid.identify(duffing, data, dt=-1.0)
+        # A denormal interval used to end in a RuntimeError from the symbolic stage.
+        with pytest.raises(momentid.UsageError,
+                           match=r"^dt: expected a sample interval from 1e-12 to 1e\+12, "
+                                 r"found 1e-320$"):
+            momentid.identify(duffing, data, dt=1e-320)
 
 
 def test_model_from_missing_file(tmp_path):

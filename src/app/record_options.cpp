@@ -6,6 +6,7 @@
 #include <regex>
 #include <span>
 
+#include "common/decimal.hpp"
 #include "momentid/error.hpp"
 #include "momentid/model.hpp"
 
@@ -14,6 +15,11 @@ namespace momentid {
 void RecordOptions::validate(const Model* model) const {
   if (dt && !(std::isfinite(*dt) && *dt > 0)) {
     throw UsageError("dt", "expected a positive number");
+  }
+  if (dt && (*dt < kMinInterval || *dt > kMaxInterval)) {
+    throw UsageError("dt", "expected a sample interval from " + shortest_decimal(kMinInterval) +
+                               " to " + shortest_decimal(kMaxInterval) + ", found " +
+                               shortest_decimal(*dt));
   }
   if (model == nullptr) return;
   const std::vector<std::string> variables = model->channel_names();
