@@ -14,7 +14,7 @@ Example::
     result = momentid.identify(model, record)
     print(result.summary())            # the table, the identified model, the diagnostics
     result.param_names                 # ['c', 'k', 'eps']: the order of the arrays
-    result.params, result.bse          # numpy arrays
+    result.params, result.bse          # numpy arrays (pandas Series for a DataFrame)
     result.cov_params(), result.conf_int(alpha=0.01)
     result.estimates["k"], result.std_errors["k"], result.ci95["k"]    # by name
 
@@ -263,7 +263,7 @@ def identify(model: Union[Model, PathLike], data: Any, **options: Any) -> Identi
     source, name, metadata, keep, options["names"] = _data_of(data, options.get("names"))
     text, value = _momentid._identify(model._model, source, name, metadata, _options(**options))
     del keep
-    return IdentifyResult(text, value)
+    return IdentifyResult(text, value, model, _is_frame(data))
 
 
 @_takes_options("select")
@@ -290,7 +290,7 @@ def select(model: Union[Model, PathLike], data: Any, **options: Any) -> SelectRe
     text, value, model_text = _momentid._select(model._model, source, name, metadata,
                                                 _options(**options), *second[:3])
     del keep, second
-    return SelectResult(text, value, model_text)
+    return SelectResult(text, value, model_text, _is_frame(data))
 
 
 @_older_keywords
@@ -441,6 +441,11 @@ def _column(name: str, values: Any) -> _np.ndarray:
     if array.dtype != _np.float64 or array.strides[0] % 8 != 0 or array.strides[0] < 0:
         array = _np.ascontiguousarray(array, dtype=_np.float64)
     return array
+
+
+def _is_frame(data: Any) -> bool:
+    """Whether `data` is a pandas DataFrame: the results are then labelled, as statsmodels'."""
+    return type(data).__module__.split(".")[0] == "pandas"
 
 
 def _data_of(data: Any, names: Optional[Sequence[str]]):

@@ -3,9 +3,10 @@
 An identification is read from its JSON value (what `momentid identify --format json` prints),
 which the binding converts into Python objects without writing or parsing text, never from the
 text report, so that the numbers are the program's to the last bit. The arrays follow
-statsmodels' results (params, bse, cov_params(), conf_int(), tvalues, pvalues, summary()) and
-are numpy arrays in the order of `param_names`: the module needs numpy only, and the same code
-gives the same types wherever it runs. pandas, when installed, gives the tables of to_frame().
+statsmodels' results (params, bse, cov_params(), conf_int(), tvalues, pvalues, summary()): as
+statsmodels does, they are numpy arrays in the order of `param_names`, and pandas Series and
+DataFrames indexed by the parameters' names when the record was a pandas DataFrame. The module
+needs numpy only; pandas, when installed, gives the tables of to_frame().
 """
 
 from __future__ import annotations
@@ -69,21 +70,24 @@ class Fit:
     tvalues, pvalues: params / bse and the two-sided p-value of the t test of "the parameter is
       0"; NaN for a parameter that is fixed or not identifiable.
     identifiable: a boolean array; fixed: the names of the fixed parameters.
+    With `labels` (a record given as a pandas DataFrame), params, bse, tvalues and pvalues are
+    pandas Series indexed by the parameters' names, cov_params() and conf_int() DataFrames.
     objective: what the fit minimised, at its estimate (docs/json.md, "identify"): fits of the
       same moments compare by it; NaN when nothing is identifiable.
     cov_params(), conf_int(alpha), to_frame(alpha): below.
     estimates, std_errors: {parameter: float}; ci95: {parameter: (low, high)}.
     """
 
-    def __init__(self, section: dict) -> None:
+    def __init__(self, section: dict, labels: bool = False) -> None:
         """section: {"parameters": the JSON's parameter entries, "error_dof": their degrees of
         freedom, "covariance": their covariance matrix (rows of numbers or null), and optionally
         "objective" and "correlation"}. Without "covariance" (a result saved by an older
         release), cov_params() is NaN."""
         parameters = section["parameters"]
         self.param_names = list(parameters)
-        self.params = _read_only([_number(p["estimate"]) for p in parameters.values()])
-        self.bse = _read_only([_number(p["std_error"]) for p in parameters.values()])
+        self._labels = labels
+        self._params = _read_only([_number(p["estimate"]) for p in parameters.values()])
+        self._bse = _read_only([_number(p["std_error"]) for p in parameters.values()])
         self.identifiable = _np.array([p["identifiable"] for p in parameters.values()], bool)
         self.identifiable.flags.writeable = False
         self._fixed = _np.array([p["fixed"] for p in parameters.values()], bool)
@@ -99,50 +103,100 @@ class Fit:
                      for name, p in parameters.items()}
         self.fixed = [name for name, p in parameters.items() if p["fixed"]]
 
+    def _series(self, values: _np.ndarray, name: str):
+        if not self._labels:
+            return values
+        return _pandas().Series(values, index=self.param_names, name=name)
+
+    def _frame(self, values: _np.ndarray, columns):
+        if not self._labels:
+            return values
+        return _pandas().DataFrame(values, index=self.param_names, columns=columns)
+
     @property
-    def tvalues(self) -> _np.ndarray:
+    def params(self):
+        return self._series(self._params, "params")
+
+    @property
+    def bse(self):
+        return self._series(self._bse, "bse")
+
+    def _tvalues(self) -> _np.ndarray:
         with _np.errstate(divide="ignore", invalid="ignore"):
-            t = self.params / self.bse
+            t = self._params / self._bse
         t[self._fixed] = _np.nan
         return t
 
-    @property
-    def pvalues(self) -> _np.ndarray:
+    def _pvalues(self) -> _np.ndarray:
         dof = _t_dof(self.df_resid)
         return _np.array([2 * _momentid._t_upper_tail(abs(t), dof)
                           if _np.isfinite(t) and not _np.isnan(dof) else _np.nan
-                          for t in self.tvalues])
+                          for t in self._tvalues()])
 
-    def cov_params(self) -> _np.ndarray:
+    @property
+    def tvalues(self):
+        return self._series(self._tvalues(), "tvalues")
+
+    @property
+    def pvalues(self):
+        return self._series(self._pvalues(), "pvalues")
+
+    def cov_params(self):
         """The covariance matrix of the estimates, as the program computes it from their
         standard errors and correlation: the squared errors on the diagonal, rows and columns of
         a fixed parameter 0, NaN where an error or a correlation is unknown."""
-        return self._covariance.copy()
+        return self._frame(self._covariance.copy(), self.param_names)
 
-    def conf_int(self, alpha: float = 0.05) -> _np.ndarray:
-        """The (1 - alpha) confidence intervals, one row (low, high) per parameter: Student's t
-        at df_resid times the standard error either side. At alpha=0.05 these are `ci95`."""
+    def _conf_int(self, alpha: float) -> _np.ndarray:
         if not 0 < alpha < 1:
             from . import UsageError
             raise UsageError(f"alpha: expected a number between 0 and 1, found {alpha!r}")
         t = _t_quantile(1 - alpha / 2, self.df_resid)
-        return _np.column_stack([self.params - t * self.bse, self.params + t * self.bse])
+        return _np.column_stack([self._params - t * self._bse, self._params + t * self._bse])
+
+    def conf_int(self, alpha: float = 0.05):
+        """The (1 - alpha) confidence intervals, one row (low, high) per parameter: Student's t
+        at df_resid times the standard error either side. At alpha=0.05 these are `ci95`."""
+        return self._frame(self._conf_int(alpha), [0, 1])
 
     def to_frame(self, alpha: float = 0.05):
         """A pandas DataFrame, one row per parameter (the index): estimate, std_error, t,
         p_value, ci_low and ci_high (the (1 - alpha) interval), identifiable, fixed."""
         pandas = _pandas()
-        interval = self.conf_int(alpha)
+        interval = self._conf_int(alpha)
         return pandas.DataFrame(
-            {"estimate": self.params, "std_error": self.bse, "t": self.tvalues,
-             "p_value": self.pvalues, "ci_low": interval[:, 0], "ci_high": interval[:, 1],
+            {"estimate": self._params, "std_error": self._bse, "t": self._tvalues(),
+             "p_value": self._pvalues(), "ci_low": interval[:, 0], "ci_high": interval[:, 1],
              "identifiable": self.identifiable, "fixed": self._fixed},
             index=pandas.Index(self.param_names, name="parameter"))
 
     def __repr__(self) -> str:
         values = ", ".join(f"{name}={value:.6g}±{error:.2g}" for name, value, error in
-                           zip(self.param_names, self.params, self.bse))
+                           zip(self.param_names, self._params, self._bse))
         return f"<momentid.Fit {values}>"
+
+
+class Summary(str):
+    """The text report, as summary() returns it: a str that prints as the report, also at the
+    interactive prompt (where a plain str shows its escapes); as_text() gives it as a plain
+    str, and `tables` the parameter tables as pandas DataFrames (the main fit's, then, when
+    optimally weighted, the least-squares one's)."""
+
+    def __new__(cls, text: str, result: "IdentifyResult"):
+        out = super().__new__(cls, text)
+        out._result = result
+        return out
+
+    def as_text(self) -> str:
+        return str.__str__(self)
+
+    @property
+    def tables(self) -> list:
+        fits = [self._result] + ([self._result.ls] if self._result.weighting == "gmm" else [])
+        return [fit.to_frame() for fit in fits]
+
+    def __repr__(self) -> str:
+        return self.as_text()
 
 
 class IdentifyResult(Fit):
@@ -160,29 +214,36 @@ class IdentifyResult(Fit):
       inputs' means, one entry per oscillating mode by frequency (Hz), each an array of
       (estimate, standard error) rows; empty when there is none (engineering["unavailable"]
       says why); engineering: that section of the JSON, with the equilibrium.
-    summary() and str(): the text report of `momentid identify`; to_dict(): the JSON of
+    summary(): the text report of `momentid identify` (a Summary: it prints as the report, and
+      gives its tables), str() the same; to_dict(): the JSON of
       `momentid identify --format json` as Python objects, `json` as text.
+    model: the Model identified (None for a result read from its JSON); simulate(**options) and
+      predict(data, **options): the model with the estimates simulated, as momentid.simulate()
+      does, under random inputs or through a record's inputs (its response to them).
     plot_engineering(): the restoring force and the backbone drawn (momentid.plots).
 
     IdentifyResult(text, value) reads a saved result of the program as well: `value` is its
-    JSON text or the dict json.load() made of it (text may be "").
+    JSON text or the dict json.load() made of it (text may be ""); `model` the Model it is of,
+    for simulate() and predict(); `labels` True for pandas Series and DataFrames (see Fit).
     """
 
-    def __init__(self, text: str, value: Union[str, dict]) -> None:
+    def __init__(self, text: str, value: Union[str, dict], model=None,
+                 labels: bool = False) -> None:
         self.text = text
+        self.model = model
         # A JSON text is a result saved by the user; the binding hands over the value itself.
         self._dict = _json.loads(value) if isinstance(value, str) else value
         self.diagnostics = self._dict["diagnostics"]
         main = {"parameters": self._dict["parameters"], **self.diagnostics}
-        super().__init__(main)
+        super().__init__(main, labels)
         self.weighting = "gmm" if "least_squares" in self._dict else "ls"
         if self.weighting == "gmm":
             # A result saved by an older release lacks the least-squares errors: their intervals
             # and covariances are NaN, not guessed.
             errors = self.diagnostics.get("least_squares", {"error_dof": None})
-            self.ls = Fit({"parameters": self._dict["least_squares"], **errors})
+            self.ls = Fit({"parameters": self._dict["least_squares"], **errors}, labels)
         else:
-            self.ls = Fit(main)
+            self.ls = Fit(main, labels)
         self.status = self.diagnostics["status"]
         self.warnings = list(self.diagnostics["warnings"])
         self.equations = list(self._dict.get("equations", []))
@@ -207,10 +268,29 @@ class IdentifyResult(Fit):
             return None
         return self.jval, self.diagnostics["j_pvalue"], self.diagnostics["j_dof"]
 
-    def summary(self) -> str:
+    def summary(self) -> Summary:
         """The text report: the estimates (both, when optimally weighted), the identified
-        model and the diagnostics."""
-        return self.text
+        model and the diagnostics, as a Summary (a str that prints as the report)."""
+        return Summary(self.text, self)
+
+    def _identified_model(self):
+        if self.model is None:
+            from . import UsageError
+            raise UsageError("model: a result read from its JSON does not hold its model: give "
+                             "IdentifyResult(text, value, model) the Model")
+        return self.model
+
+    def simulate(self, **options):
+        """momentid.simulate(model, the estimates, **options): the identified model under
+        random inputs (samples=, inputs=, seed=, noise=, ...); a Record."""
+        from . import simulate
+        return simulate(self._identified_model(), self.estimates, **options)
+
+    def predict(self, data, **options):
+        """The identified model's response to the inputs of `data` (a record: a mapping of
+        arrays with `t` and the model's inputs, or a data file's path), from its initial state,
+        as momentid.simulate(model, the estimates, inputs=data, **options); a Record."""
+        return self.simulate(inputs=data, **options)
 
     def to_dict(self) -> dict:
         return _copy.deepcopy(self._dict)
@@ -247,8 +327,11 @@ class SelectResult(IdentifyResult):
     model_text: the chosen model as a model file; write_model(path) writes it.
     """
 
-    def __init__(self, text: str, value: Union[str, dict], model_text: str = "") -> None:
-        super().__init__(text, value)
+    def __init__(self, text: str, value: Union[str, dict], model_text: str = "",
+                 labels: bool = False) -> None:
+        from . import Model
+        super().__init__(text, value, Model(model_text, "<selected>") if model_text else None,
+                         labels)
         selection = self._dict["selection"]
         self.selected = list(self._dict["selected"])
         self.dropped = list(self._dict["dropped"])

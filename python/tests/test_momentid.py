@@ -197,6 +197,52 @@ def test_pandas_dataframe(duffing, record):
                           rel=0)
 
 
+def test_a_dataframe_gives_results_labelled_by_parameter_as_statsmodels_does(duffing, record):
+    pandas = pytest.importorskip("pandas")
+    frame = pandas.DataFrame({n: record[n] for n in ("t", "y", "v", "x")})
+    arrays = momentid.identify(duffing, dict(record), input_hold="zoh")
+    labelled = momentid.identify(duffing, frame, input_hold="zoh")
+    names = ["c", "k", "eps"]
+    assert isinstance(arrays.params, np.ndarray) and isinstance(arrays.bse, np.ndarray)
+    for fit, plain in ((labelled, arrays), (labelled.ls, arrays.ls)):
+        for name in ("params", "bse", "tvalues", "pvalues"):
+            series = getattr(fit, name)
+            assert isinstance(series, pandas.Series) and list(series.index) == names
+            assert series.name == name
+            np.testing.assert_array_equal(series.to_numpy(), getattr(plain, name))
+        assert fit.params["k"] == plain.estimates["k"]
+        covariance, interval = fit.cov_params(), fit.conf_int(0.1)
+        assert list(covariance.index) == names and list(covariance.columns) == names
+        np.testing.assert_array_equal(covariance.to_numpy(), plain.cov_params())
+        assert list(interval.index) == names and list(interval.columns) == [0, 1]
+        np.testing.assert_array_equal(interval.to_numpy(), plain.conf_int(0.1))
+    # The summary prints as the report, at the prompt too, and holds the tables.
+    summary = labelled.summary()
+    assert summary == labelled.text and repr(summary) == labelled.text
+    assert summary.as_text() == labelled.text and type(summary.as_text()) is str
+    assert [list(t.index) for t in summary.tables] == [names, names]
+    np.testing.assert_array_equal(summary.tables[1]["estimate"].to_numpy(), arrays.ls.params)
+
+
+def test_a_result_simulates_and_predicts_with_its_estimates(duffing, record):
+    result = momentid.identify(duffing, record, input_hold="zoh")
+    simulated = result.simulate(samples=500, seed=2, inputs={"x": INPUT})
+    expected = momentid.simulate(duffing, result.estimates, samples=500, seed=2,
+                                 inputs={"x": INPUT})
+    np.testing.assert_array_equal(simulated["y"], expected["y"])
+    # The response to a record's inputs, from its initial state.
+    predicted = result.predict(record)
+    replayed = momentid.simulate(duffing, result.estimates, inputs=record)
+    np.testing.assert_array_equal(predicted["y"], replayed["y"])
+    assert abs(np.corrcoef(predicted["y"], record["y"])[0, 1]) > 0.9
+    # A result read from its JSON knows no model until it is given one.
+    saved = momentid.IdentifyResult("", result.json)
+    with pytest.raises(momentid.UsageError, match=r"^model: a result read from its JSON"):
+        saved.predict(record)
+    given = momentid.IdentifyResult("", result.json, duffing)
+    np.testing.assert_array_equal(given.predict(record)["y"], predicted["y"])
+
+
 # --- 4. exceptions -------------------------------------------------------------------------------
 
 def test_model_error_is_located():
@@ -223,7 +269,7 @@ def test_data_errors_name_keywords_not_flags(duffing, tmp_path):
         momentid.identify(duffing, str(path), names=["t", "y", "v"])
     assert str(raised.value) == f"{path}:1:1: names gives 3 names for 4 columns"
     units = tmp_path / "units.csv"
-    units.write_text("t,y,v,x\ns,m,m/s,N\n0,1,2,3\n")
+    units.write_text("t,y,v,x\ns,m,m/s,N\nclock,laser,laser,load cell\n0,1,2,3\n")
     with pytest.raises(momentid.DataError, match=r"\(a units row\? give skip_rows 1\)"):
         momentid.identify(duffing, str(units))
 
