@@ -399,8 +399,12 @@ TEST_SUITE("data reader") {
       std::string out = e.text(flag);
       return out.starts_with(place) ? out.substr(place.size()) : out;
     };
-    CHECK(text_of("t;y\ns;m\n0;1\n", columns({"y"})) ==
-          "2:1: column 't': expected a number (a units row? give --skip-rows 1), found 's'");
+    // A units row is skipped (below): a second row without a number draws the hint.
+    CHECK(text_of("t;y\ns;m\nclock;laser\n0;1\n", columns({"y"})) ==
+          "3:1: column 't': expected a number (a units row? give --skip-rows 1), found 'clock'");
+    // A first row with a number in it is data with a bad field.
+    CHECK(text_of("t,a\n0,m/s^2\n", columns({"a"})) ==
+          "2:3: column 'a': expected a number, found 'm/s^2'");
     CHECK(text_of("t;y\n0;1,5\n", columns({"y"})) ==
           "2:3: column 'y': expected a number (with a decimal comma? give --decimal ,), found "
           "'1,5'");
@@ -409,12 +413,8 @@ TEST_SUITE("data reader") {
           "passes over it), found 'nan'");
   }
 
-  TEST_CASE("reads a units row and decimal commas when told to, and suggests both") {
+  TEST_CASE("skips a units row, reads decimal commas when told to, and suggests them") {
     ColumnRequest request = columns({"y", "x"});
-    check_read_error("t;y;x\ns;m;N\n0;1,5;2\n0,5;1,25;1\n", request,
-                     "column 't': expected a number (a units row? give skip_rows 1), found 's'", 2,
-                     1, "s;m;N");
-    request.layout.skip_rows = 1;
     check_read_error("t;y;x\ns;m;N\n0;1,5;2\n0,5;1,25;1\n", request,
                      "column 'y': expected a number (with a decimal comma? give decimal ,), "
                      "found '1,5'",
@@ -423,10 +423,40 @@ TEST_SUITE("data reader") {
     const Contents contents = read_text("t;y;x\ns;m;N\n0;1,5;2\n0,5;1,25;-1e-1\n", request);
     CHECK(contents.values == std::vector<double>{1.5, 2, 1.25, -0.1});
     CHECK(contents.time_step == 0.5);
+    // skip_rows 1 says the same; a units row and a row of descriptions need it.
+    request.layout.skip_rows = 1;
+    CHECK(read_text("t;y;x\ns;m;N\n0;1,5;2\n0,5;1,25;-1e-1\n", request).values == contents.values);
+    CHECK(read_text("t;y;x\ns;m;N\ntime;laser;load cell\n\n0;1,5;2\n0,5;1,25;-1e-1\n", request)
+              .values == contents.values);
     check_read_error("t,y,x\n0,1,2\n", request,
                      "a decimal comma needs fields separated by ';' or blanks, but the header "
                      "separates them by ','",
                      1, 1, "t,y,x");
+  }
+
+  TEST_CASE("a units row is told from a first row of data by its fields, not its digits") {
+    // Units with digits: skipped, as in every part of a file read in shards.
+    const TempFile file("t,a,b\ns,m/s^2,m s-2\n\n0,1,2\n1,3,4\n2,5,6\n3,7,8\n");
+    CHECK(read_file(file.path(), columns({"a"})).values == std::vector<double>{1, 3, 5, 7});
+    const auto source = momentid::DataSource::file(file.path());
+    std::vector<double> values;
+    for (const auto& shard : source.shards(10)) {
+      const auto reader = source.open(shard, columns({"a"}, {}, 0));
+      DataBlock block;
+      while (reader->next(block, 10)) {
+        if (block.zone == momentid::RowZone::kOwned) {
+          values.insert(values.end(), block.values.begin(), block.values.end());
+        }
+      }
+    }
+    CHECK(values == std::vector<double>{1, 3, 5, 7});
+    // Missing values alone are a row of data (an error by default), not units.
+    check_read_error("t,a\nnan,NA\n0,1\n", columns({"a"}),
+                     "column 't': expected a number (a missing value? missing drop-row or "
+                     "split-run passes over it), found 'nan'",
+                     2, 1, "nan,NA");
+    // A first row that is data is read as such, after blank lines.
+    CHECK(read_text("t,a\n\n0,1\n1,2\n", columns({"a"})).values == std::vector<double>{1, 2});
   }
 
   TEST_CASE("a given sample interval overrides the time column, which is then not checked") {
@@ -479,6 +509,103 @@ TEST_SUITE("data reader") {
       read(momentid::DataSource::files({a.path(), a.path()}), request);
     });
     CHECK(few.message() == "the data have 4 rows in 2 files; at least 5 are needed");
+  }
+
+  // --- Sums of columns -------------------------------------------------------------------------
+
+  // Every value `source` delivers for `request`.
+  std::vector<double> read_all(const momentid::DataSource& source, const ColumnRequest& request) {
+    const auto reader = source.open(request);
+    std::vector<double> values;
+    DataBlock block;
+    while (reader->next(block, 2)) {
+      REQUIRE(block.values.size() == block.rows * request.names.size());
+      values.insert(values.end(), block.values.begin(), block.values.end());
+    }
+    return values;
+  }
+
+  TEST_CASE("a name mapped to a sum of columns is delivered as the sum, with its factors") {
+    const TempFile f("t,acc_mass,acc_table,Acc 3\n0,5,1,10\n1,7,2,20\n2,4,8,30\n");
+    const auto source = momentid::DataSource::file(f.path());
+    CHECK(
+        read_all(source, columns({"z", "a"}, {{"z", "acc_mass-acc_table"}, {"a", "acc_table"}})) ==
+        std::vector<double>{4, 1, 5, 2, -4, 8});
+    // Factors before or after the column, blanks, a leading sign, a quoted name.
+    CHECK(read_all(source, columns({"z"}, {{"z", " -0.5 * acc_mass + acc_table*2 - 'Acc 3'"}})) ==
+          std::vector<double>{-0.5 - 10, 0.5 - 20, 14 - 30});
+    // One column in two terms, and requested alone too: read once.
+    CHECK(read_all(source, columns({"acc_table", "z"}, {{"z", "acc_table + acc_table"}})) ==
+          std::vector<double>{1, 2, 2, 4, 8, 16});
+  }
+
+  TEST_CASE("a column whose name reads as a sum is that column") {
+    const TempFile f("t,a-b,a,b\n0,100,5,1\n1,200,7,2\n");
+    CHECK(read_all(momentid::DataSource::file(f.path()), columns({"y"}, {{"y", "a-b"}})) ==
+          std::vector<double>{100, 200});
+  }
+
+  TEST_CASE("sums of columns in memory, and in shards of a file") {
+    const std::vector<double> mass{3, 4, 5, 6}, table{1, 1, 2, 2};
+    momentid::MemoryData data;
+    data.columns = {{"m", mass.data(), 1}, {"b", table.data(), 1}};
+    data.rows = 4;
+    data.metadata.add_line({{"dt", "0.5"}});
+    CHECK(read_all(momentid::DataSource::memory(data), columns({"y"}, {{"y", "m - b"}})) ==
+          std::vector<double>{2, 3, 3, 4});
+    const TempFile f("t,m,b\n0,3,1\n1,4,1\n2,5,2\n3,6,2\n");
+    const auto source = momentid::DataSource::file(f.path());
+    const auto shards = source.shards(12);
+    CHECK(shards.size() > 1);
+    std::vector<double> values;
+    for (const auto& shard : shards) {
+      const auto reader = source.open(shard, columns({"y"}, {{"y", "m-b"}}, 0));
+      DataBlock block;
+      while (reader->next(block, 10)) {
+        if (block.zone != momentid::RowZone::kOwned) continue;
+        values.insert(values.end(), block.values.begin(), block.values.end());
+      }
+    }
+    CHECK(values == std::vector<double>{2, 3, 3, 4});
+  }
+
+  TEST_CASE("a sum that does not parse, or names a column the record lacks, is refused") {
+    const TempFile f("t,m,b\n0,3,1\n1,4,1\n");
+    const auto source = momentid::DataSource::file(f.path());
+    const auto message = [&](const std::string& sum) {
+      const auto e = error_from<momentid::UsageError>([&] {
+        read_all(source, columns({"y"}, {{"y", sum}}));
+      });
+      return e.text([](const std::string& field) { return "--" + field; });
+    };
+    const std::string as_sum = "', and as a sum of columns, expected ";
+    CHECK(message("m - c") == "--columns: y=m - c: " + f.path() + " has no column 'c'");
+    CHECK(message("m - - b") == "--columns: y=m - - b: " + f.path() + " has no column 'm - - b" +
+                                    as_sum +
+                                    "a column name (in quotes when it holds blanks or operators) "
+                                    "at character 5, found '-'");
+    CHECK(message("2 m") == "--columns: y=2 m: " + f.path() + " has no column '2 m" + as_sum +
+                                "'*' after the factor 2 at character 3, found 'm'");
+    CHECK(message("m*") == "--columns: y=m*: " + f.path() + " has no column 'm*" + as_sum +
+                               "a number after '*' at character 3, found the end");
+    CHECK(message("m + 'b") == "--columns: y=m + 'b: " + f.path() + " has no column 'm + 'b" +
+                                   as_sum +
+                                   "a column name and a closing ' at character 5, found '''");
+    // The time is always a column.
+    const DataError time = error_from<DataError>([&] {
+      read_all(source, columns({"m"}, {{"t", "m-b"}}));
+    });
+    CHECK(time.message().starts_with("missing column 'm-b' for 't'"));
+  }
+
+  TEST_CASE("a sum beyond the range of doubles is refused, not delivered as inf") {
+    const TempFile f("t,m,b\n0,1e308,-1e308\n");
+    const auto e = error_from<momentid::Error>([&] {
+      read_all(momentid::DataSource::file(f.path()), columns({"y"}, {{"y", "m - b"}}, 1));
+    });
+    CHECK(std::string(e.what()) == f.path() +
+                                       ": the sum m - b reaches inf, beyond the range of doubles, "
+                                       "in a row whose columns are finite");
   }
 
   // --- Blocks and runs ------------------------------------------------------------------------
@@ -697,10 +824,10 @@ TEST_SUITE("data reader") {
         "0123456789"
         "0123456789"
         "tail";
-    check_read_error("y\n" + field + "\n", columns({"y"}),
+    check_read_error("y\n1\n" + field + "\n", columns({"y"}),
                      "column 'y': expected a number, found "
                      "'x123456789012345678901234567890123456789...'",
-                     2, 1, field);
+                     3, 1, field);
   }
 
   TEST_CASE("inf and numbers too large for a double are reported as not finite") {

@@ -636,13 +636,42 @@ TEST_SUITE("derive lagged default instruments") {
     CHECK(momentid::derive_lagged(model, {.measured = {true, true, true}}).instruments ==
           std::vector<momentid::Monomial>{{1, 0, 0}, {2, 0, 0}, {0, 1, 0}});
   }
-  TEST_CASE("abs(v)*v is odd and abs(y) even; a known input term adds no instrument") {
+  TEST_CASE("an instrument names a measured column by its name or the derivative it holds") {
+    // Variables y, v, x, a: the report names the column `a`, the equations v' and y''.
+    const Model model = momentid::parse_model(
+        "state y, v\ninput x\nmeasured a = v'\nparam c, k\ny' = v\nv' = -c*v - k*y + x\n", "d.mom");
+    for (const char* written : {"a", "v'", "y''", "dot(v)"}) {
+      CAPTURE(written);
+      CHECK(momentid::parse_instrument_list(model, written, "--instruments") ==
+            std::vector<momentid::Monomial>{{0, 0, 0, 1}});
+    }
+    CHECK(momentid::parse_instrument_list(model, "a^2, y*a", "--instruments") ==
+          std::vector<momentid::Monomial>{{0, 0, 0, 2}, {1, 0, 0, 1}});
+    // A derivative no column holds is no instrument; multipliers never name a column.
+    const auto message = [&](auto parse, const char* text) {
+      return error_from<momentid::ModelError>([&] { parse(model, text, "--instruments"); })
+          .message();
+    };
+    CHECK(message(momentid::parse_instrument_list, "y'") ==
+          "an instrument must be a monomial in the states and inputs, such as y or y^3, found "
+          "'y''");
+    CHECK(message(momentid::parse_multiplier_list, "a") ==
+          "'a' is a measured column, which equations do not name: write the derivative it "
+          "holds, v'");
+  }
+  TEST_CASE("abs(v)*v is odd and abs(y) even, each term an instrument, a known input none") {
     const Model odd = oscillator("a*abs(v)*v");
     CHECK(momentid::derive_lagged(odd, {}).instruments ==
-          std::vector<momentid::Monomial>{{1, 0, 0, 0}, {3, 0, 0, 0}, {0, 1, 0, 0}, {0, 3, 0, 0}});
+          std::vector<momentid::Monomial>{
+              {1, 0, 0, 0}, {3, 0, 0, 0}, {0, 1, 0, 0}, {0, 3, 0, 0}, {0, 1, 0, 1}});
     const Model even = oscillator("a*abs(y)");
     CHECK(momentid::derive_lagged(even, {}).instruments ==
-          std::vector<momentid::Monomial>{
-              {1, 0, 0, 0}, {2, 0, 0, 0}, {3, 0, 0, 0}, {0, 1, 0, 0}, {0, 2, 0, 0}, {0, 3, 0, 0}});
+          std::vector<momentid::Monomial>{{1, 0, 0, 0},
+                                          {2, 0, 0, 0},
+                                          {3, 0, 0, 0},
+                                          {0, 1, 0, 0},
+                                          {0, 2, 0, 0},
+                                          {0, 3, 0, 0},
+                                          {0, 0, 0, 1}});
   }
 }

@@ -264,7 +264,7 @@ TEST_SUITE("measured simulation") {
     CHECK(errors[1] / errors[2] < 17);
   }
 
-  TEST_CASE("separate runs draw new multisine phases; continued runs keep the clock running") {
+  TEST_CASE("separate runs draw new multisine phases, continued runs keep the clock running") {
     const Model model = model_file("kozin_4_1a.mom");
     SimulationOptions options = options_for(model, 300, 3);
     options.inputs = {InputSpec::parse("multisine:f1=0.5,f2=5,lines=10", "")};

@@ -130,7 +130,7 @@ TEST_SUITE("simulate") {
     }
   }
 
-  TEST_CASE("the same seed gives a byte-identical file; another seed does not") {
+  TEST_CASE("the same seed gives a byte-identical file, another seed does not") {
     const Model model = model_file("duffing.mom");
     const auto dir = std::filesystem::temp_directory_path() / "momentid_test_simulate";
     std::filesystem::create_directories(dir);

@@ -53,7 +53,7 @@ bool mentions(const std::vector<std::string>& warnings, const std::string& text)
 }
 
 TEST_SUITE("warnings") {
-  TEST_CASE("the true model on a clean record is ok and has no doubts; least squares is untested") {
+  TEST_CASE("the true model on a clean record is ok and has no doubts, least squares is untested") {
     const Record record(50000);
     const Model model = model_file("duffing.mom");
     const IdentifyResult r = identify(model, record.source(), {.degree = 3});

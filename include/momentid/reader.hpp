@@ -46,7 +46,9 @@ struct MissingSummary {
 
 // What to read from a data file: the columns to deliver, in this order (normally the model's
 // states, then its inputs), and where a column has another name in the file (`--columns
-// v=velocity` maps the model's `v` to the file's `velocity`).
+// v=velocity` maps the model's `v` to the file's `velocity`). Through DataSource::open, a name
+// may map to a sum of columns with constant factors (column_sum): `--columns
+// "z''=acc_mass-acc_table"`.
 struct ColumnRequest {
   std::vector<std::string> names;
   std::map<std::string, std::string> rename;
@@ -160,6 +162,25 @@ struct MemoryData {
   DataMetadata metadata;
   std::string name = "<memory>";
 };
+
+// A channel formed from columns: the sum of factor × column over its terms.
+struct ColumnSum {
+  struct Term {
+    double factor = 1;
+    std::string column;
+  };
+  std::vector<Term> terms;
+};
+
+// What ColumnRequest::rename's `variable=text` maps to, given the record's `columns`: nullopt
+// when `text` is a column (or has no operator or blank, or `variable` is the time `t`), else the
+// sum `text` writes: terms joined by `+` or `-`, each a column with an optional factor
+// (`2.5*a`, `a*2.5`), a column holding blanks or operators in quotes (`'Acc 1' - 'Acc 2'`).
+// Throws UsageError ("columns", naming `source`) for a sum that does not parse or a column
+// that `columns` lacks.
+std::optional<ColumnSum> column_sum(const std::string& variable, const std::string& text,
+                                    const std::vector<std::string>& columns,
+                                    const std::string& source);
 
 // Where the data of an identification come from: a file (any format DataReader::open reads) or
 // columns in memory. A source is opened once per pass, with the columns the pass needs. It

@@ -241,6 +241,22 @@ def test_columns_map_model_variables_to_data_columns(duffing, record):
         momentid.identify(duffing, renamed, rename={"y": "disp"}, columns={"v": "vel"})
 
 
+def test_a_variable_maps_to_a_sum_of_columns(duffing, record):
+    # y and v each split into two columns, as two accelerometers on a shaker give the motion
+    # relative to the table: the sums give back the record's channels exactly.
+    half = record["y"] / 4
+    split = {"t": record["t"], "x": record["x"], "y_mass": record["y"] + half, "y_table": half,
+             "v 2": 2 * record["v"]}
+    expected = momentid.identify(duffing, record, input_hold="zoh", method="zero-lag")
+    result = momentid.identify(duffing, split, columns={"y": "y_mass - y_table",
+                                                        "v": "0.5*'v 2'"},
+                               input_hold="zoh", method="zero-lag")
+    np.testing.assert_allclose(result.params, expected.params, rtol=1e-9)
+    with pytest.raises(momentid.UsageError, match=r"^columns: y=y_mass - y_tab: <arrays> has no "
+                                                  r"column 'y_tab'$"):
+        momentid.identify(duffing, split, columns={"y": "y_mass - y_tab", "v": "0.5*'v 2'"})
+
+
 def test_deprecation_points_at_the_caller(duffing, record):
     with pytest.warns(DeprecationWarning) as caught:
         momentid.check(record, rename={"y": "y"})

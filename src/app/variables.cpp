@@ -21,7 +21,7 @@ std::unique_ptr<DataReader> open_header(const DataSource& source, const RecordOp
 // An array the file has under a variable's name but cannot give as a column counts as present:
 // reading it then says why it is unusable, rather than the variable passing for unmeasured.
 std::vector<bool> present_in(const Model& model, const DataReader& reader,
-                             const RecordOptions& record) {
+                             const RecordOptions& record, const std::string& source_name) {
   std::vector<std::string> header = reader.columns();
   for (const auto& [name, why] : reader.unusable_columns()) header.push_back(name);
   std::vector<bool> present;
@@ -29,7 +29,11 @@ std::vector<bool> present_in(const Model& model, const DataReader& reader,
     if (!v.channel()) continue;
     const auto renamed = record.columns.find(v.name);
     const std::string& column = renamed == record.columns.end() ? v.name : renamed->second;
-    present.push_back(std::find(header.begin(), header.end(), column) != header.end());
+    const auto has = [&](const std::string& c) {
+      return std::find(header.begin(), header.end(), c) != header.end();
+    };
+    // A sum of columns is present when every column it reads is (column_sum says which not).
+    present.push_back(has(column) || column_sum(v.name, column, header, source_name).has_value());
   }
   return present;
 }
@@ -38,14 +42,14 @@ std::vector<bool> present_in(const Model& model, const DataReader& reader,
 
 std::vector<bool> variables_present(const Model& model, const DataSource& source,
                                     const RecordOptions& record) {
-  return present_in(model, *open_header(source, record), record);
+  return present_in(model, *open_header(source, record), record, source.name());
 }
 
 RecordSurvey survey_record(const Model& model, const DataSource& source,
                            const RecordOptions& record) {
   const std::unique_ptr<DataReader> reader = open_header(source, record);
   RecordSurvey out;
-  out.present = present_in(model, *reader, record);
+  out.present = present_in(model, *reader, record, source.name());
   const DataMetadata& metadata = reader->metadata();
   // simulate writes the model's name, and noise.NAME or noise-sd.NAME for the noise it adds.
   out.noise_free = metadata.get("model").has_value();

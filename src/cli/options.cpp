@@ -76,7 +76,8 @@ void add_pass_options(CLI::App* command, PassControl& control) {
 
 void add_layout_options(CLI::App* command, FileLayout& layout) {
   command->add_option("--skip-rows", layout.skip_rows,
-                      "lines after the header that are not data (units), skipped");
+                      "lines after the header that are not data (descriptions), skipped; a units "
+                      "row is skipped without it");
   command
       ->add_option_function<std::string>(
           "--decimal", [&layout](const std::string& text) { layout.decimal = text[0]; },

@@ -45,13 +45,18 @@ class CsvReader final : public StreamReader {
       if (!lines_.next(line_)) break;
     }
     data_start_ = lines_.next_offset();
+    skip_units_row();
   }
 
  protected:
   bool read_row(double* row, RowKeys& keys) override {
-    do {
-      if (!lines_.next(line_)) return false;
-    } while (is_blank_line(line_));
+    if (peeked_) {
+      peeked_ = false;
+    } else {
+      do {
+        if (!lines_.next(line_)) return false;
+      } while (is_blank_line(line_));
+    }
     ++rows_parsed_;
     if (rows_parsed_ <= request_.min_rows) {
       last_short_row_.assign(line_);
@@ -103,6 +108,7 @@ class CsvReader final : public StreamReader {
       start = previous_row(start);
     }
     lines_.seek(start);
+    peeked_ = false;
     seek_start_ = start;
     // The units-row hint is for the file's first row.
     if (start > data_start_) rows_parsed_ = 1;
@@ -138,6 +144,40 @@ class CsvReader final : public StreamReader {
     return found == nullptr ? end : static_cast<const char*>(found);
   }
 
+  // Whether a field of the current line reads as a number; `text`: whether one is neither a
+  // number nor empty nor a missing value.
+  bool holds_a_number(bool* text = nullptr) const {
+    const char* const end = line_.data() + line_.size();
+    for (const char* p = line_.data();; ++p) {
+      const char* const start = skip_blanks(p, end);
+      const char* const stop = field_end(start, end);
+      double value = 0;
+      const char* after = parse_number(start, end, value, request_.layout.decimal);
+      if (after != nullptr && skip_blanks(after, end) >= stop) return true;
+      if (text != nullptr && !is_missing_value(trim(std::string_view(
+                                 start, static_cast<std::size_t>(stop - start))))) {
+        *text = true;
+      }
+      p = stop;
+      if (p == end) return false;
+    }
+  }
+
+  // The units row a DAQ writes under the header (`s,m/s^2,N`): a first row with text in a
+  // field and no number in any is not data, and is skipped as --skip-rows 1 skips it. Any other
+  // first row is kept for read_row.
+  void skip_units_row() {
+    do {
+      if (!lines_.next(line_)) return;
+    } while (is_blank_line(line_));
+    bool text = false;
+    if (!holds_a_number(&text) && text) {
+      data_start_ = lines_.next_offset();
+    } else {
+      peeked_ = true;
+    }
+  }
+
   // An empty field, or a missing-value marker as spreadsheets and pandas write them.
   static bool is_missing_value(std::string_view text) {
     const auto is = [&](std::string_view marker) {
@@ -165,10 +205,8 @@ class CsvReader final : public StreamReader {
       // "1,5" in a ';'-separated file: a decimal comma.
       const bool comma = request_.layout.decimal == '.' && separator_ != ',' &&
                          std::memchr(start, ',', static_cast<std::size_t>(stop - start)) != nullptr;
-      // A first row without a digit: units or descriptions.
-      const bool units = rows_parsed_ == 1 && std::none_of(line_.begin(), line_.end(), [](char c) {
-                           return c >= '0' && c <= '9';
-                         });
+      // A first row none of whose fields is a number: units or descriptions (`s`, `m/s^2`).
+      const bool units = rows_parsed_ == 1 && !holds_a_number();
       bad_field(field, p,
                 comma ? "expected a number (with a decimal comma? give " +
                             UsageError::mention("decimal") + " ,)"
@@ -288,6 +326,7 @@ class CsvReader final : public StreamReader {
   // Of the `t` and `run` fields of the current row, and of a missing value.
   std::vector<const char*> field_starts_;
   std::size_t rows_parsed_ = 0;
+  bool peeked_ = false;         // line_ holds the first row, read by skip_units_row()
   std::string last_short_row_;  // the last row while there are fewer than min_rows
   long long last_short_row_line_ = 0;
 };

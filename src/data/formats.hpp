@@ -2,6 +2,7 @@
 // The data file formats DataReader::open chooses from, by content. A new format is one source
 // file that defines its detector and opener, and one entry in the table in reader.cpp.
 
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -59,6 +60,13 @@ void check_file_interval(const std::string& file, const std::optional<double>& s
 // Reads several files one after the other (DataSource::files).
 std::unique_ptr<DataReader> open_chain(const std::vector<std::string>& paths,
                                        const ColumnRequest& request);
+
+// `open(request)`, or, when ColumnRequest::rename maps a name to a sum of columns (column_sum),
+// a reader that delivers the sum: it opens the record once for its column names (`name` in
+// messages), then with the columns the sums need.
+std::unique_ptr<DataReader> open_sums(
+    const ColumnRequest& request, const std::string& name,
+    const std::function<std::unique_ptr<DataReader>(const ColumnRequest&)>& open);
 
 // Reads columns in memory; `data` must outlive the reader.
 std::unique_ptr<DataReader> open_memory(const MemoryData& data, const ColumnRequest& request);

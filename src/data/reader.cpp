@@ -211,10 +211,12 @@ DataSource DataSource::stored(std::FILE* in, const std::string& name) {
 
 std::unique_ptr<DataReader> DataSource::open(const ColumnRequest& request) const {
   stamp();
-  if (memory_) return data::open_memory(*memory_, request);
-  if (!paths_.empty()) return data::open_chain(paths_, request);
-  if (stored_) return DataReader::open(*stored_, request, name_);
-  return DataReader::open(name_, request);
+  return data::open_sums(request, name_, [&](const ColumnRequest& r) {
+    if (memory_) return data::open_memory(*memory_, r);
+    if (!paths_.empty()) return data::open_chain(paths_, r);
+    if (stored_) return DataReader::open(*stored_, r, name_);
+    return DataReader::open(name_, r);
+  });
 }
 
 std::vector<std::string> DataSource::paths() const {
@@ -259,10 +261,12 @@ std::unique_ptr<DataReader> DataSource::open(const Shard& shard, ColumnRequest r
   request.part.index = shard.index;
   request.part.count = shard.count;
   stamp();
-  if (memory_) return data::open_memory(*memory_, request);
-  if (!paths_.empty()) return DataReader::open(paths_.at(shard.file), request);
-  if (stored_) return DataReader::open(*stored_, request, name_);
-  return DataReader::open(name_, request);
+  return data::open_sums(request, name_, [&](const ColumnRequest& r) {
+    if (memory_) return data::open_memory(*memory_, r);
+    if (!paths_.empty()) return DataReader::open(paths_.at(shard.file), r);
+    if (stored_) return DataReader::open(*stored_, r, name_);
+    return DataReader::open(name_, r);
+  });
 }
 
 }  // namespace momentid

@@ -119,6 +119,22 @@ std::pair<LagFunction, numeric> LagDeriver::lag_function(const Equation& eq, con
   reject_term(eq, t);
 }
 
+std::vector<std::string> LagDeriver::integral_states() const {
+  const auto integral = [&](int s) { return observed_[static_cast<std::size_t>(s)].order < 0; };
+  const auto states = static_cast<int>(model_.states().size());
+  std::vector<std::string> out;
+  for (int s = 0; s < states; ++s) {
+    bool derivative = false;
+    for (int r = 0; r < states; ++r) {
+      const std::optional<Kinematic> k = model_.kinematic(r);
+      derivative |= integral(r) && k && k->state == s;
+    }
+    if (integral(s) && !derivative)
+      out.push_back(model_.states()[static_cast<std::size_t>(s)].name);
+  }
+  return out;
+}
+
 void LagDeriver::reject_term(const Equation& eq, const Term& t) const {
   // A state the data show only through a derivative column enters linearly or not at all.
   for (int v = 0; v < variables_; ++v) {
@@ -127,13 +143,20 @@ void LagDeriver::reject_term(const Equation& eq, const Term& t) const {
     if (!integral) continue;
     const std::string& name = model_.variables()[v].name;
     const std::string& column = model_.variables()[observed_[v].base].name;
-    throw ModelError(eq.where, "term '" + term_text(model_, t) + "' of equation " + eq.name() +
-                                   " needs a column for state '" + name +
-                                   "': the record shows it only through '" + column + "' (" +
-                                   definition(v) + "), which gives the terms linear in " + name +
-                                   " alone (give the record a column '" + name + "', or form " +
-                                   name + " from '" + column + "' with " +
-                                   UsageError::mention("integrate") + " " + name + ")");
+    // Formed alone, the state may leave the others' integrals beyond the lag derivatives.
+    std::string formed, others;
+    for (const std::string& s : integral_states()) {
+      formed += (formed.empty() ? "" : ",") + s;
+      if (s != name) others += (others.empty() ? "" : ",") + s;
+    }
+    throw ModelError(
+        eq.where,
+        "term '" + term_text(model_, t) + "' of equation " + eq.name() +
+            " needs a column for state '" + name + "': the record shows it only through '" +
+            column + "' (" + definition(v) + "), which gives the terms linear in " + name +
+            " alone (give the record a column '" + name + "', or form " + name + " from '" +
+            column + "'" + (others.empty() ? "" : ", and " + others + " from theirs,") + " with " +
+            UsageError::mention("integrate") + " " + formed + ")");
   }
   // Name the unmeasured variable the term would need, with how the data show it.
   std::string why = "channels the data lack: it is not a time derivative of measured channels";

@@ -54,6 +54,11 @@ class LagDeriver {
   // its derivative.
   std::string definition(int v) const;
 
+  // The states the data show only as integrals of a derivative column, but for those that are
+  // another's derivative (v when y' = v): `--integrate` with these forms every state, and no
+  // equation then needs an integral.
+  std::vector<std::string> integral_states() const;
+
  private:
   // Throws the ModelError for term `t` of `eq`, which is not a time derivative of measured
   // channels: it names the column the term needs, for a state the data show only through a

@@ -88,12 +88,18 @@ LaggedEquation lagged_equation(const Model& model, const LagDeriver& deriver, st
     auto& [f, w] = terms[i];
     f.order -= lowest;
     if (f.order > kMaxLagOrder) {
-      throw ModelError(eq.where, "term '" + term_text(model, eq.terms[i]) + "' of equation " +
-                                     eq.name() + " needs the derivative of order " +
-                                     std::to_string(f.order) + " in the lag, above " +
-                                     std::to_string(kMaxLagOrder) +
-                                     ", to clear the integrals of the states read from a "
-                                     "derivative column (measure one of them)");
+      std::string integrals;
+      for (const std::string& s : deriver.integral_states()) {
+        integrals += (integrals.empty() ? "" : ",") + s;
+      }
+      throw ModelError(eq.where,
+                       "term '" + term_text(model, eq.terms[i]) + "' of equation " + eq.name() +
+                           " needs the derivative of order " + std::to_string(f.order) +
+                           " in the lag, above " + std::to_string(kMaxLagOrder) +
+                           ", to clear the integrals of the states read from a "
+                           "derivative column, " +
+                           integrals + " (measure them, or form them from their columns: add " +
+                           integrals + " to " + UsageError::mention("integrate") + ")");
     }
     const int parameter = eq.terms[i].parameter;
     if (parameter >= 0) {

@@ -315,6 +315,7 @@ std::vector<Monomial> parse_monomial_list(const Model& model, std::string_view t
   const std::vector<SyntaxNode> items = top_level(*root);
   const Source where(text, source);
   SymbolTable symbols(where, model);
+  if (inputs) symbols.read_measured();
   const TermBuilder terms(where, symbols);
   std::vector<Monomial> out;
   for (const SyntaxNode& item : items) {

@@ -19,6 +19,7 @@ void SymbolTable::declare_measured(const SyntaxNode& statement) {
 
 SymbolTable::SymbolTable(const Source& source, const Model& model)
     : source_(source),
+      model_(&model),
       states_(model.states()),
       inputs_(model.inputs()),
       parameters_(model.parameters()),
@@ -228,11 +229,28 @@ GiNaC::ex SymbolTable::value(const SyntaxNode& at, const std::string& name) cons
     case SymbolKind::kConstant:
       return *d.value;
     case SymbolKind::kMeasured:
+      if (read_measured_) return measured_symbols_[i];
       source_.fail(at, "'" + name + "' is a measured column, which equations do not name: write " +
                            "the derivative it holds, " +
                            measured_written_[static_cast<std::size_t>(i)]);
   }
   return 0;
+}
+
+std::optional<GiNaC::ex> SymbolTable::measured_derivative(const std::string& name,
+                                                          std::size_t order) const {
+  const Declaration* d = find(name);
+  if (!read_measured_ || d == nullptr || d->kind != SymbolKind::kState || order > 2) return {};
+  int state = index_of(*d);
+  if (order == 2) {
+    const std::optional<Kinematic> k = model_->kinematic(state);
+    if (!k || k->ratio != 1) return {};
+    state = k->state;
+  }
+  const int column = model_->measured_derivative_of(state);
+  if (column < 0) return {};
+  const auto first = static_cast<int>(states_.size() + inputs_.size());
+  return GiNaC::ex(measured_symbols_.at(static_cast<std::size_t>(column - first)));
 }
 
 GiNaC::ex SymbolTable::derivative(const SyntaxNode& at, const std::string& name) const {

@@ -5,6 +5,7 @@
 #include <ginac/ginac.h>
 
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -50,6 +51,13 @@ class SymbolTable {
   GiNaC::ex value(const SyntaxNode& at, const std::string& name) const;
   // The symbol of the time derivative of state `name`, used at `at`.
   GiNaC::ex derivative(const SyntaxNode& at, const std::string& name) const;
+  // Instruments of a built model may name its measured columns, by name or as the derivative
+  // they hold (`v'`, or `y''` through `y' = v`): from then on value() gives a measured column's
+  // symbol, and measured_derivative() the column of a derivative.
+  void read_measured() { read_measured_ = model_ != nullptr; }
+  // The symbol of the measured column that holds derivative `order` of state `name`, or
+  // nullopt (also unless read_measured()).
+  std::optional<GiNaC::ex> measured_derivative(const std::string& name, std::size_t order) const;
   const SymbolRole& role(const GiNaC::ex& symbol) const { return roles_.at(symbol); }
   // The symbol of `f` (whose name identifies it), a variable after those before it: the first
   // use adds it.
@@ -85,6 +93,8 @@ class SymbolTable {
   int index_of(const Declaration& d) const;
 
   const Source& source_;
+  const Model* model_ = nullptr;  // the built model this table reads, if any
+  bool read_measured_ = false;
   std::vector<Declaration> states_, inputs_, parameters_, constants_, measured_;
   std::vector<const SyntaxNode*> measured_targets_;
   std::vector<std::string> measured_written_;

@@ -269,6 +269,9 @@ GiNaC::ex TermBuilder::eval(const SyntaxNode& n) const {
     const std::string name(n.children.at(0).text);
     if (n.children.size() == 1) return symbols_.value(n, name);
     const std::size_t order = n.children[1].text.size();
+    if (std::optional<GiNaC::ex> column = symbols_.measured_derivative(name, order)) {
+      return *column;
+    }
     GiNaC::ex d = symbols_.derivative(n, name);
     if (order > 1) {
       source_.fail(n.children[1], "derivatives of order " + std::to_string(order) +
@@ -280,6 +283,9 @@ GiNaC::ex TermBuilder::eval(const SyntaxNode& n) const {
   }
   if (n.kind == SyntaxKind::kDotCall) {
     const SyntaxNode& arg = n.children.at(0);
+    if (std::optional<GiNaC::ex> column = symbols_.measured_derivative(std::string(arg.text), 1)) {
+      return *column;
+    }
     return symbols_.derivative(arg, std::string(arg.text));
   }
   if (n.kind == SyntaxKind::kCall) return eval_call(n);

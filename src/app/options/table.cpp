@@ -43,7 +43,8 @@ constexpr std::array kOptions = {
     "equations outnumber the parameters", C::kIdentify, S::kRecord, false, {}, "",
     set_weighting},
   OptionDescription{"--columns", "columns", "columns", "NAME=COLUMN,...", V::kPairs, "",
-    "where a model variable is in the data; v'=COLUMN names a column of a state's derivative",
+    "where a model variable is in the data; v'=COLUMN names a column of a state's derivative; "
+    "a COLUMN may be a sum of columns, z''=acc_mass-acc_table",
     C::kBoth, S::kRecord, true, {}, "", set_columns},
   OptionDescription{"--input-shift", "input_shift", "input_shift", "K", V::kWhole, "0",
     "pair input row n with state row n + K (delayed measurements)", C::kBoth, S::kRecord, false,
@@ -82,8 +83,8 @@ constexpr std::array kOptions = {
     "error (zero-lag equations, inputs sampled, not held)", C::kIdentify, S::kRecord, false, {},
     "", set_extrapolate},
   OptionDescription{"--skip-rows", "skip_rows", "skip_rows", "N", V::kCount, "0",
-    "lines after the header that are not data (units), skipped", C::kBoth, S::kRecord, false, {},
-    "", set_skip_rows},
+    "lines after the header that are not data (descriptions), skipped; a units row is skipped "
+    "without it", C::kBoth, S::kRecord, false, {}, "", set_skip_rows},
   OptionDescription{"--decimal", "decimal", "decimal", ".|,", V::kChoice, ".",
     "the decimal separator (with ; or blank separated fields)", C::kBoth, S::kRecord, false, {},
     "", set_decimal},
