@@ -72,6 +72,9 @@ struct RecordOptions {
   // for a column mapped from a name that is neither `t` nor a state or input of the model
   // ("columns").
   void validate(const Model* model) const;
+  // Throws DataError at `where` for a record's own interval `dt` (its time column, metadata or
+  // stored interval) outside [kMinInterval, kMaxInterval], where validate() refuses a --dt.
+  static void check_record_interval(double dt, const SourceLocation& where);
 };
 
 // `model` with the columns that `record.columns` maps from a state's derivative (v' or y'', as

@@ -341,6 +341,14 @@ def test_bad_dt_is_the_same_error_for_arrays_and_files(duffing, record, cli_csv)
                            match=r"^dt: expected a sample interval from 1e-12 to 1e\+12, "
                                  r"found 1e-320$"):
             momentid.identify(duffing, data, dt=1e-320)
+    # The record's own interval, from its time column, likewise (after the pass).
+    tiny = {**{n: record[n] for n in ("y", "v", "x")}, "t": record["t"] * 1e-13}
+    message = (r"^<arrays>:1:1: the sample interval 1e-15 \(the record's own: its time column, "
+               r"metadata or stored interval\) is outside 1e-12 to 1e\+12: give the times in "
+               r"other units, or the interval with dt$")
+    for run in (momentid.identify, momentid.validate):
+        with pytest.raises(momentid.DataError, match=message):
+            run(duffing, tiny)
 
 
 def test_model_from_missing_file(tmp_path):

@@ -32,6 +32,17 @@ void RecordOptions::validate(const Model* model) const {
   }
 }
 
+void RecordOptions::check_record_interval(double dt, const SourceLocation& where) {
+  if (dt >= kMinInterval && dt <= kMaxInterval) return;
+  throw DataError(where, "the sample interval " + shortest_decimal(dt) +
+                             " (the record's own: its time column, metadata or stored interval) "
+                             "is outside " +
+                             shortest_decimal(kMinInterval) + " to " +
+                             shortest_decimal(kMaxInterval) +
+                             ": give the times in other units, or the interval with " +
+                             UsageError::mention("dt"));
+}
+
 namespace {
 
 bool name_free(const Model& model, const std::string& name) {

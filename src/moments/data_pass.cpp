@@ -407,6 +407,11 @@ DataMoments moments_from_data(const DataSource& source, const std::vector<std::s
   out.rows = result.state->rows;
   out.runs = result.state->runs;
   out.time_step = options.record.dt ? options.record.dt : first_step;
+  // --dt is checked before the pass, the record's own interval only now.
+  if (out.time_step && !options.record.dt) {
+    RecordOptions::check_record_interval(*out.time_step,
+                                         {paths.empty() ? source.name() : paths.front(), 1, 1, ""});
+  }
   if (out.time_step) *out.time_step *= static_cast<double>(options.stride);
   out.estimates = estimates(
       accumulator,

@@ -73,6 +73,7 @@ Record read_record(const Model& model, const DataSource& source, const ReplayOpt
                     "line, or give " +
                         UsageError::mention("dt"));
   }
+  if (!options.record.dt) RecordOptions::check_record_interval(*dt, file_start(record.name));
   record.dt = *dt;
   return record;
 }
