@@ -119,18 +119,18 @@ std::pair<LagFunction, numeric> LagDeriver::lag_function(const Equation& eq, con
   reject_term(eq, t);
 }
 
-std::vector<std::string> LagDeriver::integral_states() const {
+std::string LagDeriver::integral_states(const std::string& except) const {
   const auto integral = [&](int s) { return observed_[static_cast<std::size_t>(s)].order < 0; };
   const auto states = static_cast<int>(model_.states().size());
-  std::vector<std::string> out;
+  std::string out;
   for (int s = 0; s < states; ++s) {
     bool derivative = false;
     for (int r = 0; r < states; ++r) {
       const std::optional<Kinematic> k = model_.kinematic(r);
       derivative |= integral(r) && k && k->state == s;
     }
-    if (integral(s) && !derivative)
-      out.push_back(model_.states()[static_cast<std::size_t>(s)].name);
+    const std::string& name = model_.states()[static_cast<std::size_t>(s)].name;
+    if (integral(s) && !derivative && name != except) out += (out.empty() ? "" : ",") + name;
   }
   return out;
 }
@@ -144,11 +144,7 @@ void LagDeriver::reject_term(const Equation& eq, const Term& t) const {
     const std::string& name = model_.variables()[v].name;
     const std::string& column = model_.variables()[observed_[v].base].name;
     // Formed alone, the state may leave the others' integrals beyond the lag derivatives.
-    std::string formed, others;
-    for (const std::string& s : integral_states()) {
-      formed += (formed.empty() ? "" : ",") + s;
-      if (s != name) others += (others.empty() ? "" : ",") + s;
-    }
+    const std::string others = integral_states(name);
     throw ModelError(
         eq.where,
         "term '" + term_text(model_, t) + "' of equation " + eq.name() +
@@ -156,7 +152,7 @@ void LagDeriver::reject_term(const Equation& eq, const Term& t) const {
             column + "' (" + definition(v) + "), which gives the terms linear in " + name +
             " alone (give the record a column '" + name + "', or form " + name + " from '" +
             column + "'" + (others.empty() ? "" : ", and " + others + " from theirs,") + " with " +
-            UsageError::mention("integrate") + " " + formed + ")");
+            UsageError::mention("integrate") + " " + integral_states() + ")");
   }
   // Name the unmeasured variable the term would need, with how the data show it.
   std::string why = "channels the data lack: it is not a time derivative of measured channels";

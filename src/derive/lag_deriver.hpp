@@ -56,8 +56,8 @@ class LagDeriver {
 
   // The states the data show only as integrals of a derivative column, but for those that are
   // another's derivative (v when y' = v): `--integrate` with these forms every state, and no
-  // equation then needs an integral.
-  std::vector<std::string> integral_states() const;
+  // equation then needs an integral. Their names joined by commas, `except` left out.
+  std::string integral_states(const std::string& except = "") const;
 
  private:
   // Throws the ModelError for term `t` of `eq`, which is not a time derivative of measured

@@ -88,10 +88,7 @@ LaggedEquation lagged_equation(const Model& model, const LagDeriver& deriver, st
     auto& [f, w] = terms[i];
     f.order -= lowest;
     if (f.order > kMaxLagOrder) {
-      std::string integrals;
-      for (const std::string& s : deriver.integral_states()) {
-        integrals += (integrals.empty() ? "" : ",") + s;
-      }
+      const std::string integrals = deriver.integral_states();
       throw ModelError(eq.where,
                        "term '" + term_text(model, eq.terms[i]) + "' of equation " + eq.name() +
                            " needs the derivative of order " + std::to_string(f.order) +
