@@ -337,4 +337,34 @@ TEST_SUITE("shards") {
                     ": the file changed while it was read (it was replaced or removed): read "
                     "it when it is complete");
   }
+
+  TEST_CASE(
+      "a pass stops when its caller asks: no shard is started after, and Interrupted is thrown") {
+    // 10^5 shards of two rows: read whole, the pass outlasts the first question by far.
+    const std::size_t rows = 200000;
+    std::vector<double> y(rows), v(rows), x(rows);
+    for (std::size_t n = 0; n < rows; ++n) {
+      y[n] = std::sin(0.01 * static_cast<double>(n));
+      v[n] = std::cos(0.013 * static_cast<double>(n));
+      x[n] = std::sin(0.7 * static_cast<double>(n));
+    }
+    momentid::MemoryData data;
+    data.rows = rows;
+    data.columns = {{"y", y.data()}, {"v", v.data()}, {"x", x.data()}};
+    data.metadata.add_line({{"dt", "0.01"}});
+    DataOptions options;
+    options.record.control.threads = 2;
+    options.record.control.shard_bytes = 48;
+    int asked = 0;
+    std::size_t rows_read = 0;
+    options.record.control.interrupted = [&] { return ++asked >= 2; };
+    options.record.control.progress = [&](std::size_t read, std::optional<double>) {
+      rows_read = read;
+    };
+    CHECK_THROWS_AS(momentid::moments_from_data(DataSource::memory(std::move(data)), {"y", "v"},
+                                                {"x"}, some_moments(), options),
+                    momentid::Interrupted);
+    CHECK(asked == 2);
+    CHECK(rows_read < rows);
+  }
 }

@@ -93,6 +93,12 @@ class DataError : public LocatedError {
   using LocatedError::LocatedError;
 };
 
+// A pass stopped because its caller asked (PassControl::interrupted): Ctrl-C in a front end.
+class Interrupted : public Error {
+ public:
+  Interrupted() : Error("interrupted") {}
+};
+
 // `text` safe to print on a terminal: control characters and bytes that are not UTF-8 become
 // '?'; tabs and line feeds stay.
 std::string printable(std::string_view text);

@@ -38,6 +38,10 @@ struct PassControl {
   // releases it here (the Python module, its GIL: the rest of a call uses GiNaC, which other
   // threads must not use meanwhile).
   std::function<void(const std::function<void()>& read)> around_pass;
+  // Asked about ten times a second, on the calling thread, while a pass reads (inside
+  // around_pass): true stops the pass, which then throws Interrupted once the shards being read
+  // are done. A front end answers whether the user pressed Ctrl-C. None: never asked.
+  std::function<bool()> interrupted;
 };
 
 // Where a record's channels are, how it is laid out and sampled, and how a pass reads it: a

@@ -271,6 +271,36 @@ void simulate(const Model& model, const SimulationOptions& options, SampleSink& 
               const std::vector<double>& noise_sd);
 inline constexpr double kBlowUpBound = 1e100;
 
+// Writes the samples into arrays a front end holds, one per channel in `channels` (indices of
+// the model's variables, observed_channels()), the time into `time` and the run's number (1,
+// 2, ...) into `run` unless it is null, every run's `samples` rows one run after the other.
+class ArraySink : public SampleSink {
+ public:
+  ArraySink(std::vector<double*> columns, std::vector<std::size_t> channels, double* time,
+            double* run, std::size_t samples)
+      : columns_(std::move(columns)),
+        channels_(std::move(channels)),
+        time_(time),
+        run_(run),
+        samples_(samples) {}
+  void sample(double t, const double* values, std::size_t run) override {
+    if (run != run_index_) {
+      run_index_ = run;
+      row_in_run_ = 0;
+    }
+    const std::size_t row = run * samples_ + row_in_run_++;
+    time_[row] = t;
+    if (run_ != nullptr) run_[row] = static_cast<double>(run + 1);
+    for (std::size_t c = 0; c < channels_.size(); ++c) columns_[c][row] = values[channels_[c]];
+  }
+
+ private:
+  std::vector<double*> columns_;
+  std::vector<std::size_t> channels_;
+  double *time_, *run_;
+  std::size_t samples_, run_index_ = 0, row_in_run_ = 0;
+};
+
 // Watches a simulation for a step too coarse for its dynamics, passing every sample on to `next`.
 // At up to kPoints samples spread over the record it linearises the model there (a Jacobian by
 // central differences) and keeps the largest modulus of its eigenvalues, |lambda|; the

@@ -83,6 +83,15 @@ struct Replay {
   static constexpr std::size_t kStartSamples = 7;
 };
 
+// A record's series as one array each, every run's rows one run after the other (what a front
+// end hands its users): the sample times (n*dt without a `t` column), the runs' numbers (1, 2,
+// ... without a `run` column), model variable v as recorded (the record has it:
+// Record::column_of(v) >= 0), and state j as a replay simulated it.
+std::vector<double> series_times(const Record& record);
+std::vector<double> series_runs(const Record& record);
+std::vector<double> series_recorded(const Record& record, std::size_t v);
+std::vector<double> series_simulated(const Replay& replay, std::size_t j);
+
 // Reads the record and simulates the model through its inputs. Throws UsageError for invalid
 // options, DataError for a record that lacks an input or gives no sample interval, and Error
 // naming the time, run and state when the simulation blows up.

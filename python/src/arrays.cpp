@@ -5,43 +5,8 @@ namespace py = pybind11;
 namespace momentid::python {
 namespace {
 
-// One array of every run's rows, one run after the other, from value_at(run, row).
-template <class ValueAt>
-py::array_t<double> concatenated(const Record& record, ValueAt value_at) {
-  std::size_t rows = 0;
-  for (const RecordRun& run : record.runs) rows += run.rows();
-  py::array_t<double> out(static_cast<py::ssize_t>(rows));
-  double* into = out.mutable_data();
-  for (std::size_t r = 0; r < record.runs.size(); ++r) {
-    for (std::size_t n = 0; n < record.runs[r].rows(); ++n) *into++ = value_at(r, n);
-  }
-  return out;
-}
-
-// The recorded column of model variable v, every run's rows.
-py::array_t<double> recorded(const Record& record, std::size_t v) {
-  const auto c = static_cast<std::size_t>(record.column_of(v));
-  return concatenated(record,
-                      [&](std::size_t r, std::size_t n) { return record.runs[r].columns[c][n]; });
-}
-
-// The record's sample times, and its runs' numbers (1, 2, ... for runs without a `run` column).
-py::array_t<double> times(const Record& record) {
-  return concatenated(record, [&](std::size_t r, std::size_t n) {
-    const RecordRun& run = record.runs[r];
-    return run.time.empty() ? static_cast<double>(n) * record.dt : run.time[n];
-  });
-}
-py::array_t<double> run_numbers(const Record& record) {
-  return concatenated(record, [&](std::size_t r, std::size_t) {
-    return static_cast<double>(record.has_run ? record.runs[r].number : static_cast<long>(r) + 1);
-  });
-}
-
-// State j as the replay simulated it, every run's rows.
-py::array_t<double> simulated(const Replay& done, std::size_t j) {
-  return concatenated(done.record,
-                      [&](std::size_t r, std::size_t n) { return done.simulated[r][j][n]; });
+py::array_t<double> array(const std::vector<double>& values) {
+  return py::array_t<double>(static_cast<py::ssize_t>(values.size()), values.data());
 }
 
 }  // namespace
@@ -86,14 +51,14 @@ DataSource data_source(const py::object& data, const std::string& name,
 
 py::dict replay_columns(const Model& model, const Replay& done) {
   py::dict out;
-  out["t"] = times(done.record);
+  out["t"] = array(series_times(done.record));
   const std::size_t states = model.states().size();
   for (std::size_t j = 0; j < states; ++j)
-    out[py::str(model.states()[j].name)] = simulated(done, j);
+    out[py::str(model.states()[j].name)] = array(series_simulated(done, j));
   for (std::size_t v = states; v < states + model.inputs().size(); ++v) {
-    out[py::str(model.variables()[v].name)] = recorded(done.record, v);
+    out[py::str(model.variables()[v].name)] = array(series_recorded(done.record, v));
   }
-  if (done.record.runs.size() > 1) out["run"] = run_numbers(done.record);
+  if (done.record.runs.size() > 1) out["run"] = array(series_runs(done.record));
   return out;
 }
 
@@ -102,14 +67,15 @@ py::dict validate_series(const ValidateResult& result) {
   const Record& record = result.replay.record;
   py::dict states, measured, inputs;
   for (std::size_t j = 0; j < model.states().size(); ++j) {
-    states[py::str(model.states()[j].name)] = simulated(result.replay, j);
+    states[py::str(model.states()[j].name)] = array(series_simulated(result.replay, j));
   }
   for (const OutputFit& output : result.outputs) {
-    measured[py::str(output.name)] = recorded(record, output_variable(model, output.state));
+    measured[py::str(output.name)] =
+        array(series_recorded(record, output_variable(model, output.state)));
   }
   for (std::size_t v = model.states().size(); v < model.states().size() + model.inputs().size();
        ++v) {
-    inputs[py::str(model.variables()[v].name)] = recorded(record, v);
+    inputs[py::str(model.variables()[v].name)] = array(series_recorded(record, v));
   }
   std::size_t rows = 0;
   for (const RecordRun& run : record.runs) rows += run.rows();
@@ -119,8 +85,8 @@ py::dict validate_series(const ValidateResult& result) {
     for (std::size_t n = 0; n < record.runs[r].rows(); ++n) *into++ = n >= result.skip[r];
   }
   py::dict out;
-  out["t"] = times(record);
-  out["run"] = record.runs.size() > 1 ? py::object(run_numbers(record)) : py::none();
+  out["t"] = array(series_times(record));
+  out["run"] = record.runs.size() > 1 ? py::object(array(series_runs(record))) : py::none();
   out["simulated"] = states;
   out["measured"] = measured;
   out["inputs"] = inputs;

@@ -51,6 +51,9 @@ std::string keyword_of(const std::string& field) {
 void translate(std::exception_ptr thrown) {
   try {
     if (thrown) std::rethrow_exception(thrown);
+  } catch (const Interrupted&) {
+    // The signal's handler has set its exception (KeyboardInterrupt) already.
+    if (PyErr_Occurred() == nullptr) PyErr_SetNone(PyExc_KeyboardInterrupt);
   } catch (const DataError& e) {
     raise("DataError", e.text(keyword_of), &e.location());
   } catch (const LocatedError& e) {  // ParseError, ModelError

@@ -157,6 +157,13 @@ void release_during_pass(PassControl& control) {
     py::gil_scoped_release release;
     read();
   };
+  // Ctrl-C: Python's handler runs (on the main thread; the pass is read from the calling one)
+  // and leaves KeyboardInterrupt set, which the exception translator raises once the pass has
+  // stopped.
+  control.interrupted = [] {
+    py::gil_scoped_acquire hold;
+    return PyErr_CheckSignals() != 0;
+  };
 }
 
 }  // namespace momentid::python

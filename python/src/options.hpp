@@ -23,7 +23,7 @@ pybind11::list option_list(const std::string& command);
 // of the wrong type.
 std::vector<GivenOption> given_options(const pybind11::dict& options, const std::string& command);
 
-// Lets other Python threads run while a pass reads the data.
+// Lets other Python threads run while a pass reads the data, and Ctrl-C stop it.
 void release_during_pass(PassControl& control);
 
 }  // namespace momentid::python

@@ -69,6 +69,13 @@ class RangeReading {
     std::unique_lock lock(mutex_);
     while (running_ > 0) {
       finished_.wait_for(lock, std::chrono::milliseconds(100));
+      if (options_.record.control.interrupted && running_ > 0) {
+        lock.unlock();
+        const bool stop = options_.record.control.interrupted();
+        lock.lock();
+        // No shard is started after this one; those being read finish.
+        if (stop) fail_at(begin_, std::make_exception_ptr(Interrupted()));
+      }
       if (options_.record.control.progress && running_ > 0) {
         double shards_done = static_cast<double>(next_merge_ - begin_);
         for (const std::atomic<double>& f : partial_) shards_done += f;

@@ -13,6 +13,44 @@ int Record::column_of(std::size_t v) const {
   return it == variables.end() ? -1 : static_cast<int>(it - variables.begin());
 }
 
+namespace {
+
+// value_at(run, row) for every run's rows, one run after the other.
+template <class ValueAt>
+std::vector<double> concatenated(const Record& record, ValueAt value_at) {
+  std::vector<double> out;
+  for (std::size_t r = 0; r < record.runs.size(); ++r) {
+    for (std::size_t n = 0; n < record.runs[r].rows(); ++n) out.push_back(value_at(r, n));
+  }
+  return out;
+}
+
+}  // namespace
+
+std::vector<double> series_times(const Record& record) {
+  return concatenated(record, [&](std::size_t r, std::size_t n) {
+    const RecordRun& run = record.runs[r];
+    return run.time.empty() ? static_cast<double>(n) * record.dt : run.time[n];
+  });
+}
+
+std::vector<double> series_runs(const Record& record) {
+  return concatenated(record, [&](std::size_t r, std::size_t) {
+    return static_cast<double>(record.has_run ? record.runs[r].number : static_cast<long>(r) + 1);
+  });
+}
+
+std::vector<double> series_recorded(const Record& record, std::size_t v) {
+  const auto c = static_cast<std::size_t>(record.column_of(v));
+  return concatenated(record,
+                      [&](std::size_t r, std::size_t n) { return record.runs[r].columns[c][n]; });
+}
+
+std::vector<double> series_simulated(const Replay& replay, std::size_t j) {
+  return concatenated(replay.record,
+                      [&](std::size_t r, std::size_t n) { return replay.simulated[r][j][n]; });
+}
+
 SourceLocation file_start(const std::string& name) { return {name, 1, 1, ""}; }
 
 Record read_record(const Model& model, const DataSource& source, const ReplayOptions& options) {
