@@ -1,11 +1,14 @@
 function out = momentid_call(command, varargin)
 % Calls the gateway momentid_mex with COMMAND and the arguments, each string object (MATLAB's
 % "text") turned into a char row, a cell of them into a cell of char rows, and a table into a
-% struct of its columns; raises the error it reports.
+% struct of its columns; raises the error it reports and issues its warnings.
   for k = 1:numel(varargin)
     varargin{k} = plain(varargin{k});
   end
-  [out, id, message] = momentid_mex(command, varargin{:});
+  [out, id, message, warnings] = momentid_mex(command, varargin{:});
+  for k = 1:numel(warnings)
+    warning('momentid:warning', '%s', warnings{k});
+  end
   if ~isempty(id)
     error(struct('identifier', id, 'message', message));
   end

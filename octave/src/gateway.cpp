@@ -300,8 +300,11 @@ ParameterValues parameter_values(const Model& model, const mxArray* value) {
   return parse_parameter_values(model, items);
 }
 
-void warn_each(const std::vector<std::string>& warnings) {
-  for (const std::string& w : warnings) mexWarnMsgIdAndTxt("momentid:warning", "%s", w.c_str());
+// The warnings of a call, which momentid_call issues as Octave's.
+std::vector<std::string> warnings;
+
+void warn_each(const std::vector<std::string>& given) {
+  warnings.insert(warnings.end(), given.begin(), given.end());
 }
 
 // --- commands -------------------------------------------------------------------------------
@@ -628,15 +631,17 @@ std::string keyword_of(const std::string& field) {
 }  // namespace
 }  // namespace momentid::mex
 
-// [RESULT, ID, MESSAGE] = momentid_mex(COMMAND, ...): the error, if any, as its identifier and
-// message (empty without one), which momentid_call raises. An error raised here would leave
-// the call without unwinding it (MATLAB), and Octave reports it again at exit.
+// [RESULT, ID, MESSAGE, WARNINGS] = momentid_mex(COMMAND, ...): the error, if any, as its
+// identifier and message (empty without one), which momentid_call raises, and the warnings (a
+// cell column), which it issues. An error raised here would leave the call without unwinding it
+// (MATLAB), and Octave puts the gateway's name in front of its messages.
 void mexFunction(int nlhs, mxArray* plhs[], int nrhs, const mxArray* prhs[]) {
   using namespace momentid;
   using momentid::mex::keyword_of;
   std::string id, message;
   mxArray* out = nullptr;
   bool interrupted = false;
+  mex::warnings.clear();
   try {
     if (nrhs < 1 || !mxIsChar(prhs[0])) throw UsageError("momentid_mex: expected a command");
     out = mex::run(mex::text(prhs[0], "command"), nrhs - 1, prhs + 1);
@@ -675,4 +680,5 @@ void mexFunction(int nlhs, mxArray* plhs[], int nrhs, const mxArray* prhs[]) {
   plhs[0] = out != nullptr ? out : mxCreateDoubleMatrix(0, 0, mxREAL);
   if (nlhs > 1) plhs[1] = mxCreateString(id.c_str());
   if (nlhs > 2) plhs[2] = mxCreateString(message.c_str());
+  if (nlhs > 3) plhs[3] = mex::strings(mex::warnings);
 }

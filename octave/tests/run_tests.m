@@ -112,6 +112,11 @@ program(sprintf('simulate %s --samples 1000 --input x=ma:K=10,w=0.1,sigma=20 --s
 written = read_csv(fullfile(work, 'sim.csv'));
 check(close_to([sim.t sim.y sim.v sim.x], written, 1e-15), 'simulate: the samples the command line writes');
 check(strcmp(sim.metadata.input_hold, 'zoh') && strcmp(sim.metadata.param_k, '4'), 'simulate: the metadata');
+lastwarn('');
+momentid_simulate(fullfile(source, 'models', 'kozin_4_1c.mom'), 'dt', 0.05, 'samples', 100);
+[message, id] = lastwarn();
+check(strcmp(id, 'momentid:warning') && strncmp(message, 'the step is coarse', 18), ...
+      'simulate: a coarse step warns as Octave does');
 path = momentid_simulate(duffing, 'samples', 100, 'path', fullfile(work, 'out.csv'));
 check(exist(path, 'file') == 2, 'simulate to a file');
 
