@@ -523,11 +523,11 @@ mxArray* simulate_command(const Model& model, Arguments& args) {
   options.parameters = parameter_values(model, args.take("params"));
   std::vector<std::pair<std::string, std::string>> inputs;
   if (const mxArray* v = args.take("inputs")) inputs = pair_list(v, "inputs");
-  for (const auto& [name, spec] : inputs) {
+  for (const auto& given : inputs) {
     const auto& declared = model.inputs();
     if (std::none_of(declared.begin(), declared.end(),
-                     [&](const Declaration& d) { return d.name == name; })) {
-      throw UsageError("inputs", "'" + name + "' is not an input of model " + model.name());
+                     [&](const Declaration& d) { return d.name == given.first; })) {
+      throw UsageError("inputs", "'" + given.first + "' is not an input of model " + model.name());
     }
   }
   for (const Declaration& input : model.inputs()) {
