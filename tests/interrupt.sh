@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # An interrupted output must leave neither the target nor its temporary file behind: `simulate
 # -o FILE` (SIGINT, SIGTERM, SIGHUP), and `convert` to .mat, .mat (level 7.3) and HDF5, whose
-# libraries write the temporary file themselves.
+# libraries write the temporary file themselves; nor an interrupted read of standard input the
+# file it is stored in.
 # Usage: interrupt.sh MOMENTID MODEL DIRECTORY
 set -euo pipefail
 momentid=$1 model=$2 dir=$3
@@ -46,4 +47,26 @@ for format in mat mat73 h5; do
     interrupt "$signal" "$momentid" convert "$dir/record.bin" "$dir/out/out.$extension" \
       --format "$format"
   done
+done
+
+# Standard input, endless, being stored: the signal removes the stored file.
+mkdir -p "$dir/tmp"
+for signal in INT TERM HUP; do
+  { yes "0.1,0.2,0.3,0.4" | TMPDIR=$dir/tmp "$momentid" identify "$model" - 2>/dev/null; } &
+  pipeline=$!
+  seen=0
+  for _ in $(seq 3000); do
+    if compgen -G "$dir/tmp/momentid_stream_*" >/dev/null; then
+      seen=1
+      break
+    fi
+    sleep 0.02
+  done
+  pkill -"$signal" -f "$momentid identify $model -" || true
+  wait "$pipeline" 2>/dev/null || true
+  if [[ $seen == 0 || -n $(ls -A "$dir/tmp") ]]; then
+    echo "standard input after SIG$signal (stored file seen: $seen) leaves: $(ls -A "$dir/tmp")"
+    exit 1
+  fi
+  echo "standard input: SIG$signal, nothing left behind"
 done

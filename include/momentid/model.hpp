@@ -220,6 +220,10 @@ Model parse_model_file(const std::string& path);
 // The same for a model held in memory; `file` is the name used in messages.
 Model parse_model(std::string_view text, const std::string& file);
 
+// The longest model text read (1 MiB; the longest model shipped is 2 kB): a longer one is a
+// ParseError at the byte past it, before any parsing.
+inline constexpr std::size_t kMaxModelBytes = std::size_t{1} << 20;
+
 // Parses a comma-separated list of monomials in the model's states, as given to
 // `--multipliers`. `source` names the list in messages (e.g. "--multipliers").
 std::vector<Monomial> parse_multiplier_list(const Model& model, std::string_view text,

@@ -203,8 +203,12 @@ class DataSource {
   static DataSource files(std::vector<std::string> paths);
   static DataSource memory(MemoryData data);
   // Standard input, read to its end now into a temporary file that the source (and its copies)
-  // owns and removes; named `<stdin>` in messages. Throws Error when it cannot be stored.
-  static DataSource standard_input();
+  // owns and removes (also when a signal ends the program, with
+  // remove_partial_output_on_interrupt()); named `<stdin>` in messages. Throws Error when it
+  // cannot be stored, or when more than `limit` bytes arrive (an endless stream would fill the
+  // disk).
+  static DataSource standard_input(std::uint64_t limit = kStoredLimit);
+  static constexpr std::uint64_t kStoredLimit = std::uint64_t{16} << 30;  // 16 GiB
 
   // The path (the first and how many more, for several), or MemoryData::name.
   const std::string& name() const { return name_; }
@@ -237,7 +241,7 @@ class DataSource {
   // Takes the stamps, the first time.
   void stamp() const;
   // `in` read to its end into a temporary file that the source owns, named `name`.
-  static DataSource stored(std::FILE* in, const std::string& name);
+  static DataSource stored(std::FILE* in, const std::string& name, std::uint64_t limit);
 
   std::string name_;
   std::optional<MemoryData> memory_;

@@ -75,8 +75,9 @@ class DataWriter {
   std::size_t used_ = 0;
 };
 
-// Makes SIGINT, SIGTERM and SIGHUP delete the temporary file an OutputFile is filling before the
-// process ends, so that an interrupted run leaves nothing behind. For programs that write files.
+// Makes SIGINT, SIGTERM and SIGHUP delete the temporary file an OutputFile is filling, and the
+// one a stream is stored in (DataSource::standard_input), before the process ends, so that an
+// interrupted run leaves nothing behind. For programs that write files or read streams.
 void remove_partial_output_on_interrupt();
 
 }  // namespace momentid

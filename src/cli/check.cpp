@@ -71,6 +71,7 @@ Command add_check(CLI::App& app) {
   sub->add_option("--format", command->format, "output format")
       ->check(CLI::IsMember({"text", "json"}));
   add_layout_options(sub, command->options.record.layout);
+  add_stdin_limit(sub);
   add_pass_options(sub, command->options.record.control);
   sub->add_flag("-q,--quiet", command->quiet,
                 "no progress on standard error (shown only on a terminal)");

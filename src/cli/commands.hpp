@@ -51,6 +51,9 @@ void add_layout_options(CLI::App* command, FileLayout& layout);
 // --threads and --shard-size, into `control`.
 void add_pass_options(CLI::App* command, PassControl& control);
 
+// --stdin-limit: the most bytes stored from standard input (DataSource::standard_input), which
+// data_source() and data_sources() read with.
+void add_stdin_limit(CLI::App* command);
 // The data argument: a file, or standard input for `-`.
 DataSource data_source(const std::string& path);
 // The data of several arguments: files, glob patterns (`runs/*.h5`) and `@LIST` files that name

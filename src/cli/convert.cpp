@@ -50,6 +50,7 @@ Command add_convert(CLI::App& app) {
       ->check(CLI::IsMember(names_of<FileFormat>()));
   sub->add_option("--dt", command->dt, "the sample interval, stored in OUT's metadata");
   add_layout_options(sub, command->layout);
+  add_stdin_limit(sub);
   return {sub, [command] { return run_convert(*command); }};
 }
 

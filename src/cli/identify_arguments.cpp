@@ -33,6 +33,7 @@ void add_identify_arguments(CLI::App* sub, IdentifyArguments& a, const std::stri
                   "naming one per line, each file its own runs; - for standard input")
       ->required();
   sub->add_option("--format", a.format, "output format")->check(CLI::IsMember({"text", "json"}));
+  add_stdin_limit(sub);
   for (const OptionDescription* option : options_of(command)) {
     const std::string flag(option->flag), fallback(option->default_text);
     const std::string help(std::string(option->help) +

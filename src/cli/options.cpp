@@ -107,8 +107,20 @@ void add_layout_options(CLI::App* command, FileLayout& layout) {
                       "for a rate");
 }
 
+namespace {
+std::uint64_t g_stdin_limit = DataSource::kStoredLimit;
+}  // namespace
+
+void add_stdin_limit(CLI::App* command) {
+  command
+      ->add_option("--stdin-limit", g_stdin_limit,
+                   "the most bytes stored from standard input (-), with k, M or G for powers of "
+                   "1024 (default: 16G)")
+      ->transform(CLI::AsSizeValue(false));
+}
+
 DataSource data_source(const std::string& path) {
-  return path == "-" ? DataSource::standard_input() : DataSource::file(path);
+  return path == "-" ? DataSource::standard_input(g_stdin_limit) : DataSource::file(path);
 }
 
 namespace {
@@ -143,7 +155,9 @@ void add_paths(const std::string& argument, std::vector<std::string>& out, int d
 }  // namespace
 
 DataSource data_sources(const std::vector<std::string>& arguments) {
-  if (arguments.size() == 1 && arguments.front() == "-") return DataSource::standard_input();
+  if (arguments.size() == 1 && arguments.front() == "-") {
+    return DataSource::standard_input(g_stdin_limit);
+  }
   std::vector<std::string> paths;
   for (const std::string& argument : arguments) {
     if (argument == "-") throw UsageError("- (standard input) must be the only data argument");

@@ -119,6 +119,7 @@ Command add_validate(CLI::App& app) {
                   "FROM:TO, the times the plot shows (default: the first 2000 compared rows)")
       ->needs(plot);
   add_layout_options(sub, command->options.replay.record.layout);
+  add_stdin_limit(sub);
   return {sub, [command] { return run_validate(*command); }};
 }
 

@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "data/formats.hpp"
+#include "data/temporary.hpp"
 
 namespace momentid::data {
 
@@ -147,7 +148,7 @@ DataSource DataSource::file(std::string path) {
       !std::filesystem::is_directory(status)) {
     const data::File in(std::fopen(path.c_str(), "rb"));
     if (!in) throw Error(path + ": cannot open the data file: " + std::strerror(errno));
-    return stored(in.get(), path);
+    return stored(in.get(), path, kStoredLimit);
   }
   DataSource source;
   source.name_ = std::move(path);
@@ -173,17 +174,20 @@ DataSource DataSource::memory(MemoryData data) {
   return source;
 }
 
-DataSource DataSource::standard_input() { return stored(stdin, "<stdin>"); }
+DataSource DataSource::standard_input(std::uint64_t limit) {
+  return stored(stdin, "<stdin>", limit);
+}
 
-DataSource DataSource::stored(std::FILE* in, const std::string& name) {
+DataSource DataSource::stored(std::FILE* in, const std::string& name, std::uint64_t limit) {
   const auto failed = [&](const std::string& why) {
     return Error(name + ": cannot store the data in a temporary file: " + why);
   };
   std::string path = (std::filesystem::temp_directory_path() / "momentid_stream_XXXXXX").string();
-  const int fd = mkstemp(path.data());
+  const int fd = data::create_temporary(path, data::Temporary::kStored);
   if (fd < 0) throw failed(std::strerror(errno));
   // Removed when the last copy of the source is gone.
   auto stored = std::shared_ptr<const std::string>(new std::string(path), [](const std::string* p) {
+    data::forget_temporary(data::Temporary::kStored);
     std::remove(p->c_str());
     delete p;
   });
@@ -193,8 +197,16 @@ DataSource DataSource::stored(std::FILE* in, const std::string& name) {
     throw failed(std::strerror(errno));
   }
   std::vector<char> buffer(1 << 20);
+  std::uint64_t total = 0;
   for (;;) {
     const std::size_t got = std::fread(buffer.data(), 1, buffer.size(), in);
+    total += got;
+    if (total > limit) {
+      throw Error(name + ": more than " + std::to_string(limit) +
+                  " bytes arrived, the most stored from a stream (the limit keeps an endless "
+                  "stream from filling the disk): give the data as a file, or a larger limit "
+                  "(--stdin-limit)");
+    }
     if (got > 0 && std::fwrite(buffer.data(), 1, got, out.get()) != got) {
       throw failed(std::strerror(errno));
     }

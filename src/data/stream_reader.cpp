@@ -71,7 +71,9 @@ bool StreamReader::next_rows(DataBlock& block, std::size_t max_rows) {
   const std::size_t width = request_.names.size();
   const bool parted = request_.part.count > 1;
   if (parted && !bounds_) bounds_ = seek_part(request_.part);
-  max_rows = std::max<std::size_t>(max_rows, 1);
+  // A wide record's blocks hold fewer rows: memory stays flat whatever the width.
+  max_rows = std::clamp<std::size_t>(
+      max_rows, 1, std::max<std::size_t>(1, kBlockValues / std::max<std::size_t>(width, 1)));
   block.values.resize(max_rows * width);
   block.rows = 0;
   block.zone = RowZone::kOwned;

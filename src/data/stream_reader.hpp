@@ -117,6 +117,8 @@ class StreamReader : public DataReader {
   ColumnMap map_;
 
  private:
+  // The most values a block holds (8 MB): a wide record's blocks have fewer rows.
+  static constexpr std::size_t kBlockValues = std::size_t{1} << 20;
   bool next_rows(DataBlock& block, std::size_t max_rows);
   void check_time(double t, bool owned);
   // How far a step at time t may differ from `reference`, the first step or the metadata's dt.

@@ -164,14 +164,23 @@ void DataWriter::commit() {
   file_.commit();
 }
 
-// The temporary file being written, for remove_partial_output_on_interrupt() to delete from a
-// signal handler: a fixed buffer, since a handler may not allocate.
+// The temporary files, for remove_partial_output_on_interrupt() to delete from a signal
+// handler: fixed buffers, since a handler may not allocate.
 namespace {
-char g_temporary[4096];
-volatile std::sig_atomic_t g_has_temporary = 0;
+struct Remembered {
+  char path[4096];
+  volatile std::sig_atomic_t set = 0;
+};
+Remembered g_temporaries[2];  // by data::Temporary
+
+Remembered& remembered(data::Temporary which) {
+  return g_temporaries[which == data::Temporary::kOutput ? 0 : 1];
+}
 
 extern "C" void remove_and_reraise(int signal) {
-  if (g_has_temporary) ::unlink(g_temporary);
+  for (const Remembered& t : g_temporaries) {
+    if (t.set) ::unlink(t.path);
+  }
   std::signal(signal, SIG_DFL);
   std::raise(signal);
 }
@@ -179,17 +188,18 @@ extern "C" void remove_and_reraise(int signal) {
 
 namespace data {
 
-void remember_temporary(const std::string& path) {
-  if (path.size() < sizeof g_temporary) {
-    g_has_temporary = 0;
-    std::memcpy(g_temporary, path.c_str(), path.size() + 1);
-    g_has_temporary = 1;
+void remember_temporary(const std::string& path, Temporary which) {
+  Remembered& t = remembered(which);
+  if (path.size() < sizeof t.path) {
+    t.set = 0;
+    std::memcpy(t.path, path.c_str(), path.size() + 1);
+    t.set = 1;
   }
 }
 
-void forget_temporary() { g_has_temporary = 0; }
+void forget_temporary(Temporary which) { remembered(which).set = 0; }
 
-int create_temporary(std::string& path) {
+int create_temporary(std::string& path, Temporary which) {
   // An interrupt between creating the file and remembering it would leave the file behind: the
   // signals that remove it are held until it is remembered.
   sigset_t interrupts, previous;
@@ -198,7 +208,7 @@ int create_temporary(std::string& path) {
   pthread_sigmask(SIG_BLOCK, &interrupts, &previous);
   const int fd = mkstemp(path.data());
   const int error = errno;
-  if (fd >= 0) remember_temporary(path);
+  if (fd >= 0) remember_temporary(path, which);
   pthread_sigmask(SIG_SETMASK, &previous, nullptr);
   errno = error;
   return fd;

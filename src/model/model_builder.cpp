@@ -65,6 +65,10 @@ void ModelBuilder::collect(const std::vector<SyntaxNode>& statements) {
       symbols_.declare_measured(n);
     } else if (n.kind == SyntaxKind::kEquation) {
       equation_nodes_.push_back(&n);
+      if (equation_nodes_.size() > kMaxEquations) {
+        source_.fail(n, "one equation too many: a model has at most " +
+                            std::to_string(kMaxEquations) + " equations");
+      }
     } else if (n.kind == SyntaxKind::kMultipliersStatement) {
       multiplier_nodes_.push_back(&n);
     } else if (n.kind == SyntaxKind::kLibraryStatement) {

@@ -25,6 +25,8 @@ class ModelBuilder {
 
   // `statements` are the top-level nodes of the tree, in file order.
   Model build(const std::vector<SyntaxNode>& statements);
+  // Equations a model may have (each is multiplied by every multiplier).
+  static constexpr std::size_t kMaxEquations = 1000;
 
  private:
   // Reads the `model` statement and the declarations, and sets the equations and `multipliers`

@@ -9,7 +9,6 @@
 #include <filesystem>
 #include <fstream>
 #include <memory>
-#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -285,6 +284,16 @@ Model parse_model(std::string_view text, const std::string& file) {
   const AlgebraLock lock;
   // A UTF-8 byte order mark, as some editors write, is not part of the model.
   if (text.substr(0, 3) == "\xEF\xBB\xBF") text.remove_prefix(3);
+  if (text.size() > kMaxModelBytes) {
+    const std::string_view kept = text.substr(0, kMaxModelBytes);
+    const std::size_t line =
+        1 + static_cast<std::size_t>(std::count(kept.begin(), kept.end(), '\n'));
+    const std::size_t start = kept.rfind('\n') == std::string_view::npos ? 0 : kept.rfind('\n') + 1;
+    throw ParseError({file, static_cast<int>(line), static_cast<int>(kMaxModelBytes - start + 1),
+                      line_of(text, line)},
+                     "the model goes on past " + std::to_string(kMaxModelBytes) +
+                         " bytes: a model's text is at most that long");
+  }
   // The parse tree's positions refer to the input's source name: it must outlive the tree.
   pegtl::memory_input in(text.data(), text.size(), file);
   std::unique_ptr<Node> root = parse_tree<g::model_file>(in, text, file);
@@ -300,9 +309,11 @@ Model parse_model_file(const std::string& path) {
   }
   std::ifstream in(path, std::ios::binary);
   if (!in) throw Error(path + ": cannot open the model file: " + std::strerror(errno));
-  std::ostringstream text;
-  text << in.rdbuf();
-  return parse_model(text.str(), path);
+  // One byte more than a model may have, so that a longer file (or an endless one) is refused.
+  std::string text(kMaxModelBytes + 4, '\0');
+  in.read(text.data(), static_cast<std::streamsize>(text.size()));
+  text.resize(static_cast<std::size_t>(in.gcount()));
+  return parse_model(text, path);
 }
 
 namespace {

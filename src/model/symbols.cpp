@@ -114,6 +114,17 @@ void SymbolTable::declare(const SyntaxNode& name_node, const SyntaxNode* value_n
       break;
   }
   list->push_back(std::move(d));
+  const std::size_t variables = states_.size() + inputs_.size() + measured_.size();
+  if (kind != SymbolKind::kConstant && kind != SymbolKind::kParameter &&
+      variables > kMaxVariables) {
+    source_.fail(name_node, "'" + name + "' is one variable too many: a model has at most " +
+                                std::to_string(kMaxVariables) +
+                                " states, inputs and measured columns in all");
+  }
+  if (kind == SymbolKind::kParameter && parameters_.size() > kMaxParameters) {
+    source_.fail(name_node, "'" + name + "' is one parameter too many: a model has at most " +
+                                std::to_string(kMaxParameters) + " parameters");
+  }
 }
 
 void SymbolTable::make_symbols() {

@@ -37,8 +37,12 @@ class SymbolTable {
   SymbolTable(const SymbolTable&) = delete;
   SymbolTable& operator=(const SymbolTable&) = delete;
 
-  // Declares every name of a state, input, param or const statement.
+  // Declares every name of a state, input, param or const statement. A model has at most
+  // kMaxVariables states, inputs and measured columns in all (its terms' monomials, and the
+  // moments, grow with their count) and kMaxParameters parameters.
   void declare_all(const SyntaxNode& statement, SymbolKind kind);
+  static constexpr std::size_t kMaxVariables = 1000;
+  static constexpr std::size_t kMaxParameters = 1000;
   // Declares the columns of a `measured` statement; their derivatives are read once the
   // equations are (measured_targets()).
   void declare_measured(const SyntaxNode& statement);
