@@ -14,7 +14,7 @@ function r = momentid_check(data, varargin)
     name = '';
   end
   model = [];
-  for k = numel(varargin) - 1:-1:1
+  for k = numel(varargin) - 1 - mod(numel(varargin), 2):-2:1  % the names, not the values
     if ischar(varargin{k}) && strcmpi(varargin{k}, 'model')
       model = varargin{k + 1};
       varargin(k:k + 1) = [];

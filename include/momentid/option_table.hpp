@@ -105,6 +105,11 @@ struct GivenOption {
 Model apply_options(const std::vector<GivenOption>& given, const Model& model,
                     const DataSource& source, SelectOptions& options);
 
+// The given options, each of stage kRecord (std::invalid_argument otherwise), set into a
+// RecordOptions: for a front end's commands that read a record but take no other option of the
+// table (check, validate), with the same checks and messages.
+RecordOptions record_options(const std::vector<GivenOption>& given);
+
 // The number `text` is as the command line has always read one (the nearest long double,
 // rounded to a double), or UsageError naming `name`; and the shortest text that it reads back
 // as `value`, for a front end that holds a double.

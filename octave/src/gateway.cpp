@@ -8,7 +8,6 @@
 //   momentid_mex('identify', MODEL, DATA, DATA_NAME, NAME, VALUE, ...)   and select, check,
 //                                                                       validate
 //   momentid_mex('simulate', MODEL, NAME, VALUE, ...)
-//   momentid_mex('version')
 //
 // MODEL is a model file's path (one line ending in .mom) or a model's text; DATA a file name, a
 // cell array of file names, or a struct of column vectors (with an optional field `metadata`).
@@ -17,6 +16,8 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cstdint>
+#include <limits>
 #include <map>
 #include <optional>
 #include <string>
@@ -46,7 +47,7 @@ class Arguments {
       : function_(function) {
     if (count % 2 != 0) {
       throw UsageError(function + ": expected NAME, VALUE pairs after the arguments, found " +
-                       std::to_string(count) + " values");
+                       std::to_string(count) + (count == 1 ? " value" : " values"));
     }
     for (int i = 0; i < count; i += 2) {
       std::string name = text(values[i], "option name", "an option's name");
@@ -56,13 +57,14 @@ class Arguments {
     }
   }
 
-  // The value of option `name`, nullptr when not given ([] counts as not given).
+  // The value of option `name`, nullptr when not given ([], an empty double array, counts as
+  // not given; an empty string, cell array or struct is a value, as in Python).
   const mxArray* take(const std::string& name) {
     const mxArray* out = nullptr;
     for (Given& g : given_) {
       if (g.name != name) continue;
       g.taken = true;
-      out = mxIsEmpty(g.value) && !mxIsChar(g.value) ? nullptr : g.value;
+      out = mxIsDouble(g.value) && mxIsEmpty(g.value) ? nullptr : g.value;
     }
     return out;
   }
@@ -87,21 +89,26 @@ class Arguments {
   std::vector<Given> given_;
 };
 
-// The names of the record options every command with data takes.
-const std::vector<std::string> kRecordNames = {"columns", "dt",         "skip_rows",
-                                               "decimal", "names",      "dt_from",
-                                               "missing", "input_hold", "threads"};
+// The options of the record that check and validate take, as identify takes them.
+const std::vector<std::string> kRecordNames = {"columns", "dt",      "input_hold", "skip_rows",
+                                               "decimal", "missing", "names",      "runs",
+                                               "dt_from", "threads", "shard_size"};
 
 std::optional<double> optional_number(Arguments& args, const std::string& name) {
   if (const mxArray* v = args.take(name)) return number(v, name);
   return std::nullopt;
 }
-std::optional<std::size_t> optional_count(Arguments& args, const std::string& name) {
+// A whole number from 0 to `most`.
+std::optional<std::int64_t> optional_count(Arguments& args, const std::string& name,
+                                           std::int64_t most = std::int64_t{1} << 53) {
   if (const mxArray* v = args.take(name)) {
-    return static_cast<std::size_t>(whole(v, name, 0, "a whole number, 0 or more"));
+    return whole(v, name, 0, most,
+                 most == std::numeric_limits<int>::max() ? "a whole number from 0 to 2^31 - 1"
+                                                         : "a whole number, 0 or more");
   }
   return std::nullopt;
 }
+constexpr std::int64_t kMostInt = std::numeric_limits<int>::max();
 std::optional<std::string> optional_text(Arguments& args, const std::string& name) {
   if (const mxArray* v = args.take(name)) return text(v, name);
   return std::nullopt;
@@ -127,26 +134,21 @@ void check_interrupt(PassControl& control) {
   };
 }
 
+// The options of an identify or select option table entry, as the text its setter reads.
+std::optional<std::string> option_text(const OptionDescription& o, const mxArray* value);
+
+// check's and validate's record options, set and checked by the option table's setters.
 RecordOptions record_options(Arguments& args) {
-  RecordOptions out;
-  if (const mxArray* v = args.take("columns")) {
-    for (auto& [variable, column] : pair_list(v, "columns")) out.columns[variable] = column;
-  }
-  out.dt = optional_number(args, "dt");
-  if (auto rows = optional_count(args, "skip_rows")) out.layout.skip_rows = *rows;
-  if (auto decimal = optional_text(args, "decimal")) {
-    if (*decimal != "." && *decimal != ",") {
-      throw UsageError("decimal", "expected '.' or ',', found '" + *decimal + "'");
+  std::vector<GivenOption> given;
+  for (const std::string& keyword : kRecordNames) {
+    const OptionDescription* option = find_option(keyword);
+    if (const mxArray* value = args.take(keyword)) {
+      if (std::optional<std::string> text = option_text(*option, value)) {
+        given.push_back({option, std::move(*text), keyword});
+      }
     }
-    out.layout.decimal = (*decimal)[0];
   }
-  if (const mxArray* v = args.take("names")) out.layout.column_names = names_of(v, "names");
-  out.layout.dt_from = optional_text(args, "dt_from");
-  if (auto missing = optional_text(args, "missing")) {
-    out.layout.missing = parse_missing_values(*missing, "missing");
-  }
-  if (auto hold = optional_text(args, "input_hold")) out.hold = parse_input_hold(*hold, "hold");
-  if (auto threads = optional_count(args, "threads")) out.control.threads = *threads;
+  RecordOptions out = momentid::record_options(given);
   check_interrupt(out.control);
   return out;
 }
@@ -211,15 +213,8 @@ DataSource data_source(const mxArray* data, const std::string& name,
     if (mxIsDouble(values)) {
       at = mxGetPr(values);
     } else {
-      std::vector<double>& copy = copies.emplace_back(rows);
-      mxArray* converted = nullptr;
-      mxArray* input = const_cast<mxArray*>(values);
-      if (mexCallMATLAB(1, &converted, 1, &input, "double") != 0 || converted == nullptr) {
-        throw UsageError("data." + column + ": cannot be read as double");
-      }
-      std::copy_n(mxGetPr(converted), rows, copy.begin());
-      mxDestroyArray(converted);
-      at = copy.data();
+      at = copies.emplace_back(numbers_of(values, "data." + column, "a vector of real numbers"))
+               .data();
     }
     memory.columns.push_back({column, at, 1});
   }
@@ -232,7 +227,23 @@ DataSource data_source(const mxArray* data, const std::string& name,
 void set(mxArray* s, const char* field, mxArray* value) {
   int f = mxGetFieldNumber(s, field);
   if (f < 0) f = mxAddField(s, field);
+  if (f < 0) throw Error(std::string("cannot add the field '") + field + "' to a struct");
   mxSetFieldByNumber(s, 0, f, value);
+}
+
+// A model variable's name as the field of a struct of series: UsageError for one MATLAB cannot
+// hold (`_y`, longer than 63 characters) or that `taken` already names (t, run, metadata).
+const char* variable_field(const std::string& name, const std::vector<std::string>& taken) {
+  if (!valid_field_name(name)) {
+    throw UsageError("'" + name +
+                     "' cannot name a field of a struct (a letter, then letters, "
+                     "digits and underscores, 63 at most): rename the model's variable");
+  }
+  if (std::find(taken.begin(), taken.end(), name) != taken.end()) {
+    throw UsageError("the model's variable '" + name + "' would replace the field '" + name +
+                     "' of the result: rename it");
+  }
+  return name.c_str();
 }
 
 mxArray* column(const std::vector<double>& values) {
@@ -274,14 +285,20 @@ void add_vectors(mxArray* out, const nlohmann::ordered_json& parameters) {
   set(out, "bse", column(errors));
 }
 
+// Whether `value` is a result of momentid_identify (or select): a struct with params and
+// param_names.
+bool identify_result(const mxArray* value) {
+  return mxIsStruct(value) && mxGetNumberOfElements(value) == 1 &&
+         mxGetField(value, 0, "params") != nullptr &&
+         mxGetField(value, 0, "param_names") != nullptr;
+}
+
 // Parameter values from a struct of numbers, or from an identify result (its estimates).
 ParameterValues parameter_values(const Model& model, const mxArray* value) {
   std::vector<std::string> items;
   if (value != nullptr) {
     const mxArray* from = value;
-    if (mxIsStruct(value) && mxGetNumberOfElements(value) == 1 &&
-        mxGetField(value, 0, "params") != nullptr &&
-        mxGetField(value, 0, "param_names") != nullptr) {
+    if (identify_result(value)) {
       const mxArray* names = mxGetField(value, 0, "param_names");
       const mxArray* numbers = mxGetField(value, 0, "params");
       const std::vector<std::string> list = names_of(names, "params.param_names");
@@ -314,7 +331,7 @@ mxArray* derive_command(const Model& model, Arguments& args) {
   const mxArray* instruments = args.take("instruments");
   const mxArray* measured = args.take("measured");
   const mxArray* multipliers = args.take("multipliers");
-  const std::optional<std::size_t> degree = optional_count(args, "degree");
+  const std::optional<std::int64_t> degree = optional_count(args, "degree", kMostInt);
   args.finish({"lags", "instruments", "measured", "multipliers", "degree"});
   if (lags != nullptr) {
     LagOptions options;
@@ -344,7 +361,7 @@ mxArray* derive_command(const Model& model, Arguments& args) {
     options.multipliers = parse_multiplier_list(
         model, joined(multipliers, "multipliers", ", ", "monomials"), "multipliers");
   }
-  if (degree) options.degree = static_cast<int>(*degree);
+  if (degree) options.degree = static_cast<int>(*degree);  // at most kMostInt
   const MomentSystem system = derive(model, options);
   mxArray* out = result(json_value(system), format_text(system));
   set(out, "latex", mxCreateString(format_latex(system).c_str()));
@@ -354,13 +371,17 @@ mxArray* derive_command(const Model& model, Arguments& args) {
 // An option of identify's and select's as the text its setter reads (see OptionValue).
 std::optional<std::string> option_text(const OptionDescription& o, const mxArray* value) {
   const std::string name(o.keyword);
-  if (mxIsChar(value) && o.value != OptionValue::kSwitch) return text(value, name);
+  const bool list = o.value == OptionValue::kNames || o.value == OptionValue::kMonomials ||
+                    o.value == OptionValue::kPairs;
+  if (mxIsChar(value) && o.value != OptionValue::kSwitch && !list) return text(value, name);
   std::string out;
   switch (o.value) {
     case OptionValue::kCount:
-      return std::to_string(whole(value, name, 0, "a whole number, 0 or more"));
+      return std::to_string(
+          whole(value, name, 0, std::int64_t{1} << 53, "a whole number, 0 or more"));
     case OptionValue::kWhole:
-      return std::to_string(whole(value, name, -(1L << 53), "a whole number"));
+      return std::to_string(
+          whole(value, name, -(std::int64_t{1} << 53), std::int64_t{1} << 53, "a whole number"));
     case OptionValue::kNumber:
       return option_number_text(number(value, name));
     case OptionValue::kText:
@@ -371,10 +392,14 @@ std::optional<std::string> option_text(const OptionDescription& o, const mxArray
       if (!truth(value, name)) return std::nullopt;
       return std::string(o.value_name);
     case OptionValue::kSize:
-      return std::to_string(whole(value, name, 0, "a size in bytes"));
-    case OptionValue::kRange:
-      if (mxGetNumberOfElements(value) != 2) number(value, name, "[FIRST LAST]");  // throws
+      return std::to_string(whole(value, name, 0, std::int64_t{1} << 53, "a size in bytes"));
+    case OptionValue::kRange: {
+      const std::vector<double> ends = numbers_of(value, name, "[FIRST LAST]");
+      if (ends.size() != 2) {
+        throw UsageError(name, "expected [FIRST LAST], found " + describe(value));
+      }
       return joined(value, name, "..", "[FIRST LAST]");
+    }
     case OptionValue::kNames:
       out = joined(value, name, ",", "a name or a cell array of names");
       break;
@@ -441,7 +466,7 @@ mxArray* select_command(const Model& model, const DataSource& source, Arguments&
 
 mxArray* check_command(const mxArray* model, const DataSource& source, Arguments& args) {
   CheckOptions with;
-  if (auto lags = optional_count(args, "lags")) with.lags = *lags;
+  if (auto lags = optional_count(args, "lags")) with.lags = static_cast<std::size_t>(*lags);
   with.record = record_options(args);
   std::vector<std::string> known = kRecordNames;
   known.insert(known.begin(), "lags");
@@ -461,7 +486,8 @@ mxArray* validate_series(const ValidateResult& r) {
   const Record& record = r.replay.record;
   mxArray* simulated = mxCreateStructMatrix(1, 1, 0, nullptr);
   for (std::size_t j = 0; j < model.states().size(); ++j) {
-    set(simulated, model.states()[j].name.c_str(), column(series_simulated(r.replay, j)));
+    set(simulated, variable_field(model.states()[j].name, {}),
+        column(series_simulated(r.replay, j)));
   }
   mxArray* measured = mxCreateStructMatrix(1, 1, 0, nullptr);
   for (const OutputFit& output : r.outputs) {
@@ -472,7 +498,7 @@ mxArray* validate_series(const ValidateResult& r) {
   mxArray* inputs = mxCreateStructMatrix(1, 1, 0, nullptr);
   const std::size_t states = model.states().size();
   for (std::size_t v = states; v < states + model.inputs().size(); ++v) {
-    set(inputs, model.variables()[v].name.c_str(), column(series_recorded(record, v)));
+    set(inputs, variable_field(model.variables()[v].name, {}), column(series_recorded(record, v)));
   }
   std::vector<bool> past;
   for (std::size_t k = 0; k < record.runs.size(); ++k) {
@@ -496,13 +522,14 @@ mxArray* validate_command(const Model& model, const DataSource& source, Argument
   const mxArray* params = args.take("params");
   with.replay.parameters = parameter_values(model, params);
   with.replay.record = record_options(args);
-  if (auto substeps = optional_count(args, "substeps"))
+  if (auto substeps = optional_count(args, "substeps", kMostInt)) {
     with.replay.substeps = static_cast<int>(*substeps);
+  }
   if (auto method = optional_text(args, "interpolation")) {
     with.replay.interpolation = parse_interpolation(*method, "interpolation");
   }
-  with.skip = optional_count(args, "skip");
-  if (auto lags = optional_count(args, "lags")) with.lags = static_cast<int>(*lags);
+  if (auto skip = optional_count(args, "skip")) with.skip = static_cast<std::size_t>(*skip);
+  if (auto lags = optional_count(args, "lags", kMostInt)) with.lags = static_cast<int>(*lags);
   if (const mxArray* center = args.take("center")) with.center = names_of(center, "center");
   const std::optional<std::string> plot = optional_text(args, "plot");
   std::vector<std::string> known = kRecordNames;
@@ -511,7 +538,9 @@ mxArray* validate_command(const Model& model, const DataSource& source, Argument
   args.finish(known);
   const Model completed = declare_derivative_columns(model, with.replay.record, source);
   ValidateResult r = validate(completed, source, with);
-  r.parameters_from = params == nullptr ? "the model's nominal values" : "params";
+  r.parameters_from = params == nullptr         ? "the model's nominal values"
+                      : identify_result(params) ? "the estimates of momentid_identify"
+                                                : "the model's nominal values and params";
   if (plot) write_plot(r, *plot);
   mxArray* out = result(json_value(r), format_text(r));
   set(out, "series", validate_series(r));
@@ -538,10 +567,12 @@ mxArray* simulate_command(const Model& model, Arguments& args) {
     options.inputs.push_back(InputSpec::parse(spec, "inputs." + input.name));
   }
   if (auto dt = optional_number(args, "dt")) options.dt = *dt;
-  if (auto samples = optional_count(args, "samples")) options.samples = *samples;
-  if (auto burn_in = optional_count(args, "burn_in")) options.burn_in = *burn_in;
-  if (auto runs = optional_count(args, "runs")) options.runs = *runs;
-  if (auto seed = optional_count(args, "seed")) options.seed = *seed;
+  if (auto samples = optional_count(args, "samples"))
+    options.samples = static_cast<std::size_t>(*samples);
+  if (auto burn_in = optional_count(args, "burn_in"))
+    options.burn_in = static_cast<std::size_t>(*burn_in);
+  if (auto runs = optional_count(args, "runs")) options.runs = static_cast<std::size_t>(*runs);
+  if (auto seed = optional_count(args, "seed")) options.seed = static_cast<std::uint64_t>(*seed);
   if (const mxArray* v = args.take("noise")) {
     for (const auto& [channel, level] : pair_list(v, "noise")) {
       options.noise.push_back({channel, parse_option_number(level, "noise")});
@@ -569,7 +600,7 @@ mxArray* simulate_command(const Model& model, Arguments& args) {
   for (std::size_t c : channels) {
     mxArray* values = mxCreateDoubleMatrix(rows, 1, mxREAL);
     columns.push_back(mxGetPr(values));
-    set(out, model.variables()[c].name.c_str(), values);
+    set(out, variable_field(model.variables()[c].name, {"t", "run", "metadata"}), values);
   }
   double* run = nullptr;
   if (options.runs > 1) {
@@ -599,7 +630,6 @@ mxArray* simulate_command(const Model& model, Arguments& args) {
 // Runs `command` on the arguments after it.
 mxArray* run(const std::string& command, int count, const mxArray* const* values) {
   const std::string function = "momentid_" + command;
-  if (command == "version") return mxCreateString(MOMENTID_VERSION);
   if (command == "derive" || command == "simulate") {
     if (count < 1) throw UsageError(function + ": expected a model");
     Arguments args(count - 1, values + 1, function);
@@ -670,6 +700,9 @@ void mexFunction(int nlhs, mxArray* plhs[], int nrhs, const mxArray* prhs[]) {
   } catch (const std::exception& e) {
     id = "momentid:internal";
     message = e.what();
+  } catch (...) {
+    id = "momentid:internal";
+    message = "an unknown exception";
   }
 #if defined(HAVE_OCTAVE)
   // Ctrl-C ends the call as it ends any of Octave's own.

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 
 #include "momentid/error.hpp"
@@ -187,12 +188,61 @@ double number(const mxArray* value, const std::string& name, const char* expecte
   return mxGetScalar(value);
 }
 
-long whole(const mxArray* value, const std::string& name, long lowest, const char* expected) {
+std::int64_t whole(const mxArray* value, const std::string& name, std::int64_t lowest,
+                   std::int64_t highest, const char* expected) {
   const double x = number(value, name, expected);
-  if (!(x == std::floor(x)) || x < static_cast<double>(lowest) || x > 9007199254740992.0) {
+  if (!(x == std::floor(x)) || x < static_cast<double>(lowest) ||
+      x > static_cast<double>(highest)) {
     wrong(name, expected, value);
   }
-  return static_cast<long>(x);
+  return static_cast<std::int64_t>(x);
+}
+
+std::vector<double> numbers_of(const mxArray* value, const std::string& name,
+                               const char* expected) {
+  if (!(real_numbers(value) || mxIsLogical(value))) wrong(name, expected, value);
+  const std::size_t n = mxGetNumberOfElements(value);
+  std::vector<double> out(n);
+  const void* data = mxGetData(value);
+  const auto copy = [&](const auto* typed) { std::copy(typed, typed + n, out.begin()); };
+  switch (mxGetClassID(value)) {
+    case mxDOUBLE_CLASS:
+      copy(static_cast<const double*>(data));
+      break;
+    case mxSINGLE_CLASS:
+      copy(static_cast<const float*>(data));
+      break;
+    case mxINT8_CLASS:
+      copy(static_cast<const std::int8_t*>(data));
+      break;
+    case mxUINT8_CLASS:
+      copy(static_cast<const std::uint8_t*>(data));
+      break;
+    case mxINT16_CLASS:
+      copy(static_cast<const std::int16_t*>(data));
+      break;
+    case mxUINT16_CLASS:
+      copy(static_cast<const std::uint16_t*>(data));
+      break;
+    case mxINT32_CLASS:
+      copy(static_cast<const std::int32_t*>(data));
+      break;
+    case mxUINT32_CLASS:
+      copy(static_cast<const std::uint32_t*>(data));
+      break;
+    case mxINT64_CLASS:
+      copy(static_cast<const std::int64_t*>(data));
+      break;
+    case mxUINT64_CLASS:
+      copy(static_cast<const std::uint64_t*>(data));
+      break;
+    case mxLOGICAL_CLASS:
+      copy(static_cast<const mxLogical*>(data));
+      break;
+    default:
+      wrong(name, expected, value);
+  }
+  return out;
 }
 
 bool truth(const mxArray* value, const std::string& name) {
@@ -215,19 +265,20 @@ std::string joined(const mxArray* value, const std::string& name, const char* co
     }
     return out;
   }
-  if (real_numbers(value)) {
-    const double* x = mxGetPr(value);
-    for (std::size_t i = 0; i < mxGetNumberOfElements(value); ++i) {
-      out += (i ? comma : "") + option_number_text(x[i]);
-    }
-    return out;
-  }
-  wrong(name, expected, value);
+  const std::vector<double> x = numbers_of(value, name, expected);
+  for (std::size_t i = 0; i < x.size(); ++i) out += (i ? comma : "") + option_number_text(x[i]);
+  return out;
 }
 
 std::vector<std::pair<std::string, std::string>> pair_list(const mxArray* value,
                                                            const std::string& name) {
   std::vector<std::pair<std::string, std::string>> out;
+  if (mxIsChar(value)) {
+    for (auto& pair : parse_option_pairs(text(value, name), name, "NAME=VALUE")) {
+      out.push_back(std::move(pair));
+    }
+    return out;
+  }
   if (mxIsStruct(value) && mxGetNumberOfElements(value) == 1) {
     for (int f = 0; f < mxGetNumberOfFields(value); ++f) {
       const std::string field = mxGetFieldNameByNumber(value, f);

@@ -6,6 +6,7 @@
 #include <mex.h>
 
 #include <cstddef>
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
@@ -30,8 +31,13 @@ std::string text(const mxArray* value, const std::string& name, const char* expe
 // A real scalar number, or UsageError naming `name`.
 double number(const mxArray* value, const std::string& name, const char* expected = "a number");
 
-// A whole number (within `lowest`..2^53), or UsageError naming `name`.
-long whole(const mxArray* value, const std::string& name, long lowest, const char* expected);
+// A whole number within lowest..highest, or UsageError naming `name`.
+std::int64_t whole(const mxArray* value, const std::string& name, std::int64_t lowest,
+                   std::int64_t highest, const char* expected);
+
+// The values of a real numeric or logical array, as doubles, in Octave's (column-major) order.
+// UsageError naming `name` for any other value.
+std::vector<double> numbers_of(const mxArray* value, const std::string& name, const char* expected);
 
 // true or false (a logical or a number 0 or 1), or UsageError naming `name`.
 bool truth(const mxArray* value, const std::string& name);
@@ -42,8 +48,8 @@ std::string joined(const mxArray* value, const std::string& name, const char* co
                    const char* expected);
 
 // NAME=VALUE pairs joined by commas: from a struct (a field each), a cell array of names and
-// values ({'y''', 'acc'; 'x', 'force'} or {'y''', 'acc', 'x', 'force'}), or a string as it is.
-// A number is written as the shortest text that reads back as the same double.
+// values ({'y''', 'acc'; 'x', 'force'} or {'y''', 'acc', 'x', 'force'}), or a string as it is
+// (NAME=VALUE,...). A number is written as the shortest text that reads back as the same double.
 std::string pairs(const mxArray* value, const std::string& name);
 
 // The same pairs, as a list of (name, text).

@@ -100,6 +100,18 @@ check(close_to(fixed.params, cellfun(@(n) cli_fixed.parameters.(n).estimate, nam
 text_fixed = momentid_identify(duffing, record, 'fix', 'k=4', 'lags', '3..60');
 check(isequal(text_fixed.params, fixed.params), 'identify: options as the command line''s text');
 
+% Values of other classes and forms, as Python's.
+check(isequal(momentid_identify(duffing, record, 'fix', struct('k', 4), 'lags', int32([3 60])).params, ...
+              fixed.params), 'identify: an int32 range as a double one');
+none = momentid_identify(duffing, record, 'noise', 'none', 'lags', [3 60]);
+check(isequal(momentid_identify(duffing, record, 'noise', {}, 'lags', [3 60]).params, none.params) && ...
+      isequal(momentid_identify(duffing, record, 'noise', '', 'lags', [3 60]).params, none.params), ...
+      'identify: an empty noise list is none, as in Python');
+check_error(@() momentid_identify(duffing, record, 'degree', 2^32 + 3), 'momentid:usage', ...
+            '^degree: expected a whole number', 'a degree beyond an int');
+check_error(@() momentid_identify(duffing, record, 'lags', 5), 'momentid:usage', ...
+            '^lags: expected \[FIRST LAST\], found the number 5', 'a range of one number');
+
 % A model's text.
 text = fileread(duffing);
 check(isequal(momentid_identify(text, record).params, r.params), 'identify: a model''s text');
@@ -134,7 +146,14 @@ cli_v = jsondecode(program(sprintf('validate %s %s --format json --set c=%.17g -
 check(strcmp(v.verdict, cli_v.verdict), 'validate: the verdict of the command line');
 check(numel(v.series.t) == 40000 && numel(v.series.simulated.y) == 40000 && ...
       sum(v.series.compared) < 40000, 'validate: the series');
+check(strcmp(momentid_validate(duffing, record, 'params', r, 'columns', 'y=y').verdict, v.verdict), ...
+      'validate: columns as the command line''s text');
 c = momentid_check(record, 'model', duffing);
+check_error(@() momentid_check(record, 'threads', 5000), 'momentid:usage', '^threads: ', ...
+            'check: threads beyond the table''s range');
+check_error(@() momentid_simulate(sprintf('state _y\ninput x\nparam a = 1\n_y'' = -a*_y + x'), ...
+                                  'samples', 10), 'momentid:usage', '''_y'' cannot name a field', ...
+            'simulate: a variable no struct field can hold');
 check(~isempty(strfind(c.text, 'y')) && isfield(c, 'channels'), 'check: the statistics');
 library = fullfile(source, 'examples', 'select', 'library.mom');
 s = momentid_select(library, record);

@@ -69,12 +69,16 @@ class RangeReading {
     std::unique_lock lock(mutex_);
     while (running_ > 0) {
       finished_.wait_for(lock, std::chrono::milliseconds(100));
-      if (options_.record.control.interrupted && running_ > 0) {
+      if (options_.record.control.interrupted && running_ > 0 && !interrupted_) {
         lock.unlock();
         const bool stop = options_.record.control.interrupted();
         lock.lock();
-        // No shard is started after this one; those being read finish.
-        if (stop) fail_at(begin_, std::make_exception_ptr(Interrupted()));
+        // No shard is started after this one; those being read finish. Asked no more: the
+        // caller has its answer (Python's KeyboardInterrupt is set).
+        if (stop) {
+          interrupted_ = true;
+          fail_at(begin_, std::make_exception_ptr(Interrupted()));
+        }
       }
       if (options_.record.control.progress && running_ > 0) {
         double shards_done = static_cast<double>(next_merge_ - begin_);
@@ -140,6 +144,7 @@ class RangeReading {
   std::condition_variable finished_;
   std::vector<std::optional<ShardState>> done_;
   std::size_t next_shard_, next_merge_, running_;
+  bool interrupted_ = false;
   std::atomic<std::size_t> rows_done_{0};
   // How far each worker is in its shard, when it can tell.
   std::vector<std::atomic<double>> partial_;

@@ -96,6 +96,10 @@ std::optional<Runaway> runaway_of(const IdentifyResult& r) {
 
 std::optional<Runaway> runaway(const IdentifyResult& r) {
   if (!r.estimate.usable()) return std::nullopt;
+  const auto finite = [](const std::vector<double>& values) {
+    return std::all_of(values.begin(), values.end(), [](double x) { return std::isfinite(x); });
+  };
+  if (!finite(estimates_of(r)) || !finite(input_means(r))) return std::nullopt;
   const AlgebraLock lock;
   std::optional<Runaway> out;
   try {

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <stdexcept>
 
 #include "app/options/setters.hpp"
 #include "momentid/error.hpp"
@@ -185,6 +186,19 @@ Model apply_options(const std::vector<GivenOption>& given, const Model& model,
   Model completed = declare_derivative_columns(model, into.identify.record, source);
   apply(OptionStage::kModel, completed);
   return completed;
+}
+
+RecordOptions record_options(const std::vector<GivenOption>& given) {
+  options::check_exclusions(given);
+  SelectOptions into;
+  const Model none;  // the record's setters read no model
+  for (const GivenOption& g : given) {
+    if (g.option->stage != OptionStage::kRecord) {
+      throw std::invalid_argument(std::string(g.option->flag) + " is not a record's option");
+    }
+    g.option->set(into, none, g.text, g.name);
+  }
+  return into.identify.record;
 }
 
 }  // namespace momentid
