@@ -270,6 +270,46 @@ TEST_SUITE("app") {
     CHECK(strided.data.time_step == 0.01);
   }
 
+  TEST_CASE(
+      "one value that decides a channel's moments is named with its row, in identify and check") {
+    const DuffingFile file(5000);
+    std::vector<std::vector<double>> columns =
+        read_columns(file.path.string(), {"t", "y", "v", "x"});
+    const auto identify_with = [&](double spike) {
+      std::vector<double> y = columns[1];
+      if (spike != 0) y[1234] = spike;
+      momentid::MemoryData data;
+      data.rows = y.size();
+      data.columns = {{"t", columns[0].data()},
+                      {"y", y.data()},
+                      {"v", columns[2].data()},
+                      {"x", columns[3].data()}};
+      data.metadata.add_line({{"model", "duffing"}, {"input-hold", "zoh"}});
+      return momentid::identify(file.model, momentid::DataSource::memory(data));
+    };
+    const auto warned = [](const momentid::IdentifyResult& r, const std::string& text) {
+      const auto w = momentid::format_text(r);
+      return w.find(text) != std::string::npos;
+    };
+    const auto clean = identify_with(0);
+    CHECK(clean.estimate.status == momentid::Status::kOk);
+    CHECK_FALSE(warned(clean, "one sample decides"));
+    // Its square beyond doubles: the estimate is undone, and the cause named.
+    const auto overflow = identify_with(1e300);
+    CHECK(overflow.estimate.status != momentid::Status::kOk);
+    CHECK(warned(overflow,
+                 "'y' has a value of magnitude 1e+300 at row 1235 of the record that "
+                 "has a square beyond the range of doubles: one sample decides every "
+                 "moment of it"));
+    CHECK_FALSE(warned(overflow, "parameters along :"));
+    // A spike of 10^4 (the record's rms is about 0.2): never 'ok'.
+    const auto spike = identify_with(1e4);
+    CHECK(momentid::status(spike) != momentid::Status::kOk);
+    CHECK(warned(spike,
+                 "'y' has a value of magnitude 10000 at row 1235 of the record that carries "
+                 "100% of the channel's sum of squares"));
+  }
+
   TEST_CASE("a value that is not finite in memory is located at its row and column") {
     const std::vector<double> y{1, 2, std::numeric_limits<double>::quiet_NaN(), 4};
     const std::vector<double> x{0, 1, 0, 1};

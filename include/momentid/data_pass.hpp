@@ -23,6 +23,9 @@ struct ChannelStatistics {
   bool is_input = false;
   double mean = 0;
   double variance = 0;
+  // The largest |value| and its row, from 0, among the record's rows (every run, in order).
+  double largest = 0;
+  std::size_t largest_row = 0;
   std::vector<double> autocorrelation;  // lags 1..L
   // Samples until the autocorrelation first drops below 1/e (L + 1 if it never does).
   std::size_t correlation_time = 0;
@@ -133,5 +136,11 @@ namespace momentid {
 std::vector<std::string> data_warnings(const DataMoments& data);
 // The warning for rows dropped for missing values (MissingSummary::rows > 0).
 std::string missing_warning(const MissingSummary& missing);
+// A value that decides a channel's moments: one that carries more than half of the channel's
+// sum of squares over a record of at least kOutlierRows rows (a spike, a dropout marker, a unit
+// error), or whose square is beyond doubles, named with its row and column; nullopt when no
+// channel has one.
+std::optional<std::string> outlier_warning(const DataMoments& data);
+inline constexpr std::size_t kOutlierRows = 20;
 
 }  // namespace momentid

@@ -127,6 +127,7 @@ CheckResult check(const DataSource& source, const Model* model, const CheckOptio
   data_options.derivatives = channels.derivatives;
   result.data = moments_from_data(source, channels.states, channels.inputs, moments, data_options);
   if (system) result.identities = check_identities(*system, full_moments, result.data.estimates);
+  if (std::optional<std::string> w = outlier_warning(result.data)) result.warnings.push_back(*w);
   for (std::string& w : data_warnings(result.data)) result.warnings.push_back(std::move(w));
   return result;
 }

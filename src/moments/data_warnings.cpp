@@ -26,6 +26,26 @@ std::string missing_warning(const MissingSummary& missing) {
   return text;
 }
 
+std::optional<std::string> outlier_warning(const DataMoments& data) {
+  if (data.rows < kOutlierRows) return std::nullopt;
+  for (const ChannelStatistics& c : data.channels) {
+    const double squares = static_cast<double>(data.rows) * (c.variance + c.mean * c.mean);
+    const bool overflows = !std::isfinite(squares);
+    if (!overflows && !(c.largest * c.largest > 0.5 * squares)) continue;
+    char value[32], share[32];
+    std::snprintf(value, sizeof value, "%.6g", c.largest);
+    std::snprintf(share, sizeof share, "%.3g%%",
+                  overflows ? 100.0 : 100 * c.largest * c.largest / squares);
+    return "'" + c.name + "' has a value of magnitude " + value + " at row " +
+           std::to_string(c.largest_row + 1) + " of the record that " +
+           (overflows ? "has a square beyond the range of doubles"
+                      : std::string("carries ") + share + " of the channel's sum of squares") +
+           ": one sample decides every moment of it (a spike, a dropout marker, a unit error?). "
+           "Correct or remove that row";
+  }
+  return std::nullopt;
+}
+
 std::vector<std::string> data_warnings(const DataMoments& data) {
   std::vector<std::string> out;
   if (data.missing.rows > 0) out.push_back(missing_warning(data.missing));

@@ -21,7 +21,9 @@ LagSums::LagSums(std::size_t channels, std::size_t lags)
       products_(lags * channels, 0.0),
       lead_(lags * channels, 0.0),
       lagged_(lags * channels, 0.0),
-      pairs_(lags, 0) {}
+      pairs_(lags, 0),
+      largest_(channels, 0.0),
+      largest_row_(channels, 0) {}
 
 void LagSums::add_history(const double* rows, std::size_t count) {
   for (std::size_t r = 0; r < count; ++r) remember(rows + r * channels_);
@@ -36,6 +38,10 @@ void LagSums::add(const double* rows, std::size_t count) {
       for (std::size_t k = 0; k < history_.size(); ++k) history_[k] -= offset_[k % channels_];
     }
     for (std::size_t c = 0; c < channels_; ++c) {
+      if (std::abs(row[c]) > largest_[c]) {
+        largest_[c] = std::abs(row[c]);
+        largest_row_[c] = count_;
+      }
       const double x = row[c] - offset_[c];
       sum_[c] += x;
       sum_squares_[c] += x * x;
@@ -62,6 +68,10 @@ void LagSums::save(ByteWriter& out) const {
     for (double x : *v) out.f64(x);
   }
   for (std::size_t p : pairs_) out.u64(p);
+  for (std::size_t c = 0; c < channels_; ++c) {
+    out.f64(largest_[c]);
+    out.u64(largest_row_[c]);
+  }
 }
 
 LagSums LagSums::load(ByteReader& in, std::size_t channels, std::size_t lags) {
@@ -77,6 +87,10 @@ LagSums LagSums::load(ByteReader& in, std::size_t channels, std::size_t lags) {
     for (double& x : *v) x = in.f64("a channel sum");
   }
   for (std::size_t& p : out.pairs_) p = in.u64("a count of pairs");
+  for (std::size_t c = 0; c < channels; ++c) {
+    out.largest_[c] = in.f64("a channel's largest value");
+    out.largest_row_[c] = in.u64("the row of a channel's largest value");
+  }
   return out;
 }
 
@@ -87,6 +101,10 @@ void LagSums::merge(const LagSums& other) {
     return;
   }
   for (std::size_t c = 0; c < channels_; ++c) {
+    if (other.largest_[c] > largest_[c]) {
+      largest_[c] = other.largest_[c];
+      largest_row_[c] = count_ + other.largest_row_[c];
+    }
     // other's values less this offset: x - o = (x - o_other) - d.
     const double d = offset_[c] - other.offset_[c];
     const auto n = static_cast<double>(other.count_);
@@ -110,6 +128,8 @@ ChannelStatistics LagSums::statistics(std::size_t c) const {
   const double shifted_mean = sum_[c] / n;
   s.mean = offset_[c] + shifted_mean;
   s.variance = sum_squares_[c] / n - shifted_mean * shifted_mean;
+  s.largest = largest_[c];
+  s.largest_row = largest_row_[c];
   s.correlation_time = lags_ + 1;
   // The lag-l covariance about the record's mean over the pairs that lag has. The values
   // paired are not all the values (a run's first l rows lead no pair, its last l are lagged by

@@ -43,6 +43,9 @@ class LagSums {
   // Per lag and channel: the sums of the later and of the earlier values of the pairs.
   std::vector<double> lead_, lagged_;
   std::vector<std::size_t> pairs_;
+  // Per channel: the largest |value| and its row among the rows added (the first such row).
+  std::vector<double> largest_;
+  std::vector<std::size_t> largest_row_;
   std::size_t head_ = 0, filled_ = 0, count_ = 0;
 };
 

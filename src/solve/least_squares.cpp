@@ -73,7 +73,9 @@ Identifiability identifiability(const LeastSquares& solution,
     combos += (combos.empty() ? "" : "; ") +
               combination(solution.null_space.col(j), solution.scale, names, out.identifiable);
   }
-  out.message = "the data cannot separate the parameters along " + combos + ": only " +
+  // No direction to name when the equations hold values beyond doubles (an outlier's powers).
+  out.message = "the data cannot separate the parameters" +
+                (combos.empty() ? std::string() : " along " + combos) + ": only " +
                 std::to_string(solution.rank) + " of " + std::to_string(params) +
                 " parameter combinations are determined";
   return out;

@@ -37,6 +37,12 @@ MatrixXd added_by(const MomentErrors& moments, const MatrixXd& jacobian) {
 }
 
 // The least-squares estimate's parameters, errors, correlations and objective.
+// A standard error from a variance: rounding may leave a zero variance slightly negative; a
+// variance that is not a number (equations beyond doubles) gives none.
+double error_of(double variance) {
+  return std::isnan(variance) ? kNaN : std::sqrt(std::max(0.0, variance));
+}
+
 void report_least_squares(Estimate& out, const LinearSystem& system, const LeastSquares& ls,
                           const std::vector<bool>& identifiable, const MomentErrors& moments) {
   const MatrixXd jacobian =
@@ -55,7 +61,7 @@ void report_least_squares(Estimate& out, const LinearSystem& system, const Least
     e.estimate = ls.theta(i);
     e.identifiable = identifiable[p];
     const bool has_error = e.identifiable && out.batches >= 2;
-    set_error(e, has_error ? std::sqrt(std::max(0.0, errors.covariance(i, i))) : kNaN, t975);
+    set_error(e, has_error ? error_of(errors.covariance(i, i)) : kNaN, t975);
   }
   if (out.batches >= 2) fit.correlation = correlation_of(errors.covariance, identifiable);
   warn_about_errors(out, errors);
@@ -78,7 +84,7 @@ void report_gmm(Estimate& out, const LinearSystem& system, const LeastSquares& l
     const auto i = static_cast<Index>(p);
     ParameterEstimate e{out.least_squares.parameters[p].name};
     e.estimate = gmm.theta(i);
-    set_error(e, std::sqrt(std::max(0.0, errors.covariance(i, i))), t975);
+    set_error(e, error_of(errors.covariance(i, i)), t975);
     fit.parameters.push_back(e);
   }
   fit.correlation = correlation_of(errors.covariance, identifiable);

@@ -165,6 +165,7 @@ bool undetermined(const IdentifyResult& r) {
 
 std::vector<std::string> doubts(const IdentifyResult& r) {
   std::vector<std::string> out;
+  if (std::optional<std::string> outlier = outlier_warning(r.data)) out.push_back(*outlier);
   const Estimate& e = r.estimate;
   if (e.j_pvalue && *e.j_pvalue < kJRejection) {  // the J test comes with the optimal weighting
     // Offsets too small for a warning of their own may still be what the test sees.
