@@ -877,4 +877,16 @@ y' = -a*b*c*d*k*y
           "parameters a)\n 4 | " +
               window + "\n   | " + std::string(73, ' ') + "^");
   }
+
+  TEST_CASE("a character that reorders text is shown as '?' in the source line") {
+    // U+202E (right-to-left override) after y: the terminal would show the line reversed.
+    const auto e = error_of<ParseError>("state y\nparam a\ny\xE2\x80\xAE = -a*y\n");
+    CHECK(momentid::render_with_caret(e) ==
+          "test.mom:3:2: expected '=' of an equation, or a statement keyword (model, state, "
+          "input, param, const, measured, multipliers, candidate, library)\n 3 | y? = -a*y\n   "
+          "|  ^");
+    CHECK(momentid::printable("a\xE2\x81\xA6"
+                              "b\xD8\x9C"
+                              "c \xC3\xA9") == "a?b?c \xC3\xA9");
+  }
 }

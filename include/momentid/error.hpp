@@ -99,8 +99,9 @@ class Interrupted : public Error {
   Interrupted() : Error("interrupted") {}
 };
 
-// `text` safe to print on a terminal: control characters and bytes that are not UTF-8 become
-// '?'; tabs and line feeds stay.
+// `text` safe to print on a terminal: control characters, the characters that reorder text
+// (bidirectional controls such as U+202E) and bytes that are not UTF-8 become '?'; tabs and line
+// feeds stay.
 std::string printable(std::string_view text);
 
 // Renders a located error as the command-line tool prints it: the `what()` line (its mentions

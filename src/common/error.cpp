@@ -59,6 +59,20 @@ std::string LocatedError::text(const std::function<std::string(const std::string
   return place(where_) + spelled("", message_, spell);
 }
 
+namespace {
+
+// A character that reorders the text shown around it (U+061C, U+200E, U+200F, U+202A..U+202E,
+// U+2066..U+2069): a message that echoes one could show other text than it holds.
+bool bidirectional_control(std::string_view utf8) {
+  static constexpr std::string_view kControls[] = {"\xD8\x9C",     "\xE2\x80\x8E", "\xE2\x80\x8F",
+                                                   "\xE2\x80\xAA", "\xE2\x80\xAB", "\xE2\x80\xAC",
+                                                   "\xE2\x80\xAD", "\xE2\x80\xAE", "\xE2\x81\xA6",
+                                                   "\xE2\x81\xA7", "\xE2\x81\xA8", "\xE2\x81\xA9"};
+  return std::find(std::begin(kControls), std::end(kControls), utf8) != std::end(kControls);
+}
+
+}  // namespace
+
 std::string printable(std::string_view text) {
   std::string out;
   for (std::size_t i = 0; i < text.size(); ++i) {
@@ -73,11 +87,12 @@ std::string printable(std::string_view text) {
     for (std::size_t k = 1; valid && k < n; ++k) {
       valid = (static_cast<unsigned char>(text[i + k]) >> 6) == 2;
     }
-    if (valid) {
+    if (valid && !bidirectional_control(text.substr(i, n))) {
       out.append(text.substr(i, n));
       i += n - 1;
     } else {
       out += '?';
+      if (valid) i += n - 1;
     }
   }
   return out;
