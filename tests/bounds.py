@@ -36,7 +36,7 @@ def run(args):
 failed = 0
 
 
-def case(name, args, status, message, seconds, megabytes):
+def case(name, args, status, message, seconds, megabytes, stderr_bytes=None):
     global failed
     got, stderr, took, peak = run(args)
     first = stderr.splitlines()[0] if stderr else ""
@@ -49,6 +49,8 @@ def case(name, args, status, message, seconds, megabytes):
         problems.append(f"{took:.1f} s, expected under {seconds} s")
     if peak > megabytes:
         problems.append(f"{peak:.0f} MB, expected under {megabytes} MB")
+    if stderr_bytes is not None and len(stderr) > stderr_bytes:
+        problems.append(f"{len(stderr)} bytes of messages, expected under {stderr_bytes}")
     print(f"{name}: exit {got}, {took:.2f} s, {peak:.0f} MB" +
           (": FAILED: " + "; ".join(problems) if problems else ""))
     failed += bool(problems)
@@ -84,5 +86,11 @@ case("2*10^6 terms (8 MB)", ["derive", terms], 2,
      "the model goes on past 1048576 bytes: a model's text is at most that long", 5, 200)
 case("an endless model file", ["derive", "/dev/zero"], 2,
      "/dev/zero:1:1048577: the model goes on past 1048576 bytes", 5, 200)
+# A name of 10^5 characters: refused without quoting it (the message held it whole).
+long_name = write("long_name.mom", "state y\ninput x\nparam a\ny' = -a*y + " + "b" * 100000 +
+                  "*y + x\n")
+case("a name of 10^5 characters", ["derive", long_name], 2,
+     "long_name.mom:4:13: a name of 100000 characters: a name has at most 255", 5, 200,
+     stderr_bytes=1000)
 
 sys.exit(1 if failed else 0)

@@ -41,7 +41,20 @@ Model ModelBuilder::build(const std::vector<SyntaxNode>& statements) {
   return std::move(model_);
 }
 
+// Refuses a name longer than kMaxName anywhere under `n`, without quoting it.
+void ModelBuilder::check_name_lengths(const SyntaxNode& n) const {
+  const bool name = n.kind == SyntaxKind::kModelName || n.kind == SyntaxKind::kDeclaredName ||
+                    n.kind == SyntaxKind::kCandidateName || n.kind == SyntaxKind::kName ||
+                    n.kind == SyntaxKind::kLabel;
+  if (name && n.text.size() > kMaxName) {
+    source_.fail(n, "a name of " + std::to_string(n.text.size()) +
+                        " characters: a name has at most " + std::to_string(kMaxName));
+  }
+  for (const SyntaxNode& child : n.children) check_name_lengths(child);
+}
+
 void ModelBuilder::collect(const std::vector<SyntaxNode>& statements) {
+  for (const SyntaxNode& n : statements) check_name_lengths(n);
   for (const SyntaxNode& n : statements) {
     if (n.kind == SyntaxKind::kModelStatement) {
       if (model_statement_ != nullptr) {

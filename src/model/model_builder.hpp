@@ -27,11 +27,14 @@ class ModelBuilder {
   Model build(const std::vector<SyntaxNode>& statements);
   // Equations a model may have (each is multiplied by every multiplier).
   static constexpr std::size_t kMaxEquations = 1000;
+  // The longest name: a message that names one quotes it whole.
+  static constexpr std::size_t kMaxName = 255;
 
  private:
   // Reads the `model` statement and the declarations, and sets the equations and `multipliers`
   // statements aside until every name is declared.
   void collect(const std::vector<SyntaxNode>& statements);
+  void check_name_lengths(const SyntaxNode& n) const;
   void add_equation(const SyntaxNode& n);
   void add_multipliers(const SyntaxNode& n);
   // The terms of a `library` statement, each with a candidate parameter of its own, joined to
