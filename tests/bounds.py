@@ -5,6 +5,7 @@ magnitude above what it takes) on its time and peak memory.
 
   bounds.py MOMENTID WORK_DIRECTORY
 """
+import math
 import os
 import shutil
 import subprocess
@@ -92,5 +93,17 @@ long_name = write("long_name.mom", "state y\ninput x\nparam a\ny' = -a*y + " + "
 case("a name of 10^5 characters", ["derive", long_name], 2,
      "long_name.mom:4:13: a name of 100000 characters: a name has at most 255", 5, 200,
      stderr_bytes=1000)
+
+# 100 parameters on a record of held inputs: the correction for the kinks of the held input
+# would take seconds to minutes of symbolic work (it took over 100 s), and is left out, said so.
+parameters = 100
+model = write("held.mom", "state y, v\ninput x\nparam " +
+              ", ".join(f"p{i}" for i in range(parameters)) + "\ny' = v\nv' = " +
+              " + ".join(f"-p{i}*y^{i % 7 + 1}*v^{(i // 7) % 2}*x^{(i // 14) % 3}"
+                         for i in range(parameters)) + " + x\n")
+rows = "".join(f"{0.01 * n:g},{math.sin(0.05 * n):.6g},{math.cos(0.05 * n):.6g},"
+               f"{math.sin(0.31 * n) + math.cos(0.17 * n):.6g}\n" for n in range(5000))
+held = write("held.csv", "# momentid: dt=0.01 input-hold=zoh\nt,y,v,x\n" + rows)
+case("100 parameters, held input", ["identify", model, held, "--batches", "20"], 0, "", 10, 2000)
 
 sys.exit(1 if failed else 0)

@@ -141,7 +141,10 @@ struct HeldInputCorrections {
   detail::AlgebraSpanEnd algebra_end;
 };
 // Among `moments`, those whose derivative jumps; none, with `unavailable` saying why, when the
-// equations do not give the derivatives of the states as polynomials in the states and inputs.
+// equations do not give the derivatives of the states as polynomials in the states and inputs,
+// or when the second derivatives would expand more than kMaxHeldTerms products (a model of
+// many terms: minutes of symbolic work).
+inline constexpr double kMaxHeldTerms = 1e6;
 HeldInputCorrections held_input_corrections(const Model& model,
                                             const std::vector<Monomial>& moments);
 

@@ -64,6 +64,29 @@ HeldInputCorrections held_input_corrections(const Model& model,
     for (std::size_t i = 0; i < states; ++i) sum += g.diff(variables[i]) * rate[i];
     return sum;
   };
+  // The products the second derivatives expand to: a sum of as many terms as the first
+  // derivative's times the rates' (plus a derivative of the rates' own). Past kMaxHeldTerms
+  // the symbolic work takes long (10^6 products: 14 s).
+  const auto terms_of = [](const GiNaC::ex& e) -> double {
+    return GiNaC::is_a<GiNaC::add>(e) ? static_cast<double>(e.nops()) : 1.0;
+  };
+  double rate_terms = 0;
+  for (const GiNaC::ex& r : rate) rate_terms += terms_of(r.expand());
+  double products = 0;
+  for (const Monomial& moment : moments) {
+    GiNaC::ex g = 1;
+    for (std::size_t i = 0; i < variables.size(); ++i) g *= GiNaC::pow(variables[i], moment[i]);
+    products += terms_of(time_derivative(g).expand()) * rate_terms;
+  }
+  if (products > kMaxHeldTerms) {
+    out.unavailable = "the model's " + std::to_string(static_cast<long>(rate_terms)) +
+                      " terms would make the correction expand " +
+                      std::to_string(static_cast<long>(products)) + " products, more than " +
+                      std::to_string(static_cast<long>(kMaxHeldTerms)) +
+                      " (seconds to minutes of symbolic work): give fewer terms, or --input-hold sample "
+                      "if the inputs were sampled rather than held";
+    return out;
+  }
   for (const Monomial& moment : moments) {
     GiNaC::ex g = 1;
     for (std::size_t i = 0; i < variables.size(); ++i) g *= GiNaC::pow(variables[i], moment[i]);
@@ -75,15 +98,16 @@ HeldInputCorrections held_input_corrections(const Model& model,
       jumps = jumps || rate_of_g.has(variables[i]);
     }
     if (!jumps) continue;
-    const GiNaC::ex fraction = time_derivative(rate_of_g).normal();
-    const GiNaC::ex denominator = fraction.denom();
-    std::map<Monomial, GiNaC::ex, MomentOrder> terms;
-    const GiNaC::ex numerator = fraction.numer().expand();
+    // Expanded, not brought to a common denominator: with many terms that took minutes.
+    std::map<Monomial, GiNaC::exvector, MomentOrder> terms;
+    const GiNaC::ex numerator = time_derivative(rate_of_g).expand();
     const auto add = [&](const GiNaC::ex& term) {
       const Monomial m = exponents_of(term, variables);
       GiNaC::ex weight = term;
-      for (std::size_t i = 0; i < variables.size(); ++i) weight = weight.coeff(variables[i], m[i]);
-      terms[m] += weight / denominator;
+      for (std::size_t i = 0; i < variables.size(); ++i) {
+        if (m[i] != 0) weight *= GiNaC::pow(variables[i], -m[i]);
+      }
+      terms[m].push_back(weight);
     };
     if (GiNaC::is_a<GiNaC::add>(numerator)) {
       for (const GiNaC::ex& term : numerator) add(term);
@@ -91,8 +115,8 @@ HeldInputCorrections held_input_corrections(const Model& model,
       add(numerator);
     }
     HeldInputCorrection c{moment, {}};
-    for (auto& [m, weight] : terms) {
-      const GiNaC::ex w = weight.normal();
+    for (auto& [m, weights] : terms) {
+      const GiNaC::ex w = GiNaC::ex(GiNaC::add(weights)).normal();
       if (!w.is_zero()) c.second_derivative.emplace_back(m, w);
     }
     if (!c.second_derivative.empty()) out.moments.push_back(std::move(c));
