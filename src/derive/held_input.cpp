@@ -64,9 +64,9 @@ HeldInputCorrections held_input_corrections(const Model& model,
     for (std::size_t i = 0; i < states; ++i) sum += g.diff(variables[i]) * rate[i];
     return sum;
   };
-  // The products the second derivatives expand to: a sum of as many terms as the first
-  // derivative's times the rates' (plus a derivative of the rates' own). Past kMaxHeldTerms
-  // the symbolic work takes long (10^6 products: 14 s).
+  // The products the second derivatives expand to: as many as the terms of each first
+  // derivative times those of the rates. Past kMaxHeldTerms the symbolic work takes long
+  // (10^6 products: 14 s).
   const auto terms_of = [](const GiNaC::ex& e) -> double {
     return GiNaC::is_a<GiNaC::add>(e) ? static_cast<double>(e.nops()) : 1.0;
   };
@@ -79,12 +79,12 @@ HeldInputCorrections held_input_corrections(const Model& model,
     products += terms_of(time_derivative(g).expand()) * rate_terms;
   }
   if (products > kMaxHeldTerms) {
-    out.unavailable = "the model's " + std::to_string(static_cast<long>(rate_terms)) +
-                      " terms would make the correction expand " +
-                      std::to_string(static_cast<long>(products)) + " products, more than " +
-                      std::to_string(static_cast<long>(kMaxHeldTerms)) +
-                      " (seconds to minutes of symbolic work): give fewer terms, or --input-hold sample "
-                      "if the inputs were sampled rather than held";
+    out.unavailable =
+        "the model's " + std::to_string(static_cast<long>(rate_terms)) +
+        " terms would make the correction expand " + std::to_string(static_cast<long>(products)) +
+        " products, more than " + std::to_string(static_cast<long>(kMaxHeldTerms)) +
+        " (seconds to minutes of symbolic work): give fewer terms, or --input-hold sample "
+        "if the inputs were sampled rather than held";
     return out;
   }
   for (const Monomial& moment : moments) {
