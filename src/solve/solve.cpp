@@ -134,6 +134,13 @@ Estimate solve_free(const MomentRows& rows, const std::vector<std::string>& name
   }
   const LinearSystem system =
       evaluate(rows, static_cast<Index>(names.size()), estimates.mean, options.normalise_rows);
+  if (!system.a.allFinite() || !system.b.allFinite()) {
+    // A moment beyond doubles (a value whose powers overflow): any solution would be noise.
+    out.status = Status::kNothingIdentifiable;
+    out.message = "the moment equations hold values beyond the range of doubles: the record "
+                  "has a value too large for the powers of it the equations take";
+    return out;
+  }
   const LeastSquares ls = least_squares(system);
   out.rank = static_cast<std::size_t>(ls.rank);
   out.condition = ls.condition;
