@@ -137,8 +137,9 @@ Estimate solve_free(const MomentRows& rows, const std::vector<std::string>& name
   if (!system.a.allFinite() || !system.b.allFinite()) {
     // A moment beyond doubles (a value whose powers overflow): any solution would be noise.
     out.status = Status::kNothingIdentifiable;
-    out.message = "the moment equations hold values beyond the range of doubles: the record "
-                  "has a value too large for the powers of it the equations take";
+    out.message =
+        "the moment equations hold values beyond the range of doubles: the record "
+        "has a value too large for the powers of it the equations take";
     return out;
   }
   const LeastSquares ls = least_squares(system);
