@@ -1,4 +1,4 @@
-// The compiled part of momentid's Octave and MATLAB functions (octave/momentid_*.m are the rest):
+// The compiled part of momentid's Octave and MATLAB functions (momentid_*.m beside it are the rest):
 // one MEX gateway, `momentid_mex(COMMAND, ...)`, that runs the library on Octave's values and
 // returns structs. It uses the MEX interface only, so that the same source builds with Octave's
 // `mkoctfile --mex` and with MATLAB's `mex`; Ctrl-C is asked of Octave (or of MATLAB's
