@@ -102,11 +102,15 @@ Estimate solve_rows(const MomentRows& rows, const std::vector<std::string>& name
 // noise on channel c (absent or 0: none); every power of a noisy channel is replaced by its Hermite
 // polynomial in that variance (y^3 by y^3 - 3 v y), whose expectation over the noise is the clean
 // power. The list of moments does not depend on the variances.
+//
+// `shared` (moment.hpp; empty without a filter): the noise that channels share across lags, taken
+// out of each moment. The moments it adds are listed whatever the variances.
 struct LaggedRows {
   std::vector<Moment> moments;
   MomentRows rows;
 };
 LaggedRows lagged_rows(const LaggedSystem& system, double dt, const std::vector<int>& channel,
-                       const std::vector<double>& noise, int stencil = kStencilReach);
+                       const std::vector<double>& noise, int stencil = kStencilReach,
+                       const SharedNoise& shared = {});
 
 }  // namespace momentid

@@ -168,7 +168,9 @@ struct IdentifyResult {
     std::vector<Moment> moments;                 // the moments of data.estimates, in that order
     std::vector<std::string> channels;
     std::vector<double> noise;  // the noise variance used per channel
-    int stencil_reach = 0;      // of the lag-derivative stencils
+    // The noise that formed states share with their columns (estimate.hpp), with the variances.
+    SharedNoise shared_noise;
+    int stencil_reach = 0;  // of the lag-derivative stencils
     // Per moment: the variance of the accuracy floor added to its errors (SolveOptions).
     std::vector<double> moment_variance;
     // Per measured state the equations read: the lag at which its autocorrelation first falls

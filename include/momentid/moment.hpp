@@ -133,4 +133,21 @@ std::string to_string(const MomentFactor& factor);
 // The factors joined by `*`, or `1`: `c0^2*c2(t-3)`; an increment as `d(c0^2)`.
 std::string to_string(const Moment& moment);
 
+// Which channels carry the same white noise through filters, as a state formed by integration
+// carries its column's: at lag s its noise and the column's are correlated, and each moment E[psi(t
+// - s) F(t)] of an instrument linear in such a channel c1 is corrected by what that brings,
+// kappa(s) E[(psi / c1)(t - s) dF/dc2 (t)] for each channel c2 of F with the same noise (Stein's
+// lemma; kappa: covariance below).
+struct SharedNoise {
+  std::vector<int> source;                // per channel: the noise it carries, or -1: its own
+  std::vector<std::vector<double>> taps;  // per channel with a source: the filter of its noise
+  std::vector<double> variance;           // per source: its white noise's variance
+  bool empty() const { return source.empty(); }
+  bool shared(std::size_t c1, std::size_t c2) const {
+    return c1 < source.size() && c2 < source.size() && source[c1] >= 0 && source[c1] == source[c2];
+  }
+  // The covariance of the noise on channel c1 at t - s with that on c2 at t (0 unless shared).
+  double covariance(std::size_t c1, std::size_t c2, int s) const;
+};
+
 }  // namespace momentid

@@ -290,11 +290,11 @@ std::vector<Moment> in_columns(std::vector<Moment> moments, const ReadOrder& ord
 // The channels' statistics, named, in the moments' numbering (states, inputs, derivatives).
 std::vector<ChannelStatistics> channel_statistics(const LagSums& sums,
                                                   const std::vector<std::string>& names,
-                                                  const ReadOrder& order) {
+                                                  const ReadOrder& order, bool held) {
   std::vector<ChannelStatistics> out;
   for (std::size_t c = 0; c < names.size(); ++c) {
     const std::size_t read = order.read[c];
-    ChannelStatistics s = sums.statistics(read);
+    ChannelStatistics s = sums.statistics(read, held);
     s.name = names[read];
     s.is_input = read >= order.states;
     out.push_back(std::move(s));
@@ -420,7 +420,8 @@ DataMoments moments_from_data(const DataSource& source, const std::vector<std::s
           : std::clamp(std::max(accumulator.intervals() / DataOptions::kAutoBatchIntervals,
                                 options.min_batches),
                        DataOptions::kMinAutoBatches, batches));
-  out.channels = channel_statistics(result.state->lags, request.names, order);
+  out.channels = channel_statistics(result.state->lags, request.names, order,
+                                    out.hold == InputHold::kZeroOrderHold && !inputs.empty());
   return out;
 }
 

@@ -23,6 +23,8 @@ class IntegrationFilter {
   // The variance of channel c's output for white noise of unit variance on its input (the sum of
   // the squares of its taps).
   double noise_gain(std::size_t c) const;
+  // Channel c's taps: its output is sum_j taps[j] input(t - j).
+  const std::vector<double>& taps(std::size_t c) const { return taps_of_.at(c); }
 
   void start_run();
   // Takes `count` rows (one after another) and appends to `out` the filtered rows that are

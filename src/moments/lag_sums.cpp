@@ -122,7 +122,7 @@ void LagSums::merge(const LagSums& other) {
   count_ += other.count_;
 }
 
-ChannelStatistics LagSums::statistics(std::size_t c) const {
+ChannelStatistics LagSums::statistics(std::size_t c, bool held) const {
   ChannelStatistics s;
   const double n = static_cast<double>(count_);
   const double shifted_mean = sum_[c] / n;
@@ -146,7 +146,7 @@ ChannelStatistics LagSums::statistics(std::size_t c) const {
     if (s.correlation_time == lags_ + 1 && rho < std::exp(-1.0)) s.correlation_time = l + 1;
   }
   if (lags_ >= 4 && s.variance > 0) {
-    s.noise_variance = s.variance * (1 - smooth_lag_zero(s.autocorrelation));
+    s.noise_variance = s.variance * (1 - smooth_lag_zero(s.autocorrelation, held));
   }
   return s;
 }
@@ -160,8 +160,10 @@ void LagSums::remember(const double* row) {
   ++filled_;
 }
 
-double smooth_lag_zero(const std::vector<double>& rho) {
-  return 1.92 * rho[0] - 1.44 * rho[1] + 0.64 * rho[2] - 0.12 * rho[3];
+double smooth_lag_zero(const std::vector<double>& rho, bool held) {
+  if (held) return 1.92 * rho[0] - 1.44 * rho[1] + 0.64 * rho[2] - 0.12 * rho[3];
+  // Lagrange's extrapolation to s^2 = 0 through s^2 = 1, 4, 9, 16.
+  return 1.6 * rho[0] - 0.8 * rho[1] + 1.6 / 7 * rho[2] - 0.2 / 7 * rho[3];
 }
 
 }  // namespace momentid

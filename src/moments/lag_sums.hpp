@@ -30,7 +30,8 @@ class LagSums {
   // Adds the sums of `other`, the shard after this one's rows.
   void merge(const LagSums& other);
 
-  ChannelStatistics statistics(std::size_t c) const;
+  // `held`: the inputs are held over each sample (smooth_lag_zero).
+  ChannelStatistics statistics(std::size_t c, bool held) const;
 
  private:
   void remember(const double* row);

@@ -104,4 +104,15 @@ std::string to_string(const Moment& moment) {
   return out;
 }
 
+double SharedNoise::covariance(std::size_t c1, std::size_t c2, int s) const {
+  if (!shared(c1, c2)) return 0;
+  const std::vector<double>&k1 = taps[c1], &k2 = taps[c2];
+  const long n1 = static_cast<long>(k1.size()), n2 = static_cast<long>(k2.size());
+  double sum = 0;
+  for (long i = std::max(0L, -static_cast<long>(s)); i < n1 && i + s < n2; ++i) {
+    sum += k1[static_cast<std::size_t>(i)] * k2[static_cast<std::size_t>(i + s)];
+  }
+  return variance[static_cast<std::size_t>(source[c1])] * sum;
+}
+
 }  // namespace momentid

@@ -1,19 +1,69 @@
 // The lagged moment equations as numbers: each equation summed over lags against each test
 // function of the lag, the lag derivatives moved onto the test function, and powers of noisy
 // channels replaced by their Hermite polynomials in the noise variance (not where a channel is
-// inside an abs or sign factor of the same moment).
+// inside an abs or sign factor of the same moment), and the noise that a formed state shares with
+// its column across lags taken out of each moment (SharedNoise).
 
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <stdexcept>
 
 #include "momentid/estimate.hpp"
 #include "solve/rows.hpp"
 
 namespace momentid {
 
+namespace {
+
+// A moment pair's share of an entry: E[instrument(t - s) function(t)] times `weight`, and
+// times kappa[s - first] at each lag s where `kappa` is given (a shared noise's covariance).
+struct PairTerm {
+  Monomial instrument, function;
+  double weight;
+  const std::vector<double>* kappa;
+};
+
+// The shared-noise corrections of the pair (instrument, function) with weight `w`: for the one
+// channel c1 of the instrument whose noise the function's channels share, -kappa_{c1 c2}(s) E[
+// (instrument / c1)(t - s) dfunction/dc2 (t)] for each such c2. Throws std::invalid_argument
+// when more than one factor of the instrument shares that noise, where the first-order term
+// would not be the whole correction.
+template <class Kappa>
+void add_shared_noise(const SharedNoise& shared, const Monomial& instrument,
+                      const Monomial& function, double w, Kappa kappa,
+                      std::vector<PairTerm>& terms) {
+  std::size_t c1 = instrument.size();
+  int sharing = 0;
+  for (std::size_t c = 0; c < instrument.size(); ++c) {
+    if (instrument[c] == 0) continue;
+    for (std::size_t c2 = 0; c2 < function.size(); ++c2) {
+      if (function[c2] != 0 && shared.shared(c, c2)) {
+        c1 = c;
+        sharing += instrument[c];
+        break;
+      }
+    }
+  }
+  if (sharing == 0) return;
+  if (sharing > 1) {
+    throw std::invalid_argument(
+        "lagged_rows: an instrument holds more than one factor whose noise the function shares");
+  }
+  Monomial rest = instrument;
+  rest[c1] = 0;
+  for (std::size_t c2 = 0; c2 < function.size(); ++c2) {
+    if (function[c2] == 0 || !shared.shared(c1, c2)) continue;
+    Monomial derivative = function;
+    derivative[c2] -= 1;
+    terms.push_back({rest, derivative, -w * function[c2], &kappa(c1, c2)});
+  }
+}
+
+}  // namespace
+
 LaggedRows lagged_rows(const LaggedSystem& system, double dt, const std::vector<int>& channel,
-                       const std::vector<double>& noise, int stencil) {
+                       const std::vector<double>& noise, int stencil, const SharedNoise& shared) {
   LaggedRows out;
   std::map<Moment, std::size_t> index;
   const std::vector<std::vector<std::size_t>> from = computed_from(*system.model, channel);
@@ -52,55 +102,76 @@ LaggedRows lagged_rows(const LaggedSystem& system, double dt, const std::vector<
     }
     return it->second;
   };
+  // Per pair of channels sharing a noise, its covariance at each lag of the window.
+  std::map<std::pair<std::size_t, std::size_t>, std::vector<double>> covariances;
+  const auto kappa = [&](std::size_t c1, std::size_t c2) -> const std::vector<double>& {
+    const auto [it, inserted] = covariances.try_emplace({c1, c2});
+    if (inserted) {
+      for (int s = system.first_lag; s <= system.last_lag; ++s) {
+        it->second.push_back(shared.covariance(c1, c2, s));
+      }
+    }
+    return it->second;
+  };
   const auto entry = [&](const LagCombination& c, const LagTestFunction& phi) {
     MomentRows::Entry e;
     for (const auto& [f, weight] : c) {
       const std::vector<double>& ws = stencil_at(f.order, phi);
       const double scale = weight.to_double() / std::pow(dt, f.order);
       const auto instruments = noise_corrected(remap(f.instrument), noise);
-      // The instrument, at an earlier time, carries noise independent of the function's.
+      // The instrument, at an earlier time, carries noise independent of the function's, save
+      // the noise the two share.
       const Monomial read = remap(f.function);
       const auto functions = noise_corrected(read, correctable_noise(read, noise, from));
+      std::vector<PairTerm> terms;
+      for (const auto& [instrument, wi] : instruments) {
+        for (const auto& [function, wf] : functions) {
+          terms.push_back({instrument, function, wi * wf, nullptr});
+        }
+      }
+      if (!shared.empty()) {
+        for (const auto& [instrument, wi] : instruments) {
+          for (const auto& [function, wf] : functions) {
+            add_shared_noise(shared, instrument, function, wi * wf, kappa, terms);
+          }
+        }
+      }
       // The pairs of terms (a constant pair has none): those first met here enter the index in
       // the order of the loops below, lag by lag.
       std::vector<const std::vector<std::size_t>*> pairs;
       std::vector<std::vector<std::size_t>*> met;
-      std::vector<std::pair<const Monomial*, const Monomial*>> met_terms;
-      for (const auto& [instrument, wi] : instruments) {
-        for (const auto& [function, wf] : functions) {
-          const bool constant =
-              std::all_of(instrument.begin(), instrument.end(), [](int p) { return p == 0; }) &&
-              std::all_of(function.begin(), function.end(), [](int p) { return p == 0; });
-          if (constant) {
-            pairs.push_back(nullptr);
-            continue;
-          }
-          const auto [it, inserted] = lag_positions.try_emplace({instrument, function});
-          if (inserted) {
-            met.push_back(&it->second);
-            met_terms.emplace_back(&instrument, &function);
-          }
-          pairs.push_back(&it->second);
+      std::vector<const PairTerm*> met_terms;
+      for (const PairTerm& term : terms) {
+        const auto zero = [](const Monomial& m) {
+          return std::all_of(m.begin(), m.end(), [](int p) { return p == 0; });
+        };
+        if (zero(term.instrument) && zero(term.function)) {
+          pairs.push_back(nullptr);
+          continue;
         }
+        const auto [it, inserted] = lag_positions.try_emplace({term.instrument, term.function});
+        if (inserted) {
+          met.push_back(&it->second);
+          met_terms.push_back(&term);
+        }
+        pairs.push_back(&it->second);
       }
       for (int s = system.first_lag; s <= system.last_lag; ++s) {
         for (std::size_t k = 0; k < met.size(); ++k) {
-          const Moment m = lagged_moment(*met_terms[k].first, *met_terms[k].second, s);
+          const Moment m = lagged_moment(met_terms[k]->instrument, met_terms[k]->function, s);
           const auto [it, inserted] = index.emplace(m, out.moments.size());
           if (inserted) out.moments.push_back(m);
           met[k]->push_back(it->second);
         }
       }
       for (std::size_t l = 0; l < lags; ++l) {
-        std::size_t k = 0;
-        for (const auto& [instrument, wi] : instruments) {
-          for (const auto& [function, wf] : functions) {
-            const double w = scale * ws[l] * wi * wf;
-            if (const std::vector<std::size_t>* at = pairs[k++]) {
-              e.moments.emplace_back((*at)[l], w);
-            } else {
-              e.constant += w;
-            }
+        for (std::size_t k = 0; k < terms.size(); ++k) {
+          const PairTerm& term = terms[k];
+          const double w = scale * ws[l] * term.weight * (term.kappa ? (*term.kappa)[l] : 1.0);
+          if (const std::vector<std::size_t>* at = pairs[k]) {
+            e.moments.emplace_back((*at)[l], w);
+          } else {
+            e.constant += w;
           }
         }
       }

@@ -131,6 +131,31 @@ std::vector<IdentifyResult::Integration::Formed> formed_states(const Model& mode
   return out;
 }
 
+// The instruments given: each holds at most one factor of the states formed and the columns they
+// are formed from, whose noise the lagged equations share across lags and are corrected for to
+// first order (lagged_rows).
+void check_instruments(const Model& model, const IdentifyOptions& options,
+                       const std::vector<IdentifyResult::Integration::Formed>& formed) {
+  if (!options.instruments) return;
+  for (const Monomial& instrument : *options.instruments) {
+    int sharing = 0;
+    for (const auto& f : formed) {
+      for (const std::string& name : {f.state, f.variable}) {
+        sharing += instrument[static_cast<std::size_t>(model.variable_index(name))];
+      }
+    }
+    if (sharing > 1) {
+      throw UsageError("instruments",
+                       "instrument '" + format_monomial(model, instrument) +
+                           "' holds more than one factor of the states formed (" +
+                           UsageError::mention("integrate") +
+                           ") and the columns they are formed from, whose noise the equations "
+                           "share across lags: give such instruments to the first power, alone "
+                           "or times other channels");
+    }
+  }
+}
+
 // The filter's corner (given, or from the band of `rows` of the guide column) and length, raised
 // until the filter fills at most a quarter of a first run read to its end, and the formed
 // states' noise gains; DataError when the filter would take half of that run.
@@ -197,6 +222,7 @@ IdentifyResult::Integration plan_integration(const Model& model, const DataSourc
                                              std::vector<bool>& present) {
   IdentifyResult::Integration out;
   out.formed = formed_states(model, options, present);
+  check_instruments(model, options, out.formed);
   // The corner from the band of the force, the first input with a column, else of the column
   // integrated.
   std::string guide = out.formed.front().variable;

@@ -16,6 +16,7 @@
 #include "app/identify/plan.hpp"
 #include "app/identify/zero_lag_check.hpp"
 #include "common/number.hpp"
+#include "moments/integration.hpp"
 
 namespace momentid {
 namespace {
@@ -29,6 +30,35 @@ constexpr double kNoisyArgument = 0.02;
 bool function_holds(const VariableFunction& f, std::size_t c) {
   return std::any_of(f.argument.begin(), f.argument.end(),
                      [&](const auto& term) { return term.second[c] != 0; });
+}
+
+// Whether the equations hold state v nonlinearly: in a product of degree 2 or more, or in the
+// argument of an abs or sign.
+bool nonlinear_in(const Model& model, const LaggedSystem& system, std::size_t v) {
+  const auto nonlinear = [&](const LagCombination& c) {
+    return std::any_of(c.begin(), c.end(), [&](const auto& entry) {
+      const Monomial& m = entry.first.function;
+      int degree = 0;
+      bool holds = false;
+      for (std::size_t u = 0; u < m.size(); ++u) {
+        if (m[u] == 0) continue;
+        degree += m[u];
+        const Variable& variable = model.variables()[u];
+        if (u == v) {
+          holds = true;
+        } else if (!variable.channel() && function_holds(model.function_of(variable), v)) {
+          holds = true;
+          degree += 1;  // nonlinear in v by itself
+        }
+      }
+      return holds && degree >= 2;
+    });
+  };
+  return std::any_of(
+      system.equations.begin(), system.equations.end(), [&](const LaggedEquation& eq) {
+        return nonlinear(eq.rhs) ||
+               std::any_of(eq.coefficients.begin(), eq.coefficients.end(), nonlinear);
+      });
 }
 
 // Multipliers, a degree and the sampling bias belong to the zero-lag equations.
@@ -196,6 +226,38 @@ DataOptions lagged_pass_options(IdentifyResult& result, const LaggedChannels& c,
   return data_options;
 }
 
+// The noise each formed state shares with the column it is formed from: both channels carry the
+// column's white noise, through the filter's taps for their integrals, with the variance of the
+// column's filtered noise `noise` (empty: 0, before the pass) over the filter's gain.
+SharedNoise shared_noise(const IdentifyResult& result, const LaggedChannels& c,
+                         const std::vector<double>& noise) {
+  SharedNoise out;
+  if (!result.integration) return out;
+  const IdentifyResult::Integration& integration = *result.integration;
+  const IntegrationFilter filter(
+      {.corner = integration.corner, .dt = integration.dt, .integrals = {0, 1, 2}});
+  std::size_t channels = c.states.size() + c.inputs.size() + c.derivatives.size();
+  out.source.assign(channels, -1);
+  out.taps.resize(channels);
+  const auto channel_of = [&](const std::string& name) {
+    return c.channel[static_cast<std::size_t>(result.model->variable_index(name))];
+  };
+  for (const auto& formed : integration.formed) {
+    const int column = channel_of(formed.variable), state = channel_of(formed.state);
+    if (column < 0 || state < 0) continue;
+    const auto at = static_cast<std::size_t>(column);
+    if (out.source[at] < 0) {
+      out.source[at] = static_cast<int>(out.variance.size());
+      out.taps[at] = filter.taps(0);
+      out.variance.push_back(at < noise.size() ? noise[at] / filter.noise_gain(0) : 0.0);
+    }
+    out.source[static_cast<std::size_t>(state)] = out.source[at];
+    out.taps[static_cast<std::size_t>(state)] =
+        filter.taps(static_cast<std::size_t>(formed.integrals));
+  }
+  return out;
+}
+
 // Derives the equations for the plan's lags and makes the pass over the data into `result`,
 // reading the zero-lag check's moments as well when the plan has a check.
 LaggedPass read_lagged(IdentifyResult& result, const LaggedPlan& plan, const DataSource& source,
@@ -209,7 +271,8 @@ LaggedPass read_lagged(IdentifyResult& result, const LaggedPlan& plan, const Dat
   result.lagged->channels.insert(result.lagged->channels.end(), c.derivatives.begin(),
                                  c.derivatives.end());
   // The rows need the sample interval, which the data give: accumulate, then build rows.
-  const LaggedRows probe = lagged_rows(*result.lagged->system, 1.0, c.channel, {});
+  const LaggedRows probe = lagged_rows(*result.lagged->system, 1.0, c.channel, {}, kStencilReach,
+                                       shared_noise(result, c, {}));
   result.lagged->moments = probe.moments;
   const PassMoments read = pass_moments(result, c, probe.moments, plan.check);
   const DataOptions data_options =
@@ -291,8 +354,9 @@ std::vector<double> accuracy_floor(const std::vector<Moment>& moments,
 
 MomentRows lagged_rows_of(const IdentifyResult& result, const LaggedSystem& system) {
   const LaggedChannels channels = lagged_channels(*result.model, *result.lagged->system);
-  LaggedRows rows = lagged_rows(system, *result.data.time_step, channels.channel,
-                                result.lagged->noise, result.lagged->stencil_reach);
+  LaggedRows rows =
+      lagged_rows(system, *result.data.time_step, channels.channel, result.lagged->noise,
+                  result.lagged->stencil_reach, result.lagged->shared_noise);
   std::map<Moment, std::size_t> index;
   for (std::size_t k = 0; k < result.lagged->moments.size(); ++k) {
     index.emplace(result.lagged->moments[k], k);
@@ -337,6 +401,7 @@ void solve_lagged(IdentifyResult& result, const LaggedPlan& plan, const LaggedCh
                   const IdentifyOptions& options) {
   const Model& model = *result.model;
   result.lagged->noise = noise_variances(result, channels, options);
+  result.lagged->shared_noise = shared_noise(result, channels, result.lagged->noise);
   // The moments name the computed channels after the channels read (lagged_moment_text).
   for (std::size_t v = 0; v < channels.channel.size(); ++v) {
     const Variable& variable = model.variables()[v];
@@ -350,7 +415,7 @@ void solve_lagged(IdentifyResult& result, const LaggedPlan& plan, const LaggedCh
       result.data.hold == InputHold::kSample ? kWideStencilReach : kStencilReach;
   const LaggedRows rows =
       lagged_rows(*result.lagged->system, *result.data.time_step, channels.channel,
-                  result.lagged->noise, result.lagged->stencil_reach);
+                  result.lagged->noise, result.lagged->stencil_reach, result.lagged->shared_noise);
   std::vector<std::string> names;
   for (const Declaration& p : model.parameters()) names.push_back(p.name);
   result.gmm = optimal_weighting(options, plan.fixed, rows.rows.a.size());
@@ -370,12 +435,13 @@ void add_lagged_warnings(IdentifyResult& result, const LaggedChannels& channels)
   result.estimate.warnings.insert(result.estimate.warnings.end(), noisy.begin(), noisy.end());
   if (const auto& integration = result.integration) {
     for (const auto& formed : integration->formed) {
+      const auto v = static_cast<std::size_t>(result.model->variable_index(formed.state));
+      if (!nonlinear_in(*result.model, *result.lagged->system, v)) continue;
       result.estimate.warnings.push_back(
           "'" + formed.state + "' was formed from '" + formed.column + "' inside a high-pass at " +
           number(integration->corner, "%.3g") +
-          " Hz: the terms nonlinear in it lose the low frequencies the filter cuts, which "
-          "biases the estimates (a stiffness by a few percent), and the intervals do not "
-          "include that bias "
+          " Hz: the terms nonlinear in it lose the low frequencies the filter cuts, a bias "
+          "the intervals do not include, small where the force has no power below the corner "
           "(docs/model-language.md, \"Forming a state from its acceleration\")");
     }
   }
