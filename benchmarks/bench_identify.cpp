@@ -50,7 +50,7 @@ std::vector<momentid::Monomial> moments(const momentid::Model& model) {
 // `observe`: the columns to write (empty: all).
 void write_data(const momentid::Model& model, const std::string& path, std::size_t rows,
                 std::vector<std::string> observe = {},
-                momentid::WriterFormat format = momentid::WriterFormat::kCsv) {
+                momentid::FileFormat format = momentid::FileFormat::kCsv) {
   momentid::SimulationOptions options;
   options.inputs = {momentid::InputSpec::parse("ma:K=10,w=0.1,sigma=20", "bench")};
   options.samples = rows;
@@ -204,7 +204,7 @@ int main(int argc, char** argv) {
   const Pass pass = best_pass(argv[0], big);
   // The same record as a binary file, and the reading floor of each file on the pass's threads.
   const std::string binary = (dir / "bench_identify_big.bin").string();
-  write_data(model, binary, rows, {}, momentid::WriterFormat::kBinary);
+  write_data(model, binary, rows, {}, momentid::FileFormat::kBinary);
   const Pass binary_pass = best_pass(argv[0], binary);
   const std::size_t threads = std::max(1u, std::thread::hardware_concurrency());
   const auto floor_of = [&](const std::string& path, bool csv, std::size_t header) {

@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # An interrupted output must leave neither the target nor its temporary file behind: `simulate
-# -o FILE` (SIGINT, SIGTERM, SIGHUP), and `convert` to .mat, .mat (level 7.3) and HDF5, whose
-# libraries write the temporary file themselves; nor an interrupted read of standard input the
-# file it is stored in.
+# -o FILE` (SIGINT, SIGTERM, SIGHUP; and SIGINT in .npy, .mat and HDF5), and `convert` to .mat,
+# .mat (level 7.3) and HDF5, whose libraries write the temporary file themselves; nor an
+# interrupted read of standard input the file it is stored in.
 # Usage: interrupt.sh MOMENTID MODEL DIRECTORY
 set -euo pipefail
 momentid=$1 model=$2 dir=$3
@@ -39,6 +39,12 @@ interrupt() {
 for signal in INT TERM HUP; do
   interrupt "$signal" "$momentid" simulate "$model" --samples 100000000 -o "$dir/out/out.csv"
 done
+# simulate in the array formats: .npy and HDF5 fill their temporary file as the rows come, the
+# .mat writers once all rows are in.
+for target in out.npy out.h5; do
+  interrupt INT "$momentid" simulate "$model" --samples 100000000 -o "$dir/out/$target"
+done
+interrupt INT "$momentid" simulate "$model" --samples 3000000 -o "$dir/out/out.mat"
 "$momentid" simulate "$model" --samples 3000000 --format bin -o "$dir/record.bin"
 for format in mat mat73 h5; do
   extension=$format

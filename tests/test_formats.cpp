@@ -110,7 +110,7 @@ TEST_SUITE("formats") {
       if (format == FileFormat::kNpy) {
         REQUIRE(notes.size() == 1);
         CHECK(notes[0] == "a .npy file keeps neither column names nor metadata: read " +
-                              (dir / name) + " with --names t,y,x");
+                              (dir / name) + " with --names t,y,x --input-hold zoh");
         layout.column_names = {"t", "y", "x"};
       }
       const Table copy = read_all(dir / name, layout);

@@ -9,7 +9,6 @@ using momentid::Interpolation;
 using momentid::MissingValues;
 using momentid::UsageError;
 using momentid::Weighting;
-using momentid::WriterFormat;
 
 namespace {
 
@@ -42,8 +41,6 @@ TEST_SUITE("types") {
     check_round_trip<FileFormat>({FileFormat::kCsv, FileFormat::kBinary, FileFormat::kNpy,
                                   FileFormat::kMat5, FileFormat::kMat73, FileFormat::kHdf5},
                                  momentid::parse_file_format);
-    check_round_trip<WriterFormat>({WriterFormat::kCsv, WriterFormat::kBinary},
-                                   momentid::parse_writer_format);
     check_round_trip<momentid::Status>(
         {momentid::Status::kOk, momentid::Status::kUntested, momentid::Status::kDoubtful,
          momentid::Status::kRankDeficient, momentid::Status::kNothingIdentifiable},
@@ -64,8 +61,8 @@ TEST_SUITE("types") {
                          UsageError);
     CHECK_THROWS_WITH_AS(momentid::parse_weighting("GMM", "weighting"),
                          "weighting: expected auto, ls or gmm, found 'GMM'", UsageError);
-    CHECK_THROWS_WITH_AS(momentid::parse_writer_format("", "format"),
-                         "format: expected csv or bin, found ''", UsageError);
+    CHECK_THROWS_WITH_AS(momentid::parse_file_format("", "format"),
+                         "format: expected csv, bin, npy, mat, mat73 or h5, found ''", UsageError);
     try {
       momentid::parse_input_hold("held", "hold");
     } catch (const UsageError& e) {

@@ -356,11 +356,11 @@ DataMetadata simulation_metadata(const Model& model, const SimulationOptions& op
 std::vector<std::size_t> observed_channels(const Model& model, const SimulationOptions& options);
 
 // Simulates into a data file in the layout of `momentid simulate`: columns t, the observed
-// channels (by default the states, then the inputs) and, for several runs, `run` (from 1), after
-// simulation_metadata(); written whole or not at all (see DataWriter). `path` "-" is standard
-// output. With noise, the simulation runs twice: once to measure the channels' standard
-// deviations, which the metadata records, and once to write. Returns the warnings of a
-// StepCheck.
+// channels (by default the states, then the inputs) and, for several runs, `run` (from 1), with
+// simulation_metadata(); in `format` (simulation_format() tells it from the name), written whole
+// or not at all (see DataWriter). `path` "-" is standard output. With noise, the simulation runs
+// twice: once to measure the channels' standard deviations, which the metadata records, and once
+// to write. Returns the warnings of a StepCheck and, for a .npy file, DataWriter::note().
 std::vector<std::string> simulate_to_file(const Model& model, const SimulationOptions& options,
                                           const std::string& path, DataWriter::Format format);
 

@@ -60,7 +60,8 @@ enum class Weighting { kAuto, kLeastSquares, kGmm };
 // the lagged ones cannot serve; kZeroLag; kLagged. Names: auto, zero-lag, lagged.
 enum class Method { kAuto, kZeroLag, kLagged };
 
-// The formats `momentid convert` writes (docs/cli/convert.md, "momentid convert").
+// The formats DataWriter writes, which `momentid convert` and `momentid simulate` take as
+// --format (docs/cli/convert.md, "momentid convert"; format_for_path() tells them by name).
 // Names: csv, bin, npy, mat (level 5), mat73 (level 7.3), h5.
 enum class FileFormat { kCsv, kBinary, kNpy, kMat5, kMat73, kHdf5 };
 
@@ -74,9 +75,6 @@ enum class FileFormat { kCsv, kBinary, kNpy, kMat5, kMat73, kHdf5 };
 // Names: ok, untested, doubtful, rank-deficient, nothing-identifiable.
 enum class Status { kOk, kUntested, kDoubtful, kRankDeficient, kNothingIdentifiable };
 
-// The formats DataWriter writes a row at a time (simulate's output). Names: csv, bin.
-enum class WriterFormat { kCsv, kBinary };
-
 // The random processes and signals that simulate drives an input with (InputSpec, docs/cli/
 // simulate.md): a moving average of white noise, an Ornstein-Uhlenbeck process, white noise, a
 // multisine. Names: ma, ou, white, multisine.
@@ -88,7 +86,6 @@ std::string to_string(Interpolation method);
 std::string to_string(Weighting weighting);
 std::string to_string(Method method);
 std::string to_string(FileFormat format);
-std::string to_string(WriterFormat format);
 std::string to_string(Status status);
 std::string to_string(InputKind process);
 
@@ -98,7 +95,6 @@ Interpolation parse_interpolation(std::string_view text, std::string_view option
 Weighting parse_weighting(std::string_view text, std::string_view option);
 Method parse_method(std::string_view text, std::string_view option);
 FileFormat parse_file_format(std::string_view text, std::string_view option);
-WriterFormat parse_writer_format(std::string_view text, std::string_view option);
 Status parse_status(std::string_view text, std::string_view option);
 InputKind parse_input_kind(std::string_view text, std::string_view option);
 
@@ -116,8 +112,6 @@ template <>
 std::vector<std::string> names_of<Method>();
 template <>
 std::vector<std::string> names_of<FileFormat>();
-template <>
-std::vector<std::string> names_of<WriterFormat>();
 template <>
 std::vector<std::string> names_of<Status>();
 template <>

@@ -99,9 +99,10 @@ Replay replay(const Model& model, const DataSource& source, const ReplayOptions&
 
 // Writes the replay in the record's layout (`simulate --input-file`): its `t` column, the columns
 // of the model's variables it has, with the states replaced by the simulated ones, and its `run`
-// column; whole or not at all.
-void write_replay(const Model& model, const Replay& replay, const std::string& path,
-                  DataWriter::Format format);
+// column; in `format` (simulation_format() tells it from the name), whole or not at all (see
+// DataWriter). Returns, for a .npy file, DataWriter::note().
+std::vector<std::string> write_replay(const Model& model, const Replay& replay,
+                                      const std::string& path, DataWriter::Format format);
 
 // The parameter values of an `identify --format json` result: one per model parameter, by name.
 // Throws DataError located in the file for text that is not JSON, estimates of another model, or a

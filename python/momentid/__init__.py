@@ -337,9 +337,11 @@ def simulate(model: Union[Model, PathLike], params: Optional[Mapping[str, float]
 
     Returns a Record, {"t": array, channel: array, ..., "run": array (with several runs)},
     the same numbers the program writes, with the file's metadata; or, with `path`, writes that
-    file and returns None: `format` "csv" or "bin", by default the path's extension (.bin binary,
-    otherwise CSV; another format's name, or a format the name contradicts, is a UsageError).
-    A step too coarse for the dynamics gives a MomentidWarning.
+    file and returns None: `format` "csv", "bin", "npy", "mat", "mat73" or "h5", by default the
+    one the path's extension names (.csv, .txt, .bin, .npy, .mat, .h5, .hdf5; CSV without an
+    extension; another extension, or a format the name contradicts, is a UsageError). A .npy
+    file keeps neither names nor metadata, said in a MomentidWarning with the options that read
+    it back; a step too coarse for the dynamics gives one too.
     """
     model = _model_of(model)
     if inputs is not None and (isinstance(inputs, (str, _os.PathLike)) or

@@ -243,9 +243,9 @@ py::tuple simulate_record(const Model& model, const py::dict& options) {
   const SimulationOptions simulation = simulation_options(model, options);
   if (auto path = get<std::string>(options, "path")) {
     const std::optional<std::string> asked = get<std::string>(options, "format");
-    const WriterFormat format = simulation_format(
-        *path, asked ? std::optional(parse_writer_format(*asked, "format")) : std::nullopt,
-        "format", "path");
+    const FileFormat format = simulation_format(
+        *path, asked ? std::optional(parse_file_format(*asked, "format")) : std::nullopt, "format",
+        "path");
     return py::make_tuple(py::none(), py::none(),
                           simulate_to_file(model, simulation, *path, format));
   }
@@ -303,17 +303,16 @@ ValidateOptions validate_options(const Model& model, const py::dict& options) {
 py::tuple replay_record(const Model& model, const DataSource& source, const py::dict& options) {
   const ValidateOptions with = validate_options(model, options);
   const std::optional<std::string> path = get<std::string>(options, "path");
-  std::optional<WriterFormat> format;
+  std::optional<FileFormat> format;
   if (path) {
     const std::optional<std::string> asked = get<std::string>(options, "format");
     format = simulation_format(
-        *path, asked ? std::optional(parse_writer_format(*asked, "format")) : std::nullopt,
-        "format", "path");
+        *path, asked ? std::optional(parse_file_format(*asked, "format")) : std::nullopt, "format",
+        "path");
   }
   const std::optional<Replay> done = replay(model, source, with.replay);
   if (path) {
-    write_replay(model, *done, *path, *format);
-    return py::make_tuple(py::none(), py::none(), std::vector<std::string>{});
+    return py::make_tuple(py::none(), py::none(), write_replay(model, *done, *path, *format));
   }
   // What the record says of its sampling holds for the response too; its parameters do not.
   py::dict metadata;

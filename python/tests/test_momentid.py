@@ -481,13 +481,53 @@ def test_simulate_path_name_chooses_the_format(duffing, tmp_path):
     # Without `format`, a .bin path is written in binary, as `simulate -o FILE.bin` does.
     momentid.simulate(duffing, samples=10, path=tmp_path / "named.bin")
     assert (tmp_path / "named.bin").read_bytes()[:8] == b"MOMNTID1"
-    # A name of a format simulate does not write, or one `format` contradicts: refused, and no
-    # file is written.
-    with pytest.raises(momentid.UsageError, match=r"^path: simulate writes CSV .* found '.*x\.mat'"):
-        momentid.simulate(duffing, samples=10, path=tmp_path / "x.mat")
+    # A name no format has, or one `format` contradicts: refused, and no file is written.
+    with pytest.raises(momentid.UsageError,
+                       match=r"^path: cannot tell the format of '.*x\.xyz' from its name .*: "
+                             r"give format$"):
+        momentid.simulate(duffing, samples=10, path=tmp_path / "x.xyz")
     with pytest.raises(momentid.UsageError, match="^format: csv contradicts the output file's name"):
         momentid.simulate(duffing, samples=10, path=tmp_path / "y.bin", format="csv")
+    with pytest.raises(momentid.UsageError, match=r"^format: bin contradicts .*'.*z\.mat' \(mat\)"):
+        momentid.simulate(duffing, samples=10, path=tmp_path / "z.mat", format="bin")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["named.bin"]
+    # `format` names the format of a name that does not.
+    momentid.simulate(duffing, samples=10, path=tmp_path / "x.xyz", format="csv")
+    assert (tmp_path / "x.xyz").read_text().startswith("# momentid: model=duffing")
+
+
+def test_simulate_path_h5_holds_the_csv_values(duffing, tmp_path):
+    """An .h5 path is written as HDF5, which h5py reads: the same values as the CSV of the same
+    seed, bit for bit (CSV numbers read back exactly), and the metadata as attributes."""
+    h5py = pytest.importorskip("h5py")
+    options = dict(samples=2000, runs=2, seed=9, inputs={"x": INPUT}, noise={"y": 0.05})
+    momentid.simulate(duffing, path=tmp_path / "r.csv", **options)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # HDF5 keeps the names and metadata: nothing to warn of
+        assert momentid.simulate(duffing, path=tmp_path / "r.h5", **options) is None
+    csv, metadata = read_csv(tmp_path / "r.csv"), read_metadata(tmp_path / "r.csv")
+    assert list(csv) == ["t", "y", "v", "x", "run"]
+    with h5py.File(tmp_path / "r.h5", "r") as f:
+        assert sorted(f.keys()) == sorted(csv)
+        for name, column in csv.items():
+            values = f[name][()]
+            assert values.dtype == np.float64 and values.shape == (4000,), name
+            assert np.array_equal(values.view(np.uint64), column.view(np.uint64)), name
+        # Every key=value of the CSV's metadata, `dt` as a number, the others as text.
+        assert "noise-sd.y" in metadata
+        for key, value in metadata.items():
+            assert f.attrs[key] == (float(value) if key == "dt" else value.encode()), key
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["r.csv", "r.h5"]
+
+
+def test_simulate_path_npy_warns_how_to_read_it_back(duffing, tmp_path):
+    path = tmp_path / "r.npy"
+    with pytest.warns(momentid.MomentidWarning,
+                      match=r"^a \.npy file keeps neither column names nor metadata: read "
+                            r".*r\.npy with --names t,y,v,x --input-hold zoh$"):
+        momentid.simulate(duffing, samples=500, seed=2, path=path)
+    np.testing.assert_array_equal(
+        np.load(path), np.column_stack(list(momentid.simulate(duffing, samples=500, seed=2).values())))
 
 
 def test_simulate_driven_by_a_record_writes_its_path_as_the_cli(duffing, cli, tmp_path):

@@ -12,7 +12,6 @@
 
 #include "app/variables.hpp"
 #include "common/decimal.hpp"
-#include "data/array_writers.hpp"
 #include "data/header.hpp"
 #include "momentid/writer.hpp"
 
@@ -54,24 +53,33 @@ std::optional<FileFormat> format_for_path(const std::string& path) {
   return std::nullopt;
 }
 
-WriterFormat simulation_format(const std::string& path, std::optional<WriterFormat> asked,
-                               const std::string& format_option, const std::string& output_option) {
-  if (path == "-") return asked.value_or(WriterFormat::kCsv);
+FileFormat simulation_format(const std::string& path, std::optional<FileFormat> asked,
+                             const std::string& format_option, const std::string& output_option) {
+  const auto same = [](FileFormat a, FileFormat b) {
+    const auto level = [](FileFormat f) { return f == FileFormat::kMat73 ? FileFormat::kMat5 : f; };
+    return level(a) == level(b);
+  };
+  if (path == "-") {
+    if (asked && *asked != FileFormat::kCsv && *asked != FileFormat::kBinary &&
+        *asked != FileFormat::kNpy) {
+      throw UsageError(format_option, "standard output takes csv, bin or npy, not " +
+                                          to_string(*asked) + ": name a file with " +
+                                          UsageError::mention(output_option));
+    }
+    return asked.value_or(FileFormat::kCsv);
+  }
   const std::optional<FileFormat> named = format_for_path(path);
-  std::optional<WriterFormat> by_name;
-  if (named == FileFormat::kCsv) by_name = WriterFormat::kCsv;
-  if (named == FileFormat::kBinary) by_name = WriterFormat::kBinary;
-  if (named && !by_name) {
-    throw UsageError(output_option,
-                     "simulate writes CSV (.csv, .txt) or binary (.bin) files, found '" + path +
-                         "' (" + to_string(*named) +
-                         "): write a .bin file and convert it with `momentid convert`");
-  }
-  if (asked && by_name && *asked != *by_name) {
+  if (asked && named && !same(*asked, *named)) {
     throw UsageError(format_option, to_string(*asked) + " contradicts the output file's name '" +
-                                        path + "' (" + to_string(*by_name) + "): give one of them");
+                                        path + "' (" + to_string(*named) + "): give one of them");
   }
-  return asked.value_or(by_name.value_or(WriterFormat::kCsv));
+  if (asked) return *asked;
+  if (named) return *named;
+  if (std::filesystem::path(path).extension().empty()) return FileFormat::kCsv;
+  throw UsageError(output_option, "cannot tell the format of '" + path +
+                                      "' from its name (.csv, .txt, .bin, .npy, .mat, .h5, "
+                                      ".hdf5): give " +
+                                      UsageError::mention(format_option));
 }
 
 namespace {
@@ -106,7 +114,7 @@ std::vector<std::string> convert(const DataSource& source, const std::string& pa
                      source.name() + " has a time column, which is copied and gives the interval");
   }
   // The array formats are given their length first: one pass counts the rows.
-  std::size_t rows = 0;
+  std::optional<std::size_t> rows;
   if (format != FileFormat::kCsv && format != FileFormat::kBinary) {
     const auto counter = source.open(request);
     read_blocks(source, *counter, [](const DataBlock&) {});
@@ -118,40 +126,12 @@ std::vector<std::string> convert(const DataSource& source, const std::string& pa
   if (!has_time && interval && (dt || !metadata.get("dt"))) {
     metadata.add_line({{"dt", shortest_decimal(*interval)}});
   }
-  std::vector<std::string> notes;
-  if (format == FileFormat::kCsv || format == FileFormat::kBinary) {
-    DataWriter out(
-        path, format == FileFormat::kCsv ? DataWriter::Format::kCsv : DataWriter::Format::kBinary,
-        metadata, columns);
-    read_blocks(source, *reader, [&](const DataBlock& block) {
-      for (std::size_t r = 0; r < block.rows; ++r)
-        out.row(block.values.data() + r * columns.size());
-    });
-    out.commit();
-    return notes;
-  }
-  std::unique_ptr<data::ArrayWriter> out;
-  switch (format) {
-    case FileFormat::kNpy: {
-      out = data::open_npy_writer(path, columns.size(), rows);
-      std::string names;
-      for (const std::string& c : columns) names += (names.empty() ? "" : ",") + c;
-      notes.push_back("a .npy file keeps neither column names nor metadata: read " + path +
-                      " with --names " + names +
-                      (!has_time && interval ? " --dt " + shortest_decimal(*interval) : ""));
-      break;
-    }
-    case FileFormat::kMat5:
-    case FileFormat::kMat73:
-      out = data::open_mat_writer(path, columns, metadata, rows, format == FileFormat::kMat73);
-      break;
-    default:
-      out = data::open_hdf5_writer(path, columns, metadata, rows);
-      break;
-  }
+  DataWriter out(path, format, metadata, columns, rows);
   read_blocks(source, *reader,
-              [&](const DataBlock& block) { out->rows(block.values.data(), block.rows); });
-  out->commit();
+              [&](const DataBlock& block) { out.rows(block.values.data(), block.rows); });
+  out.commit();
+  std::vector<std::string> notes;
+  if (auto note = out.note()) notes.push_back(std::move(*note));
   return notes;
 }
 

@@ -20,7 +20,7 @@ struct SimulateCommand {
   std::vector<std::string> inputs;
   std::vector<std::string> noise;
   SimulationOptions options;
-  std::string format = to_string(WriterFormat::kCsv);
+  std::string format = to_string(FileFormat::kCsv);
   std::string output = "-";
   // The response to a recorded input instead.
   std::string input_file;
@@ -62,9 +62,9 @@ std::vector<InputSpec> input_specs(const Model& model, const std::vector<std::st
 
 int run_simulate(SimulateCommand& command, bool format_given) {
   const Model model = parse_model_file(command.model);
-  const WriterFormat format = simulation_format(
+  const FileFormat format = simulation_format(
       command.output,
-      format_given ? std::optional(parse_writer_format(command.format, "format")) : std::nullopt);
+      format_given ? std::optional(parse_file_format(command.format, "format")) : std::nullopt);
   if (!command.input_file.empty()) {
     ReplayOptions options;
     options.parameters = parse_parameter_values(model, command.set);
@@ -74,8 +74,11 @@ int run_simulate(SimulateCommand& command, bool format_given) {
     if (!command.interpolation.empty()) {
       options.interpolation = parse_interpolation(command.interpolation, "interpolation");
     }
-    write_replay(model, replay(model, DataSource::file(command.input_file), options),
-                 command.output, format);
+    for (const std::string& note :
+         write_replay(model, replay(model, DataSource::file(command.input_file), options),
+                      command.output, format)) {
+      std::cerr << "momentid: warning: " << note << "\n";
+    }
     return 0;
   }
   command.options.parameters = parse_parameter_values(model, command.set);
@@ -93,8 +96,9 @@ int run_simulate(SimulateCommand& command, bool format_given) {
 Command add_simulate(CLI::App& app) {
   auto command = std::make_shared<SimulateCommand>();
   SimulationOptions& options = command->options;
-  CLI::App* sub = app.add_subcommand(
-      "simulate", "simulate a model driven by random inputs and write the samples (CSV or binary)");
+  CLI::App* sub = app.add_subcommand("simulate",
+                                     "simulate a model driven by random inputs and write the "
+                                     "samples (CSV, binary, .npy, .mat or HDF5)");
   sub->add_option("MODEL", command->model, "model file")->required();
   sub->add_option("--set", command->set,
                   "parameter values NAME=VALUE, overriding the model's nominal values")
@@ -151,11 +155,13 @@ Command add_simulate(CLI::App& app) {
   sub->add_flag("--continue", options.continue_runs,
                 "start each run from the previous run's last state");
   sub->add_option("--seed", options.seed, "random seed");
-  sub->add_option("--format", command->format, "output format")
-      ->check(CLI::IsMember(names_of<WriterFormat>()));
+  sub->add_option("--format", command->format,
+                  "csv, bin, npy, mat (level 5), mat73 (level 7.3) or h5; default: by the output's "
+                  "name, CSV without an extension")
+      ->check(CLI::IsMember(names_of<FileFormat>()));
   sub->add_option("-o,--output", command->output,
-                  "output file, - for standard output; without --format its extension (.csv, .txt "
-                  "or .bin) chooses the format");
+                  "output file, - for standard output (csv, bin or npy); without --format its "
+                  "extension (.csv, .txt, .bin, .npy, .mat, .h5, .hdf5) chooses the format");
   for (const char* name : {"--input", "--noise", "--observe", "--samples", "--burn-in", "--runs",
                            "--continue", "--seed"}) {
     sub->get_option(name)->excludes(input_file);

@@ -25,8 +25,6 @@ constexpr Names<Weighting> kWeightings = {
 constexpr Names<FileFormat> kFileFormats = {
     {FileFormat::kCsv, "csv"},  {FileFormat::kBinary, "bin"},  {FileFormat::kNpy, "npy"},
     {FileFormat::kMat5, "mat"}, {FileFormat::kMat73, "mat73"}, {FileFormat::kHdf5, "h5"}};
-constexpr Names<WriterFormat> kWriterFormats = {{WriterFormat::kCsv, "csv"},
-                                                {WriterFormat::kBinary, "bin"}};
 constexpr Names<Method> kMethods = {
     {Method::kAuto, "auto"}, {Method::kZeroLag, "zero-lag"}, {Method::kLagged, "lagged"}};
 constexpr Names<Status> kStatuses = {{Status::kOk, "ok"},
@@ -79,7 +77,6 @@ std::string to_string(MissingValues missing) { return name_in(kMissingValues, mi
 std::string to_string(Interpolation method) { return name_in(kInterpolations, method); }
 std::string to_string(Weighting weighting) { return name_in(kWeightings, weighting); }
 std::string to_string(FileFormat format) { return name_in(kFileFormats, format); }
-std::string to_string(WriterFormat format) { return name_in(kWriterFormats, format); }
 std::string to_string(Method method) { return name_in(kMethods, method); }
 std::string to_string(Status status) { return name_in(kStatuses, status); }
 std::string to_string(InputKind process) { return name_in(kInputKindes, process); }
@@ -98,9 +95,6 @@ Weighting parse_weighting(std::string_view text, std::string_view option) {
 }
 FileFormat parse_file_format(std::string_view text, std::string_view option) {
   return parse_in(kFileFormats, text, option);
-}
-WriterFormat parse_writer_format(std::string_view text, std::string_view option) {
-  return parse_in(kWriterFormats, text, option);
 }
 Method parse_method(std::string_view text, std::string_view option) {
   return parse_in(kMethods, text, option);
@@ -131,10 +125,6 @@ std::vector<std::string> names_of<Weighting>() {
 template <>
 std::vector<std::string> names_of<FileFormat>() {
   return list(kFileFormats);
-}
-template <>
-std::vector<std::string> names_of<WriterFormat>() {
-  return list(kWriterFormats);
 }
 template <>
 std::vector<std::string> names_of<Method>() {

@@ -12,8 +12,11 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <stdexcept>
 
+#include "data/array_writers.hpp"
 #include "data/format.hpp"
+#include "data/header.hpp"
 #include "data/temporary.hpp"
 #include "momentid/error.hpp"
 
@@ -117,51 +120,123 @@ void write_whole_file(const std::string& path, const std::string& contents) {
 }
 
 DataWriter::DataWriter(const std::string& path, Format format, const DataMetadata& metadata,
-                       const std::vector<std::string>& columns)
-    : file_(path), format_(format), columns_(columns.size()), buffer_(kBufferSize) {
-  // The header goes through the buffer like the rows: on standard output nothing appears before
-  // the first megabyte or commit(), so a run that fails early leaves no header-only output.
-  std::string header = data::header_text(metadata, columns);
-  if (format_ == Format::kBinary) {
-    const auto length = static_cast<std::uint32_t>(header.size());
-    const char bytes[4] = {static_cast<char>(length), static_cast<char>(length >> 8),
-                           static_cast<char>(length >> 16), static_cast<char>(length >> 24)};
-    header = std::string(data::kMagic) + std::string(bytes, 4) + header;
+                       const std::vector<std::string>& columns, std::optional<std::size_t> rows)
+    : path_(path), format_(format), columns_(columns), metadata_(metadata), rows_(rows) {
+  if (format_ == Format::kCsv || format_ == Format::kBinary) {
+    file_ = std::make_unique<OutputFile>(path);
+    buffer_.resize(kBufferSize);
+    // The header goes through the buffer like the rows: on standard output nothing appears
+    // before the first megabyte or commit(), so a run that fails early leaves no header-only
+    // output.
+    std::string header = data::header_text(metadata, columns);
+    if (format_ == Format::kBinary) {
+      const auto length = static_cast<std::uint32_t>(header.size());
+      const char bytes[4] = {static_cast<char>(length), static_cast<char>(length >> 8),
+                             static_cast<char>(length >> 16), static_cast<char>(length >> 24)};
+      header = std::string(data::kMagic) + std::string(bytes, 4) + header;
+    }
+    if (header.size() > buffer_.size()) buffer_.resize(header.size() + kBufferSize);
+    std::copy(header.begin(), header.end(), buffer_.begin());
+    used_ = header.size();
+    return;
   }
-  if (header.size() > buffer_.size()) buffer_.resize(header.size() + kBufferSize);
-  std::copy(header.begin(), header.end(), buffer_.begin());
-  used_ = header.size();
+  if (path == "-" && format_ != Format::kNpy) {
+    throw UsageError("standard output takes csv, bin or npy, not " + to_string(format_) +
+                     ", whose file is written whole before it is moved into place: name a file");
+  }
+  if (!rows) throw std::invalid_argument("DataWriter: an array format needs the row count");
+  switch (format_) {
+    case Format::kNpy:
+      array_ = data::open_npy_writer(path, columns.size(), *rows);
+      break;
+    case Format::kMat5:
+    case Format::kMat73:
+      array_ = data::open_mat_writer(path, columns, metadata, *rows, format_ == Format::kMat73);
+      break;
+    default:
+      array_ = data::open_hdf5_writer(path, columns, metadata, *rows);
+      break;
+  }
+  // Blocks of at most 2^16 rows (HDF5's chunk) and 2^20 values (a wide record's bound).
+  const std::size_t width = std::max<std::size_t>(columns.size(), 1);
+  block_.reserve(std::max<std::size_t>(1, std::min<std::size_t>(1 << 16, (1 << 20) / width)) *
+                 width);
 }
 
 DataWriter::~DataWriter() = default;
 
 void DataWriter::flush() {
-  file_.write(buffer_.data(), used_);
+  file_->write(buffer_.data(), used_);
   used_ = 0;
 }
 
-void DataWriter::row(const double* values) {
-  if (buffer_.size() - used_ < columns_ * 32 + 2) flush();
-  char* out = buffer_.data() + used_;
-  if (format_ == Format::kBinary) {
-    for (std::size_t c = 0; c < columns_; ++c) {
-      std::uint64_t bits = std::bit_cast<std::uint64_t>(values[c]);
-      for (int b = 0; b < 8; ++b) *out++ = static_cast<char>(bits >> (8 * b));
-    }
-  } else {
-    char* const end = buffer_.data() + buffer_.size();
-    for (std::size_t c = 0; c < columns_; ++c) {
-      if (c) *out++ = ',';
-      out = std::to_chars(out, end, values[c]).ptr;
-    }
-    *out++ = '\n';
+void DataWriter::flush_block() {
+  array_->rows(block_.data(), block_.size() / std::max<std::size_t>(columns_.size(), 1));
+  block_.clear();
+}
+
+void DataWriter::rows(const double* values, std::size_t count) {
+  const std::size_t width = columns_.size();
+  if (rows_ && count > *rows_ - written_) {
+    throw std::invalid_argument("DataWriter: more rows than the " + std::to_string(*rows_) +
+                                " announced");
   }
-  used_ = static_cast<std::size_t>(out - buffer_.data());
+  written_ += count;
+  if (array_) {
+    for (std::size_t r = 0; r < count; ++r) {
+      if (block_.size() + width > block_.capacity()) flush_block();
+      block_.insert(block_.end(), values + r * width, values + (r + 1) * width);
+    }
+    return;
+  }
+  for (std::size_t r = 0; r < count; ++r, values += width) {
+    if (buffer_.size() - used_ < width * 32 + 2) flush();
+    char* out = buffer_.data() + used_;
+    if (format_ == Format::kBinary) {
+      for (std::size_t c = 0; c < width; ++c) {
+        std::uint64_t bits = std::bit_cast<std::uint64_t>(values[c]);
+        for (int b = 0; b < 8; ++b) *out++ = static_cast<char>(bits >> (8 * b));
+      }
+    } else {
+      char* const end = buffer_.data() + buffer_.size();
+      for (std::size_t c = 0; c < width; ++c) {
+        if (c) *out++ = ',';
+        out = std::to_chars(out, end, values[c]).ptr;
+      }
+      *out++ = '\n';
+    }
+    used_ = static_cast<std::size_t>(out - buffer_.data());
+  }
 }
 
 void DataWriter::commit() {
+  if (rows_ && written_ != *rows_) {
+    throw std::invalid_argument("DataWriter: " + std::to_string(written_) + " rows written, " +
+                                std::to_string(*rows_) + " announced");
+  }
+  if (array_) {
+    if (!block_.empty()) flush_block();
+    array_->commit();
+    return;
+  }
   flush();
-  file_.commit();
+  file_->commit();
+}
+
+std::optional<std::string> DataWriter::note() const {
+  if (format_ != Format::kNpy) return std::nullopt;
+  std::string names;
+  for (const std::string& c : columns_) names += (names.empty() ? "" : ",") + c;
+  std::string options = " with --names " + names;
+  const bool has_time = std::any_of(columns_.begin(), columns_.end(), [](const std::string& c) {
+    return c == "t" || data::is_time_name(c);
+  });
+  if (const auto dt = metadata_.get("dt"); dt && !has_time) options += " --dt " + *dt;
+  if (const auto hold = metadata_.get("input-hold");
+      hold && (*hold == "zoh" || *hold == "sample")) {
+    options += " --input-hold " + *hold;
+  }
+  return "a .npy file keeps neither column names nor metadata: read " + path_ + options;
 }
 
 // The temporary files, for remove_partial_output_on_interrupt() to delete from a signal

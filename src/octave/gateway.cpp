@@ -1,6 +1,6 @@
-// The compiled part of momentid's Octave and MATLAB functions (momentid_*.m beside it are the rest):
-// one MEX gateway, `momentid_mex(COMMAND, ...)`, that runs the library on Octave's values and
-// returns structs. It uses the MEX interface only, so that the same source builds with Octave's
+// The compiled part of momentid's Octave and MATLAB functions (momentid_*.m beside it are the
+// rest): one MEX gateway, `momentid_mex(COMMAND, ...)`, that runs the library on Octave's values
+// and returns structs. It uses the MEX interface only, so that the same source builds with Octave's
 // `mkoctfile --mex` and with MATLAB's `mex`; Ctrl-C is asked of Octave (or of MATLAB's
 // utIsInterruptPending) while a pass reads the data.
 //
@@ -584,8 +584,8 @@ mxArray* simulate_command(const Model& model, Arguments& args) {
   args.finish({"params", "inputs", "dt", "samples", "burn_in", "runs", "seed", "noise", "observe",
                "path", "format"});
   if (path) {
-    const WriterFormat written = simulation_format(
-        *path, format ? std::optional(parse_writer_format(*format, "format")) : std::nullopt,
+    const FileFormat written = simulation_format(
+        *path, format ? std::optional(parse_file_format(*format, "format")) : std::nullopt,
         "format", "path");
     warn_each(simulate_to_file(model, options, *path, written));
     return mxCreateString(path->c_str());

@@ -9,7 +9,8 @@ function rec = momentid_simulate(model, varargin)
 %   REC is a struct of column vectors: t, the observed channels, run (several runs), and
 %   metadata, what a file of the record would say of it (dt, input_hold, ...). It is a record
 %   the other functions take. With 'path', FILE the record is written to FILE instead (its
-%   format from the extension, or 'format') and REC is the file's name.
+%   format from the extension, .csv, .bin, .npy, .mat or .h5, or 'format': csv, bin, npy, mat,
+%   mat73 or h5) and REC is the file's name.
 %
 %   See also MOMENTID_IDENTIFY.
   rec = momentid_call('simulate', model, varargin{:});

@@ -635,13 +635,15 @@ std::vector<std::string> simulate_to_file(const Model& model, const SimulationOp
   for (std::size_t c : channels) columns.push_back(model.variables()[c].name);
   const bool with_run = options.runs > 1;
   if (with_run) columns.push_back("run");
-  DataWriter out(path, format, simulation_metadata(model, options, noise_sd), columns);
+  DataWriter out(path, format, simulation_metadata(model, options, noise_sd), columns,
+                 options.samples * options.runs);
   SampleRows rows(out, std::move(channels), with_run);
   StepCheck check(model, options, rows);
   simulate(model, options, check, noise_sd);
   out.commit();
   std::vector<std::string> warnings;
   if (auto w = check.warning()) warnings.push_back(std::move(*w));
+  if (auto note = out.note()) warnings.push_back(std::move(*note));
   return warnings;
 }
 

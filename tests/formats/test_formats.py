@@ -221,7 +221,7 @@ def converted(name, extra_convert=(), extra_read=()):
         if name.endswith(".npy"):
             assert proc.stderr == (
                 f"momentid: note: a .npy file keeps neither column names nor metadata: "
-                f"read {name} with --names t,y,v,x\n"
+                f"read {name} with --names t,y,v,x --input-hold zoh\n"
             )
         else:
             assert proc.stderr == ""

@@ -153,8 +153,8 @@ std::size_t run_label(const Record& record, std::size_t r) {
   return record.has_run ? static_cast<std::size_t>(record.runs[r].number) : r + 1;
 }
 
-void write_replay(const Model& model, const Replay& replay, const std::string& path,
-                  DataWriter::Format format) {
+std::vector<std::string> write_replay(const Model& model, const Replay& replay,
+                                      const std::string& path, DataWriter::Format format) {
   const AlgebraLock lock;
   const Record& record = replay.record;
   std::vector<std::string> columns;
@@ -173,7 +173,9 @@ void write_replay(const Model& model, const Replay& replay, const std::string& p
   }
   line.emplace_back("substeps", std::to_string(replay.substeps));
   metadata.add_line(std::move(line));
-  DataWriter out(path, format, metadata, columns);
+  std::size_t rows = 0;
+  for (const RecordRun& run : record.runs) rows += run.rows();
+  DataWriter out(path, format, metadata, columns, rows);
   const std::size_t states = model.states().size();
   std::vector<double> row(columns.size());
   for (std::size_t r = 0; r < record.runs.size(); ++r) {
@@ -190,6 +192,9 @@ void write_replay(const Model& model, const Replay& replay, const std::string& p
     }
   }
   out.commit();
+  std::vector<std::string> notes;
+  if (auto note = out.note()) notes.push_back(std::move(*note));
+  return notes;
 }
 
 }  // namespace momentid
