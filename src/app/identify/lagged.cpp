@@ -444,6 +444,13 @@ void add_lagged_warnings(IdentifyResult& result, const LaggedChannels& channels)
           "the intervals do not include, small where the force has no power below the corner "
           "(docs/model-language.md, \"Forming a state from its acceleration\")");
     }
+    if (result.estimate.j_statistic) {
+      result.estimate.warnings.push_back(
+          "the J test is conservative where a state is formed (--integrate): on true models J "
+          "stays far below its degrees of freedom (a fifth of them, median "
+          "of 20 shaker records), so it rejects only a gross misfit and its p-value overstates "
+          "the fit (docs/uncertainty.md, \"Optimal weighting and the J test\")");
+    }
   }
 }
 
