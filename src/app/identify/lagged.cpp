@@ -236,7 +236,7 @@ SharedNoise shared_noise(const IdentifyResult& result, const LaggedChannels& c,
   const IdentifyResult::Integration& integration = *result.integration;
   const IntegrationFilter filter(
       {.corner = integration.corner, .dt = integration.dt, .integrals = {0, 1, 2}});
-  std::size_t channels = c.states.size() + c.inputs.size() + c.derivatives.size();
+  const std::size_t channels = c.states.size() + c.inputs.size() + c.derivatives.size();
   out.source.assign(channels, -1);
   out.taps.resize(channels);
   const auto channel_of = [&](const std::string& name) {
