@@ -9,6 +9,10 @@ weighted), over many seeds of one case.
   duffing3   the same with 3% noise on y;
   two_mass   models/duffing_2dof.mom (lab_records.TWO_MASS), y1, y2 and the force at 1024 Hz,
              2*10^5 samples, 3% noise on y1 and y2, 1% on the force.
+  integrate  the hardening oscillator of lab_records.hardening from its force and acceleration
+             alone (2048 Hz, 10^5 samples, 2% noise on both), y formed with --integrate y. 20
+             seeds gave coverage 100/95/90% and z sd 0.87/1.03/0.98 for c, k, k3 (k was 3.4%
+             low, 83% coverage, while the accelerometer's noise was under-estimated).
 
 Printed per parameter: the mean, the standard deviation and a robust one (1.4826 times the
 median absolute deviation) of z = (estimate - truth) / standard error, the share of 95% intervals
@@ -38,7 +42,12 @@ TWO_MASS = ("state y1, v1, y2, v2\ninput x\nparam c1, k1, eps1, c2, k2, eps2, kc
             "y1' = v1\ny2' = v2\n"
             "v1' = -c1*v1 - k1*y1 - eps1*y1^3 - kc*(y1 - y2)\n"
             "v2' = -c2*v2 - k2*y2 - eps2*y2^3 - kc*(y2 - y1) + x\n")
-CASES = {"duffing3": 0.03, "duffing5": 0.05, "duffing10": 0.10, "two_mass": 0.03}
+HARDENING = ("state y, v\ninput x\nmeasured a = v'\nparam c, k, k3\ny' = v\n"
+             "v' = -c*v - k*y - k3*y^3 + x\n")
+CASES = {"duffing3": 0.03, "duffing5": 0.05, "duffing10": 0.10, "two_mass": 0.03,
+         "integrate": 0.02}
+MODELS = {"two_mass": TWO_MASS, "integrate": HARDENING}
+OPTIONS = {"integrate": ["--integrate", "y"]}
 
 
 def record(case, workdir, seed):
@@ -47,7 +56,11 @@ def record(case, workdir, seed):
         return path
     rng = np.random.default_rng(seed)
     noise = CASES[case]
-    if case == "two_mass":
+    if case == "integrate":
+        clean = lab.hardening(rng, 2048, 100000)
+        columns = {"t": clean["t"], "a": lab.measured(rng, clean["a"], noise),
+                   "x": lab.measured(rng, clean["x"], noise)}
+    elif case == "two_mass":
         clean = lab.two_mass(rng, FS, 200000, rms=3000.0)
         columns = {"t": clean["t"], "y1": lab.measured(rng, clean["y1"], noise),
                    "y2": lab.measured(rng, clean["y2"], noise),
@@ -64,6 +77,8 @@ def record(case, workdir, seed):
 def truth_of(case):
     if case == "two_mass":
         return dict(lab.TWO_MASS)
+    if case == "integrate":
+        return dict(lab.HARDENING)
     return {**lab.SDOF, "b": 1.0}
 
 
@@ -74,13 +89,14 @@ def main():
     os.makedirs(workdir, exist_ok=True)
     model = os.path.join(workdir, f"{case}.mom")
     with open(model, "w") as out:
-        out.write(TWO_MASS if case == "two_mass" else DUFFING)
+        out.write(MODELS.get(case, DUFFING))
     truth = truth_of(case)
 
     def one(seed):
         path = record(case, workdir, seed)
         result = subprocess.run([momentid, "identify", model, path, "--format", "json",
-                                 "--quiet"], capture_output=True, text=True, check=True)
+                                 "--quiet", *OPTIONS.get(case, [])],
+                                capture_output=True, text=True, check=True)
         parameters = json.loads(result.stdout)["parameters"]
         return [(parameters[p]["estimate"], parameters[p]["std_error"]) for p in truth]
 
