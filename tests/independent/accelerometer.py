@@ -24,6 +24,9 @@ at each sample, computed from the exact states and force.
                       --integrate y: y formed, the bias warned of, no offset named on the
                       formed y (the filter removes its mean), and c, k and k3 within 3
                       standard errors.
+  measured_nonlinear  the two-mass Duffing chain (lab.two_mass) with y1 measured, y2 formed from a2
+                      by --integrate y2: the filter every channel goes through is warned of for
+                      y1 (in y1^3) as for the formed y2.
   base_excitation     the hardening spring of lab.hardening on a shaker table
                       (models/base_excitation.mom), measured by an accelerometer on the table
                       and one on the mass, 2% noise and an offset of 1% of each channel's
@@ -187,6 +190,26 @@ def integrate(momentid, models, workdir):
     return warned and formed and all(value <= 3 for value in z.values())
 
 
+def measured_nonlinear(momentid, models, workdir):
+    p = lab.TWO_MASS
+    rng = np.random.default_rng(20271129)
+    clean = lab.two_mass(rng, 1024, 100000, rms=3000.0)
+    clean["a2"] = (clean["x"] - p["c2"] * clean["v2"] - p["k2"] * clean["y2"]
+                   - p["eps2"] * clean["y2"]**3 - p["kc"] * (clean["y2"] - clean["y1"]))
+    path, model = f"{workdir}/y1_a2_x.csv", f"{workdir}/two_mass.mom"
+    write(rng, clean, ("y1", "a2", "x"), path)
+    with open(f"{models}/duffing_2dof.mom") as source, open(model, "w") as out:
+        out.write(source.read() + "measured a2 = v2'\n")
+    print("duffing_2dof.mom on y1, a2 and x, --integrate y2:")
+    report = lab.identify(momentid, model, path, "--integrate", "y2")
+    lab.describe(report, p)
+    if "failed" in report:
+        return False
+    warnings = report["diagnostics"]["warnings"]
+    return (any("'y1' goes through the high-pass" in w for w in warnings)
+            and any("'y2' was formed from 'a2'" in w for w in warnings))
+
+
 def base_excitation(momentid, models, workdir):
     p = lab.HARDENING
 
@@ -268,7 +291,8 @@ def acceleration_duffing(momentid, models, workdir):
 CASES = {"displacement": displacement, "all_channels": all_channels, "velocity": velocity,
          "acceleration_sdof": acceleration_sdof, "acceleration_chain": acceleration_chain,
          "acceleration_offset": acceleration_offset, "acceleration_duffing": acceleration_duffing,
-         "integrate": integrate, "base_excitation": base_excitation,
+         "integrate": integrate, "measured_nonlinear": measured_nonlinear,
+         "base_excitation": base_excitation,
          "validate": validate}
 
 if __name__ == "__main__":

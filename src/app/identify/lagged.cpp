@@ -434,12 +434,29 @@ void add_lagged_warnings(IdentifyResult& result, const LaggedChannels& channels)
   const std::vector<std::string> noisy = noisy_function_warnings(result, channels);
   result.estimate.warnings.insert(result.estimate.warnings.end(), noisy.begin(), noisy.end());
   if (const auto& integration = result.integration) {
+    const Model& model = *result.model;
+    const std::string corner = number(integration->corner, "%.3g");
+    // A measured state goes through the same filter, so that the formed states' equations hold.
+    for (std::size_t v = 0; v < model.states().size(); ++v) {
+      const std::string& name = model.states()[v].name;
+      const bool formed = std::any_of(integration->formed.begin(), integration->formed.end(),
+                                      [&](const auto& f) { return f.state == name; });
+      if (formed || channels.channel[v] < 0 || !nonlinear_in(model, *result.lagged->system, v)) {
+        continue;
+      }
+      result.estimate.warnings.push_back(
+          "'" + name + "' goes through the high-pass at " + corner +
+          " Hz with every channel, so that the equations of the states formed (--integrate) "
+          "hold: the terms nonlinear in it lose the low frequencies the filter cuts, a bias the "
+          "intervals do not include, and which the J test can see on a precise record "
+          "(docs/model-language.md, \"Forming a state from its acceleration\")");
+    }
     for (const auto& formed : integration->formed) {
-      const auto v = static_cast<std::size_t>(result.model->variable_index(formed.state));
-      if (!nonlinear_in(*result.model, *result.lagged->system, v)) continue;
+      const auto v = static_cast<std::size_t>(model.variable_index(formed.state));
+      if (!nonlinear_in(model, *result.lagged->system, v)) continue;
       result.estimate.warnings.push_back(
           "'" + formed.state + "' was formed from '" + formed.column + "' inside a high-pass at " +
-          number(integration->corner, "%.3g") +
+          corner +
           " Hz: the terms nonlinear in it lose the low frequencies the filter cuts, a bias "
           "the intervals do not include, small where the force has no power below the corner "
           "(docs/model-language.md, \"Forming a state from its acceleration\")");
