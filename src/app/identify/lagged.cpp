@@ -234,8 +234,12 @@ SharedNoise shared_noise(const IdentifyResult& result, const LaggedChannels& c,
   SharedNoise out;
   if (!result.integration) return out;
   const IdentifyResult::Integration& integration = *result.integration;
-  const IntegrationFilter filter(
-      {.corner = integration.corner, .dt = integration.dt, .integrals = {0, 1, 2}});
+  // Before the pass (no variances) the sources alone decide which moments the corrections add.
+  std::optional<IntegrationFilter> filter;
+  if (!noise.empty()) {
+    filter.emplace(DataOptions::Integration{
+        .corner = integration.corner, .dt = integration.dt, .integrals = {0, 1, 2}});
+  }
   const std::size_t channels = c.states.size() + c.inputs.size() + c.derivatives.size();
   out.source.assign(channels, -1);
   out.taps.resize(channels);
@@ -248,12 +252,14 @@ SharedNoise shared_noise(const IdentifyResult& result, const LaggedChannels& c,
     const auto at = static_cast<std::size_t>(column);
     if (out.source[at] < 0) {
       out.source[at] = static_cast<int>(out.variance.size());
-      out.taps[at] = filter.taps(0);
-      out.variance.push_back(at < noise.size() ? noise[at] / filter.noise_gain(0) : 0.0);
+      out.variance.push_back(filter && at < noise.size() ? noise[at] / filter->noise_gain(0) : 0.0);
+      if (filter) out.taps[at] = filter->taps(0);
     }
     out.source[static_cast<std::size_t>(state)] = out.source[at];
-    out.taps[static_cast<std::size_t>(state)] =
-        filter.taps(static_cast<std::size_t>(formed.integrals));
+    if (filter) {
+      out.taps[static_cast<std::size_t>(state)] =
+          filter->taps(static_cast<std::size_t>(formed.integrals));
+    }
   }
   return out;
 }
