@@ -380,6 +380,59 @@ TEST_SUITE("accumulator") {
     }
   }
 
+  TEST_CASE("without lags, every stretch holds its intervals' averages, held ones by cubic weights") {
+    // Every moment of degree 0 to 3 and increments: formed a chunk of rows at a time. A product
+    // with the held input is u[n] times the cubic rule's integral of its state part g over
+    // [n, n + 1], one-sided at a run's first and last interval, the trapezoid in a run of two.
+    const Record record = make_record({301, 3, 6, 7, 180, 1, 95, 2, 40, 33, 64});
+    std::vector<Moment> moments = all_moments();
+    moments.push_back(Moment::increment_of({1, 1, 1}));
+    const auto part = [&](const Moment& m, std::size_t row, std::size_t first, std::size_t last) {
+      double out = 1;
+      for (const MomentFactor& f : m.factors()) {
+        const auto c = static_cast<std::size_t>(f.channel);
+        if (c >= first && c < last) out *= std::pow(record.row(row)[c], f.power);
+      }
+      return out;
+    };
+    const auto held = [&](const Moment& m, std::size_t n) {
+      const auto g = [&](std::size_t row) { return part(m, row, 0, kStates); };
+      const std::size_t begin =
+          *(std::upper_bound(record.run_starts.begin(), record.run_starts.end(), n) - 1);
+      const bool first = n == begin, last = n + 2 >= record.run_end(n);
+      const double integral = first && last ? (g(n) + g(n + 1)) / 2
+                              : first ? (5 * g(n) + 8 * g(n + 1) - g(n + 2)) / 12
+                              : last  ? (-g(n - 1) + 8 * g(n) + 5 * g(n + 1)) / 12
+                                      : (-g(n - 1) + 13 * g(n) + 13 * g(n + 1) - g(n + 2)) / 24;
+      return part(m, n, kStates, kChannels) * integral;
+    };
+    const auto value = [&](InputHold hold, const Moment& m, std::size_t n) {
+      if (m.is_increment()) return part(m, n + 1, 0, kChannels) - part(m, n, 0, kChannels);
+      const bool has_input =
+          std::any_of(m.factors().begin(), m.factors().end(), [](const MomentFactor& f) {
+            return static_cast<std::size_t>(f.channel) >= kStates;
+          });
+      if (hold == InputHold::kZeroOrderHold && has_input) return held(m, n);
+      return 0.5 * (part(m, n, 0, kChannels) + part(m, n + 1, 0, kChannels));
+    };
+    std::vector<std::size_t> all(moments.size());
+    for (std::size_t i = 0; i < all.size(); ++i) all[i] = i;
+    momentid::PortableRandom random(/*seed=*/11, /*stream=*/0);
+    for (InputHold hold : {InputHold::kSample, InputHold::kZeroOrderHold}) {
+      for (const std::size_t shards : {1, 5, 40}) {
+        const MomentAccumulator acc =
+            shards == 1 ? one_pass(record, hold, moments)
+                        : merged_shards(record, random_cuts(random, record.rows(), shards - 1),
+                                        hold, moments);
+        INFO("hold ", static_cast<int>(hold), ", ", shards, " shards");
+        check_stretch_sums(
+            acc, record.interval_rows(0), all,
+            [&](const Moment& m, std::size_t n) { return value(hold, m, n); },
+            [](double want) { return 1e-12 * std::max(1.0, std::abs(want)); });
+      }
+    }
+  }
+
   TEST_CASE("an increment sums g(n + 1) - g(n) over the intervals of each stretch") {
     // Increments of a state, of a product of states and of a product with the input (the whole
     // product, not held), beside held moments; stretches cut runs anywhere, also for shards.

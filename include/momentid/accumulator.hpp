@@ -144,15 +144,20 @@ class MomentAccumulator {
   // The per-row work (accumulator_rows.cpp).
   void store_powers(const double* row);
   void push_rows(const double* rows, std::size_t count);
-  void push_row(const double* row, std::size_t chunk_row);
-  void form_chunk(const double* rows, std::size_t count);
-  void add_chunk_row(std::size_t chunk_row);
+  void push_row(const double* row);
   bool owns(std::size_t n) const;
+  static std::array<double, 4> held_weights(std::size_t n, std::size_t rows, bool cubic);
   void close_interval(std::size_t n);
   void close_stretch();
   void add_plain_products(const double* history);
   void plain_products(double* out, const double* history) const;
   void add_plain(const std::vector<double>& row, double weight);
+  // The work of the chunked accumulator, a chunk of rows at a time (accumulator_chunks.cpp).
+  void lay_out_chunks();
+  void push_chunks(const double* rows, std::size_t count);
+  void form_chunk(const double* rows, std::size_t count);
+  void close_chunked(std::size_t first, std::size_t last);
+  void sum_intervals(std::size_t first, std::size_t last);
   // Runs and stretches (accumulator.cpp).
   void finish_run();
   void compact();
@@ -185,14 +190,25 @@ class MomentAccumulator {
   };
   std::vector<Single> held_singles_, plain_singles_;
   std::vector<std::size_t> held_blocks_, plain_blocks_;
-  // Without lags every moment is a single (when each has at most four factors): their products
-  // are formed kChunk rows at a time, factor column by factor column (form_chunk), into tables
-  // of kChunk values per moment that the per-row loops read: the state and input parts of the
-  // ringed moments, the products of the others. `columns_`: per power-table index, its values
-  // at the chunk's rows.
-  static constexpr std::size_t kChunk = 32;
+  // Without lags every moment is a single (when each has at most four factors): the moments are
+  // formed kChunk rows at a time, column by column, in `chunk_`: kStride values per column, the
+  // kPad rows before the chunk first. Its columns: every power of every channel (power 0 a column
+  // of ones), then the products of two to four of them that some moment needs (`products_`, each
+  // once). A moment's `whole_` column holds its product (for a held moment its state part),
+  // `held_input_` the input part of the held ones (positions below increments_begin_). The
+  // intervals whose rows the chunk holds are then closed together, moment by moment along the
+  // rows (sum_intervals), without rings. `chunk_base_`: the run's row at the chunk's first;
+  // `next_close_`: the first interval of the run not closed.
+  static constexpr std::size_t kChunk = 128, kPad = 4, kStride = kPad + kChunk;
+  struct ChunkProduct {
+    std::uint32_t column, count;
+    std::array<std::uint32_t, 4> factors;  // columns of powers
+  };
   bool chunked_ = false;
-  std::vector<double> columns_, state_chunk_, input_chunk_, plain_chunk_;
+  std::vector<double> chunk_;
+  std::vector<ChunkProduct> products_;
+  std::vector<std::uint32_t> whole_, held_input_;
+  std::size_t chunk_base_ = 0, chunk_rows_ = 0, next_close_ = 0;
   // The product of factors [first, last) (1 without any) of a single.
   static double single_product(const Single& one, const double* history, std::uint32_t first,
                                std::uint32_t last);
@@ -217,7 +233,7 @@ class MomentAccumulator {
   std::vector<double> state_ring_, input_ring_, row_, previous_row_, open_sums_;
   // The plain sums (of the moments without a held input) hold an interval whose successor may
   // follow: the last row added has weight 1 in them, and 1/2 if the run or the shard's
-  // intervals end there (see push_rows).
+  // intervals end there (see push_row).
   bool plain_open_ = false;
   // Rows of the current run this accumulator saw (history and lookahead included), and those of
   // them past the first max_lag_, which have their moments' values in the rings.

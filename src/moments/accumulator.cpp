@@ -7,8 +7,8 @@
 #include "data/text.hpp"
 
 // The accumulator's life: its runs and shards, its stretches and their merging. How it lays out
-// its work is in accumulator_layout.cpp, the per-row work in accumulator_rows.cpp, its bytes in
-// accumulator_bytes.cpp.
+// its work is in accumulator_layout.cpp, the per-row work in accumulator_rows.cpp (a chunk of
+// rows at a time without lags: accumulator_chunks.cpp), its bytes in accumulator_bytes.cpp.
 
 namespace momentid {
 
@@ -56,7 +56,12 @@ void MomentAccumulator::finish_run() {
     add_plain(row_, -0.5);
     plain_open_ = false;
   }
-  if (run_rows_ >= 2) close_interval(run_rows_ - 2);
+  if (chunked_ && run_rows_ >= 2) {
+    close_chunked(next_close_, run_rows_ - 1);
+  } else if (run_rows_ >= 2) {
+    close_interval(run_rows_ - 2);
+  }
+  next_close_ = 0;
   flush();
   run_rows_ = 0;
   seen_rows_ = 0;

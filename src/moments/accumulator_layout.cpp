@@ -112,13 +112,7 @@ void MomentAccumulator::lay_out() {
   previous_row_.assign(k, 0.0);
   open_sums_.assign(k, 0.0);
   chunked_ = max_lag_ == 0 && held_blocks_.empty() && plain_blocks_.empty();
-  if (chunked_) {
-    // The history holds 2 (max_lag_ + 2) = 4 values per power-table index without lags.
-    columns_.assign(history_.size() / 4 * kChunk, 1.0);
-    state_chunk_.assign(kChunk * ringed_count_, 0.0);
-    input_chunk_.assign(kChunk * ringed_count_, 0.0);
-    plain_chunk_.assign(kChunk * (k - ringed_count_), 0.0);
-  }
+  if (chunked_) lay_out_chunks();
 }
 
 // Runs of moments in working order with the same kind and factors, whose lags step by -1, 0 or
@@ -155,7 +149,7 @@ void MomentAccumulator::group_blocks(const std::vector<Layout>& all) {
   }
 }
 
-// Blocks of one moment with one to four factors go to the flat lists of singles.
+// Blocks of one moment with at most four factors go to the flat lists of singles.
 void MomentAccumulator::choose_singles() {
   for (std::size_t i = 0; i < blocks_.size(); ++i) {
     const Block& b = blocks_[i];
@@ -164,7 +158,7 @@ void MomentAccumulator::choose_singles() {
     const bool fits = std::all_of(b.factors.begin(), b.factors.end(), [](const BlockFactor& f) {
       return f.offset <= std::numeric_limits<std::uint32_t>::max();
     });
-    if (b.size == 1 && n >= 1 && n <= 4 && fits) {
+    if (b.size == 1 && n <= 4 && fits) {
       Single single{static_cast<std::uint32_t>(b.begin),
                     static_cast<std::uint32_t>(b.state_factors),
                     static_cast<std::uint32_t>(n),

@@ -134,77 +134,15 @@ inline void MomentAccumulator::store_powers(const double* row) {
 }
 
 void MomentAccumulator::push_rows(const double* rows, std::size_t count) {
+  if (chunked_) {
+    push_chunks(rows, count);
+    return;
+  }
   const std::size_t variables = states_ + inputs_;
-  for (std::size_t first = 0; first < count; first += kChunk) {
-    const std::size_t n = std::min(kChunk, count - first);
-    if (chunked_) form_chunk(rows + first * variables, n);
-    for (std::size_t r = 0; r < n; ++r) push_row(rows + (first + r) * variables, r);
-  }
+  for (std::size_t r = 0; r < count; ++r) push_row(rows + r * variables);
 }
 
-namespace {
-
-// out[r] = the product of the columns factors[0 .. count) at row r (1 with none), in the order
-// single_product multiplies them, for r < rows.
-[[gnu::always_inline]] inline void column_product(double* out,
-                                                  const std::array<const double*, 4>& f,
-                                                  std::uint32_t count, std::size_t rows) {
-  switch (count) {
-    case 0:
-      for (std::size_t r = 0; r < rows; ++r) out[r] = 1.0;
-      break;
-    case 1:
-      for (std::size_t r = 0; r < rows; ++r) out[r] = f[0][r];
-      break;
-    case 2:
-      for (std::size_t r = 0; r < rows; ++r) out[r] = f[0][r] * f[1][r];
-      break;
-    case 3:
-      for (std::size_t r = 0; r < rows; ++r) out[r] = f[0][r] * f[1][r] * f[2][r];
-      break;
-    default:
-      for (std::size_t r = 0; r < rows; ++r) {
-        out[r] = f[0][r] * f[1][r] * f[2][r] * f[3][r];
-      }
-  }
-}
-
-}  // namespace
-
-// The powers of `count` (at most kChunk) rows, column by column as store_powers forms them, and
-// the products of every single from them.
-MOMENTID_KERNEL void MomentAccumulator::form_chunk(const double* rows, std::size_t count) {
-  const std::size_t variables = states_ + inputs_;
-  const auto column = [&](std::size_t index) { return columns_.data() + index * kChunk; };
-  for (std::size_t v = 0; v < variables; ++v) {
-    double* power = column(power_offset_[v] + 1);
-    for (std::size_t r = 0; r < count; ++r) power[r] = rows[r * variables + v];
-    for (int e = 2; e <= max_power_[v]; ++e, power += kChunk) {
-      for (std::size_t r = 0; r < count; ++r)
-        power[kChunk + r] = power[r] * rows[r * variables + v];
-    }
-  }
-  // A factor's history offset is its power-table index times the history's span, 4 without lags.
-  const auto factors = [&](const Single& one, std::uint32_t first, std::uint32_t last) {
-    std::array<const double*, 4> out{};
-    for (std::uint32_t f = first; f < last; ++f) out[f - first] = column(one.offsets[f] / 4);
-    return out;
-  };
-  for (const Single& one : held_singles_) {
-    column_product(state_chunk_.data() + one.position * kChunk, factors(one, 0, one.state_factors),
-                   one.state_factors, count);
-    column_product(input_chunk_.data() + one.position * kChunk,
-                   factors(one, one.state_factors, one.factors), one.factors - one.state_factors,
-                   count);
-  }
-  for (const Single& one : plain_singles_) {
-    column_product(plain_chunk_.data() + (one.position - ringed_count_) * kChunk,
-                   factors(one, 0, one.factors), one.factors, count);
-  }
-}
-
-// Row `chunk_row` of the chunk form_chunk formed (unless the accumulator is not chunked_).
-void MomentAccumulator::push_row(const double* row, std::size_t chunk_row) {
+void MomentAccumulator::push_row(const double* row) {
   store_powers(row);
   ++seen_rows_;
   // The first max_lag_ rows of a run only fill the history.
@@ -215,21 +153,14 @@ void MomentAccumulator::push_row(const double* row, std::size_t chunk_row) {
   // the interval, the input held), in the rings for close_interval.
   double* state = state_ring_.data() + (m % 4) * ringed_count_;
   double* input = input_ring_.data() + (m % 4) * ringed_count_;
-  if (chunked_) {
-    for (std::size_t i = 0; i < ringed_count_; ++i) {
-      state[i] = state_chunk_[i * kChunk + chunk_row];
-      input[i] = input_chunk_[i * kChunk + chunk_row];
-    }
-  } else {
-    for (const Single& one : held_singles_) {
-      state[one.position] = single_product(one, history, 0, one.state_factors);
-      input[one.position] = single_product(one, history, one.state_factors, one.factors);
-    }
-    for (const std::size_t i : held_blocks_) {
-      const Block& b = blocks_[i];
-      product(state + b.begin, b, history, 0, b.state_factors);
-      product(input + b.begin, b, history, b.state_factors, b.factors.size());
-    }
+  for (const Single& one : held_singles_) {
+    state[one.position] = single_product(one, history, 0, one.state_factors);
+    input[one.position] = single_product(one, history, one.state_factors, one.factors);
+  }
+  for (const std::size_t i : held_blocks_) {
+    const Block& b = blocks_[i];
+    product(state + b.begin, b, history, 0, b.state_factors);
+    product(input + b.begin, b, history, b.state_factors, b.factors.size());
   }
   // Any other moment is the product of all its factors, averaged over the intervals by the
   // trapezoidal rule as the rows arrive: over consecutive intervals added to the same sums,
@@ -240,11 +171,7 @@ void MomentAccumulator::push_row(const double* row, std::size_t chunk_row) {
       add_plain(previous_row_, 0.5);
       plain_open_ = true;
     }
-    if (chunked_) {
-      add_chunk_row(chunk_row);
-    } else {
-      add_plain_products(history);
-    }
+    add_plain_products(history);
   } else if (plain_open_) {
     plain_products(previous_row_.data(), history + 1);
     add_plain(previous_row_, -0.5);
@@ -253,14 +180,6 @@ void MomentAccumulator::push_row(const double* row, std::size_t chunk_row) {
   ++run_rows_;
   // With rows up to m known, the interval [m - 2, m - 1] can be closed.
   if (m >= 2) close_interval(m - 2);
-}
-
-// Adds the plain products of row `chunk_row` of the chunk to the open sums.
-MOMENTID_KERNEL void MomentAccumulator::add_chunk_row(std::size_t chunk_row) {
-  const std::size_t plain = moments_.size() - ringed_count_;
-  const double* products = plain_chunk_.data() + chunk_row;
-  double* sums = open_sums_.data() + ringed_count_;
-  for (std::size_t i = 0; i < plain; ++i) sums[i] += products[i * kChunk];
 }
 
 // Adds the products of the moments without a held input at the row `history` starts at to the
@@ -305,18 +224,14 @@ bool MomentAccumulator::owns(std::size_t n) const {
   return j == 0 ? !continued_ : j - 1 >= history_rows_ && j - 1 < history_rows_ + owned_rows_;
 }
 
-namespace {
-
 // Weights of g at rows n - 1, n, n + 1, n + 2 for the integral over interval n, [n, n + 1], of
 // a run of `rows` rows so far, divided by dt.
-std::array<double, 4> held_weights(std::size_t n, std::size_t rows, bool cubic) {
+std::array<double, 4> MomentAccumulator::held_weights(std::size_t n, std::size_t rows, bool cubic) {
   if (cubic && n >= 1 && n + 2 < rows) return {-1.0 / 24, 13.0 / 24, 13.0 / 24, -1.0 / 24};
   if (cubic && n + 2 < rows) return {0, 5.0 / 12, 8.0 / 12, -1.0 / 12};  // a run's first
   if (cubic && n >= 1) return {-1.0 / 12, 8.0 / 12, 5.0 / 12, 0};        // a run's last
   return {0, 0.5, 0.5, 0};
 }
-
-}  // namespace
 
 // Closes interval n, between rows n and n + 1 of the run: adds the averages of its held moments
 // to the open sums and counts it. A product with a held input is u[n] times the integral of g(y)

@@ -1,0 +1,209 @@
+// The chunked accumulator (no lags, every moment of one to four factors): the products of the
+// moments formed kChunk rows at a time, factor column by factor column, and every interval whose
+// rows the chunk holds closed at once, moment by moment along the rows, where
+// accumulator_rows.cpp goes row by row through rings. The intervals, their weights and the
+// stretches are the same; only the order of the floating-point sums differs.
+
+#include <algorithm>
+#include <array>
+#include <cstdint>
+#include <cstring>
+#include <map>
+#include <utility>
+#include <vector>
+
+#include "momentid/accumulator.hpp"
+
+// As in accumulator_rows.cpp: the kernels are also built for AVX2, chosen when the program loads.
+#if defined(__x86_64__) && defined(__gnu_linux__) && !defined(__clang__) && \
+    !defined(MOMENTID_NO_TARGET_CLONES)
+#define MOMENTID_KERNEL __attribute__((target_clones("avx2", "default")))
+#else
+#define MOMENTID_KERNEL
+#endif
+
+namespace momentid {
+namespace {
+
+// Four doubles in a vector register (two with SSE2 alone), read and written at any address.
+using Lanes = double __attribute__((vector_size(32)));
+[[gnu::always_inline]] inline Lanes load(const double* p) {
+  Lanes v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
+}
+[[gnu::always_inline]] inline void store(double* p, Lanes v) { std::memcpy(p, &v, sizeof v); }
+
+// out[r] = the product of the columns f[0 .. count) (two to four) at row r, for r < rows.
+[[gnu::always_inline]] inline void column_product(double* out,
+                                                  const std::array<const double*, 4>& f,
+                                                  std::uint32_t count, std::size_t rows) {
+  for (std::size_t r = 0; r < rows; r += 4) {
+    Lanes p = load(f[0] + r) * load(f[1] + r);
+    if (count > 2) p *= load(f[2] + r);
+    if (count > 3) p *= load(f[3] + r);
+    store(out + r, p);
+  }
+}
+
+// The sum of u[k] (w0 g[k - 1] + w1 g[k] + w2 g[k + 1] + w3 g[k + 2]) over k < count, the rows
+// whose weight is 0 (Before, After false) not read: a run has none there.
+template <bool Before, bool After>
+[[gnu::always_inline]] inline double held_sum(const double* u, const double* g, std::size_t count,
+                                              const std::array<double, 4>& w) {
+  const auto term = [&](auto at) {
+    auto integral = w[1] * at(g) + w[2] * at(g + 1);
+    if constexpr (Before) integral = w[0] * at(g - 1) + integral;
+    if constexpr (After) integral += w[3] * at(g + 2);
+    return at(u) * integral;
+  };
+  Lanes lanes{};
+  std::size_t k = 0;
+  for (; k + 4 <= count; k += 4) lanes += term([&](const double* p) { return load(p + k); });
+  double sum = (lanes[0] + lanes[1]) + (lanes[2] + lanes[3]);
+  for (; k < count; ++k) sum += term([&](const double* p) { return p[k]; });
+  return sum;
+}
+
+// The sum of p[k] over k < count.
+[[gnu::always_inline]] inline double column_sum(const double* p, std::size_t count) {
+  Lanes lanes{};
+  std::size_t k = 0;
+  for (; k + 4 <= count; k += 4) lanes += load(p + k);
+  double sum = (lanes[0] + lanes[1]) + (lanes[2] + lanes[3]);
+  for (; k < count; ++k) sum += p[k];
+  return sum;
+}
+
+}  // namespace
+
+// The columns of the chunk: the powers, then each product of two to four powers that a moment
+// (or a held moment's state or input part) needs, once.
+void MomentAccumulator::lay_out_chunks() {
+  std::map<std::vector<std::uint32_t>, std::uint32_t> columns;
+  auto next = static_cast<std::uint32_t>(history_.size() / 4);  // the powers' columns
+  // The column of the product of the factors [first, last) of a single: a power's own column
+  // for one (a column of ones, power 0 of channel 0, for none).
+  const auto column = [&](const Single& one, std::uint32_t first, std::uint32_t last) {
+    // A factor's history offset is its power-table index times the history's span, 4 without
+    // lags.
+    std::vector<std::uint32_t> factors;
+    for (std::uint32_t f = first; f < last; ++f) factors.push_back(one.offsets[f] / 4);
+    if (factors.size() <= 1) return factors.empty() ? std::uint32_t{0} : factors[0];
+    const auto [at, added] = columns.try_emplace(factors, next);
+    if (added) {
+      ChunkProduct product{next++, static_cast<std::uint32_t>(factors.size()), {}};
+      std::copy(factors.begin(), factors.end(), product.factors.begin());
+      products_.push_back(product);
+    }
+    return at->second;
+  };
+  whole_.assign(moments_.size(), 0);
+  held_input_.assign(increments_begin_, 0);
+  for (const Single& one : held_singles_) {
+    whole_[one.position] = column(one, 0, one.state_factors);
+    if (one.position < increments_begin_) {
+      held_input_[one.position] = column(one, one.state_factors, one.factors);
+    }
+  }
+  for (const Single& one : plain_singles_) whole_[one.position] = column(one, 0, one.factors);
+  chunk_.assign(next * kStride, 1.0);
+}
+
+void MomentAccumulator::push_chunks(const double* rows, std::size_t count) {
+  const std::size_t variables = states_ + inputs_;
+  for (std::size_t first = 0; first < count; first += kChunk) {
+    const std::size_t n = std::min(kChunk, count - first);
+    form_chunk(rows + first * variables, n);
+    seen_rows_ += n;
+    run_rows_ += n;
+    // The intervals with the rows their cubic weights need; the run's last waits for its end.
+    if (run_rows_ >= 3) close_chunked(next_close_, run_rows_ - 2);
+  }
+}
+
+// Forms the columns of `count` (at most kChunk) rows of the run after the rows the chunk holds,
+// keeping its last kPad rows before them. The products are formed a multiple of four rows at a
+// time: the rows past `count` are not read.
+MOMENTID_KERNEL void MomentAccumulator::form_chunk(const double* rows, std::size_t count) {
+  if (run_rows_ > 0) {
+    for (double* at = chunk_.data(); at < chunk_.data() + chunk_.size(); at += kStride) {
+      for (std::size_t r = 0; r < kPad; ++r) at[r] = at[r + chunk_rows_];
+    }
+  }
+  chunk_base_ = run_rows_;
+  chunk_rows_ = count;
+  const auto column = [&](std::size_t index) { return chunk_.data() + index * kStride + kPad; };
+  const std::size_t variables = states_ + inputs_;
+  for (std::size_t v = 0; v < variables; ++v) {
+    double* power = column(power_offset_[v] + 1);
+    for (std::size_t r = 0; r < count; ++r) power[r] = rows[r * variables + v];
+    for (int e = 2; e <= max_power_[v]; ++e, power += kStride) {
+      for (std::size_t r = 0; r < count; ++r) power[kStride + r] = power[r] * rows[r * variables + v];
+    }
+  }
+  for (const ChunkProduct& p : products_) {
+    column_product(column(p.column),
+                   {column(p.factors[0]), column(p.factors[1]), column(p.factors[2]),
+                    column(p.factors[3])},
+                   p.count, count);
+  }
+}
+
+// Closes the intervals [first, last) of the run, whose rows the tables hold, that this
+// accumulator owns (owns(): without lags, from the run's first, or its second when the run
+// began in another shard, to the one after its last own row), a stretch at a time.
+void MomentAccumulator::close_chunked(std::size_t first, std::size_t last) {
+  const std::size_t end = std::min(last, owned_rows_ + 1);
+  for (std::size_t n = std::max<std::size_t>(first, continued_ ? 1 : 0); n < end;) {
+    Stretch& stretch = stretches_.back();
+    const std::size_t k = std::min(end - n, stretch_length_ - stretch.intervals);
+    sum_intervals(n, n + k);
+    stretch.intervals += k;
+    intervals_ += k;
+    n += k;
+    if (stretch.intervals >= stretch_length_) close_stretch();
+  }
+  next_close_ = std::max(next_close_, last);
+}
+
+// Adds the averages of the intervals [first, last) of the run to the open sums (as
+// close_interval and the plain sums of push_row do): the held moments with the weights of
+// held_weights, the run's first and last intervals with their own; the increments' g at `last`
+// less g at `first`; the other products by the trapezoidal rule.
+MOMENTID_KERNEL void MomentAccumulator::sum_intervals(std::size_t first, std::size_t last) {
+  const std::size_t rows = run_rows_;
+  const bool cubic = rule_ == HeldRule::kCubic;
+  // Column `c` from the run's row `row` on.
+  const auto at = [&](std::uint32_t c, std::size_t row) {
+    return chunk_.data() + c * kStride + kPad + row - chunk_base_;
+  };
+  double* sums = open_sums_.data();
+  // The interior intervals [inner, outer) share one set of weights; a run's first and last
+  // have their own.
+  const std::size_t inner = std::max<std::size_t>(first, 1);
+  const std::size_t outer = std::max(inner, std::min(last, rows - 2));
+  for (const auto& [a, b] : {std::pair{first, std::min<std::size_t>(first + 1, inner)},
+                            std::pair{inner, outer}, std::pair{outer, last}}) {
+    if (a >= b) continue;
+    const std::array<double, 4> w = held_weights(a, rows, cubic);
+    const bool before = w[0] != 0, after = w[3] != 0;
+    for (std::size_t i = 0; i < increments_begin_; ++i) {
+      const double* g = at(whole_[i], a);
+      const double* u = at(held_input_[i], a);
+      sums[i] += before && after ? held_sum<true, true>(u, g, b - a, w)
+                 : before        ? held_sum<true, false>(u, g, b - a, w)
+                 : after         ? held_sum<false, true>(u, g, b - a, w)
+                                 : held_sum<false, false>(u, g, b - a, w);
+    }
+  }
+  for (std::size_t i = increments_begin_; i < ringed_count_; ++i) {
+    sums[i] += *at(whole_[i], last) - *at(whole_[i], first);
+  }
+  for (std::size_t i = ringed_count_; i < moments_.size(); ++i) {
+    const double* p = at(whole_[i], first);
+    sums[i] += 0.5 * p[0] + column_sum(p + 1, last - first - 1) + 0.5 * p[last - first];
+  }
+}
+
+}  // namespace momentid
