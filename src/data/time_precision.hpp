@@ -1,5 +1,9 @@
 #pragma once
 
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
 namespace momentid::data {
 
 // The precision to which a column of time stamps was written: the unit in the last decimal
@@ -14,12 +18,29 @@ namespace momentid::data {
 //   p.unit();  // 1e-6
 class TimePrecision {
  public:
-  void see(double t);
-  double unit() const;
+  // Most values need no more decimals than those before them: one test.
+  void see(double t) {
+    if (!binary_ && !whole(t * scale_)) see_more_decimals(t);
+  }
+  double unit() const { return unit_; }
 
  private:
+  // Whether x, a value scaled by a power of ten, is a whole number up to the rounding of the
+  // value and of the scaling (a few units in the last place of a double).
+  static bool whole(double x) {
+    constexpr double kLimit = 4503599627370496.0;  // 2^52: above it every double is whole
+    constexpr double kRounding = 4 * std::numeric_limits<double>::epsilon();
+    const double a = std::abs(x);
+    // a to the nearest whole number as std::nearbyint rounds it, without a library call for
+    // every time stamp: in [2^52, 2^53) the doubles are the whole numbers.
+    const double nearest = (a + kLimit) - kLimit;
+    return a < kLimit && std::abs(a - nearest) <= kRounding * std::max(a, 1.0);
+  }
+  void see_more_decimals(double t);
+
   int decimals_ = 0;
   double scale_ = 1;  // 10^decimals_
+  double unit_ = 1;   // 1 / scale_, or 0 once binary_
   bool binary_ = false;
 };
 

@@ -1,8 +1,10 @@
 #include "moments/lag_sums.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 
 namespace momentid {
 
@@ -11,11 +13,63 @@ std::optional<double> ChannelStatistics::noise_fraction() const {
   return std::sqrt(std::max(0.0, *noise_variance) / variance);
 }
 
+namespace {
+
+// Two doubles, one SSE2 register (a vector type of GCC and Clang). A sum is kept in kVectors of
+// them, whose additions do not wait on one another.
+using Double2 = double __attribute__((vector_size(2 * sizeof(double))));
+constexpr std::size_t kVectors = 4;
+constexpr std::size_t kLanes = 2 * kVectors;
+
+// Over i < n: the sums of x[i] * y[i], of x[i] and of y[i].
+struct PairSums {
+  double products = 0, lead = 0, lagged = 0;
+};
+
+PairSums sum_pairs(const double* x, const double* y, std::size_t n) {
+  std::array<Double2, kVectors> products{}, lead{}, lagged{};
+  std::size_t i = 0;
+  for (; i + kLanes <= n; i += kLanes) {
+    for (std::size_t v = 0; v < kVectors; ++v) {
+      Double2 xv, yv;
+      std::memcpy(&xv, x + i + 2 * v, sizeof xv);
+      std::memcpy(&yv, y + i + 2 * v, sizeof yv);
+      products[v] += xv * yv;
+      lead[v] += xv;
+      lagged[v] += yv;
+    }
+  }
+  const auto total = [](const std::array<Double2, kVectors>& s) {
+    Double2 t = s[0];
+    for (std::size_t v = 1; v < kVectors; ++v) t += s[v];
+    return t[0] + t[1];
+  };
+  PairSums out{total(products), total(lead), total(lagged)};
+  for (; i < n; ++i) {
+    out.products += x[i] * y[i];
+    out.lead += x[i];
+    out.lagged += y[i];
+  }
+  return out;
+}
+
+// The largest |x[i]| over i < n.
+double largest_magnitude(const double* x, std::size_t n) {
+  std::array<double, kLanes> top{};
+  std::size_t i = 0;
+  for (; i + kLanes <= n; i += kLanes) {
+    for (std::size_t j = 0; j < kLanes; ++j) top[j] = std::max(top[j], std::abs(x[i + j]));
+  }
+  for (; i < n; ++i) top[0] = std::max(top[0], std::abs(x[i]));
+  return *std::max_element(top.begin(), top.end());
+}
+
+}  // namespace
+
 LagSums::LagSums(std::size_t channels, std::size_t lags)
     : channels_(channels),
       lags_(lags),
-      history_(2 * lags * channels, 0.0),
-      repeated_(lags * channels, 0.0),
+      history_(lags * channels, 0.0),
       sum_(channels, 0.0),
       sum_squares_(channels, 0.0),
       products_(lags * channels, 0.0),
@@ -26,39 +80,64 @@ LagSums::LagSums(std::size_t channels, std::size_t lags)
       largest_row_(channels, 0) {}
 
 void LagSums::add_history(const double* rows, std::size_t count) {
-  for (std::size_t r = 0; r < count; ++r) remember(rows + r * channels_);
+  // Remembered as read: the offset is not known before the shard's first row.
+  for (std::size_t c = 0; c < channels_; ++c) {
+    fill_column(c, rows, count);
+    keep_history(c);
+  }
+  filled_ += count;
 }
 
 void LagSums::add(const double* rows, std::size_t count) {
-  for (std::size_t r = 0; r < count; ++r) {
-    const double* const row = rows + r * channels_;
-    if (count_ == 0) {
-      offset_.assign(row, row + channels_);
-      // The rows before the shard, remembered as read, less the offset now known.
-      for (std::size_t k = 0; k < history_.size(); ++k) history_[k] -= offset_[k % channels_];
-    }
-    for (std::size_t c = 0; c < channels_; ++c) {
-      if (std::abs(row[c]) > largest_[c]) {
-        largest_[c] = std::abs(row[c]);
-        largest_row_[c] = count_;
-      }
-      const double x = row[c] - offset_[c];
-      sum_[c] += x;
-      sum_squares_[c] += x * x;
-      for (std::size_t l = 0; l < lags_; ++l) repeated_[l * channels_ + c] = x;
-    }
-    // The previous rows, newest first, against this one: every lag and channel in one sweep.
-    const double* past = &history_[head_ * channels_];
-    const std::size_t paired = std::min(filled_, lags_) * channels_;
-    for (std::size_t k = 0; k < paired; ++k) {
-      products_[k] += repeated_[k] * past[k];
-      lead_[k] += repeated_[k];
-      lagged_[k] += past[k];
-    }
-    for (std::size_t l = 0; l < std::min(filled_, lags_); ++l) ++pairs_[l];
-    remember(repeated_.data());
-    ++count_;
+  if (count == 0) return;
+  if (count_ == 0) {
+    offset_.assign(rows, rows + channels_);
+    // The rows before the shard, remembered as read, less the offset now known.
+    for (std::size_t k = 0; k < history_.size(); ++k) history_[k] -= offset_[k / lags_];
   }
+  // The first row of the block that lag l pairs: the run's (l + 1)-th.
+  const auto first_paired = [&](std::size_t l) {
+    return std::min(l > filled_ ? l - filled_ : 0, count);
+  };
+  for (std::size_t c = 0; c < channels_; ++c) {
+    fill_column(c, rows, count);
+    double* const x = column_.data() + lags_;  // the block's values
+    // The block's largest |value|, then the first row that has it.
+    const double top = largest_magnitude(x, count);
+    if (top > largest_[c]) {
+      largest_[c] = top;
+      const auto at = std::find_if(x, x + count, [&](double v) { return std::abs(v) == top; });
+      largest_row_[c] = count_ + static_cast<std::size_t>(at - x);
+    }
+    for (std::size_t r = 0; r < count; ++r) x[r] -= offset_[c];
+    const PairSums own = sum_pairs(x, x, count);
+    sum_[c] += own.lead;
+    sum_squares_[c] += own.products;
+    // Lag l pairs each row with the one l rows earlier in the run, history included.
+    for (std::size_t l = 1; l <= lags_; ++l) {
+      const std::size_t first = first_paired(l);
+      const PairSums pairs = sum_pairs(x + first, x + first - l, count - first);
+      const std::size_t i = (l - 1) * channels_ + c;
+      products_[i] += pairs.products;
+      lead_[i] += pairs.lead;
+      lagged_[i] += pairs.lagged;
+    }
+    keep_history(c);
+  }
+  for (std::size_t l = 1; l <= lags_; ++l) pairs_[l - 1] += count - first_paired(l);
+  filled_ += count;
+  count_ += count;
+}
+
+void LagSums::fill_column(std::size_t c, const double* rows, std::size_t count) {
+  column_.resize(lags_ + count);
+  std::copy_n(history_.begin() + static_cast<std::ptrdiff_t>(c * lags_), lags_, column_.begin());
+  for (std::size_t r = 0; r < count; ++r) column_[lags_ + r] = rows[r * channels_ + c];
+}
+
+void LagSums::keep_history(std::size_t c) {
+  std::copy(column_.end() - static_cast<std::ptrdiff_t>(lags_), column_.end(),
+            history_.begin() + static_cast<std::ptrdiff_t>(c * lags_));
 }
 
 void LagSums::save(ByteWriter& out) const {
@@ -149,15 +228,6 @@ ChannelStatistics LagSums::statistics(std::size_t c, bool held) const {
     s.noise_variance = s.variance * (1 - smooth_lag_zero(s.autocorrelation, held));
   }
   return s;
-}
-
-void LagSums::remember(const double* row) {
-  if (lags_ > 0) {
-    head_ = head_ == 0 ? lags_ - 1 : head_ - 1;
-    std::copy(row, row + channels_, &history_[head_ * channels_]);
-    std::copy(row, row + channels_, &history_[(head_ + lags_) * channels_]);
-  }
-  ++filled_;
 }
 
 double smooth_lag_zero(const std::vector<double>& rho, bool held) {

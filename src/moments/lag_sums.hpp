@@ -22,6 +22,7 @@ class LagSums {
   void start_run() { filled_ = 0; }
   // Rows of the run before the shard, which only pair with the shard's own rows.
   void add_history(const double* rows, std::size_t count);
+  // `count` rows (row-major), taken a channel at a time.
   void add(const double* rows, std::size_t count);
 
   // The sums, for another process (load()).
@@ -34,12 +35,16 @@ class LagSums {
   ChannelStatistics statistics(std::size_t c, bool held) const;
 
  private:
-  void remember(const double* row);
+  // Fills column_ with channel c: its history, then the block's values as they are.
+  void fill_column(std::size_t c, const double* rows, std::size_t count);
+  // Keeps the column's last `lags_` values as channel c's history.
+  void keep_history(std::size_t c);
 
   std::size_t channels_, lags_;
-  // The previous `lags_` rows less the offset, newest first from head_, stored twice in a row so
-  // that they are contiguous from any head; this row less the offset, once per lag.
-  std::vector<double> history_, repeated_;
+  // Per channel, the run's last `lags_` values less the offset, oldest first (the last
+  // min(filled_, lags_) of them are rows of the run). The block at hand, one channel at a time:
+  // its history, then its values less the offset.
+  std::vector<double> history_, column_;
   std::vector<double> offset_, sum_, sum_squares_, products_;
   // Per lag and channel: the sums of the later and of the earlier values of the pairs.
   std::vector<double> lead_, lagged_;
@@ -47,7 +52,7 @@ class LagSums {
   // Per channel: the largest |value| and its row among the rows added (the first such row).
   std::vector<double> largest_;
   std::vector<std::size_t> largest_row_;
-  std::size_t head_ = 0, filled_ = 0, count_ = 0;
+  std::size_t filled_ = 0, count_ = 0;
 };
 
 }  // namespace momentid
