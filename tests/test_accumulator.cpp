@@ -492,6 +492,34 @@ TEST_SUITE("accumulator") {
     }
   }
 
+  TEST_CASE("lagged moments formed a chunk at a time are those formed row by row") {
+    // A moment of five factors sends the whole accumulator row by row through its blocks and
+    // rings; without it every moment is formed a chunk of rows at a time. Both holds (the cubic
+    // weights of held products at every lag), one pass and shards with their history.
+    const Record record = make_record({301, 3, 6, 7, 180, 1, 95, 2, 40});
+    std::vector<Moment> by_rows = lagged_moments();
+    by_rows.push_back(Moment({{0, 1, 0}, {1, 1, 1}, {2, 1, 2}, {0, 1, 3}, {1, 1, 4}}));
+    momentid::PortableRandom random(/*seed=*/13, /*stream=*/0);
+    for (const InputHold hold : {InputHold::kSample, InputHold::kZeroOrderHold}) {
+      for (const std::size_t shards : {1, 6}) {
+        const auto cuts = random_cuts(random, record.rows(), shards - 1);
+        const MomentAccumulator chunked = merged_shards(record, cuts, hold, lagged_moments());
+        const MomentAccumulator rows = merged_shards(record, cuts, hold, by_rows);
+        CAPTURE(shards);
+        REQUIRE(chunked.stretches().size() == rows.stretches().size());
+        for (std::size_t q = 0; q < rows.stretches().size(); ++q) {
+          CHECK(chunked.stretches()[q].intervals == rows.stretches()[q].intervals);
+          for (std::size_t i = 0; i < lagged_moments().size(); ++i) {
+            const double want = rows.stretches()[q].sums[i];
+            INFO("stretch ", q, ", ", to_string(rows.moments()[i]));
+            CHECK(std::abs(chunked.stretches()[q].sums[i] - want) <=
+                  1e-12 * std::max(1.0, std::abs(want)));
+          }
+        }
+      }
+    }
+  }
+
   TEST_CASE("history is refused beyond the largest lag or outside a continued run") {
     MomentAccumulator acc(lagged_moments(), kStates, kInputs, InputHold::kSample, kBatches);
     const std::vector<double> rows(6 * kChannels, 1.0);

@@ -153,7 +153,7 @@ class MomentAccumulator {
   void plain_products(double* out, const double* history) const;
   void add_plain(const std::vector<double>& row, double weight);
   // The work of the chunked accumulator, a chunk of rows at a time (accumulator_chunks.cpp).
-  void lay_out_chunks();
+  void lay_out_chunks(const std::vector<Layout>& layouts);
   void push_chunks(const double* rows, std::size_t count);
   void form_chunk(const double* rows, std::size_t count);
   void close_chunked(std::size_t first, std::size_t last);
@@ -190,24 +190,32 @@ class MomentAccumulator {
   };
   std::vector<Single> held_singles_, plain_singles_;
   std::vector<std::size_t> held_blocks_, plain_blocks_;
-  // Without lags every moment is a single (when each has at most four factors): the moments are
-  // formed kChunk rows at a time, column by column, in `chunk_`: kStride values per column, the
-  // kPad rows before the chunk first. Its columns: every power of every channel (power 0 a column
-  // of ones), then the products of two to four of them that some moment needs (`products_`, each
-  // once). A moment's `whole_` column holds its product (for a held moment its state part),
-  // `held_input_` the input part of the held ones (positions below increments_begin_). The
-  // intervals whose rows the chunk holds are then closed together, moment by moment along the
-  // rows (sum_intervals), without rings. `chunk_base_`: the run's row at the chunk's first;
+  // When every moment has at most kChunkFactors factors (every moment of the zero-lag and the
+  // lagged equations), the moments are formed kChunk rows at a time, column by column, in
+  // `chunk_`: stride_ values per column, the pad_ rows before the chunk first (the largest lag
+  // and the cubic weights' rows). Its columns: every power of every channel (power 0 a column of
+  // ones), then the products of two to four powers, each at its lag, that some moment needs
+  // (`products_`, each once, its factors' lags less the smallest). A moment's `whole_` part is
+  // its product (for a held moment its state part), `held_input_` the input part of the held
+  // ones (positions below increments_begin_): each a column read `lag` rows back. The intervals
+  // whose rows the chunk holds are then closed together, moment by moment along the rows
+  // (sum_intervals), without the blocks, rings and per-row sums of the other moments.
+  // `chunk_base_`: the run's row (of those this accumulator saw) at the chunk's first;
   // `next_close_`: the first interval of the run not closed.
-  static constexpr std::size_t kChunk = 128, kPad = 4, kStride = kPad + kChunk;
+  static constexpr std::size_t kChunk = 128, kChunkFactors = 4;
   struct ChunkProduct {
     std::uint32_t column, count;
-    std::array<std::uint32_t, 4> factors;  // columns of powers
+    std::array<std::uint32_t, kChunkFactors> factors;  // columns of powers
+    std::array<std::uint32_t, kChunkFactors> lags;
+  };
+  struct ChunkPart {
+    std::uint32_t column, lag;
   };
   bool chunked_ = false;
+  std::size_t pad_ = 0, stride_ = 0;
   std::vector<double> chunk_;
   std::vector<ChunkProduct> products_;
-  std::vector<std::uint32_t> whole_, held_input_;
+  std::vector<ChunkPart> whole_, held_input_;
   std::size_t chunk_base_ = 0, chunk_rows_ = 0, next_close_ = 0;
   // The product of factors [first, last) (1 without any) of a single.
   static double single_product(const Single& one, const double* history, std::uint32_t first,

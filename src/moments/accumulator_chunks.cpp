@@ -1,8 +1,8 @@
-// The chunked accumulator (no lags, every moment of one to four factors): the products of the
-// moments formed kChunk rows at a time, factor column by factor column, and every interval whose
-// rows the chunk holds closed at once, moment by moment along the rows, where
-// accumulator_rows.cpp goes row by row through rings. The intervals, their weights and the
-// stretches are the same; only the order of the floating-point sums differs.
+// The chunked accumulator (every moment of at most four factors, at any lags): the products of
+// the moments formed kChunk rows at a time, column by column, and every interval whose rows the
+// chunk holds closed at once, moment by moment along the rows, where accumulator_rows.cpp goes
+// row by row through blocks and rings. The intervals, their weights and the stretches are the
+// same; only the order of the floating-point sums differs.
 
 #include <algorithm>
 #include <array>
@@ -77,37 +77,48 @@ template <bool Before, bool After>
 
 }  // namespace
 
-// The columns of the chunk: the powers, then each product of two to four powers that a moment
-// (or a held moment's state or input part) needs, once.
-void MomentAccumulator::lay_out_chunks() {
-  std::map<std::vector<std::uint32_t>, std::uint32_t> columns;
-  auto next = static_cast<std::uint32_t>(history_.size() / 4);  // the powers' columns
-  // The column of the product of the factors [first, last) of a single: a power's own column
-  // for one (a column of ones, power 0 of channel 0, for none).
-  const auto column = [&](const Single& one, std::uint32_t first, std::uint32_t last) {
-    // A factor's history offset is its power-table index times the history's span, 4 without
-    // lags.
-    std::vector<std::uint32_t> factors;
-    for (std::uint32_t f = first; f < last; ++f) factors.push_back(one.offsets[f] / 4);
-    if (factors.size() <= 1) return factors.empty() ? std::uint32_t{0} : factors[0];
+// The columns of the chunk: the powers, then each product of two to four powers at their lags
+// that a moment (or a held moment's state or input part) needs, once.
+void MomentAccumulator::lay_out_chunks(const std::vector<Layout>& layouts) {
+  // The largest lag, and the rows n - 1 .. n + 2 of the cubic weights before the chunk's.
+  pad_ = max_lag_ + 4;
+  stride_ = pad_ + kChunk;
+  // The power table's columns first: the history holds 2 (max_lag_ + 2) values of each.
+  auto next = static_cast<std::uint32_t>(history_.size() / (2 * (max_lag_ + 2)));
+  std::map<std::vector<std::pair<std::uint32_t, std::uint32_t>>, std::uint32_t> columns;
+  // The product of the factors [first, last) of a layout: a power's own column for one, the
+  // column of ones (power 0 of channel 0) for none, read `lag` rows back.
+  const auto part = [&](const Layout& l, std::size_t first, std::size_t last) -> ChunkPart {
+    if (first == last) return {0, 0};
+    const auto lag = static_cast<std::uint32_t>(
+        *std::min_element(l.lags.begin() + static_cast<std::ptrdiff_t>(first),
+                          l.lags.begin() + static_cast<std::ptrdiff_t>(last)));
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> factors;
+    for (std::size_t f = first; f < last; ++f) {
+      factors.emplace_back(static_cast<std::uint32_t>(l.indices[f]),
+                           static_cast<std::uint32_t>(l.lags[f]) - lag);
+    }
+    if (factors.size() == 1) return {factors[0].first, lag};
+    std::sort(factors.begin(), factors.end());
     const auto [at, added] = columns.try_emplace(factors, next);
     if (added) {
-      ChunkProduct product{next++, static_cast<std::uint32_t>(factors.size()), {}};
-      std::copy(factors.begin(), factors.end(), product.factors.begin());
+      ChunkProduct product{next++, static_cast<std::uint32_t>(factors.size()), {}, {}};
+      for (std::size_t f = 0; f < factors.size(); ++f) {
+        std::tie(product.factors[f], product.lags[f]) = factors[f];
+      }
       products_.push_back(product);
     }
-    return at->second;
+    return {at->second, lag};
   };
-  whole_.assign(moments_.size(), 0);
-  held_input_.assign(increments_begin_, 0);
-  for (const Single& one : held_singles_) {
-    whole_[one.position] = column(one, 0, one.state_factors);
-    if (one.position < increments_begin_) {
-      held_input_[one.position] = column(one, one.state_factors, one.factors);
-    }
+  whole_.resize(moments_.size());
+  held_input_.resize(increments_begin_);
+  for (std::size_t i = 0; i < moments_.size(); ++i) {
+    const Layout& l = layouts[order_[i]];
+    const bool held = i < increments_begin_;
+    whole_[i] = part(l, 0, held ? l.state_factors : l.indices.size());
+    if (held) held_input_[i] = part(l, l.state_factors, l.indices.size());
   }
-  for (const Single& one : plain_singles_) whole_[one.position] = column(one, 0, one.factors);
-  chunk_.assign(next * kStride, 1.0);
+  chunk_.assign(next * stride_, 1.0);
 }
 
 void MomentAccumulator::push_chunks(const double* rows, std::size_t count) {
@@ -116,55 +127,57 @@ void MomentAccumulator::push_chunks(const double* rows, std::size_t count) {
     const std::size_t n = std::min(kChunk, count - first);
     form_chunk(rows + first * variables, n);
     seen_rows_ += n;
-    run_rows_ += n;
+    // The first max_lag_ rows of a run only give the lagged factors.
+    run_rows_ = seen_rows_ > max_lag_ ? seen_rows_ - max_lag_ : 0;
     // The intervals with the rows their cubic weights need; the run's last waits for its end.
     if (run_rows_ >= 3) close_chunked(next_close_, run_rows_ - 2);
   }
 }
 
 // Forms the columns of `count` (at most kChunk) rows of the run after the rows the chunk holds,
-// keeping its last kPad rows before them. The products are formed a multiple of four rows at a
+// keeping its last pad_ rows before them. The products are formed a multiple of four rows at a
 // time: the rows past `count` are not read.
 MOMENTID_KERNEL void MomentAccumulator::form_chunk(const double* rows, std::size_t count) {
-  if (run_rows_ > 0) {
-    for (double* at = chunk_.data(); at < chunk_.data() + chunk_.size(); at += kStride) {
-      for (std::size_t r = 0; r < kPad; ++r) at[r] = at[r + chunk_rows_];
+  if (seen_rows_ > 0) {
+    for (double* at = chunk_.data(); at < chunk_.data() + chunk_.size(); at += stride_) {
+      for (std::size_t r = 0; r < pad_; ++r) at[r] = at[r + chunk_rows_];
     }
   }
-  chunk_base_ = run_rows_;
+  chunk_base_ = seen_rows_;
   chunk_rows_ = count;
-  const auto column = [&](std::size_t index) { return chunk_.data() + index * kStride + kPad; };
+  const auto column = [&](std::size_t index) { return chunk_.data() + index * stride_ + pad_; };
   const std::size_t variables = states_ + inputs_;
   for (std::size_t v = 0; v < variables; ++v) {
     double* power = column(power_offset_[v] + 1);
     for (std::size_t r = 0; r < count; ++r) power[r] = rows[r * variables + v];
-    for (int e = 2; e <= max_power_[v]; ++e, power += kStride) {
-      for (std::size_t r = 0; r < count; ++r) power[kStride + r] = power[r] * rows[r * variables + v];
+    for (int e = 2; e <= max_power_[v]; ++e, power += stride_) {
+      for (std::size_t r = 0; r < count; ++r) power[stride_ + r] = power[r] * rows[r * variables + v];
     }
   }
   for (const ChunkProduct& p : products_) {
-    column_product(column(p.column),
-                   {column(p.factors[0]), column(p.factors[1]), column(p.factors[2]),
-                    column(p.factors[3])},
-                   p.count, count);
+    std::array<const double*, kChunkFactors> factors{};
+    for (std::size_t f = 0; f < kChunkFactors; ++f) factors[f] = column(p.factors[f]) - p.lags[f];
+    column_product(column(p.column), factors, p.count, count);
   }
 }
 
-// Closes the intervals [first, last) of the run, whose rows the tables hold, that this
-// accumulator owns (owns(): without lags, from the run's first, or its second when the run
-// began in another shard, to the one after its last own row), a stretch at a time.
+// Closes the intervals [first, last) of the run, whose rows the chunk holds, that this
+// accumulator owns (owns()), a stretch at a time.
 void MomentAccumulator::close_chunked(std::size_t first, std::size_t last) {
-  const std::size_t end = std::min(last, owned_rows_ + 1);
-  for (std::size_t n = std::max<std::size_t>(first, continued_ ? 1 : 0); n < end;) {
+  next_close_ = std::max(next_close_, last);
+  // The intervals it owns are contiguous: those before (a continued run's first) and after
+  // (the lookahead's) are few.
+  while (first < last && !owns(first)) ++first;
+  while (last > first && !owns(last - 1)) --last;
+  for (std::size_t n = first; n < last;) {
     Stretch& stretch = stretches_.back();
-    const std::size_t k = std::min(end - n, stretch_length_ - stretch.intervals);
+    const std::size_t k = std::min(last - n, stretch_length_ - stretch.intervals);
     sum_intervals(n, n + k);
     stretch.intervals += k;
     intervals_ += k;
     n += k;
     if (stretch.intervals >= stretch_length_) close_stretch();
   }
-  next_close_ = std::max(next_close_, last);
 }
 
 // Adds the averages of the intervals [first, last) of the run to the open sums (as
@@ -174,9 +187,9 @@ void MomentAccumulator::close_chunked(std::size_t first, std::size_t last) {
 MOMENTID_KERNEL void MomentAccumulator::sum_intervals(std::size_t first, std::size_t last) {
   const std::size_t rows = run_rows_;
   const bool cubic = rule_ == HeldRule::kCubic;
-  // Column `c` from the run's row `row` on.
-  const auto at = [&](std::uint32_t c, std::size_t row) {
-    return chunk_.data() + c * kStride + kPad + row - chunk_base_;
+  // A part from interval `n`'s row on (max_lag_ rows into the run for interval 0).
+  const auto at = [&](const ChunkPart& part, std::size_t n) {
+    return chunk_.data() + (part.column * stride_ + pad_ + n + max_lag_ - part.lag - chunk_base_);
   };
   double* sums = open_sums_.data();
   // The interior intervals [inner, outer) share one set of weights; a run's first and last

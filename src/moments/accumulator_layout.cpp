@@ -103,16 +103,21 @@ void MomentAccumulator::lay_out() {
   };
   increments_begin_ = count(Layout::kHeld);
   ringed_count_ = increments_begin_ + count(Layout::kIncrement);
+  const std::size_t k = moments_.size();
+  open_sums_.assign(k, 0.0);
+  chunked_ = std::all_of(all.begin(), all.end(), [](const Layout& l) {
+    return l.indices.size() <= kChunkFactors;
+  });
+  if (chunked_) {
+    lay_out_chunks(all);
+    return;
+  }
   group_blocks(all);
   choose_singles();
-  const std::size_t k = moments_.size();
   state_ring_.assign(4 * ringed_count_, 0.0);
   input_ring_.assign(4 * ringed_count_, 0.0);
   row_.assign(k, 0.0);
   previous_row_.assign(k, 0.0);
-  open_sums_.assign(k, 0.0);
-  chunked_ = max_lag_ == 0 && held_blocks_.empty() && plain_blocks_.empty();
-  if (chunked_) lay_out_chunks();
 }
 
 // Runs of moments in working order with the same kind and factors, whose lags step by -1, 0 or
