@@ -13,14 +13,7 @@
 #include <vector>
 
 #include "momentid/accumulator.hpp"
-
-// As in accumulator_rows.cpp: the kernels are also built for AVX2, chosen when the program loads.
-#if defined(__x86_64__) && defined(__gnu_linux__) && !defined(__clang__) && \
-    !defined(MOMENTID_NO_TARGET_CLONES)
-#define MOMENTID_KERNEL __attribute__((target_clones("avx2", "default")))
-#else
-#define MOMENTID_KERNEL
-#endif
+#include "moments/kernel.hpp"
 
 namespace momentid {
 namespace {
