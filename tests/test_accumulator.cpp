@@ -166,6 +166,14 @@ std::vector<std::size_t> random_cuts(momentid::PortableRandom& random, std::size
   return {cuts.begin(), cuts.end()};
 }
 
+// One pass over the record (shards == 1), or that many shards cut at random rows and merged.
+MomentAccumulator accumulate(const Record& record, std::size_t shards,
+                             momentid::PortableRandom& random, InputHold hold,
+                             const std::vector<Moment>& moments) {
+  if (shards == 1) return one_pass(record, hold, moments);
+  return merged_shards(record, random_cuts(random, record.rows(), shards - 1), hold, moments);
+}
+
 void check_same_moments(const MomentAccumulator& got, const MomentAccumulator& want) {
   CHECK(got.intervals() == want.intervals());
   const auto g = momentid::estimates(got, kBatches).mean;
@@ -368,10 +376,7 @@ TEST_SUITE("accumulator") {
     for (std::size_t i = 0; i < all.size(); ++i) all[i] = i;
     momentid::PortableRandom random(/*seed=*/3, /*stream=*/0);
     for (const std::size_t shards : {1, 5, 40}) {
-      const MomentAccumulator acc =
-          shards == 1 ? one_pass(record, InputHold::kSample, moments)
-                      : merged_shards(record, random_cuts(random, record.rows(), shards - 1),
-                                      InputHold::kSample, moments);
+      const MomentAccumulator acc = accumulate(record, shards, random, InputHold::kSample, moments);
       INFO(shards, " shards");
       check_stretch_sums(
           acc, intervals, all,
@@ -380,7 +385,8 @@ TEST_SUITE("accumulator") {
     }
   }
 
-  TEST_CASE("without lags, every stretch holds its intervals' averages, held ones by cubic weights") {
+  TEST_CASE(
+      "without lags, every stretch holds its intervals' averages, held ones by cubic weights") {
     // Every moment of degree 0 to 3 and increments: formed a chunk of rows at a time. A product
     // with the held input is u[n] times the cubic rule's integral of its state part g over
     // [n, n + 1], one-sided at a run's first and last interval, the trapezoid in a run of two.
@@ -401,17 +407,16 @@ TEST_SUITE("accumulator") {
           *(std::upper_bound(record.run_starts.begin(), record.run_starts.end(), n) - 1);
       const bool first = n == begin, last = n + 2 >= record.run_end(n);
       const double integral = first && last ? (g(n) + g(n + 1)) / 2
-                              : first ? (5 * g(n) + 8 * g(n + 1) - g(n + 2)) / 12
-                              : last  ? (-g(n - 1) + 8 * g(n) + 5 * g(n + 1)) / 12
-                                      : (-g(n - 1) + 13 * g(n) + 13 * g(n + 1) - g(n + 2)) / 24;
+                              : first       ? (5 * g(n) + 8 * g(n + 1) - g(n + 2)) / 12
+                              : last        ? (-g(n - 1) + 8 * g(n) + 5 * g(n + 1)) / 12
+                                     : (-g(n - 1) + 13 * g(n) + 13 * g(n + 1) - g(n + 2)) / 24;
       return part(m, n, kStates, kChannels) * integral;
     };
     const auto value = [&](InputHold hold, const Moment& m, std::size_t n) {
       if (m.is_increment()) return part(m, n + 1, 0, kChannels) - part(m, n, 0, kChannels);
-      const bool has_input =
-          std::any_of(m.factors().begin(), m.factors().end(), [](const MomentFactor& f) {
-            return static_cast<std::size_t>(f.channel) >= kStates;
-          });
+      const bool has_input = std::any_of(
+          m.factors().begin(), m.factors().end(),
+          [](const MomentFactor& f) { return static_cast<std::size_t>(f.channel) >= kStates; });
       if (hold == InputHold::kZeroOrderHold && has_input) return held(m, n);
       return 0.5 * (part(m, n, 0, kChannels) + part(m, n + 1, 0, kChannels));
     };
@@ -420,10 +425,7 @@ TEST_SUITE("accumulator") {
     momentid::PortableRandom random(/*seed=*/11, /*stream=*/0);
     for (InputHold hold : {InputHold::kSample, InputHold::kZeroOrderHold}) {
       for (const std::size_t shards : {1, 5, 40}) {
-        const MomentAccumulator acc =
-            shards == 1 ? one_pass(record, hold, moments)
-                        : merged_shards(record, random_cuts(random, record.rows(), shards - 1),
-                                        hold, moments);
+        const MomentAccumulator acc = accumulate(record, shards, random, hold, moments);
         INFO("hold ", static_cast<int>(hold), ", ", shards, " shards");
         check_stretch_sums(
             acc, record.interval_rows(0), all,
@@ -448,10 +450,7 @@ TEST_SUITE("accumulator") {
     momentid::PortableRandom random(/*seed=*/5, /*stream=*/0);
     for (InputHold hold : {InputHold::kSample, InputHold::kZeroOrderHold}) {
       for (const std::size_t shards : {1, 6}) {
-        const MomentAccumulator acc =
-            shards == 1 ? one_pass(record, hold, moments)
-                        : merged_shards(record, random_cuts(random, record.rows(), shards - 1),
-                                        hold, moments);
+        const MomentAccumulator acc = accumulate(record, shards, random, hold, moments);
         INFO("hold ", static_cast<int>(hold), ", ", shards, " shards");
         check_stretch_sums(
             acc, intervals, increments,

@@ -144,7 +144,8 @@ MOMENTID_KERNEL void MomentAccumulator::form_chunk(const double* rows, std::size
     double* power = column(power_offset_[v] + 1);
     for (std::size_t r = 0; r < count; ++r) power[r] = rows[r * variables + v];
     for (int e = 2; e <= max_power_[v]; ++e, power += stride_) {
-      for (std::size_t r = 0; r < count; ++r) power[stride_ + r] = power[r] * rows[r * variables + v];
+      for (std::size_t r = 0; r < count; ++r)
+        power[stride_ + r] = power[r] * rows[r * variables + v];
     }
   }
   for (const ChunkProduct& p : products_) {
@@ -190,7 +191,7 @@ MOMENTID_KERNEL void MomentAccumulator::sum_intervals(std::size_t first, std::si
   const std::size_t inner = std::max<std::size_t>(first, 1);
   const std::size_t outer = std::max(inner, std::min(last, rows - 2));
   for (const auto& [a, b] : {std::pair{first, std::min<std::size_t>(first + 1, inner)},
-                            std::pair{inner, outer}, std::pair{outer, last}}) {
+                             std::pair{inner, outer}, std::pair{outer, last}}) {
     if (a >= b) continue;
     const std::array<double, 4> w = held_weights(a, rows, cubic);
     const bool before = w[0] != 0, after = w[3] != 0;

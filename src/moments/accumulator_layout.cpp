@@ -105,9 +105,8 @@ void MomentAccumulator::lay_out() {
   ringed_count_ = increments_begin_ + count(Layout::kIncrement);
   const std::size_t k = moments_.size();
   open_sums_.assign(k, 0.0);
-  chunked_ = std::all_of(all.begin(), all.end(), [](const Layout& l) {
-    return l.indices.size() <= kChunkFactors;
-  });
+  chunked_ = std::all_of(all.begin(), all.end(),
+                         [](const Layout& l) { return l.indices.size() <= kChunkFactors; });
   if (chunked_) {
     lay_out_chunks(all);
     return;
