@@ -191,10 +191,11 @@ class MomentAccumulator {
   std::vector<Single> held_singles_, plain_singles_;
   std::vector<std::size_t> held_blocks_, plain_blocks_;
   // When every moment has at most kChunkFactors factors (every moment of the zero-lag and the
-  // lagged equations), the moments are formed kChunk rows at a time, column by column, in
-  // `chunk_`: stride_ values per column, the pad_ rows before the chunk first (the largest lag
-  // and the cubic weights' rows). Its columns: every power of every channel (power 0 a column of
-  // ones), then the products of two to four powers, each at its lag, that some moment needs
+  // lagged equations) and the largest lag is under half a chunk, the moments are formed kChunk rows
+  // at a time, column by column, in `chunk_`: stride_ values per column, the pad_ rows before the
+  // chunk first (the largest lag and the cubic weights' rows). Its columns: every power of every
+  // channel (power 0 a column of ones), then the products of two to four powers, each at its lag,
+  // that some moment needs
   // (`products_`, each once, its factors' lags less the smallest). A moment's `whole_` part is
   // its product (for a held moment its state part), `held_input_` the input part of the held
   // ones (positions below increments_begin_): each a column read `lag` rows back. The intervals

@@ -105,8 +105,12 @@ void MomentAccumulator::lay_out() {
   ringed_count_ = increments_begin_ + count(Layout::kIncrement);
   const std::size_t k = moments_.size();
   open_sums_.assign(k, 0.0);
-  chunked_ = std::all_of(all.begin(), all.end(),
-                         [](const Layout& l) { return l.indices.size() <= kChunkFactors; });
+  // A chunk carries the max_lag_ + 4 rows before it: beyond half a chunk, copying them would
+  // cost more than the chunk saves (a default window of lags to 300 on 10^5 rows: 18% more time),
+  // and such moments go row by row.
+  chunked_ = max_lag_ + 4 <= kChunk / 2 && std::all_of(all.begin(), all.end(), [](const Layout& l) {
+               return l.indices.size() <= kChunkFactors;
+             });
   if (chunked_) {
     lay_out_chunks(all);
     return;
