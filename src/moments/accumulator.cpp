@@ -8,7 +8,8 @@
 
 // The accumulator's life: its runs and shards, its stretches and their merging. How it lays out
 // its work is in accumulator_layout.cpp, the per-row work in accumulator_rows.cpp (a chunk of
-// rows at a time without lags: accumulator_chunks.cpp), its bytes in accumulator_bytes.cpp.
+// rows at a time with lags up to 60 rows: accumulator_chunks.cpp), its bytes in
+// accumulator_bytes.cpp.
 
 namespace momentid {
 

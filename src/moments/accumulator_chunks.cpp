@@ -1,5 +1,5 @@
-// The chunked accumulator (every moment of at most four factors, at any lags): the products of
-// the moments formed kChunk rows at a time, column by column, and every interval whose rows the
+// The chunked accumulator (every moment of at most four factors, lags up to 60 rows): the products
+// of the moments formed kChunk rows at a time, column by column, and every interval whose rows the
 // chunk holds closed at once, moment by moment along the rows, where accumulator_rows.cpp goes
 // row by row through blocks and rings. The intervals, their weights and the stretches are the
 // same; only the order of the floating-point sums differs.
