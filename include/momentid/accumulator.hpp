@@ -160,6 +160,7 @@ class MomentAccumulator {
   void sum_intervals(std::size_t first, std::size_t last);
   // Runs and stretches (accumulator.cpp).
   void finish_run();
+  void open_stretch();  // appends an empty stretch
   void compact();
   void flush();
 
@@ -250,6 +251,7 @@ class MomentAccumulator {
   bool continued_ = false;  // the current run began before this shard (continue_run())
   std::size_t history_rows_ = 0, owned_rows_ = 0, lookahead_rows_ = 0;
   std::vector<Stretch> stretches_;
+  std::vector<std::vector<double>> spare_sums_;  // of stretches compacted away, for reuse
   std::size_t max_stretches_;
   std::size_t stretch_length_ = 1;  // intervals per stretch, doubled when there are too many
   std::size_t intervals_ = 0;

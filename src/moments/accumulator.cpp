@@ -25,7 +25,7 @@ MomentAccumulator::MomentAccumulator(std::vector<Moment> moments, std::size_t st
       max_stretches_(4 * std::max<std::size_t>(batches, 2)) {
   size_history();
   lay_out();
-  stretches_.push_back({std::vector<double>(moments_.size(), 0.0), 0});
+  open_stretch();
 }
 
 void MomentAccumulator::start_run() { finish_run(); }
@@ -121,27 +121,36 @@ void MomentAccumulator::collapse() {
   for (const Stretch& s : stretches_) add_stretch(whole, s);
   stretches_.clear();
   if (whole.intervals > 0) stretches_.push_back(std::move(whole));
-  stretches_.push_back({std::vector<double>(moments_.size(), 0.0), 0});
+  open_stretch();
 }
 
+// Adds each pair of closed stretches into its first, in place; the emptied sums are kept for the
+// stretches to come, so that a long pass allocates none after its first compaction.
 void MomentAccumulator::compact() {
-  std::vector<Stretch> merged;
   const std::size_t closed = stretches_.size() - 1;
+  std::size_t kept = 0;
   for (std::size_t i = 0; i + 1 < closed; i += 2) {
-    Stretch s = stretches_[i];
-    add_stretch(s, stretches_[i + 1]);
-    merged.push_back(std::move(s));
+    add_stretch(stretches_[i], stretches_[i + 1]);
+    std::swap(stretches_[kept++], stretches_[i]);
   }
-  if (closed % 2 == 1) {
-    // An odd one out starts the open stretch, which is then at most one old length long.
-    Stretch s = stretches_[closed - 1];
-    add_stretch(s, stretches_.back());
-    merged.push_back(std::move(s));
-  } else {
-    merged.push_back(std::move(stretches_.back()));
+  // An odd one out starts the open stretch, which is then at most one old length long.
+  if (closed % 2 == 1) add_stretch(stretches_[closed - 1], stretches_.back());
+  std::swap(stretches_[kept++], stretches_[closed % 2 == 1 ? closed - 1 : closed]);
+  while (stretches_.size() > kept) {
+    spare_sums_.push_back(std::move(stretches_.back().sums));
+    stretches_.pop_back();
   }
-  stretches_ = std::move(merged);
   stretch_length_ *= 2;
+}
+
+void MomentAccumulator::open_stretch() {
+  if (spare_sums_.empty()) {
+    stretches_.push_back({std::vector<double>(moments_.size(), 0.0), 0});
+    return;
+  }
+  stretches_.push_back({std::move(spare_sums_.back()), 0});
+  spare_sums_.pop_back();
+  std::fill(stretches_.back().sums.begin(), stretches_.back().sums.end(), 0.0);
 }
 
 namespace {
@@ -196,7 +205,7 @@ void MomentAccumulator::merge(const MomentAccumulator& other) {
     if (s.intervals > 0) stretches_.push_back(s);
   }
   intervals_ += other.intervals_;
-  stretches_.push_back({std::vector<double>(moments_.size(), 0.0), 0});
+  open_stretch();
   while (stretches_.size() > max_stretches_) compact();
 }
 

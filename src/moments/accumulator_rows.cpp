@@ -278,7 +278,7 @@ void MomentAccumulator::close_stretch() {
     add_plain(row_, 1.0);
     add_plain(previous_row_, 0.5);
   }
-  stretches_.push_back({std::vector<double>(moments_.size(), 0.0), 0});
+  open_stretch();
   if (stretches_.size() > max_stretches_) compact();
 }
 
