@@ -1061,6 +1061,53 @@ TEST_SUITE("data reader") {
                      3, 2, "");
   }
 
+  TEST_CASE("rows of a binary file taken many at a time keep every check of one row") {
+    // 5000 rows of t, y, v, x; each problem at row 3001 (from 1), deep inside a block.
+    constexpr int kRows = 5000, kBad = 3000;
+    const auto record = [&](int row, int field, double value) {
+      std::vector<double> values;
+      for (int n = 0; n < kRows; ++n) {
+        const double x = n;
+        values.insert(values.end(), {x * 0.25, x + 0.5, -x, 2 * x});
+      }
+      values[static_cast<std::size_t>(4 * row + field)] = value;
+      return binary_file("t,y,v,x\n", values);
+    };
+    check_read_error(record(kBad, 1, kNaN), columns({"x", "y"}),
+                     "column 'y': expected a number (a missing value? missing drop-row or "
+                     "split-run passes over it), found 'nan'",
+                     kBad + 1, 2, "");
+    check_read_error(record(kBad, 3, kInf), columns({"x", "y"}),
+                     "column 'x': expected a finite number, found 'inf'", kBad + 1, 4, "");
+    check_read_error(record(kBad, 0, kBad * 0.25 + 0.125), columns({"y"}),
+                     "non-uniform time step: 0.375 after 0.25 at t = 750.125 (the steps before "
+                     "it average 0.25): give the sample interval with dt 0.25 if the samples are "
+                     "equally spaced",
+                     kBad + 1, 1, "");
+    check_read_error(record(kBad, 0, 0), columns({"y"}),
+                     "non-increasing time: t = 0 after t = 749.75 (samples must be in increasing "
+                     "time order)",
+                     kBad + 1, 1, "");
+    // A missing value dropped: the rows around it are delivered, in blocks of any size.
+    ColumnRequest request = columns({"v", "y", "y"});
+    request.layout.missing = momentid::MissingValues::kDropRow;
+    const std::string bytes = record(kBad, 2, kNaN);
+    for (const std::size_t max_rows : {std::size_t{7}, std::size_t{4096}}) {
+      const Contents c = read_text(bytes, request, max_rows);
+      REQUIRE(c.values.size() == 3 * (kRows - 1));
+      for (int n = 0, at = 0; n < kRows; ++n) {
+        if (n == kBad) continue;
+        const std::vector<double> row(c.values.begin() + at, c.values.begin() + at + 3);
+        const double x = n;
+        CHECK(row == std::vector<double>{-x, x + 0.5, x + 0.5});
+        at += 3;
+      }
+      CHECK(c.rows == kRows - 1);
+      CHECK(c.missing.rows == 1);
+      CHECK(c.time_step == 0.25);
+    }
+  }
+
   TEST_CASE("too few rows of a binary file are reported at the last row or the header") {
     check_read_error(binary_file("y\n", {1}), columns({"y"}),
                      "the data have 1 row; at least 2 are needed", 1, 1, "");

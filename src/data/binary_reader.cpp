@@ -68,7 +68,9 @@ class BinaryReader final : public StreamReader {
     header_ = read_header(path_, lines, /*binary=*/true);
     map_ = map_columns(path_, header_, request_);
     for (std::size_t field = 0; field < header_.names.size(); ++field) {
-      if (map_.needed[field]) needed_fields_.push_back(field);
+      if (!map_.needed[field]) continue;
+      needed_fields_.push_back(field);
+      takes_.push_back({field, map_.output[field], static_cast<int>(field) == map_.time});
     }
     row_bytes_ = sizeof(double) * header_.names.size();
     data_start_ = kMagic.size() + 4 + length;
@@ -77,13 +79,7 @@ class BinaryReader final : public StreamReader {
 
  protected:
   bool read_row(double* row, RowKeys& keys) override {
-    if (position_ == filled_) {
-      if (at_end_) return false;
-      filled_ = read_fully(file_.get(), path_, buffer_.data(), buffer_.size());
-      position_ = 0;
-      at_end_ = filled_ < buffer_.size();
-      if (filled_ == 0) return false;
-    }
+    if (position_ == filled_ && !refill()) return false;
     const std::size_t left = filled_ - position_;
     ++row_number_;
     if (left < row_bytes_) {
@@ -99,6 +95,36 @@ class BinaryReader final : public StreamReader {
                  [&](const std::string& expected) { bad_value(field, value, expected); });
     }
     return true;
+  }
+
+  // The rows the buffer holds whole, up to the first with a value that is not finite.
+  std::size_t read_rows(double* rows, double* times, std::size_t count) override {
+    if (position_ == filled_ && !refill()) return 0;
+    const std::size_t width = request_.names.size();
+    std::size_t n = std::min(count, (filled_ - position_) / row_bytes_);
+    for (std::size_t r = 0; r < n; ++r) {
+      const unsigned char* const bytes = buffer_.data() + position_ + r * row_bytes_;
+      double* const row = rows + r * width;
+      bool finite = true;
+      for (const Take& take : takes_) {
+        const double value = load_double(bytes + sizeof(double) * take.field);
+        finite = finite && std::isfinite(value);
+        if (take.output >= 0) row[take.output] = value;
+        if (take.time) times[r] = value;
+      }
+      if (!finite) {
+        n = r;
+        break;
+      }
+    }
+    position_ += n * row_bytes_;
+    row_number_ += static_cast<long long>(n);
+    return n;
+  }
+
+  void unread_rows(std::size_t count) override {
+    position_ -= count * row_bytes_;
+    row_number_ -= static_cast<long long>(count);
   }
 
   std::optional<double> fraction_read() const override { return file_fraction(file_.get()); }
@@ -130,6 +156,15 @@ class BinaryReader final : public StreamReader {
   }
 
  private:
+  // Fills the buffer with the next whole rows; false at the end of the file.
+  bool refill() {
+    if (at_end_) return false;
+    filled_ = read_fully(file_.get(), path_, buffer_.data(), buffer_.size());
+    position_ = 0;
+    at_end_ = filled_ < buffer_.size();
+    return filled_ > 0;
+  }
+
   [[noreturn]] void bad_value(std::size_t field, double value, const std::string& expected) {
     fail(field_location(static_cast<int>(field)), "column '" + header_.names[field] +
                                                       "': " + expected + ", found '" +
@@ -138,6 +173,13 @@ class BinaryReader final : public StreamReader {
 
   File file_;
   std::vector<std::size_t> needed_fields_;
+  // Per needed field: where read_rows() puts it.
+  struct Take {
+    std::size_t field;
+    int output;  // ColumnMap::output
+    bool time;
+  };
+  std::vector<Take> takes_;
   std::size_t row_bytes_ = 0;
   std::uint64_t data_start_ = 0;       // the offset of the first row
   std::vector<unsigned char> buffer_;  // whole rows

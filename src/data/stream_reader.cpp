@@ -61,6 +61,47 @@ StreamReader::Bounds StreamReader::row_bounds(std::uint64_t rows, const ColumnRe
   return bounds;
 }
 
+// The rows that follow the block's first as it does, taken at once (read_rows): the block's
+// zone owned, no run column, no row dropped before them, and, with a time column, the first
+// step known. Rows from the first whose time step read_row's checks would question on are
+// given back, to be read one by one. Returns how many were taken.
+std::size_t StreamReader::take_rows(DataBlock& block, std::size_t max_rows) {
+  const bool timed = map_.time >= 0 && !request_.dt;
+  if (block.rows == 0 || block.zone != RowZone::kOwned || map_.run >= 0 || dropped_ || joined_ ||
+      (timed && !step_)) {
+    return 0;
+  }
+  std::size_t room = max_rows - block.rows;
+  if (bounds_) room = std::min<std::uint64_t>(room, bounds_->end - (row_position() + 1));
+  if (room == 0) return 0;
+  const std::size_t width = request_.names.size();
+  double* const rows = block.values.data() + block.rows * width;
+  times_.resize(room);
+  std::size_t n = read_rows(rows, times_.data(), room);
+  for (std::size_t r = 0; r < n; ++r) {
+    for (const auto& [to, from] : map_.copies) rows[r * width + to] = rows[r * width + from];
+  }
+  if (timed) {
+    for (std::size_t r = 0; r < n; ++r) {
+      const double t = times_[r];
+      precision_.see(t);
+      const double step = t - previous_time_;
+      if (!(step > 0) || std::abs(step - *step_) > step_allowance(t, *step_)) {
+        unread_rows(n - r);
+        n = r;
+        break;
+      }
+      run_span_ += step;
+      ++run_steps_;
+      span_ += step;
+      ++steps_;
+      previous_time_ = t;
+    }
+  }
+  block.rows += n;
+  return n;
+}
+
 RowZone StreamReader::zone_of_last_row() const {
   const std::uint64_t position = row_position();
   if (position < bounds_->begin) return RowZone::kBefore;
@@ -87,6 +128,7 @@ bool StreamReader::next_rows(DataBlock& block, std::size_t max_rows) {
   }
   RowKeys keys;
   while (block.rows < max_rows && !part_done_) {
+    if (take_rows(block, max_rows) > 0) continue;
     double* const row = block.values.data() + block.rows * width;
     keys.missing_field = -1;
     if (!read_row(row, keys)) {

@@ -60,6 +60,16 @@ class StreamReader : public DataReader {
   // run into `keys`. False at the end of the data. A missing value in a requested field fails
   // when the rule is MissingValues::kError, else marks the row in `keys` (pass_over_missing).
   virtual bool read_row(double* row, RowKeys& keys) = 0;
+  // For a layout that numbers its rows: reads up to `count` rows at once, their requested
+  // values into `rows` (request order, as read_row) and their times into `times` when the file
+  // has a time column, and returns how many; 0 at the end of the data, or before a row that
+  // read_row must take (a value that is not finite, a row cut short), or for a layout that reads
+  // row by row. The rows follow the last one read.
+  virtual std::size_t read_rows(double* /*rows*/, double* /*times*/, std::size_t /*count*/) {
+    return 0;
+  }
+  // Takes back the last `count` rows of read_rows(), to be read again.
+  virtual void unread_rows(std::size_t /*count*/) {}
   // Where field `field` (from 0) of the row read last is.
   virtual SourceLocation field_location(int field) const = 0;
   // Where the last data row is, or the header when there is none.
@@ -120,6 +130,7 @@ class StreamReader : public DataReader {
   // The most values a block holds (8 MB): a wide record's blocks have fewer rows.
   static constexpr std::size_t kBlockValues = std::size_t{1} << 20;
   bool next_rows(DataBlock& block, std::size_t max_rows);
+  std::size_t take_rows(DataBlock& block, std::size_t max_rows);
   void check_time(double t, bool owned);
   // How far a step at time t may differ from `reference`, the first step or the metadata's dt.
   double step_allowance(double t, double reference) const;
@@ -151,6 +162,7 @@ class StreamReader : public DataReader {
   std::size_t after_rows_ = 0;
   bool part_done_ = false;
   std::size_t rows_read_ = 0;
+  std::vector<double> times_;  // of the rows of read_rows()
 };
 
 }  // namespace momentid::data
