@@ -77,8 +77,11 @@ void MomentAccumulator::lay_out_chunks(const std::vector<Layout>& layouts) {
   // The largest lag, and the rows n - 1 .. n + 2 of the cubic weights before the chunk's.
   pad_ = max_lag_ + 4;
   stride_ = pad_ + kChunk;
-  // The power table's columns first: the history holds 2 (max_lag_ + 2) values of each.
-  auto next = static_cast<std::uint32_t>(history_.size() / (2 * (max_lag_ + 2)));
+  // The power table's columns first, every power of every channel; the row path's history of
+  // them is not needed.
+  std::uint32_t next = 0;
+  for (const int p : max_power_) next += static_cast<std::uint32_t>(p) + 1;
+  history_ = {};
   std::map<std::vector<std::pair<std::uint32_t, std::uint32_t>>, std::uint32_t> columns;
   // The product of the factors [first, last) of a layout: a power's own column for one, the
   // column of ones (power 0 of channel 0) for none, read `lag` rows back.
