@@ -46,6 +46,7 @@ class BinaryReader final : public StreamReader {
   // Reads the header of `file`, whose first bytes, already read, are the magic.
   BinaryReader(File file, const std::string& path, const ColumnRequest& request)
       : StreamReader(path, request), file_(std::move(file)) {
+    takes_many_rows_ = true;
     const SourceLocation start{path_, 1, 1, ""};
     std::array<unsigned char, 4> length_bytes;
     const std::size_t got = read_fully(file_.get(), path_, length_bytes.data(), 4);

@@ -67,8 +67,8 @@ StreamReader::Bounds StreamReader::row_bounds(std::uint64_t rows, const ColumnRe
 // given back, to be read one by one. Returns how many were taken.
 std::size_t StreamReader::take_rows(DataBlock& block, std::size_t max_rows) {
   const bool timed = map_.time >= 0 && !request_.dt;
-  if (block.rows == 0 || block.zone != RowZone::kOwned || map_.run >= 0 || dropped_ || joined_ ||
-      (timed && !step_)) {
+  if (!takes_many_rows_ || block.rows == 0 || block.zone != RowZone::kOwned || map_.run >= 0 ||
+      dropped_ || joined_ || (timed && !step_)) {
     return 0;
   }
   std::size_t room = max_rows - block.rows;

@@ -60,11 +60,11 @@ class StreamReader : public DataReader {
   // run into `keys`. False at the end of the data. A missing value in a requested field fails
   // when the rule is MissingValues::kError, else marks the row in `keys` (pass_over_missing).
   virtual bool read_row(double* row, RowKeys& keys) = 0;
-  // For a layout that numbers its rows: reads up to `count` rows at once, their requested
-  // values into `rows` (request order, as read_row) and their times into `times` when the file
-  // has a time column, and returns how many; 0 at the end of the data, or before a row that
-  // read_row must take (a value that is not finite, a row cut short), or for a layout that reads
-  // row by row. The rows follow the last one read.
+  // For a layout that numbers its rows and sets takes_many_rows_: reads up to `count` rows at once,
+  // their requested values into `rows` (request order, as read_row) and their times into `times`
+  // when the file has a time column, and returns how many: 0 at the end of the data, or before a
+  // row that read_row must take (a value that is not finite, a row cut short). The rows follow
+  // the last one read.
   virtual std::size_t read_rows(double* /*rows*/, double* /*times*/, std::size_t /*count*/) {
     return 0;
   }
@@ -123,6 +123,7 @@ class StreamReader : public DataReader {
 
   std::string path_;
   ColumnRequest request_;
+  bool takes_many_rows_ = false;  // the layout implements read_rows()
   Header header_;
   ColumnMap map_;
 
