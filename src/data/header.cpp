@@ -135,14 +135,15 @@ ColumnMap map_columns(const std::string& path, const Header& header, const Colum
   if (header.names.size() > 12) {
     listed += " and " + std::to_string(header.names.size() - 12) + " more";
   }
+  const std::string known = header.names.empty() ? "the file has no " + header.item + "s"
+                                                 : header.listing + ": " + listed;
 
   // The time column: the one `t` is renamed to, else `t`, else the first time-like name.
   std::string time_name;
   if (const auto renamed = request.rename.find("t"); renamed != request.rename.end()) {
     time_name = renamed->second;
     if (std::find(header.names.begin(), header.names.end(), time_name) == header.names.end()) {
-      fail(location(1), "missing " + header.item + " '" + time_name + "' for 't' (" +
-                            header.listing + ": " + listed + ")");
+      fail(location(1), "missing " + header.item + " '" + time_name + "' for 't' (" + known + ")");
     }
   } else if (std::find(header.names.begin(), header.names.end(), "t") != header.names.end()) {
     time_name = "t";
@@ -187,8 +188,8 @@ ColumnMap map_columns(const std::string& path, const Header& header, const Colum
     if (found == first.end()) {
       const std::string& name = request.names[k];
       fail(location(1), "missing " + header.item + " '" + file_names[k] + "'" +
-                            (file_names[k] == name ? "" : " for '" + name + "'") + " (" +
-                            header.listing + ": " + listed + ")");
+                            (file_names[k] == name ? "" : " for '" + name + "'") + " (" + known +
+                            ")");
     }
     const std::size_t field = found->second;
     if (map.output[field] < 0) {

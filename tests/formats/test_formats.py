@@ -357,6 +357,13 @@ def bad_h5_missing_dataset(d, c):
             "(the file has the datasets: run1/v, run1/x, run1/y)")
 
 
+def bad_h5_no_datasets(d, c):
+    # What a writer that died before its first dataset leaves.
+    with h5py.File(d / "a.h5", "w") as f:
+        f.attrs["dt"] = 0.01
+    return (["a.h5"], "a.h5:1:1: missing dataset 'y' (the file has no datasets)")
+
+
 def bad_npy_missing_column(d, c):
     np.save(d / "a.npy", matrix(cut(c)))
     return (["a.npy", "--names", "t,y,v,q"],
@@ -529,6 +536,7 @@ def bad_names_too_many(d, c):
 BAD = {
     "mat-missing-variable": bad_mat_missing_variable,
     "hdf5-missing-dataset": bad_h5_missing_dataset,
+    "hdf5-no-datasets": bad_h5_no_datasets,
     "npy-missing-column": bad_npy_missing_column,
     "mat-complex": bad_mat_complex,
     "mat-integer": bad_mat_integer,
