@@ -26,7 +26,7 @@ struct Columns : momentid::SampleSink {
   }
 };
 
-constexpr std::size_t kSamples = 10000;
+constexpr std::size_t kSamples = 20000;
 
 // The Duffing model under its held moving-average input: without noise, every channel (what
 // simulate writes, the input held over each sample), in memory and in a CSV file that one source
