@@ -171,15 +171,11 @@ def chain_matrices(masses, truth, corner, damping):
     return a, b
 
 
-def chain(rng, masses, truth, fs, samples, rms):
-    """The chain sampled exactly at fs from its stationary distribution, driven by a force
-    low-passed at 40 Hz (second order, damping 0.7) of RMS `rms`: a dict of y1..yn, their
-    velocities v1..vn and accelerations a1..an, x and t."""
-    n = len(masses)
-    a, b = chain_matrices(masses, truth, 40.0, 0.7)
+def sample_exactly(rng, a, b, fs, samples):
+    """Samples z' = A z + b w (w white, unit intensity) exactly at fs from its stationary
+    distribution: the rows of z at 0, 1/fs, ..."""
     m = len(b)
     stationary = solve_continuous_lyapunov(a, -np.outer(b, b))
-    scale = rms / np.sqrt(stationary[2 * n, 2 * n])
     # Van Loan: exp([[-A, bb'], [0, A']] dt) holds exp(A dt)' and the noise's covariance.
     block = np.zeros((2 * m, 2 * m))
     block[:m, :m], block[:m, m:], block[m:, m:] = -a, np.outer(b, b), a.T
@@ -199,7 +195,17 @@ def chain(rng, masses, truth, fs, samples, rms):
     for j, value in enumerate(eigenvalues):
         modes[:, j] = lfilter([1.0], [1.0, -value], drive[:, j])
     del drive
-    z = (modes @ vectors.T).real * scale
+    return (modes @ vectors.T).real
+
+
+def chain(rng, masses, truth, fs, samples, rms):
+    """The chain sampled exactly at fs from its stationary distribution, driven by a force
+    low-passed at 40 Hz (second order, damping 0.7) of RMS `rms`: a dict of y1..yn, their
+    velocities v1..vn and accelerations a1..an, x and t."""
+    n = len(masses)
+    a, b = chain_matrices(masses, truth, 40.0, 0.7)
+    stationary = solve_continuous_lyapunov(a, -np.outer(b, b))
+    z = sample_exactly(rng, a, b, fs, samples) * (rms / np.sqrt(stationary[2 * n, 2 * n]))
     record = {f"y{i + 1}": z[:, i] for i in range(n)}
     record.update({f"v{i + 1}": z[:, n + i] for i in range(n)})
     # The accelerations are the rows of the velocities in z' = A z (the noise drives x' only).

@@ -17,8 +17,8 @@ import tempfile
 from pathlib import Path
 
 import numpy as np
-from scipy.linalg import expm, solve_continuous_lyapunov
-from scipy.signal import lfilter
+
+from lab_records import sample_exactly
 
 FREQUENCY = 5.0
 MODEL = """model oscillator "a linear oscillator"
@@ -40,25 +40,7 @@ def record(rng, zeta, per_period, samples, noise=0.02):
     a = np.array([[0, 1, 0, 0], [-k, -c, 1, 0], [0, 0, 0, 1],
                   [0, 0, -corner**2, -2 * 0.7 * corner]], float)
     b = np.array([0, 0, 0, corner**2], float)
-    m = len(b)
-    stationary = solve_continuous_lyapunov(a, -np.outer(b, b))
-    block = np.zeros((2 * m, 2 * m))
-    block[:m, :m], block[:m, m:], block[m:, m:] = -a, np.outer(b, b), a.T
-    g = expm(block / fs)
-    step = g[m:, m:].T
-    covariance = step @ g[:m, m:]
-    w, u = np.linalg.eigh((covariance + covariance.T) / 2)
-    root = u * np.sqrt(np.clip(w, 0, None))
-    w, u = np.linalg.eigh(stationary)
-    start = (u * np.sqrt(np.clip(w, 0, None))) @ rng.standard_normal(m)
-    values, vectors = np.linalg.eig(step)
-    drive = np.empty((samples, m), complex)
-    drive[0] = np.linalg.solve(vectors, start)
-    drive[1:] = np.linalg.solve(vectors, root @ rng.standard_normal((m, samples - 1))).T
-    modes = np.empty_like(drive)
-    for j, value in enumerate(values):
-        modes[:, j] = lfilter([1.0], [1.0, -value], drive[:, j])
-    z = (modes @ vectors.T).real
+    z = sample_exactly(rng, a, b, fs, samples)
     y = z[:, 0] + noise * np.std(z[:, 0]) * rng.standard_normal(samples)
     x = z[:, 2] + noise * np.std(z[:, 2]) * rng.standard_normal(samples)
     return {"t": np.arange(samples) / fs, "y": y, "x": x}, {"c": c, "k": k}
