@@ -241,8 +241,9 @@ int main(int argc, char** argv) {
   std::filesystem::remove(big);
   std::filesystem::remove(small);
 
-  std::printf("identify's pass over a CSV of the Duffing model (%zu moments in its equations), best of 2\n",
-              pass.moments);
+  std::printf(
+      "identify's pass over a CSV of the Duffing model (%zu moments in its equations), best of 2\n",
+      pass.moments);
   std::printf("  %zu rows, %.0f MB: %.2f s, %.0f MB/s, %.2f M rows/s\n", pass.rows, megabytes,
               pass.seconds, megabytes / pass.seconds, pass.rows / pass.seconds / 1e6);
   std::printf(

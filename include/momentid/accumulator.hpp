@@ -196,10 +196,10 @@ class MomentAccumulator {
   // at a time, column by column, in `chunk_`: stride_ values per column, the pad_ rows before the
   // chunk first (the largest lag and the cubic weights' rows). Its columns: every power of every
   // channel (power 0 a column of ones), then the products of two to four powers, each at its lag,
-  // that some moment needs
-  // (`products_`, each once, its factors' lags less the smallest). A moment's `whole_` part is
-  // its product (for a held moment its state part), `held_input_` the input part of the held
-  // ones (positions below increments_begin_): each a column read `lag` rows back. The intervals
+  // that some moment needs (`products_`, each once, its factors' lags less the smallest). A
+  // moment's `whole_` part is its product (for a held moment its state part), `held_input_` the
+  // input part of the held ones (positions below increments_begin_): each a column read `lag`
+  // rows back. The intervals
   // whose rows the chunk holds are then closed together, moment by moment along the rows
   // (sum_intervals), without the blocks, rings and per-row sums of the other moments.
   // `chunk_base_`: the run's row (of those this accumulator saw) at the chunk's first;

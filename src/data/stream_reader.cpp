@@ -83,19 +83,11 @@ std::size_t StreamReader::take_rows(DataBlock& block, std::size_t max_rows) {
   }
   if (timed) {
     for (std::size_t r = 0; r < n; ++r) {
-      const double t = times_[r];
-      precision_.see(t);
-      const double step = t - previous_time_;
-      if (!(step > 0) || std::abs(step - *step_) > step_allowance(t, *step_)) {
+      if (!steady_step(times_[r])) {
         unread_rows(n - r);
         n = r;
         break;
       }
-      run_span_ += step;
-      ++run_steps_;
-      span_ += step;
-      ++steps_;
-      previous_time_ = t;
     }
   }
   block.rows += n;
@@ -203,6 +195,19 @@ void StreamReader::non_uniform_step(double t, double step) const {
        "non-uniform time step: " + found + " after " + expected + " at t = " + shortest_decimal(t) +
            " (the steps before it average " + number(mean) + "): give the sample interval with " +
            UsageError::mention("dt") + " " + number(mean) + " if the samples are equally spaced");
+}
+
+// check_time's common case, without its messages: take_rows gives a row it questions back.
+bool StreamReader::steady_step(double t) {
+  precision_.see(t);
+  const double step = t - previous_time_;
+  if (!(step > 0) || std::abs(step - *step_) > step_allowance(t, *step_)) return false;
+  run_span_ += step;
+  ++run_steps_;
+  span_ += step;
+  ++steps_;
+  previous_time_ = t;
+  return true;
 }
 
 void StreamReader::check_time(double t, bool owned) {
