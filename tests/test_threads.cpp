@@ -89,6 +89,8 @@ std::vector<std::string> results(const Records& records) {
 }
 
 // Runs `results` on `threads` threads at once, `rounds` times, and compares each with `serial`.
+// ThreadSanitizer sees a race between any two threads whose accesses no lock orders, whether or
+// not they overlap in time: four threads on two cores, once, are enough.
 void compare_threads(const Records& records, const std::vector<std::string>& serial,
                      std::size_t threads, int rounds) {
   for (int round = 0; round < rounds; ++round) {
@@ -120,7 +122,6 @@ TEST_SUITE("threads") {
       "identify, check, validate and select on several threads give the serial results exactly") {
     const Records records;
     const std::vector<std::string> serial = results(records);
-    compare_threads(records, serial, 2, 2);
-    compare_threads(records, serial, 8, 1);
+    compare_threads(records, serial, 4, 1);
   }
 }
