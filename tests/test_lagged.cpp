@@ -91,7 +91,7 @@ TEST_SUITE("lagged") {
 
   TEST_CASE("a power of a state read only through its derivative names the state and --integrate") {
     const momentid::Model model = model_file("duffing_accelerometer.mom");
-    const auto e = error_from<momentid::ModelError>([&] {
+    const auto e = error_from<momentid::FormStatesError>([&] {
       momentid::derive_lagged(model, {.measured = {false, false, true, true}});
     });
     const std::string text = e.text([](const std::string& field) { return "--" + field; });
@@ -100,6 +100,7 @@ TEST_SUITE("lagged") {
           "through 'a' (y'' = a), which gives the terms linear in y alone (give the record a "
           "column 'y', or form y from 'a' with --integrate y)");
     CHECK(e.location().line == 9);
+    CHECK(e.states() == std::vector<std::string>{"y"});  // what identify forms by default
   }
 
   TEST_CASE("lags that reach lag 0 or are too few for the test functions are refused") {

@@ -4,6 +4,7 @@
 #include <stdexcept>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace momentid {
 
@@ -83,6 +84,20 @@ class ParseError : public LocatedError {
 class ModelError : public LocatedError {
  public:
   using LocatedError::LocatedError;
+};
+
+// The lagged equations of a record that shows states only through the column of a derivative
+// (y'' = a) need those states themselves: in a nonlinear term, or through a derivative in the lag
+// beyond the highest. Forming them from their columns (IdentifyOptions::integrate) with the
+// states `states()` lifts it: identify does so by default.
+class FormStatesError : public ModelError {
+ public:
+  FormStatesError(SourceLocation where, const std::string& message, std::vector<std::string> states)
+      : ModelError(std::move(where), message), states_(std::move(states)) {}
+  const std::vector<std::string>& states() const { return states_; }
+
+ private:
+  std::vector<std::string> states_;
 };
 
 // A data file that cannot be used: a missing column, a field that is not a finite number, a

@@ -69,7 +69,9 @@ struct IdentifyOptions {
   // integrated in the pass inside a high-pass filter that every channel goes through
   // (DataOptions::Integration), with the corner `integrate_corner` (Hz), by default half the
   // lowest frequency of the record's band (docs/model-language.md). The formed state is then
-  // read as measured, biased where the filter cuts its nonlinear terms' low frequencies.
+  // read as measured, biased where the filter cuts its nonlinear terms' low frequencies. Empty
+  // (and no `instruments`): the states the lagged equations cannot do without are formed
+  // (IdentifyResult::Integration::by_default).
   std::vector<std::string> integrate;
   std::optional<double> integrate_corner;
   // The sampling bias (`--extrapolate dt`): the zero-lag estimate again from every other sample
@@ -228,6 +230,8 @@ struct IdentifyResult {
     bool corner_chosen = false;
     std::string band;        // how the corner was chosen, when it was
     std::size_t settle = 0;  // rows at the start of each run that fill the filter
+    // Formed without IdentifyOptions::integrate: the equations needed the states (identify()).
+    bool by_default = false;
   };
   std::optional<Integration> integration;
   // The identified model runs away from its equilibrium (runaway()): a doubt.

@@ -119,18 +119,26 @@ std::pair<LagFunction, numeric> LagDeriver::lag_function(const Equation& eq, con
   reject_term(eq, t);
 }
 
-std::string LagDeriver::integral_states(const std::string& except) const {
+std::vector<std::string> LagDeriver::integral_state_names() const {
   const auto integral = [&](int s) { return observed_[static_cast<std::size_t>(s)].order < 0; };
   const auto states = static_cast<int>(model_.states().size());
-  std::string out;
+  std::vector<std::string> out;
   for (int s = 0; s < states; ++s) {
     bool derivative = false;
     for (int r = 0; r < states; ++r) {
       const std::optional<Kinematic> k = model_.kinematic(r);
       derivative |= integral(r) && k && k->state == s;
     }
-    const std::string& name = model_.states()[static_cast<std::size_t>(s)].name;
-    if (integral(s) && !derivative && name != except) out += (out.empty() ? "" : ",") + name;
+    if (integral(s) && !derivative)
+      out.push_back(model_.states()[static_cast<std::size_t>(s)].name);
+  }
+  return out;
+}
+
+std::string LagDeriver::integral_states(const std::string& except) const {
+  std::string out;
+  for (const std::string& name : integral_state_names()) {
+    if (name != except) out += (out.empty() ? "" : ",") + name;
   }
   return out;
 }
@@ -145,14 +153,15 @@ void LagDeriver::reject_term(const Equation& eq, const Term& t) const {
     const std::string& column = model_.variables()[observed_[v].base].name;
     // Formed alone, the state may leave the others' integrals beyond the lag derivatives.
     const std::string others = integral_states(name);
-    throw ModelError(
+    throw FormStatesError(
         eq.where,
         "term '" + term_text(model_, t) + "' of equation " + eq.name() +
             " needs a column for state '" + name + "': the record shows it only through '" +
             column + "' (" + definition(v) + "), which gives the terms linear in " + name +
             " alone (give the record a column '" + name + "', or form " + name + " from '" +
             column + "'" + (others.empty() ? "" : ", and " + others + " from theirs,") + " with " +
-            UsageError::mention("integrate") + " " + integral_states() + ")");
+            UsageError::mention("integrate") + " " + integral_states() + ")",
+        integral_state_names());
   }
   // Name the unmeasured variable the term would need, with how the data show it.
   std::string why = "channels the data lack: it is not a time derivative of measured channels";

@@ -56,13 +56,15 @@ class LagDeriver {
 
   // The states the data show only as integrals of a derivative column, but for those that are
   // another's derivative (v when y' = v): `--integrate` with these forms every state, and no
-  // equation then needs an integral. Their names joined by commas, `except` left out.
+  // equation then needs an integral.
+  std::vector<std::string> integral_state_names() const;
+  // Their names joined by commas, `except` left out.
   std::string integral_states(const std::string& except = "") const;
 
  private:
   // Throws the ModelError for term `t` of `eq`, which is not a time derivative of measured
   // channels: it names the column the term needs, for a state the data show only through a
-  // derivative column or for an unmeasured variable.
+  // derivative column (a FormStatesError) or for an unmeasured variable.
   [[noreturn]] void reject_term(const Equation& eq, const Term& t) const;
 
   // "state " or "input ", for a message about a missing column.

@@ -62,22 +62,32 @@ LaggedEquation lagged_equation(const Model& model, const LagDeriver& deriver, st
   row.instrument = instrument;
   row.coefficients.resize(model.parameters().size());
   std::vector<std::pair<LagFunction, numeric>> terms;
-  // Every term the data cannot carry is named at once (a library may hold several).
+  // Every term the data cannot carry is named at once (a library may hold several); forming
+  // states lifts the error when it lifts each term's.
   std::vector<ModelError> cannot;
+  bool formable = true;
   for (const Term& t : eq.terms) {
     try {
       terms.push_back(deriver.lag_function(eq, t, instrument, columns));
+    } catch (const FormStatesError& error) {
+      cannot.push_back(error);
     } catch (const ModelError& error) {
       cannot.push_back(error);
+      formable = false;
     }
   }
-  if (cannot.size() == 1) throw cannot.front();
   if (!cannot.empty()) {
-    std::string message = std::to_string(cannot.size()) + " terms of equation " + eq.name() +
-                          " cannot be read from the data's channels (leave them out, or record " +
-                          "the channels they need):";
-    for (const ModelError& error : cannot) message += "\n  " + error.message();
-    throw ModelError(eq.where, message);
+    SourceLocation where = cannot.front().location();
+    std::string message = cannot.front().message();
+    if (cannot.size() > 1) {
+      where = eq.where;
+      message = std::to_string(cannot.size()) + " terms of equation " + eq.name() +
+                " cannot be read from the data's channels (leave them out, or record the " +
+                "channels they need):";
+      for (const ModelError& error : cannot) message += "\n  " + error.message();
+    }
+    if (formable) throw FormStatesError(where, message, deriver.integral_state_names());
+    throw ModelError(where, message);
   }
   // A state read as the integral of a column (y'' = a) enters at a negative order: its
   // cross-moments are known up to a polynomial in s, which the equation's derivative in s of
@@ -89,14 +99,15 @@ LaggedEquation lagged_equation(const Model& model, const LagDeriver& deriver, st
     f.order -= lowest;
     if (f.order > kMaxLagOrder) {
       const std::string integrals = deriver.integral_states();
-      throw ModelError(eq.where,
-                       "term '" + term_text(model, eq.terms[i]) + "' of equation " + eq.name() +
-                           " needs the derivative of order " + std::to_string(f.order) +
-                           " in the lag, above " + std::to_string(kMaxLagOrder) +
-                           ", to clear the integrals of the states read from a "
-                           "derivative column, " +
-                           integrals + " (measure them, or form them from their columns: add " +
-                           integrals + " to " + UsageError::mention("integrate") + ")");
+      throw FormStatesError(
+          eq.where,
+          "term '" + term_text(model, eq.terms[i]) + "' of equation " + eq.name() +
+              " needs the derivative of order " + std::to_string(f.order) + " in the lag, above " +
+              std::to_string(kMaxLagOrder) +
+              ", to clear the integrals of the states read from a derivative column, " + integrals +
+              " (measure them, or form them from their columns: add " + integrals + " to " +
+              UsageError::mention("integrate") + ")",
+          deriver.integral_state_names());
     }
     const int parameter = eq.terms[i].parameter;
     if (parameter >= 0) {

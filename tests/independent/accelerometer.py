@@ -9,7 +9,8 @@ at each sample, computed from the exact states and force.
                 standard error with the acceleration no larger than without it.
   all_channels  the force, y, v and a: `ok` within 3 standard errors.
   velocity      the force, v and a, no displacement: the equations need y^3, which neither
-                column shows: exit 2 naming y.
+                column shows: y formed from v by default (integrated once), `ok` within 3
+                standard errors.
   acceleration_sdof   the force and a alone, a linear oscillator (lab.chain with one mass,
                       sampled exactly): within 3 standard errors.
   acceleration_chain  the force and the accelerations alone, a linear chain of two masses:
@@ -18,8 +19,13 @@ at each sample, computed from the exact states and force.
   acceleration_offset the force and a alone of a linear oscillator (5-150 Hz force, SI units) with
                       an offset of 5% of its standard deviation on each sensor besides the noise:
                       a's offset removed by default, `ok` within 3 standard errors.
-  acceleration_duffing  the force and a alone, the Duffing oscillator: exit 2 before the pass,
-                      naming y and --integrate.
+  acceleration_duffing  the force and a alone, the Duffing oscillator: y formed by default (as
+                      --integrate y forms it, the report says so), `ok` within 3 standard errors.
+  chain3              three masses, a cubic spring at mass 1, the force on mass 3, an accelerometer
+                      on each mass (2% noise) and the force (1%), a CSV with a units row: y1, y2
+                      and y3 formed by default, `ok` within 3 standard errors, no offset named
+                      (the mean of an acceleration over a record is the velocity's change over it,
+                      in its standard error); the cubic spring put at mass 2: not `ok`.
   integrate           the force and a alone of lab.hardening (physical units, 5-150 Hz), with
                       --integrate y: y formed, the bias warned of, no offset named on the
                       formed y (the filter removes its mean), and c, k and k3 within 3
@@ -32,7 +38,8 @@ at each sample, computed from the exact states and force.
                       and one on the mass, 2% noise and an offset of 1% of each channel's
                       standard deviation: with the relative acceleration given as the sum
                       acc_mass-acc_table and z formed by --integrate, `ok`, c, k and k3 within 3
-                      standard errors; the absolute acceleration taken for the relative one
+                      standard errors, and the same report without --integrate (z formed by
+                      default); the absolute acceleration taken for the relative one
                       (z''=acc_mass) is not `ok`.
   validate            validate on the force and a alone of the one-mass chain, with the
                       estimates: it compares a (the record's only output) with the acceleration
@@ -107,10 +114,11 @@ def velocity(momentid, models, workdir):
     rng, clean = record(20271103)
     path = f"{workdir}/v_a_x.csv"
     write(rng, clean, ("v", "a", "x"), path)
-    result = subprocess.run([momentid, "identify", f"{models}/duffing_accelerometer.mom", path],
-                            capture_output=True, text=True)
-    print(result.stderr.strip())
-    return result.returncode == 2 and "'y'" in result.stderr
+    report, worst = run(momentid, f"{models}/duffing_accelerometer.mom", path)
+    formed = report.get("integration", {})
+    return ("failed" not in report and report["diagnostics"]["status"] == "ok" and worst <= 3
+            and formed.get("by_default") is True
+            and formed["formed"] == [{"state": "y", "column": "v", "integrals": 1}])
 
 
 def linear(momentid, workdir, masses, seed):
@@ -235,6 +243,11 @@ def base_excitation(momentid, models, workdir):
     formed = report["integration"]["formed"] == [
         {"state": "z", "column": "acc_mass-acc_table", "integrals": 2}]
     passed = report["diagnostics"]["status"] == "ok" and worst <= 3 and formed
+    # Without --integrate, z is formed by default: the same report but for saying so.
+    default = lab.identify(momentid, model, path, "--columns", "z''=acc_mass-acc_table,a=acc_table")
+    print(f"  without --integrate: formed by default {default['integration']['by_default']}")
+    default["integration"]["by_default"] = False
+    passed &= default == report
     print("base_excitation.mom, z'' = acc_mass (the absolute acceleration):")
     absolute = lab.identify(momentid, model, path, "--columns", "z''=acc_mass,a=acc_table",
                             "--integrate", "z")
@@ -277,20 +290,86 @@ def acceleration_offset(momentid, models, workdir):
             and "a" in report.get("centered", {}))
 
 
+def formed_by_default(report, states, columns):
+    integration = report.get("integration", {})
+    return integration.get("by_default") is True and integration["formed"] == [
+        {"state": s, "column": c, "integrals": 2} for s, c in zip(states, columns)]
+
+
 def acceleration_duffing(momentid, models, workdir):
     rng, clean = record(20271106)
     path = f"{workdir}/a_x.csv"
     write(rng, clean, ("a", "x"), path)
-    result = subprocess.run([momentid, "identify", f"{models}/duffing_accelerometer.mom", path],
-                            capture_output=True, text=True)
-    print(result.stderr.strip())
-    return (result.returncode == 2 and "'y'" in result.stderr
-            and "--integrate y" in result.stderr and result.stdout == "")
+    report, worst = run(momentid, f"{models}/duffing_accelerometer.mom", path)
+    text = subprocess.run([momentid, "identify", f"{models}/duffing_accelerometer.mom", path],
+                          capture_output=True, text=True).stdout
+    return ("failed" not in report and report["diagnostics"]["status"] == "ok" and worst <= 3
+            and formed_by_default(report, ["y"], ["a"])
+            and "\nformed by default (as --integrate y forms them): y from 'a' (integrated "
+                "twice); every channel high-passed at" in text)
+
+
+CHAIN3 = {"c1": 10.0, "k1": 4.0e4, "e1": 1.0e9, "c2": 8.0, "k2": 3.0e4, "c3": 6.0, "k3": 5.0e4}
+CHAIN3_MODEL = """model chain3
+state y1, v1, y2, v2, y3, v3
+input x
+measured a1 = v1', a2 = v2', a3 = v3'
+param c1, k1, e1, c2, k2, c3, k3
+y1' = v1
+v1' = -c1*v1 - k1*y1 - e1*y1^3 + k2*(y2 - y1) + c2*(v2 - v1)
+y2' = v2
+v2' = -k2*(y2 - y1) - c2*(v2 - v1) + k3*(y3 - y2) + c3*(v3 - v2)
+y3' = v3
+v3' = -k3*(y3 - y2) - c3*(v3 - v2) + x
+"""
+
+
+def chain3(momentid, models, workdir):
+    p = CHAIN3
+
+    def accelerations(y1, v1, y2, v2, y3, v3, x):
+        f2 = p["k2"] * (y2 - y1) + p["c2"] * (v2 - v1)
+        f3 = p["k3"] * (y3 - y2) + p["c3"] * (v3 - v2)
+        return -p["c1"] * v1 - p["k1"] * y1 - p["e1"] * y1**3 + f2, f3 - f2, x - f3
+
+    def rates(s, x):
+        a1, a2, a3 = accelerations(*s, x)
+        return (s[1], a1, s[3], a2, s[5], a3)
+    rng = np.random.default_rng(20271130)
+    # Modes at 13.5, 41 and 57 Hz, damping ratios 1-3%; e1 y1^2 is 0.27 k1 at one standard
+    # deviation of y1.
+    names = ("y1", "v1", "y2", "v2", "y3", "v3")
+    clean = lab.oscillator(rng, rates, names, FS, 200000, (5.0, 150.0), 60.0, 2.0)
+    a = accelerations(*(clean[n] for n in names), clean["x"])
+    path = f"{workdir}/chain3.csv"
+    columns = {"t": clean["t"], **{f"a{i + 1}": lab.measured(rng, a[i], NOISE) for i in range(3)},
+               "x": lab.measured(rng, clean["x"], 0.01)}
+    with open(path, "w") as out:
+        out.write(",".join(columns) + "\n" + "s,m/s^2,m/s^2,m/s^2,N\n")
+        np.savetxt(out, np.column_stack(list(columns.values())), delimiter=",", fmt="%.10g")
+    model, wrong = f"{workdir}/chain3.mom", f"{workdir}/chain3_wrong.mom"
+    with open(model, "w") as out:
+        out.write(CHAIN3_MODEL)
+    with open(wrong, "w") as out:
+        out.write(CHAIN3_MODEL.replace(" - e1*y1^3", "").replace(
+            "c3*(v3 - v2)\ny3'", "c3*(v3 - v2) - e1*y2^3\ny3'"))
+    print("chain3.mom on chain3.csv:")
+    report = lab.identify(momentid, model, path)
+    worst = lab.describe(report, p)
+    if "failed" in report:
+        return False
+    passed = (report["diagnostics"]["status"] == "ok" and worst <= 3
+              and formed_by_default(report, ["y1", "y2", "y3"], ["a1", "a2", "a3"]))
+    print("the cubic spring at mass 2:")
+    misplaced = lab.identify(momentid, wrong, path)
+    lab.describe(misplaced, {})
+    return passed and misplaced.get("diagnostics", {}).get("status") not in (None, "ok")
 
 
 CASES = {"displacement": displacement, "all_channels": all_channels, "velocity": velocity,
          "acceleration_sdof": acceleration_sdof, "acceleration_chain": acceleration_chain,
          "acceleration_offset": acceleration_offset, "acceleration_duffing": acceleration_duffing,
+         "chain3": chain3,
          "integrate": integrate, "measured_nonlinear": measured_nonlinear,
          "base_excitation": base_excitation,
          "validate": validate}

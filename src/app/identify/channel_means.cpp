@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 #include "app/identify/moment_lists.hpp"
 #include "solve/delta_method.hpp"
@@ -35,24 +36,64 @@ std::vector<ChannelMean> channel_means(const std::vector<std::string>& names,
   return out;
 }
 
+namespace {
+
+const ChannelStatistics* statistics_of(const DataMoments& data, const std::string& name) {
+  const auto found = std::find_if(data.channels.begin(), data.channels.end(),
+                                  [&](const ChannelStatistics& c) { return c.name == name; });
+  return found == data.channels.end() ? nullptr : &*found;
+}
+
+// The variance of state s without its white noise: from its channel, or else, for the rate w of
+// a kinematic y' = ratio w, from the channel of y as Var(y(t + dt) - y(t)) / (ratio dt)^2 (the
+// lag-1 autocovariance has no white noise in it). Nullopt when neither channel is read.
+std::optional<double> state_variance(const Model& model, const DataMoments& data, int s,
+                                     double dt) {
+  const auto clean = [](const ChannelStatistics& c) {
+    return std::max(c.variance - c.noise_variance.value_or(0.0), 0.0);
+  };
+  if (const ChannelStatistics* c =
+          statistics_of(data, model.states()[static_cast<std::size_t>(s)].name)) {
+    return clean(*c);
+  }
+  for (std::size_t y = 0; y < model.states().size(); ++y) {
+    const std::optional<Kinematic> k = model.kinematic(static_cast<int>(y));
+    if (!k || k->state != s) continue;
+    const ChannelStatistics* c = statistics_of(data, model.states()[y].name);
+    if (!c || c->autocorrelation.empty()) continue;
+    const double step = k->ratio.to_double() * dt;
+    return std::max(2 * (clean(*c) - c->autocorrelation[0] * c->variance), 0.0) / (step * step);
+  }
+  return std::nullopt;
+}
+
+}  // namespace
+
 void add_end_errors(std::vector<ChannelMean>& means, const Model& model, const DataMoments& data) {
   if (!data.time_step || data.estimates.intervals == 0) return;
   const double duration = static_cast<double>(data.estimates.intervals) * *data.time_step;
   const double runs = static_cast<double>(std::max<std::size_t>(data.runs, 1));
+  const auto add = [&](const std::string& rate, double variance, double scale) {
+    const auto mean = std::find_if(means.begin(), means.end(),
+                                   [&](const ChannelMean& m) { return m.name == rate; });
+    if (mean == means.end()) return;
+    const double ends = 2 * runs * variance / (scale * scale);
+    mean->std_error = std::sqrt(mean->std_error * mean->std_error + ends);
+  };
   for (std::size_t s = 0; s < model.states().size(); ++s) {
     const std::optional<Kinematic> k = model.kinematic(static_cast<int>(s));
     if (!k) continue;
-    const std::string& integral = model.states()[s].name;
-    const std::string& rate = model.variables()[static_cast<std::size_t>(k->state)].name;
-    const auto statistics =
-        std::find_if(data.channels.begin(), data.channels.end(),
-                     [&](const ChannelStatistics& c) { return c.name == integral; });
-    const auto mean = std::find_if(means.begin(), means.end(),
-                                   [&](const ChannelMean& m) { return m.name == rate; });
-    if (statistics == data.channels.end() || mean == means.end()) continue;
-    const double scale = k->ratio.to_double() * duration;
-    const double ends = 2 * runs * statistics->variance / (scale * scale);
-    mean->std_error = std::sqrt(mean->std_error * mean->std_error + ends);
+    const ChannelStatistics* integral = statistics_of(data, model.states()[s].name);
+    if (!integral) continue;
+    add(model.variables()[static_cast<std::size_t>(k->state)].name, integral->variance,
+        k->ratio.to_double() * duration);
+  }
+  // A column of a state's derivative (a = v'), read as a channel of its own.
+  for (const MeasuredDerivative& d : model.measured_derivatives()) {
+    if (const std::optional<double> variance =
+            state_variance(model, data, d.state, *data.time_step)) {
+      add(d.name, *variance, duration);
+    }
   }
 }
 

@@ -26,7 +26,9 @@ std::vector<ChannelMean> channel_means(const std::vector<std::string>& names,
 // state's derivative (v in y' = v) the error of the record's ends: its mean over a run is
 // (y(end) - y(start)) / (ratio T), whose batch series telescopes, so that the batches show
 // nearly none of it; the ends, far apart, are independent draws of y, 2 runs Var(y) /
-// (ratio T)^2 over the runs. Needs the sample interval; `data` holds the channels' statistics.
+// (ratio T)^2 over the runs. The same for a column of a state's derivative (a = v'), with the
+// variance of v from its channel or, when the record shows v only as y' (y' = v), from the
+// differences of y. Needs the sample interval; `data` holds the channels' statistics.
 void add_end_errors(std::vector<ChannelMean>& means, const Model& model, const DataMoments& data);
 
 }  // namespace momentid

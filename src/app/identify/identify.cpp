@@ -1,26 +1,28 @@
 #include "momentid/identify.hpp"
 
 #include <memory>
+#include <optional>
+#include <utility>
 
 #include "app/identify/integrate.hpp"
 #include "app/identify/lagged.hpp"
 #include "app/identify/plan.hpp"
 #include "app/identify/zero_lag.hpp"
 #include "momentid/algebra_lock.hpp"
+#include "momentid/error.hpp"
 
 namespace momentid {
 
-IdentifyResult identify(const Model& model, const DataSource& source,
-                        const IdentifyOptions& options) {
-  const AlgebraLock lock;
-  options.validate(model);
+namespace {
+
+// Identifies with the record surveyed and the states to form planned (none: nullopt).
+IdentifyResult identify_with(const Model& model, const DataSource& source,
+                             const IdentifyOptions& options, const RecordSurvey& record,
+                             std::optional<IdentifyResult::Integration> integration) {
   IdentifyResult result;
   result.model = std::make_shared<const Model>(model);
   result.data_name = source.name();
-  RecordSurvey record = survey_record(model, source, options.record);
-  if (!options.integrate.empty()) {
-    result.integration = plan_integration(model, source, options, record.present);
-  }
+  result.integration = std::move(integration);
   const EquationChoice choice = choose_equations(model, record, options);
   result.why = choice.why;
   switch (choice.kind) {
@@ -33,6 +35,41 @@ IdentifyResult identify(const Model& model, const DataSource& source,
   }
   result.runaway = runaway(result);
   return result;
+}
+
+}  // namespace
+
+IdentifyResult identify(const Model& model, const DataSource& source,
+                        const IdentifyOptions& options) {
+  const AlgebraLock lock;
+  options.validate(model);
+  RecordSurvey record = survey_record(model, source, options.record);
+  if (!options.integrate.empty()) {
+    IdentifyResult::Integration integration =
+        plan_integration(model, source, options, record.present);
+    return identify_with(model, source, options, record, std::move(integration));
+  }
+  try {
+    return identify_with(model, source, options, record, std::nullopt);
+  } catch (const FormStatesError& e) {
+    // The record shows states only through their derivatives' columns and the equations need
+    // the states themselves: the defaults form them, as `integrate` with the states the error
+    // names does. Where the user chose the instruments, or the record cannot be filtered (too
+    // short, no sample interval), the error stands: it names the option.
+    if (options.instruments) throw;
+    IdentifyOptions formed = options;
+    formed.integrate = e.states();
+    IdentifyResult::Integration integration;
+    try {
+      integration = plan_integration(model, source, formed, record.present);
+    } catch (const Interrupted&) {
+      throw;
+    } catch (const Error&) {
+      throw e;
+    }
+    integration.by_default = true;
+    return identify_with(model, source, formed, record, std::move(integration));
+  }
 }
 
 }  // namespace momentid

@@ -392,9 +392,15 @@ Json diagnostics_json(const IdentifyResult& r) {
   return out;
 }
 
-// "formed (--integrate): y from 'a' (integrated twice); every channel high-passed at ..."
+// "formed (--integrate): y from 'a' (integrated twice); every channel high-passed at ...", or
+// "formed by default (as --integrate y forms them): ..."
 std::string integration_text(const IdentifyResult::Integration& f) {
   std::string out = "formed (--integrate):";
+  if (f.by_default) {
+    out = "formed by default (as --integrate ";
+    for (std::size_t i = 0; i < f.formed.size(); ++i) out += (i ? "," : "") + f.formed[i].state;
+    out += " forms them):";
+  }
   for (std::size_t i = 0; i < f.formed.size(); ++i) {
     const auto& s = f.formed[i];
     out += std::string(i ? ", " : " ") + s.state + " from '" + s.column + "' (integrated " +
@@ -472,7 +478,8 @@ nlohmann::ordered_json json_value(const IdentifyResult& r) {
                           {"corner_hz", json_value(f->corner)},
                           {"corner_chosen", f->corner_chosen},
                           {"band", f->band},
-                          {"settle_rows", f->settle}};
+                          {"settle_rows", f->settle},
+                          {"by_default", f->by_default}};
   }
   if (!r.centered.empty()) {
     Json& centered = out["centered"] = Json::object();
