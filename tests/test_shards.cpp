@@ -160,10 +160,11 @@ TEST_SUITE("shards") {
     options.batches = 20;
     options.record.hold = momentid::InputHold::kZeroOrderHold;
     options.record.control.threads = 2;
-    options.computed = {{.sign = false, .argument = {{1.0, {0, 1, 0}}}},
-                        {.sign = true, .argument = {{1.0, {0, 1, 0}}}},
-                        {.sign = false, .argument = {{-2.0, {0, 0, 1}}}},
-                        {.sign = true, .argument = {{1.0, {0, 0, 1}}}}};
+    options.computed = {
+        {.kind = momentid::ComputedChannel::Kind::kAbs, .argument = {{1.0, {0, 1, 0}}}},
+        {.kind = momentid::ComputedChannel::Kind::kSign, .argument = {{1.0, {0, 1, 0}}}},
+        {.kind = momentid::ComputedChannel::Kind::kAbs, .argument = {{-2.0, {0, 0, 1}}}},
+        {.kind = momentid::ComputedChannel::Kind::kSign, .argument = {{1.0, {0, 0, 1}}}}};
     const std::vector<Moment> moments{Moment({{1, 2, 0}}),
                                       Moment({{3, 2, 0}}),  // abs(v)^2 = v^2
                                       Moment({{3, 1, 0}}),
@@ -185,6 +186,40 @@ TEST_SUITE("shards") {
     CHECK(mean[2] > 0);
     CHECK(mean[4] == doctest::Approx(2 * mean[5]).epsilon(1e-12));
     check_same_sums(cuts[0], cuts[1]);
+  }
+
+  TEST_CASE("under the integration filter a product of channels filtered alone is filtered whole") {
+    // y = 1 + sin(2 pi 5 t): the high-pass takes y to sin, whose square has the mean 1/2, and
+    // y^2 = 1 + 2 sin + sin^2 to 2 sin - cos(4 pi 5 t)/2, whose mean is 0. The equations filtered
+    // whole hold the second.
+    const Directory dir;
+    const std::string path = dir / "offset_sine.csv";
+    {
+      std::ofstream out(path);
+      out << "t,y,x\n";
+      for (int n = 0; n < 20000; ++n) {
+        const double t = 0.01 * n;
+        out << t << ',' << 1 + std::sin(2 * M_PI * 5 * t) << ',' << std::cos(2 * M_PI * 3 * t)
+            << '\n';
+      }
+    }
+    DataOptions options;
+    options.batches = 20;
+    options.integration = DataOptions::Integration{.corner = 0.5, .dt = 0.01, .integrals = {0, 0}};
+    options.computed = {
+        {.kind = momentid::ComputedChannel::Kind::kPolynomial, .argument = {{1.0, {2, 0}}}}};
+    const std::vector<Moment> moments{Moment({{0, 2, 0}}), Moment({{2, 1, 0}}),
+                                      Moment({{0, 1, 0}})};
+    const DataMoments m =
+        momentid::moments_from_data(DataSource::file(path), {"y"}, {"x"}, moments, options);
+    REQUIRE(m.estimates.mean.size() == 3);
+    CHECK(m.estimates.mean[0] == doctest::Approx(0.5).epsilon(0.01));
+    CHECK(std::abs(m.estimates.mean[1]) < 0.01);
+    CHECK(std::abs(m.estimates.mean[2]) < 0.01);
+    // The channel statistics are those of the channels read.
+    REQUIRE(m.channels.size() == 2);
+    CHECK(m.channels[0].variance == doctest::Approx(0.5).epsilon(0.01));
+    CHECK(m.channels[1].variance == doctest::Approx(0.5).epsilon(0.01));
   }
 
   TEST_CASE("blank lines, CR LF line ends and rows cut by a shard edge read alike") {

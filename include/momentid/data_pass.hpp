@@ -42,11 +42,13 @@ struct ChannelStatistics {
 };
 
 // A channel computed row by row from the channels read: |p| or sign(p) (0 at 0) of a polynomial
-// p in them, as a model's abs and sign terms need (VariableFunction). Its argument holds states
+// p in them, as a model's abs and sign terms need (VariableFunction), or p itself, a product of
+// channels that a filter must see whole (DataOptions::Integration). Its argument holds states
 // alone or inputs alone, so that it is continuous or held as they are. Moments name the computed
 // channels after the states and inputs, in order.
 struct ComputedChannel {
-  bool sign = false;
+  enum class Kind { kAbs, kSign, kPolynomial };
+  Kind kind = Kind::kAbs;
   std::vector<std::pair<double, Monomial>> argument;  // over the states, then the inputs
 };
 
@@ -86,8 +88,11 @@ struct DataOptions {
   // goes through a linear-phase high-pass with the magnitude of a fourth-order Butterworth
   // filter of corner `corner` (Hz, at the sample interval `dt`), and a formed channel, read from
   // its derivative's column, through the same divided by (i w)^integrals[c] (1 or 2), its
-  // integral, so that the filtered channels keep the linear relations of the raw ones. Each file
-  // is read whole; the first rows of each run, the filter's length, give no rows.
+  // integral, so that the filtered channels keep the linear relations of the raw ones. A computed
+  // channel of channels filtered alone (no integral) is computed from the raw rows and filtered
+  // with them, as the equations filtered whole hold it; one of a formed channel, from the
+  // filtered rows. Each file is read whole; the first rows of each run, the filter's length,
+  // give no rows.
   struct Integration {
     double corner = 0;
     double dt = 0;

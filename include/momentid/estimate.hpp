@@ -1,5 +1,6 @@
 #pragma once
 
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -105,12 +106,17 @@ Estimate solve_rows(const MomentRows& rows, const std::vector<std::string>& name
 //
 // `shared` (moment.hpp; empty without a filter): the noise that channels share across lags, taken
 // out of each moment. The moments it adds are listed whatever the variances.
+//
+// `products`: monomials over the channels (as many entries as the model has variables or the
+// channels count, whichever is more) read from a channel of their own, each where a function's
+// term (after its noise correction) is that monomial: a product that a filter saw whole.
 struct LaggedRows {
   std::vector<Moment> moments;
   MomentRows rows;
 };
 LaggedRows lagged_rows(const LaggedSystem& system, double dt, const std::vector<int>& channel,
                        const std::vector<double>& noise, int stencil = kStencilReach,
-                       const SharedNoise& shared = {});
+                       const SharedNoise& shared = {},
+                       const std::map<Monomial, int>& products = {});
 
 }  // namespace momentid

@@ -1,5 +1,6 @@
 #include "moments/shard.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <deque>
@@ -30,18 +31,47 @@ double value_of(const ComputedChannel& c, const double* row) {
     }
     p += term;
   }
-  if (!c.sign) return std::abs(p);
-  return p > 0 ? 1.0 : p < 0 ? -1.0 : 0.0;
+  switch (c.kind) {
+    case ComputedChannel::Kind::kAbs:
+      return std::abs(p);
+    case ComputedChannel::Kind::kSign:
+      return p > 0 ? 1.0 : p < 0 ? -1.0 : 0.0;
+    case ComputedChannel::Kind::kPolynomial:
+      break;
+  }
+  return p;
+}
+
+// The computed channels that a filter takes with the channels read (DataOptions::Integration):
+// those whose argument holds channels filtered alone, no formed one.
+std::vector<std::size_t> filtered_whole(const DataOptions& options) {
+  std::vector<std::size_t> out;
+  if (!options.integration) return out;
+  const std::vector<int>& integrals = options.integration->integrals;
+  for (std::size_t k = 0; k < options.computed.size(); ++k) {
+    bool raw = true;
+    for (const auto& [coefficient, monomial] : options.computed[k].argument) {
+      for (std::size_t c = 0; c < monomial.size(); ++c)
+        raw &= monomial[c] == 0 || integrals[c] == 0;
+    }
+    if (raw) out.push_back(k);
+  }
+  return out;
 }
 
 // The rows in the accumulator's columns (ChannelLayout): the channels read, with the computed
-// ones. Without computed channels the rows are used as they are.
+// ones. Without computed channels the rows are used as they are. The rows taken may carry
+// computed channels after the channels read (`carried`, in their order), which are copied.
 class Widen {
  public:
-  explicit Widen(const PassSetup& setup)
+  Widen(const PassSetup& setup, const std::vector<std::size_t>& carried)
       : read_(setup.states + setup.inputs),
+        stride_(read_ + carried.size()),
         computed_(setup.options->computed),
-        column_(setup.layout.column) {}
+        column_(setup.layout.column),
+        carried_at_(computed_.size(), 0) {
+    for (std::size_t j = 0; j < carried.size(); ++j) carried_at_[carried[j]] = read_ + j;
+  }
 
   std::size_t width() const { return column_.size(); }
 
@@ -49,20 +79,22 @@ class Widen {
     if (computed_.empty()) return rows;
     out_.resize(count * width());
     for (std::size_t r = 0; r < count; ++r) {
-      const double* in = rows + r * read_;
+      const double* in = rows + r * stride_;
       double* out = out_.data() + r * width();
       for (std::size_t c = 0; c < read_; ++c) out[column_[c]] = in[c];
       for (std::size_t k = 0; k < computed_.size(); ++k) {
-        out[column_[read_ + k]] = value_of(computed_[k], in);
+        out[column_[read_ + k]] =
+            carried_at_[k] > 0 ? in[carried_at_[k]] : value_of(computed_[k], in);
       }
     }
     return out_.data();
   }
 
  private:
-  std::size_t read_;
+  std::size_t read_, stride_;
   const std::vector<ComputedChannel>& computed_;
   const std::vector<std::size_t>& column_;
+  std::vector<std::size_t> carried_at_;  // per computed channel: its place in a row taken, or 0
   std::vector<double> out_;
 };
 
@@ -138,11 +170,16 @@ class ShardPass {
         out_{MomentAccumulator(setup.moments, setup.layout.states, setup.layout.inputs, setup.hold,
                                setup.batches, options_.held_rule),
              LagSums(channels_, options_.lags)},
-        widen_(setup),
+        filtered_whole_(filtered_whole(options_)),
+        widen_(setup, filtered_whole_),
         shift_(setup.layout.states, setup.layout.inputs, options_.input_shift),
         decimate_(widen_.width(), options_.stride, options_.phase),
         history_values_(out_.moments.max_lag() * widen_.width()) {
-    if (options_.integration) integration_.emplace(*options_.integration);
+    if (options_.integration) {
+      DataOptions::Integration filter = *options_.integration;
+      filter.integrals.resize(channels_ + filtered_whole_.size(), 0);
+      integration_.emplace(filter);
+    }
   }
 
   // Takes the next block; true if it holds rows of the shard's own.
@@ -192,8 +229,35 @@ class ShardPass {
       run_pending_ = true;
     }
     filtered_.values.clear();
-    integration_->push(block.values.data(), block.rows, filtered_.values);
+    integration_->push(with_filtered_whole(block), block.rows, filtered_.values);
     return emit_filtered() || took;
+  }
+
+  // The block's rows with the computed channels the filter takes after the channels read.
+  const double* with_filtered_whole(const DataBlock& block) {
+    if (filtered_whole_.empty()) return block.values.data();
+    const std::size_t stride = channels_ + filtered_whole_.size();
+    wide_.resize(block.rows * stride);
+    for (std::size_t r = 0; r < block.rows; ++r) {
+      const double* in = block.values.data() + r * channels_;
+      double* out = wide_.data() + r * stride;
+      std::copy(in, in + channels_, out);
+      for (std::size_t j = 0; j < filtered_whole_.size(); ++j) {
+        out[channels_ + j] = value_of(options_.computed[filtered_whole_[j]], in);
+      }
+    }
+    return wide_.data();
+  }
+
+  // The channels read of the filtered rows, without the computed ones they carry.
+  const double* channels_of(const DataBlock& block) {
+    if (filtered_whole_.empty()) return block.values.data();
+    const std::size_t stride = channels_ + filtered_whole_.size();
+    narrow_.resize(block.rows * channels_);
+    for (std::size_t r = 0; r < block.rows; ++r) {
+      std::copy_n(block.values.data() + r * stride, channels_, narrow_.data() + r * channels_);
+    }
+    return narrow_.data();
   }
 
   // The filtered rows of the run's last inputs.
@@ -204,7 +268,7 @@ class ShardPass {
   }
 
   bool emit_filtered() {
-    filtered_.rows = filtered_.values.size() / channels_;
+    filtered_.rows = filtered_.values.size() / (channels_ + filtered_whole_.size());
     if (filtered_.rows == 0) return false;
     filtered_.run_starts = run_pending_;
     run_pending_ = false;
@@ -256,13 +320,14 @@ class ShardPass {
       count = kept.size() / widen_.width();
     }
     out_.moments.add(rows, count);
-    out_.lags.add(values, block.rows);
+    out_.lags.add(channels_of(block), block.rows);
     out_.rows += block.rows;
   }
 
   const DataOptions& options_;
   std::size_t channels_;
   ShardState out_;
+  std::vector<std::size_t> filtered_whole_;  // the computed channels the filter takes (in order)
   Widen widen_;
   InputShift shift_;
   Decimate decimate_;
@@ -271,6 +336,7 @@ class ShardPass {
   bool owned_ = false;
   std::optional<IntegrationFilter> integration_;
   DataBlock filtered_;
+  std::vector<double> wide_, narrow_;  // the rows with and without the computed channels
   bool run_pending_ = false;
 };
 

@@ -63,12 +63,15 @@ void add_shared_noise(const SharedNoise& shared, const Monomial& instrument,
 }  // namespace
 
 LaggedRows lagged_rows(const LaggedSystem& system, double dt, const std::vector<int>& channel,
-                       const std::vector<double>& noise, int stencil, const SharedNoise& shared) {
+                       const std::vector<double>& noise, int stencil, const SharedNoise& shared,
+                       const std::map<Monomial, int>& products) {
   LaggedRows out;
   std::map<Moment, std::size_t> index;
   const std::vector<std::vector<std::size_t>> from = computed_from(*system.model, channel);
+  std::size_t width = system.model->variables().size();
+  for (const auto& [product, at] : products) width = std::max(width, product.size());
   const auto remap = [&](const Monomial& m) {
-    Monomial out_m(m.size(), 0);
+    Monomial out_m(width, 0);
     for (std::size_t v = 0; v < m.size(); ++v) {
       if (m[v] != 0) out_m[static_cast<std::size_t>(channel[v])] += m[v];
     }
@@ -135,6 +138,12 @@ LaggedRows lagged_rows(const LaggedSystem& system, double dt, const std::vector<
             add_shared_noise(shared, instrument, function, wi * wf, kappa, terms);
           }
         }
+      }
+      for (PairTerm& term : terms) {
+        const auto product = products.find(term.function);
+        if (product == products.end()) continue;
+        term.function = Monomial(width, 0);
+        term.function[static_cast<std::size_t>(product->second)] = 1;
       }
       // The pairs of terms (a constant pair has none): those first met here enter the index in
       // the order of the loops below, lag by lag.

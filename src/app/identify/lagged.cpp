@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <map>
 #include <numeric>
 #include <tuple>
@@ -33,11 +34,13 @@ bool function_holds(const VariableFunction& f, std::size_t c) {
 }
 
 // Whether the equations hold state v nonlinearly: in a product of degree 2 or more, or in the
-// argument of an abs or sign.
-bool nonlinear_in(const Model& model, const LaggedSystem& system, std::size_t v) {
+// argument of an abs or sign; with `apart`, only in terms for which apart(term) holds.
+bool nonlinear_in(const Model& model, const LaggedSystem& system, std::size_t v,
+                  const std::function<bool(const Monomial&)>& apart = nullptr) {
   const auto nonlinear = [&](const LagCombination& c) {
     return std::any_of(c.begin(), c.end(), [&](const auto& entry) {
       const Monomial& m = entry.first.function;
+      if (apart && !apart(m)) return false;
       int degree = 0;
       bool holds = false;
       for (std::size_t u = 0; u < m.size(); ++u) {
@@ -271,14 +274,14 @@ LaggedPass read_lagged(IdentifyResult& result, const LaggedPlan& plan, const Dat
   result.lagged = IdentifyResult::Lagged{};
   result.lagged->system =
       std::make_shared<const LaggedSystem>(derive_lagged(*result.model, plan.lags));
-  LaggedChannels c = lagged_channels(*result.model, *result.lagged->system);
+  LaggedChannels c = lagged_channels(*result.model, *result.lagged->system, result.integration);
   result.lagged->channels = c.states;
   result.lagged->channels.insert(result.lagged->channels.end(), c.inputs.begin(), c.inputs.end());
   result.lagged->channels.insert(result.lagged->channels.end(), c.derivatives.begin(),
                                  c.derivatives.end());
   // The rows need the sample interval, which the data give: accumulate, then build rows.
   const LaggedRows probe = lagged_rows(*result.lagged->system, 1.0, c.channel, {}, kStencilReach,
-                                       shared_noise(result, c, {}));
+                                       shared_noise(result, c, {}), c.products);
   result.lagged->moments = probe.moments;
   const PassMoments read = pass_moments(result, c, probe.moments, plan.check);
   const DataOptions data_options =
@@ -359,10 +362,11 @@ std::vector<double> accuracy_floor(const std::vector<Moment>& moments,
 }  // namespace
 
 MomentRows lagged_rows_of(const IdentifyResult& result, const LaggedSystem& system) {
-  const LaggedChannels channels = lagged_channels(*result.model, *result.lagged->system);
+  const LaggedChannels channels =
+      lagged_channels(*result.model, *result.lagged->system, result.integration);
   LaggedRows rows =
       lagged_rows(system, *result.data.time_step, channels.channel, result.lagged->noise,
-                  result.lagged->stencil_reach, result.lagged->shared_noise);
+                  result.lagged->stencil_reach, result.lagged->shared_noise, channels.products);
   std::map<Moment, std::size_t> index;
   for (std::size_t k = 0; k < result.lagged->moments.size(); ++k) {
     index.emplace(result.lagged->moments[k], k);
@@ -409,19 +413,15 @@ void solve_lagged(IdentifyResult& result, const LaggedPlan& plan, const LaggedCh
   result.lagged->noise = noise_variances(result, channels, options);
   result.lagged->shared_noise = shared_noise(result, channels, result.lagged->noise);
   // The moments name the computed channels after the channels read (lagged_moment_text).
-  for (std::size_t v = 0; v < channels.channel.size(); ++v) {
-    const Variable& variable = model.variables()[v];
-    if (!variable.channel() && channels.channel[v] >= 0) {
-      result.lagged->channels.push_back(variable.name);
-    }
-  }
+  result.lagged->channels.insert(result.lagged->channels.end(), channels.computed_names.begin(),
+                                 channels.computed_names.end());
   // Inputs held over each sample put kinks into the states at the samples, which only the
   // five-point stencils match; band-limited records take the wide ones.
   result.lagged->stencil_reach =
       result.data.hold == InputHold::kSample ? kWideStencilReach : kStencilReach;
-  const LaggedRows rows =
-      lagged_rows(*result.lagged->system, *result.data.time_step, channels.channel,
-                  result.lagged->noise, result.lagged->stencil_reach, result.lagged->shared_noise);
+  const LaggedRows rows = lagged_rows(
+      *result.lagged->system, *result.data.time_step, channels.channel, result.lagged->noise,
+      result.lagged->stencil_reach, result.lagged->shared_noise, channels.products);
   std::vector<std::string> names;
   for (const Declaration& p : model.parameters()) names.push_back(p.name);
   result.gmm = optimal_weighting(options, plan.fixed, rows.rows.a.size());
@@ -442,12 +442,33 @@ void add_lagged_warnings(IdentifyResult& result, const LaggedChannels& channels)
   if (const auto& integration = result.integration) {
     const Model& model = *result.model;
     const std::string corner = number(integration->corner, "%.3g");
+    const auto is_formed = [&](const std::string& name) {
+      return std::any_of(integration->formed.begin(), integration->formed.end(),
+                         [&](const auto& f) { return f.state == name; });
+    };
+    // A term the filter takes apart: a product with a formed state, or an abs or sign of one.
+    const auto apart = [&](const Monomial& m) {
+      Monomial read(channels.products.empty() ? 0 : channels.products.begin()->first.size(), 0);
+      for (std::size_t u = 0; u < m.size() && !read.empty(); ++u) {
+        if (m[u] != 0) read[static_cast<std::size_t>(channels.channel[u])] = m[u];
+      }
+      if (channels.products.count(read)) return false;
+      const auto u = static_cast<std::size_t>(
+          std::find_if(m.begin(), m.end(), [](int p) { return p != 0; }) - m.begin());
+      if (u == m.size() || m.degree() != 1 || model.variables()[u].channel()) {
+        return true;
+      }
+      const VariableFunction& f = model.function_of(model.variables()[u]);
+      for (std::size_t s = 0; s < model.states().size(); ++s) {
+        if (function_holds(f, s) && is_formed(model.states()[s].name)) return true;
+      }
+      return false;
+    };
     // A measured state goes through the same filter, so that the formed states' equations hold.
     for (std::size_t v = 0; v < model.states().size(); ++v) {
       const std::string& name = model.states()[v].name;
-      const bool formed = std::any_of(integration->formed.begin(), integration->formed.end(),
-                                      [&](const auto& f) { return f.state == name; });
-      if (formed || channels.channel[v] < 0 || !nonlinear_in(model, *result.lagged->system, v)) {
+      if (is_formed(name) || channels.channel[v] < 0 ||
+          !nonlinear_in(model, *result.lagged->system, v, apart)) {
         continue;
       }
       result.estimate.warnings.push_back(

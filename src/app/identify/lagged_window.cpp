@@ -8,6 +8,7 @@
 
 #include "app/identify/pass.hpp"
 #include "momentid/estimate.hpp"
+#include "solve/rows.hpp"
 
 namespace momentid {
 namespace {
@@ -40,7 +41,64 @@ std::vector<Monomial> fewer_instruments(const std::vector<Monomial>& all, std::s
 
 }  // namespace
 
-LaggedChannels lagged_channels(const Model& model, const LaggedSystem& system) {
+namespace {
+
+// The channels of `c`'s products (LaggedChannels::products), which `raw` (per channel read) says
+// the filter may take whole.
+void add_products(const Model& model, const LaggedSystem& system, const std::vector<bool>& raw,
+                  LaggedChannels& c) {
+  const std::size_t read = c.states.size() + c.inputs.size() + c.derivatives.size();
+  const std::size_t width = std::max(model.variables().size(), read + c.computed.size());
+  const std::vector<double> every(read, 1.0);  // every term of the noise corrections
+  std::vector<Monomial> found;
+  const auto add = [&](const LagCombination& combination) {
+    for (const auto& [f, weight] : combination) {
+      Monomial function(width, 0);
+      for (std::size_t v = 0; v < f.function.size(); ++v) {
+        if (f.function[v] != 0) function[static_cast<std::size_t>(c.channel[v])] = f.function[v];
+      }
+      for (const auto& [term, w] : noise_corrected(function, every)) {
+        bool whole = true;
+        for (std::size_t k = 0; k < term.size(); ++k)
+          whole &= term[k] == 0 || (k < raw.size() && raw[k]);
+        if (whole && term.degree() >= 2 &&
+            std::find(found.begin(), found.end(), term) == found.end()) {
+          found.push_back(term);
+        }
+      }
+    }
+  };
+  for (const LaggedEquation& eq : system.equations) {
+    add(eq.rhs);
+    for (const LagCombination& coefficient : eq.coefficients) add(coefficient);
+  }
+  if (found.empty()) return;
+  // The products widen every monomial over the channels to the channels' count.
+  const std::size_t channels = read + c.computed.size() + found.size();
+  std::vector<std::string> names = c.states;
+  names.insert(names.end(), c.inputs.begin(), c.inputs.end());
+  names.insert(names.end(), c.derivatives.begin(), c.derivatives.end());
+  for (Monomial& product : found) {
+    ComputedChannel computed{.kind = ComputedChannel::Kind::kPolynomial, .argument = {}};
+    computed.argument.emplace_back(1.0, Monomial(product.begin(), product.begin() + read));
+    std::string name;
+    for (std::size_t k = 0; k < read; ++k) {
+      if (product[k] == 0) continue;
+      if (!name.empty()) name += '*';
+      name += names[k];
+      if (product[k] > 1) (name += '^') += std::to_string(product[k]);
+    }
+    c.computed.push_back(std::move(computed));
+    c.computed_names.push_back(std::move(name));
+    product.resize(std::max(width, channels));
+    c.products.emplace(std::move(product), static_cast<int>(read + c.computed.size() - 1));
+  }
+}
+
+}  // namespace
+
+LaggedChannels lagged_channels(const Model& model, const LaggedSystem& system,
+                               const std::optional<IdentifyResult::Integration>& integration) {
   LaggedChannels out;
   out.channel.assign(model.variables().size(), -1);
   std::size_t next = 0;
@@ -54,13 +112,12 @@ LaggedChannels lagged_channels(const Model& model, const LaggedSystem& system) {
     // The pass numbers its channels in the variables' order.
     out.channel[v] = static_cast<int>(next++);
   }
-  if (model.functions().empty()) return out;
   const std::vector<ComputedChannel> all = computed_channels(model);
-  for (std::size_t u = 0; u < model.variables().size(); ++u) {
+  for (std::size_t u = 0; u < model.variables().size() && !all.empty(); ++u) {
     const Variable& variable = model.variables()[u];
     if (variable.channel() || !system.needed[u]) continue;
     const ComputedChannel& function = all[static_cast<std::size_t>(variable.index)];
-    ComputedChannel c{.sign = function.sign, .argument = {}};
+    ComputedChannel c{.kind = function.kind, .argument = {}};
     for (const auto& [coefficient, monomial] : function.argument) {
       Monomial read(next, 0);
       for (std::size_t v = 0; v < monomial.size(); ++v) {
@@ -69,8 +126,21 @@ LaggedChannels lagged_channels(const Model& model, const LaggedSystem& system) {
       c.argument.emplace_back(coefficient, std::move(read));
     }
     out.computed.push_back(std::move(c));
+    out.computed_names.push_back(variable.name);
     out.channel[u] = static_cast<int>(next + out.computed.size() - 1);
   }
+  if (!integration) return out;
+  // The measured states that are neither formed nor a formed state's column (whose noise the
+  // formed state shares) go through the filter alone.
+  std::vector<bool> raw(next, false);
+  for (std::size_t v = 0; v < model.states().size(); ++v) {
+    const std::string& name = model.variables()[v].name;
+    if (out.channel[v] < 0) continue;
+    raw[static_cast<std::size_t>(out.channel[v])] =
+        std::none_of(integration->formed.begin(), integration->formed.end(),
+                     [&](const auto& f) { return f.state == name || f.variable == name; });
+  }
+  add_products(model, system, raw, out);
   return out;
 }
 

@@ -4,6 +4,7 @@
 // the pass, to the correlation times the pass shows after it.
 
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -14,13 +15,22 @@
 namespace momentid {
 
 // The channels a lagged pass reads: the variables the equations need, states, inputs and
-// derivatives, as the pass numbers them, then the functions it computes from them.
+// derivatives, as the pass numbers them, then the functions it computes from them. Under the
+// filter that forms states (`integration`), the products of measured states that the equations'
+// terms hold (y1^3, and y1 y2 of two lasers, with the lower powers of their noise corrections)
+// are computed too, from the raw rows, so that the filter sees them whole: H(y1^3), not
+// H(y1)^3 (lagged_rows' `products`). A product with a formed state cannot be formed so.
 struct LaggedChannels {
   std::vector<std::string> states, inputs, derivatives;
-  std::vector<ComputedChannel> computed;  // over the channels read
+  std::vector<ComputedChannel> computed;  // over the channels read: functions, then products
   std::vector<int> channel;               // per model variable: its channel, or -1 when not read
+  std::map<Monomial, int> products;       // per product (over the channels): its channel
+  // Names of the computed channels, in their order: the functions', then "y1^3".
+  std::vector<std::string> computed_names;
 };
-LaggedChannels lagged_channels(const Model& model, const LaggedSystem& system);
+LaggedChannels lagged_channels(
+    const Model& model, const LaggedSystem& system,
+    const std::optional<IdentifyResult::Integration>& integration = std::nullopt);
 
 // Per measured (or formed) state that the lagged equations read, or derivative column that
 // stands for its unmeasured state: the lag at which its autocorrelation first falls below 1/e,

@@ -21,7 +21,9 @@ std::vector<std::string> input_names(const Model& model) {
 std::vector<ComputedChannel> computed_channels(const Model& model) {
   std::vector<ComputedChannel> out;
   for (const VariableFunction& f : model.functions()) {
-    ComputedChannel c{.sign = f.kind == FunctionKind::kSign, .argument = {}};
+    ComputedChannel c{.kind = f.kind == FunctionKind::kSign ? ComputedChannel::Kind::kSign
+                                                            : ComputedChannel::Kind::kAbs,
+                      .argument = {}};
     bool of_states = false, of_inputs = false;
     for (const auto& [coefficient, monomial] : f.argument) {
       c.argument.emplace_back(coefficient.to_double(), monomial);
