@@ -176,7 +176,7 @@ struct IdentifyResult {
     // Per moment: the variance of the accuracy floor added to its errors (SolveOptions).
     std::vector<double> moment_variance;
     // Per measured state the equations read: the lag at which its autocorrelation first falls
-    // below 1/e, 0 if it stays above across the lags.
+    // below 1/e, 0 if it stays above across the lags, -1 if the pass did not read it.
     std::map<std::string, int> correlation_lags;
     // What was cut from the default lags and instruments to stay within kMaxLaggedMoments, e.g.
     // "cut to 4 of the 10 instruments to stay within 3000 moments"; empty when nothing was.

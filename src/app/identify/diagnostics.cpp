@@ -304,7 +304,7 @@ std::vector<std::string> warnings(const IdentifyResult& r) {
   }
   if (r.lagged) {
     for (const auto& [name, tau] : r.lagged->correlation_lags) {
-      if (tau > 0) continue;
+      if (tau != 0) continue;
       rest.push_back("'" + name + "' stays correlated across lags " +
                      std::to_string(r.lagged->system->first_lag) + ".." +
                      std::to_string(r.lagged->system->last_lag) +

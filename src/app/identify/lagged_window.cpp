@@ -170,12 +170,12 @@ std::map<std::string, int> correlation_lags(const IdentifyResult& r,
     if (!(c.variance > 0)) continue;
     Monomial y(channel.size(), 0);
     y[static_cast<std::size_t>(channel[v])] = 1;
-    int tau = 0;
-    for (int s = system.first_lag; s <= system.last_lag && tau == 0; ++s) {
+    int tau = -1;
+    for (int s = system.first_lag; s <= system.last_lag && tau <= 0; ++s) {
       const auto it = index.find(lagged_moment(y, y, s));
       if (it == index.end()) continue;
       const double rho = (r.data.estimates.mean[it->second] - c.mean * c.mean) / c.variance;
-      if (rho < std::exp(-1.0)) tau = s;
+      tau = rho < std::exp(-1.0) ? s : 0;
     }
     out[c.name] = tau;
   }

@@ -34,12 +34,14 @@ LaggedChannels lagged_channels(
 
 // Per measured (or formed) state that the lagged equations read, or derivative column that
 // stands for its unmeasured state: the lag at which its autocorrelation first falls below 1/e,
-// from the lagged moments C[y;y](s) of the pass; 0 when it stays above across the window.
+// from the lagged moments C[y;y](s) of the pass; 0 when it stays above across the window, -1
+// when the pass did not read them (the state is no instrument).
 std::map<std::string, int> correlation_lags(const IdentifyResult& r,
                                             const std::vector<int>& channel);
 
 // The last lag that spans five correlation times of the slowest measured state; four times the
-// window when a state stays correlated across it. Kept within the bounds of the lag options.
+// window when a state stays correlated across it or its correlation was not read. Kept within
+// the bounds of the lag options.
 int lag_window(const IdentifyResult& r);
 
 // The last lag at which `count` moments over lags first..last would stay within the budget,
