@@ -111,6 +111,9 @@ struct DataMoments {
   std::size_t rows = 0;
   std::size_t runs = 0;
   MissingSummary missing;  // rows dropped for missing values
+
+  // The statistics of the channel named `name`, or nullptr when the pass read none.
+  const ChannelStatistics* channel(const std::string& name) const;
 };
 
 // Reads `source` once, streaming (memory does not grow with a file), and estimates `moments`

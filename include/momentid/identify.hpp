@@ -71,7 +71,8 @@ struct IdentifyOptions {
   // lowest frequency of the record's band (docs/model-language.md). The formed state is then
   // read as measured, biased where the filter cuts its nonlinear terms' low frequencies. Empty
   // (and no `instruments`): the states the lagged equations cannot do without are formed
-  // (IdentifyResult::Integration::by_default).
+  // (IdentifyResult::Integration::by_default), with `integrate_corner` too; where none is, a
+  // corner given is warned of as having no effect.
   std::vector<std::string> integrate;
   std::optional<double> integrate_corner;
   // The sampling bias (`--extrapolate dt`): the zero-lag estimate again from every other sample

@@ -8,6 +8,12 @@
 
 namespace momentid {
 
+const ChannelStatistics* DataMoments::channel(const std::string& name) const {
+  const auto found = std::find_if(channels.begin(), channels.end(),
+                                  [&](const ChannelStatistics& c) { return c.name == name; });
+  return found == channels.end() ? nullptr : &*found;
+}
+
 std::optional<double> ChannelStatistics::noise_fraction() const {
   if (!noise_variance || !(variance > 0)) return std::nullopt;
   return std::sqrt(std::max(0.0, *noise_variance) / variance);

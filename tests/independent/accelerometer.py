@@ -20,7 +20,8 @@ at each sample, computed from the exact states and force.
                       an offset of 5% of its standard deviation on each sensor besides the noise:
                       a's offset removed by default, `ok` within 3 standard errors.
   acceleration_duffing  the force and a alone, the Duffing oscillator: y formed by default (as
-                      --integrate y forms it, the report says so), `ok` within 3 standard errors.
+                      --integrate y forms it, the report says so), `ok` within 3 standard errors;
+                      --integrate-corner alone sets the corner of the states formed by default.
   chain3              three masses, a cubic spring at mass 1, the force on mass 3, an accelerometer
                       on each mass (2% noise) and the force (1%), a CSV with a units row: y1, y2
                       and y3 formed by default, `ok` within 3 standard errors, no offset named
@@ -308,10 +309,17 @@ def acceleration_duffing(momentid, models, workdir):
     report, worst = run(momentid, f"{models}/duffing_accelerometer.mom", path)
     text = subprocess.run([momentid, "identify", f"{models}/duffing_accelerometer.mom", path],
                           capture_output=True, text=True).stdout
+    # A corner given alone applies to the states formed by default.
+    cornered = lab.identify(momentid, f"{models}/duffing_accelerometer.mom", path,
+                            "--integrate-corner", "0.5")
+    print("  with --integrate-corner 0.5:", cornered.get("integration", {}).get("corner_hz"))
     return ("failed" not in report and report["diagnostics"]["status"] == "ok" and worst <= 3
             and formed_by_default(report, ["y"], ["a"])
             and "\nformed by default (as --integrate y forms them): y from 'a' (integrated "
-                "twice); every channel high-passed at" in text)
+                "twice); every channel high-passed at" in text
+            and formed_by_default(cornered, ["y"], ["a"])
+            and cornered["integration"]["corner_hz"] == 0.5
+            and not cornered["integration"]["corner_chosen"])
 
 
 CHAIN3 = {"c1": 10.0, "k1": 4.0e4, "e1": 1.0e9, "c2": 8.0, "k2": 3.0e4, "c3": 6.0, "k3": 5.0e4}

@@ -38,12 +38,6 @@ std::vector<ChannelMean> channel_means(const std::vector<std::string>& names,
 
 namespace {
 
-const ChannelStatistics* statistics_of(const DataMoments& data, const std::string& name) {
-  const auto found = std::find_if(data.channels.begin(), data.channels.end(),
-                                  [&](const ChannelStatistics& c) { return c.name == name; });
-  return found == data.channels.end() ? nullptr : &*found;
-}
-
 // The variance of state s without its white noise: from its channel, or else, for the rate w of
 // a kinematic y' = ratio w, from the channel of y as Var(y(t + dt) - y(t)) / (ratio dt)^2 (the
 // lag-1 autocovariance has no white noise in it). Nullopt when neither channel is read.
@@ -52,14 +46,13 @@ std::optional<double> state_variance(const Model& model, const DataMoments& data
   const auto clean = [](const ChannelStatistics& c) {
     return std::max(c.variance - c.noise_variance.value_or(0.0), 0.0);
   };
-  if (const ChannelStatistics* c =
-          statistics_of(data, model.states()[static_cast<std::size_t>(s)].name)) {
+  if (const ChannelStatistics* c = data.channel(model.states()[static_cast<std::size_t>(s)].name)) {
     return clean(*c);
   }
   for (std::size_t y = 0; y < model.states().size(); ++y) {
     const std::optional<Kinematic> k = model.kinematic(static_cast<int>(y));
     if (!k || k->state != s) continue;
-    const ChannelStatistics* c = statistics_of(data, model.states()[y].name);
+    const ChannelStatistics* c = data.channel(model.states()[y].name);
     if (!c || c->autocorrelation.empty()) continue;
     const double step = k->ratio.to_double() * dt;
     return std::max(2 * (clean(*c) - c->autocorrelation[0] * c->variance), 0.0) / (step * step);
@@ -83,7 +76,7 @@ void add_end_errors(std::vector<ChannelMean>& means, const Model& model, const D
   for (std::size_t s = 0; s < model.states().size(); ++s) {
     const std::optional<Kinematic> k = model.kinematic(static_cast<int>(s));
     if (!k) continue;
-    const ChannelStatistics* integral = statistics_of(data, model.states()[s].name);
+    const ChannelStatistics* integral = data.channel(model.states()[s].name);
     if (!integral) continue;
     add(model.variables()[static_cast<std::size_t>(k->state)].name, integral->variance,
         k->ratio.to_double() * duration);

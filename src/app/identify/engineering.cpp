@@ -176,12 +176,10 @@ NonlinearCurves curves_of(const IdentifyResult& r) {
   NonlinearCurves out;
   const Model& model = *r.model;
   const std::vector<double> theta = estimates_of(r);
-  const auto channel =
-      std::find_if(r.data.channels.begin(), r.data.channels.end(), [&](const ChannelStatistics& c) {
-        return model.states().size() == 2 && c.name == model.states()[0].name;
-      });
-  if (!r.estimate.usable() || channel == r.data.channels.end() ||
-      !kinematic(model, theta, input_means(r)) || !std::isfinite(mass_of(model, theta))) {
+  const ChannelStatistics* channel =
+      model.states().size() == 2 ? r.data.channel(model.states()[0].name) : nullptr;
+  if (!r.estimate.usable() || !channel || !kinematic(model, theta, input_means(r)) ||
+      !std::isfinite(mass_of(model, theta))) {
     out.unavailable =
         "the curves are drawn for an oscillator y' = v, m v' = ... with a constant mass, a usable "
         "estimate and a column for y";

@@ -50,7 +50,13 @@ IdentifyResult identify(const Model& model, const DataSource& source,
     return identify_with(model, source, options, record, std::move(integration));
   }
   try {
-    return identify_with(model, source, options, record, std::nullopt);
+    IdentifyResult result = identify_with(model, source, options, record, std::nullopt);
+    if (options.integrate_corner) {
+      result.estimate.warnings.push_back(
+          "--integrate-corner has no effect: no state was formed from a derivative's column (the "
+          "equations need none that the record lacks; --integrate names states to form)");
+    }
+    return result;
   } catch (const FormStatesError& e) {
     // The record shows states only through their derivatives' columns and the equations need
     // the states themselves: the defaults form them, as `integrate` with the states the error

@@ -58,10 +58,8 @@ std::optional<VectorXd> equilibrium(const RightHandSide& f) {
 }
 
 double spread_of(const IdentifyResult& r, const std::string& name) {
-  for (const ChannelStatistics& c : r.data.channels) {
-    if (c.name == name && c.variance > 0) return std::sqrt(c.variance);
-  }
-  return 0;
+  const ChannelStatistics* c = r.data.channel(name);
+  return c && c->variance > 0 ? std::sqrt(c->variance) : 0;
 }
 
 std::vector<double> estimates_of(const IdentifyResult& r) {

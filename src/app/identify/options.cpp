@@ -95,10 +95,6 @@ void IdentifyOptions::validate(const Model& model) const {
   if (integrate_corner && !(std::isfinite(*integrate_corner) && *integrate_corner > 0)) {
     throw UsageError("integrate_corner", "expected a positive frequency in Hz");
   }
-  if (integrate_corner && integrate.empty()) {
-    throw UsageError("integrate_corner", "there is no state to form: give " +
-                                             UsageError::mention("integrate") + " too");
-  }
   if (method == Method::kZeroLag && (lags || instruments)) {
     throw UsageError("method", "the zero-lag equations take no lags or instruments");
   }
