@@ -39,10 +39,6 @@ std::vector<Monomial> fewer_instruments(const std::vector<Monomial>& all, std::s
   return out;
 }
 
-}  // namespace
-
-namespace {
-
 // The channels of `c`'s products (LaggedChannels::products), which `raw` (per channel read) says
 // the filter may take whole.
 void add_products(const Model& model, const LaggedSystem& system, const std::vector<bool>& raw,
@@ -59,8 +55,9 @@ void add_products(const Model& model, const LaggedSystem& system, const std::vec
       }
       for (const auto& [term, w] : noise_corrected(function, every)) {
         bool whole = true;
-        for (std::size_t k = 0; k < term.size(); ++k)
+        for (std::size_t k = 0; k < term.size(); ++k) {
           whole &= term[k] == 0 || (k < raw.size() && raw[k]);
+        }
         if (whole && term.degree() >= 2 &&
             std::find(found.begin(), found.end(), term) == found.end()) {
           found.push_back(term);
