@@ -474,8 +474,9 @@ void add_lagged_warnings(IdentifyResult& result, const LaggedChannels& channels)
       result.estimate.warnings.push_back(
           "'" + name + "' goes through the high-pass at " + corner +
           " Hz with every channel, so that the equations of the states formed (--integrate) "
-          "hold: the terms nonlinear in it lose the low frequencies the filter cuts, a bias the "
-          "intervals do not include, and which the J test can see on a precise record "
+          "hold: the terms that hold it with a formed state lose the low frequencies the filter "
+          "cuts, a bias the intervals do not include, and which the J test can see on a precise "
+          "record "
           "(docs/model-language.md, \"Forming a state from its acceleration\")");
     }
     for (const auto& formed : integration->formed) {
