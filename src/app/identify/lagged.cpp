@@ -435,6 +435,35 @@ void solve_lagged(IdentifyResult& result, const LaggedPlan& plan, const LaggedCh
                                 .moment_variance = result.lagged->moment_variance});
 }
 
+// Whether state `name` is formed from a column.
+bool is_formed(const IdentifyResult::Integration& integration, const std::string& name) {
+  return std::any_of(integration.formed.begin(), integration.formed.end(),
+                     [&](const auto& f) { return f.state == name; });
+}
+
+// Whether the filter that forms states takes the function term `m` (over the model's variables)
+// apart: a product with a formed state, or an abs or sign of one, which the pass computes from
+// the filtered channels; not a product of measured states (LaggedChannels::products) or an abs
+// or sign of measured channels, which it filters whole.
+bool taken_apart(const Model& model, const LaggedChannels& channels,
+                 const IdentifyResult::Integration& integration, const Monomial& m) {
+  if (!channels.products.empty()) {
+    Monomial read(channels.products.begin()->first.size(), 0);
+    for (std::size_t u = 0; u < m.size(); ++u) {
+      if (m[u] != 0) read[static_cast<std::size_t>(channels.channel[u])] = m[u];
+    }
+    if (channels.products.count(read)) return false;
+  }
+  const auto u = static_cast<std::size_t>(
+      std::find_if(m.begin(), m.end(), [](int p) { return p != 0; }) - m.begin());
+  if (u == m.size() || m.degree() != 1 || model.variables()[u].channel()) return true;
+  const VariableFunction& f = model.function_of(model.variables()[u]);
+  for (std::size_t s = 0; s < model.states().size(); ++s) {
+    if (function_holds(f, s) && is_formed(integration, model.states()[s].name)) return true;
+  }
+  return false;
+}
+
 // The warnings of the lagged path: functions of noisy channels, states formed by integration.
 void add_lagged_warnings(IdentifyResult& result, const LaggedChannels& channels) {
   const std::vector<std::string> noisy = noisy_function_warnings(result, channels);
@@ -442,32 +471,13 @@ void add_lagged_warnings(IdentifyResult& result, const LaggedChannels& channels)
   if (const auto& integration = result.integration) {
     const Model& model = *result.model;
     const std::string corner = number(integration->corner, "%.3g");
-    const auto is_formed = [&](const std::string& name) {
-      return std::any_of(integration->formed.begin(), integration->formed.end(),
-                         [&](const auto& f) { return f.state == name; });
-    };
-    // A term the filter takes apart: a product with a formed state, or an abs or sign of one.
-    const auto apart = [&](const Monomial& m) {
-      Monomial read(channels.products.empty() ? 0 : channels.products.begin()->first.size(), 0);
-      for (std::size_t u = 0; u < m.size() && !read.empty(); ++u) {
-        if (m[u] != 0) read[static_cast<std::size_t>(channels.channel[u])] = m[u];
-      }
-      if (channels.products.count(read)) return false;
-      const auto u = static_cast<std::size_t>(
-          std::find_if(m.begin(), m.end(), [](int p) { return p != 0; }) - m.begin());
-      if (u == m.size() || m.degree() != 1 || model.variables()[u].channel()) {
-        return true;
-      }
-      const VariableFunction& f = model.function_of(model.variables()[u]);
-      for (std::size_t s = 0; s < model.states().size(); ++s) {
-        if (function_holds(f, s) && is_formed(model.states()[s].name)) return true;
-      }
-      return false;
-    };
     // A measured state goes through the same filter, so that the formed states' equations hold.
+    const auto apart = [&](const Monomial& m) {
+      return taken_apart(model, channels, *integration, m);
+    };
     for (std::size_t v = 0; v < model.states().size(); ++v) {
       const std::string& name = model.states()[v].name;
-      if (is_formed(name) || channels.channel[v] < 0 ||
+      if (is_formed(*integration, name) || channels.channel[v] < 0 ||
           !nonlinear_in(model, *result.lagged->system, v, apart)) {
         continue;
       }
@@ -476,8 +486,7 @@ void add_lagged_warnings(IdentifyResult& result, const LaggedChannels& channels)
           " Hz with every channel, so that the equations of the states formed (--integrate) "
           "hold: the terms that hold it with a formed state lose the low frequencies the filter "
           "cuts, a bias the intervals do not include, and which the J test can see on a precise "
-          "record "
-          "(docs/model-language.md, \"Forming a state from its acceleration\")");
+          "record (docs/model-language.md, \"Forming a state from its acceleration\")");
     }
     for (const auto& formed : integration->formed) {
       const auto v = static_cast<std::size_t>(model.variable_index(formed.state));
