@@ -80,6 +80,9 @@ struct IdentifyOptions {
   // difference estimates the bias of the estimate at the data's dt, which is removed
   // (Richardson's extrapolation to dt = 0) when it exceeds its standard error.
   bool extrapolate = false;
+  // The law check of a drag or friction term (IdentifyResult::law_checks): a second
+  // identification with the other law added. `select` leaves it to the chosen model.
+  bool law_check = true;
 
   static constexpr std::size_t kMinBatches = 2, kMaxBatches = 10000;
   static constexpr int kMaxDegree = 12;
@@ -237,6 +240,18 @@ struct IdentifyResult {
   std::optional<Integration> integration;
   // The identified model runs away from its equilibrium (runaway()): a doubt.
   std::optional<Runaway> runaway;
+  // The law check (docs/measured-data.md, "The law check"): for a damping term of quadratic
+  // drag, abs(v)*v, or of Coulomb friction, sign(v) (v a velocity, y' = v), the model identified
+  // again with the other law of the same state added to the equation, and that term's estimate
+  // in standard errors. A doubt beyond kLawZ: the two laws are nearly collinear over a record,
+  // and a wrong one leaves a residual that the J test sees weakly.
+  struct LawCheck {
+    std::string equation;  // the library target: "v'" or a label
+    std::string term;      // "sign(v)", "abs(v)*v"
+    double z = 0;          // its estimate over its standard error
+  };
+  std::vector<LawCheck> law_checks;
+  static constexpr double kLawZ = 4;
   // The means of the channels read (after `centered` was removed), states then inputs.
   std::vector<ChannelMean> means;
 
@@ -321,7 +336,8 @@ std::string format_text(const IdentifyResult& result);
 // The JSON layout (docs/json.md, "identify").
 std::string format_json(const IdentifyResult& result);
 // What makes a result doubtful (docs/cli/identify.md, "Warnings"): a J test that rejects the model
-// (p < 0.01), a zero-lag check that does, a stationarity identity violated (|z| > 4), a state with
+// (p < 0.01), a zero-lag check that does, a law check beyond kLawZ, a stationarity identity
+// violated (|z| > 4), a state with
 // a mean of more than 0.2 of its standard deviation when the model is symmetric and its inputs have
 // none.
 std::vector<std::string> doubts(const IdentifyResult& result);

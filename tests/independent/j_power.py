@@ -8,12 +8,13 @@ Two cases, each identified with no options by the true model and by wrong ones:
   friction  Coulomb friction (nonsmooth_records.py, f = 120), y, v and x with 2% noise, 10^5
             samples; the wrong model: quadratic drag c2 |v| v instead of f sign(v).
 Printed per model: how often the J test rejects at 5% and at 1%, how often the zero-lag check
-does at 1%, how many records read `ok`, the median of J over its degrees of freedom, and the
-median of its law's parameters (JLaw: F(dof, denominator_dof) of J/dof times scale). The test
-fails when the true model is rejected at 5% more often than three binomial standard errors above
-5%, or reads `ok` on fewer than all records but one; or when a wrong Duffing model reads `ok` on
-more than a tenth of the records, the drag model on friction records on more than a third (the
-J test sees a wrong non-smooth law weakly, the zero-lag check better: docs/uncertainty.md).
+does at 1%, how often the law check does (the other law of v added, |z| > 4), how many records
+read `ok`, the median of J over its degrees of freedom, and the median of its law's parameters
+(JLaw: F(dof, denominator_dof) of J/dof times scale). The test fails when the true model is
+rejected at 5% more often than three binomial standard errors above 5%, or reads `ok` on fewer
+than all records but one; or when a wrong Duffing model reads `ok` on more than a tenth of the
+records, the drag model on friction records on any (the J test sees a wrong non-smooth law
+weakly; the law check sees it: docs/uncertainty.md).
 
 Usage: j_power.py duffing|friction MOMENTID WORKDIR [SEEDS]
 """
@@ -63,9 +64,11 @@ def j_test(momentid, model, path):
     d = report["diagnostics"]
     law = d["j_law"]
     check = d.get("zero_lag_check") or {}
+    laws = d.get("law_check", [])
     return (d["j_statistic"] / d["j_dof"], d["j_pvalue"], law["dof"], law["denominator_dof"],
             law["scale"], d["status"] == "ok",
-            np.nan if check.get("p_value") is None else check["p_value"])
+            np.nan if check.get("p_value") is None else check["p_value"],
+            max((abs(c["z"]) for c in laws), default=np.nan))
 
 
 def main():
@@ -76,8 +79,8 @@ def main():
     with ProcessPoolExecutor(2) as pool:
         paths = list(pool.map(record, [case] * seeds, [workdir] * seeds, range(seeds)))
     print(f"{case}, {seeds} records")
-    print(f"{'model':10} {'5%':>6} {'1%':>6} {'check':>6} {'ok':>4} {'J/dof':>8} {'law dof':>8} "
-          f"{'denom':>8} {'scale':>6}")
+    print(f"{'model':10} {'5%':>6} {'1%':>6} {'check':>6} {'laws':>6} {'ok':>4} {'J/dof':>8} "
+          f"{'law dof':>8} {'denom':>8} {'scale':>6}")
     passed = True
     for name, (params, rates) in MODELS[case].items():
         model = os.path.join(workdir, f"{case}_{name}.mom")
@@ -87,14 +90,14 @@ def main():
             r = np.array(list(pool.map(lambda path: j_test(momentid, model, path), paths)))
         rejected, ok = int(np.sum(r[:, 1] < 0.05)), int(r[:, 5].sum())
         print(f"{name:10} {rejected / seeds:6.2f} {np.mean(r[:, 1] < 0.01):6.2f} "
-              f"{np.mean(r[:, 6] < 0.01):6.2f} {ok:4d} "
+              f"{np.mean(r[:, 6] < 0.01):6.2f} {np.mean(r[:, 7] > 4):6.2f} {ok:4d} "
               f"{np.median(r[:, 0]):8.3g} {np.median(r[:, 2]):8.3g} {np.median(r[:, 3]):8.3g} "
               f"{np.median(r[:, 4]):6.3f}")
         if name == "true":
             passed &= rejected <= int(0.05 * seeds + 3 * np.sqrt(seeds * 0.05 * 0.95))
             passed &= ok >= seeds - 1
         else:
-            passed &= ok <= seeds // (10 if case == "duffing" else 3)
+            passed &= ok <= (seeds // 10 if case == "duffing" else 0)
     print("PASS" if passed else "FAIL")
     return 0 if passed else 1
 

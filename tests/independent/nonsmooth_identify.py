@@ -66,6 +66,14 @@ def main():
     if noise and NOISE_WARNING not in report["diagnostics"]["warnings"]:
         print(f"FAILED: no warning {NOISE_WARNING!r}")
         return 1
+    # A drag or friction term is checked against the other law (docs/measured-data.md, "The law
+    # check"): on the true model the added term stays within its bound.
+    expected = {"drag": "sign(v)", "friction": "abs(v)*v"}.get(oscillator, None)
+    checks = report["diagnostics"].get("law_check", [])
+    print(f"  law check: {checks}")
+    if [c["term"] for c in checks] != ([expected] if expected else []):
+        print(f"FAILED: law check {checks}, expected the term {expected}")
+        return 1
     return 0
 
 

@@ -201,6 +201,17 @@ std::vector<std::string> doubts(const IdentifyResult& r) {
                   "end to end), or its columns are not what the model's kinematic equations say "
                   "(v is not y', or the channels are shifted in time)");
   }
+  for (const IdentifyResult::LawCheck& c : r.law_checks) {
+    if (!(std::abs(c.z) > IdentifyResult::kLawZ)) continue;
+    out.push_back("the law check rejects the damping law: " + c.term +
+                  " added to the equation of " + c.equation + " is " + number(c.z, "%.3g") +
+                  " standard errors from zero, where a right law leaves it within " +
+                  number(IdentifyResult::kLawZ, "%g") +
+                  ": the data call for that law, which the model's term stands in for (Coulomb "
+                  "friction and quadratic drag are nearly collinear over a record, and the J test "
+                  "sees the wrong one weakly; docs/measured-data.md, \"The law check\"). Compare "
+                  "the two with 'momentid select'");
+  }
   if (r.runaway) out.push_back(runaway_text(*r.runaway));
   if (undetermined(r)) {
     out.push_back("no parameter is determined: every estimate lies within " +

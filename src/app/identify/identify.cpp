@@ -6,6 +6,7 @@
 
 #include "app/identify/integrate.hpp"
 #include "app/identify/lagged.hpp"
+#include "app/identify/law_check.hpp"
 #include "app/identify/plan.hpp"
 #include "app/identify/zero_lag.hpp"
 #include "momentid/algebra_lock.hpp"
@@ -37,11 +38,9 @@ IdentifyResult identify_with(const Model& model, const DataSource& source,
   return result;
 }
 
-}  // namespace
-
-IdentifyResult identify(const Model& model, const DataSource& source,
-                        const IdentifyOptions& options) {
-  const AlgebraLock lock;
+// identify() without the law check.
+IdentifyResult identify_unchecked(const Model& model, const DataSource& source,
+                                  const IdentifyOptions& options) {
   options.validate(model);
   RecordSurvey record = survey_record(model, source, options.record);
   if (!options.integrate.empty()) {
@@ -76,6 +75,17 @@ IdentifyResult identify(const Model& model, const DataSource& source,
     integration.by_default = true;
     return identify_with(model, source, formed, record, std::move(integration));
   }
+}
+
+}  // namespace
+
+IdentifyResult identify(const Model& model, const DataSource& source,
+                        const IdentifyOptions& options) {
+  const AlgebraLock lock;
+  IdentifyResult result = identify_unchecked(model, source, options);
+  check_laws(result, options,
+             [&](const Model& extended) { return identify_unchecked(extended, source, options); });
+  return result;
 }
 
 }  // namespace momentid

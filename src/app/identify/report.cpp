@@ -185,6 +185,11 @@ void diagnostics_text(std::ostringstream& out, const IdentifyResult& r) {
     }
     out << "\n";
   }
+  for (const IdentifyResult::LawCheck& c : r.law_checks) {
+    out << "  law check: " << c.term << " added to the equation of " << c.equation
+        << ": z = " << number(c.z, "%.3g")
+        << (std::abs(c.z) > IdentifyResult::kLawZ ? " (the data call for it)" : "") << "\n";
+  }
   refinements_text(out, r);
   if (!e.identities.empty()) {
     out << "  stationarity identities (sample violation, z-score):\n";
@@ -376,6 +381,12 @@ Json diagnostics_json(const IdentifyResult& r) {
                               : Json()},
         {"p_value", check->pvalue ? json_value(*check->pvalue) : Json()},
         {"unavailable", check->unavailable}};
+  }
+  if (!r.law_checks.empty()) {
+    Json& checks = out["law_check"] = Json::array();
+    for (const IdentifyResult::LawCheck& c : r.law_checks) {
+      checks.push_back({{"equation", c.equation}, {"term", c.term}, {"z", json_value(c.z)}});
+    }
   }
   refinements_json(out, r);
   Json& exact = out["taken_as_exact"] = Json::object();

@@ -169,7 +169,9 @@ void validate_best(SelectResult& out, const DataSource& source, const SelectOpti
     } else if (rank > 0) {
       const Model subset =
           parse_model(subset_model_text(out, out.ranking[rank].kept, out.library), library.file());
-      identified = identify(subset, source, options.identify);
+      IdentifyOptions unchecked = options.identify;
+      unchecked.law_check = false;  // compared by their simulations
+      identified = identify(subset, source, unchecked);
     }
     const IdentifyResult& estimated = rank == 0 ? out.chosen : identified;
     const Model model =
@@ -228,6 +230,7 @@ std::vector<std::size_t> candidates_of(const Model& model,
 IdentifyResult identify_library(const Model& model, const DataSource& source,
                                 const SelectOptions& options) {
   IdentifyOptions identify_options = options.identify;
+  identify_options.law_check = false;  // the chosen model's is the one that counts
   identify_options.method = Method::kLagged;
   identify_options.weighting = Weighting::kGmm;
   IdentifyResult library = identify(model, source, identify_options);
