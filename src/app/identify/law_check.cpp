@@ -97,7 +97,14 @@ void check_laws(IdentifyResult& result, const IdentifyOptions& options,
   } catch (const ModelError&) {
     return;  // a parameter name the library would give is taken
   }
-  const IdentifyResult with = identify_model(*extended);
+  IdentifyResult with;
+  try {
+    with = identify_model(*extended);
+  } catch (const Interrupted&) {
+    throw;
+  } catch (const Error&) {
+    return;  // the check cannot be made (the added term leaves too few equations, ...)
+  }
   if (!with.estimate.usable()) return;
   const std::vector<ParameterEstimate>& estimates = with.parameters();
   // The library's parameters follow the model's own, in the order of the additions.
