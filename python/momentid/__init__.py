@@ -260,10 +260,13 @@ def identify(model: Union[Model, PathLike], data: Any, **options: Any) -> Identi
     keyword. The GIL is released during the pass over the data.
     """
     model = _model_of(model)
+    record = _record_options(options)
     source, name, metadata, keep, options["names"] = _data_of(data, options.get("names"))
     text, value = _momentid._identify(model._model, source, name, metadata, _options(**options))
     del keep
-    return IdentifyResult(text, value, model, _is_frame(data))
+    result = IdentifyResult(text, value, model, _is_frame(data))
+    result._record = (data, record)
+    return result
 
 
 @_takes_options("select")
@@ -284,13 +287,16 @@ def select(model: Union[Model, PathLike], data: Any, **options: Any) -> SelectRe
     model without candidates, and what identify() raises.
     """
     model = _model_of(model)
+    record = _record_options(options)
     source, name, metadata, keep, options["names"] = _data_of(data, options.get("names"))
     validate = options.pop("validate", None)
     second = (None, "", {}, None) if validate is None else _data_of(validate, None)[:4]
     text, value, model_text = _momentid._select(model._model, source, name, metadata,
                                                 _options(**options), *second[:3])
     del keep, second
-    return SelectResult(text, value, model_text, _is_frame(data))
+    result = SelectResult(text, value, model_text, _is_frame(data))
+    result._record = (data, record)
+    return result
 
 
 @_older_keywords
@@ -413,6 +419,19 @@ def _channel_lists(model: Model, center: Union[None, str, Sequence[str]]) -> Opt
     if isinstance(center, str):
         return model.states + model.inputs if center == "all" else [center]
     return None if center is None else list(center)
+
+
+# The options of identify() and select() that say how the record is read, which validate()
+# takes as well: what IdentifyResult.validate() reads the record identified with.
+_RECORD_OPTIONS = ("columns", "names", "dt", "missing", "skip_rows", "decimal", "dt_from",
+                   "center")
+
+
+def _record_options(options: dict) -> dict:
+    out = {key: options[key] for key in _RECORD_OPTIONS if options.get(key) is not None}
+    if options.get("input_hold") == "zoh":
+        out["interpolation"] = "zoh"  # held inputs are replayed held
+    return out
 
 
 def _options(**options: Any) -> dict:

@@ -220,6 +220,12 @@ class IdentifyResult(Fit):
     model: the Model identified (None for a result read from its JSON); simulate(**options) and
       predict(data, **options): the model with the estimates simulated, as momentid.simulate()
       does, under random inputs or through a record's inputs (its response to them).
+    validate(data=None, **options): the model with the estimates simulated through the inputs
+      of a record (by default the one identified, with its record options) and compared with
+      it, as momentid.validate() does; fittedvalues and resid: on the record identified, per
+      state the record shows, the model's response to its inputs and the record minus that
+      response (NaN on the rows before each run's skip, where the response still carries the
+      initial state), arrays in a dict, or a DataFrame when the record was one.
     plot_engineering(): the restoring force and the backbone drawn (momentid.plots).
 
     IdentifyResult(text, value) reads a saved result of the program as well: `value` is its
@@ -231,6 +237,10 @@ class IdentifyResult(Fit):
                  labels: bool = False) -> None:
         self.text = text
         self.model = model
+        # The record identified and its record options (identify() and select() set them): what
+        # validate(), fittedvalues and resid compare the model with.
+        self._record = None
+        self._validation = None
         # A JSON text is a result saved by the user; the binding hands over the value itself.
         self._dict = _json.loads(value) if isinstance(value, str) else value
         self.diagnostics = self._dict["diagnostics"]
@@ -291,6 +301,53 @@ class IdentifyResult(Fit):
         arrays with `t` and the model's inputs, or a data file's path), from its initial state,
         as momentid.simulate(model, the estimates, inputs=data, **options); a Record."""
         return self.simulate(inputs=data, **options)
+
+    def validate(self, data=None, **options):
+        """momentid.validate(model, data, the estimates, **options): the identified model
+        simulated through the record's inputs and compared with it, a ValidateResult. Without
+        `data`, the record identified, read with the record options it was identified with
+        (columns, names, dt, center, ...); `options` add to them."""
+        from . import validate
+        if data is None:
+            data, record_options = self._identified_record()
+            options = {**record_options, **options}
+        return validate(self._identified_model(), data, self, **options)
+
+    def _identified_record(self):
+        if self._record is None:
+            from . import UsageError
+            raise UsageError("data: a result read from its JSON does not hold its record: give "
+                             "validate(data) the record")
+        return self._record
+
+    def _validated(self):
+        if self._validation is None:
+            self._validation = self.validate()
+        return self._validation
+
+    def _per_state(self, values: dict):
+        if not self._labels:
+            return values
+        index = getattr(self._identified_record()[0], "index", None)
+        rows = len(next(iter(values.values()))) if values else 0
+        return _pandas().DataFrame(values, index=index if index is not None and
+                                   len(index) == rows else None)
+
+    @property
+    def fittedvalues(self):
+        """Per state the record shows, the identified model's response to the inputs of the
+        record identified, from its initial state (validate()'s `simulated`)."""
+        validation = self._validated()
+        return self._per_state({name: validation.simulated[name] for name in validation.measured})
+
+    @property
+    def resid(self):
+        """Per state the record shows, the record identified minus fittedvalues; NaN on the rows
+        before each run's skip (validate()'s `compared` false)."""
+        validation = self._validated()
+        return self._per_state({
+            name: _np.where(validation.compared, measured - validation.simulated[name], _np.nan)
+            for name, measured in validation.measured.items()})
 
     def to_dict(self) -> dict:
         return _copy.deepcopy(self._dict)

@@ -243,6 +243,39 @@ def test_a_result_simulates_and_predicts_with_its_estimates(duffing, record):
     np.testing.assert_array_equal(given.predict(record)["y"], predicted["y"])
 
 
+def test_resid_and_fittedvalues_are_the_response_to_the_record_identified(duffing, record):
+    # 2% noise on both states, in a DataFrame with its own index, a renamed column and the
+    # force's hold in its attrs: the residuals are the noise (2% of each state's spread) and
+    # the estimates' small error, on the rows the response has forgotten its initial state.
+    pd = pytest.importorskip("pandas")
+    rng = np.random.default_rng(11)
+    frame = pd.DataFrame({name: record[name] + 0.02 * np.std(record[name])
+                          * rng.standard_normal(len(record[name])) for name in ("y", "v")},
+                         index=np.arange(len(record["t"])) + 500)
+    frame["t"], frame["x"] = record["t"], record["x"]
+    frame = frame.rename(columns={"y": "disp"})
+    frame.attrs["momentid"] = {"input-hold": "zoh"}
+    result = momentid.identify(duffing, frame, columns={"y": "disp"})
+    resid, fitted = result.resid, result.fittedvalues
+    assert list(resid.columns) == ["y", "v"] and list(fitted.columns) == ["y", "v"]
+    assert resid.index.equals(frame.index) and fitted.index.equals(frame.index)
+    validation = result.validate()
+    np.testing.assert_array_equal(fitted["y"].to_numpy(), validation.simulated["y"])
+    assert np.array_equal(np.isnan(resid["y"].to_numpy()), ~validation.compared)
+    assert 0 < (~validation.compared).sum() < len(frame) // 4
+    for name, column in (("y", "disp"), ("v", "v")):
+        spread = np.nanstd(resid[name]) / np.std(frame[column])
+        assert 0.0195 < spread < 0.0215, (name, spread)
+    # Plain arrays give plain arrays; a result read from its JSON holds no record.
+    plain = momentid.identify(duffing, {k: np.asarray(frame[k]) for k in frame},
+                              columns={"y": "disp"}, input_hold="zoh")
+    np.testing.assert_array_equal(plain.resid["y"], resid["y"].to_numpy())
+    saved = momentid.IdentifyResult("", result.json, duffing)
+    with pytest.raises(momentid.UsageError, match=r"^data: a result read from its JSON"):
+        saved.resid
+    assert saved.validate(frame, columns={"y": "disp"}).fit == validation.fit
+
+
 # --- 4. exceptions -------------------------------------------------------------------------------
 
 def test_model_error_is_located():
