@@ -239,6 +239,51 @@ TEST_SUITE("validate") {
     CHECK(std::abs(y.rms_rest / y.rms_start - 1) < 0.1);
   }
 
+  TEST_CASE("the noise band: noise inside, k 1% off outside, inside as an estimate one error off") {
+    const Model model = model_file("duffing.mom");
+    SimulationOptions simulation = duffing_options(model, 50000);
+    simulation.noise = {{"y", 0.01}, {"v", 0.01}};
+    const Recorder recorder =
+        simulated(model, simulation, noise_standard_deviations(model, simulation));
+    const MemoryRecord record(model, recorder, {"y", "v", "x"}, "zoh");
+    const ValidateResult truth = validate(model, record.source(), with_parameters(model, {}));
+    const NoiseBand& band = truth.noise_band;
+    REQUIRE(band.compared);
+    CHECK_FALSE(band.with_errors);
+    CHECK(band.input_noise == std::vector<double>{0.0});  // the held force is exact
+    REQUIRE(band.outputs.size() == 2);
+    for (const NoiseBand::Output& output : band.outputs) {
+      MESSAGE(output.name << ": " << output.error << " of " << output.limit);
+      CHECK(output.inside());
+      CHECK(output.simulations.size() == NoiseBand::kSimulations);
+    }
+    CHECK(truth.consistent);
+    CHECK(truth.warnings.empty());
+    // k 1% off: the error it leaves is far beyond the band, and the fit still near 99%.
+    ValidateOptions off = with_parameters(model, {"k=4.04"});
+    const ValidateResult wrong = validate(model, record.source(), off);
+    CHECK(wrong.noise_band.outside() == 2);
+    CHECK_FALSE(wrong.consistent);
+    MESSAGE("k 1% off: fit " << wrong.outputs[0].fit << "%, error "
+                             << wrong.noise_band.outputs[0].error << " of "
+                             << wrong.noise_band.outputs[0].limit);
+    CHECK(wrong.outputs[0].fit > 90);
+    CHECK(wrong.warnings.back().find("v: the error beyond its white noise is ") == 0);
+    // The same values as an estimate one standard error off: inside the band it widens.
+    off.covariance = {{0, 0, 0}, {0, 0.04 * 0.04, 0}, {0, 0, 0}};
+    const ValidateResult estimated = validate(model, record.source(), off);
+    CHECK(estimated.noise_band.with_errors);
+    CHECK(estimated.noise_band.outside() == 0);
+    CHECK(estimated.consistent);
+    CHECK(estimated.noise_band.outputs[0].estimates > wrong.noise_band.outputs[0].error);
+    // A covariance of another size is refused.
+    off.covariance = {{1}};
+    const UsageError e = error_from<UsageError>([&] { validate(model, record.source(), off); });
+    CHECK(e.option() == "covariance");
+    CHECK(std::string(e.what()) ==
+          "covariance: expected 3 rows of 3 entries, one per parameter of model duffing");
+  }
+
   TEST_CASE("the chosen skip is where a linear oscillator's transient falls to 1%") {
     // c = 0.5, m = 1: the envelope decays as exp(-c t / 2), to 1% after 2 ln(100) / c s.
     const Model model = model_file("duffing.mom");
@@ -315,7 +360,9 @@ TEST_SUITE("validate") {
     const std::string good = write(
         "{\"model\": \"duffing\", \"parameters\": {\"c\": {\"estimate\": 0.25}, \"k\": "
         "{\"estimate\": 3}, \"eps\": {\"estimate\": -1e-3}}}");
-    const momentid::ParameterValues values = read_estimates(model, good);
+    const Estimates read = read_estimates(model, good);
+    const momentid::ParameterValues& values = read.values;
+    CHECK(read.covariance.empty());
     REQUIRE(values.size() == 3);
     CHECK(values.at("c").value == 0.25);
     CHECK(values.at("eps").value == -1e-3);
@@ -329,6 +376,19 @@ TEST_SUITE("validate") {
                                   "{\"estimate\": 1}}}"));
     });
     CHECK(missing.message().find("no estimate of parameter 'eps'") == 0);
+    // The covariance in declaration order, null as NaN; one of another shape is located.
+    const std::string parameters =
+        "{\"parameters\": {\"c\": {\"estimate\": 1}, \"k\": {\"estimate\": 1}, \"eps\": "
+        "{\"estimate\": 1}},\n\"diagnostics\": {\"covariance\": ";
+    const Estimates with =
+        read_estimates(model, write(parameters + "[[1, 2, 3], [2, 5, 6], [3, 6, null]]}}"));
+    REQUIRE(with.covariance.size() == 3);
+    CHECK(with.covariance[1] == std::vector<double>{2, 5, 6});
+    CHECK(std::isnan(with.covariance[2][2]));
+    const DataError shape = error_from<DataError>(
+        [&] { read_estimates(model, write(parameters + "[[1, 2], [2, 5]]}}")); });
+    CHECK(shape.location().line == 2);
+    CHECK(shape.message() == "\"covariance\": expected 3 rows of 3 entries, one per parameter");
   }
 }
 

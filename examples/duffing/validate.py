@@ -6,7 +6,7 @@
 The estimation record (seed 11) and the validation record (seed 12) are simulated with the same
 input as sweep.py, 2% white noise on y and no velocity column, as a measured record would be.
 The script prints the estimates, then `momentid validate`'s figures for them and for values 20%
-off; with --plot it draws the validation record against both simulations and the correlation
+off (the fit, the correlation checks, the noise band and the verdict); with --plot it draws the validation record against both simulations and the correlation
 checks of the estimates' simulation error (matplotlib).
 Uses the momentid executable (build/momentid, or the MOMENTID environment variable).
 """
@@ -68,14 +68,17 @@ def main():
             simulated[name] = column(replay, "y")
         t, y = column(test, "t"), column(test, "y")
     print(f"{'parameters':<12} {'fit %':>8} {'rms error':>10} {'rms first 10%':>14} "
-          f"{'rms rest':>10} {'autocorr. out':>14} {'cross-corr. out':>16}")
+          f"{'rms rest':>10} {'autocorr. out':>14} {'cross-corr. out':>16} "
+          f"{'band error/limit':>17} {'consistent':>11}")
     for name, result in results.items():
         out = result["outputs"]["y"]
         auto, cross = out["autocorrelation"], out["cross_correlation"]["x"]
+        band = result["noise_band"]["outputs"]["y"]
         print(f"{name:<12} {out['fit_percent']:>8.3f} {out['rms']:>10.4g} "
               f"{out['rms_first_10pct']:>14.4g} {out['rms_rest']:>10.4g} "
               f"{auto['outside']:>9d} of {len(auto['values']):<2d} "
-              f"{cross['outside']:>11d} of {len(cross['values']):<2d}")
+              f"{cross['outside']:>11d} of {len(cross['values']):<2d} "
+              f"{band['error'] / band['limit']:>17.3g} {str(result['consistent']):>11}")
     if not args.plot:
         return
     import matplotlib

@@ -144,6 +144,9 @@ class Model {
   int measured_derivative_of(int state) const;
   // The kinematic equation that gives state s's derivative as another state, if any.
   std::optional<Kinematic> kinematic(int s) const;
+  // The state whose kinematic equation gives its derivative as state w (y for v when y' = v),
+  // or -1.
+  int integral_of(int w) const;
   // The model file's text, as parsed.
   const std::string& text() const { return text_; }
   // The variables that monomials are written in: states, then inputs, then measured derivatives,

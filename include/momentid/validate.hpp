@@ -104,10 +104,18 @@ Replay replay(const Model& model, const DataSource& source, const ReplayOptions&
 std::vector<std::string> write_replay(const Model& model, const Replay& replay,
                                       const std::string& path, DataWriter::Format format);
 
-// The parameter values of an `identify --format json` result: one per model parameter, by name.
-// Throws DataError located in the file for text that is not JSON, estimates of another model, or a
-// parameter missing or without a numeric estimate.
-ParameterValues read_estimates(const Model& model, const std::string& path);
+// What an `identify --format json` result says of the parameters: one value per model
+// parameter, by name, and their covariance matrix in declaration order (NaN where the file has
+// null, an unknown error; empty when it has none).
+struct Estimates {
+  ParameterValues values;
+  std::vector<std::vector<double>> covariance;
+};
+
+// Throws DataError located in the file for text that is not JSON, estimates of another model, a
+// parameter missing or without a numeric estimate, or a covariance that is not a square array
+// with a row per parameter.
+Estimates read_estimates(const Model& model, const std::string& path);
 
 // How to validate (docs/cli/validate.md, "momentid validate").
 struct ValidateOptions {
@@ -122,6 +130,10 @@ struct ValidateOptions {
   // the simulation and the comparison: a sensor's offset on a symmetric system, as
   // IdentifyOptions::center. A variable the record has no column for is left as it is.
   std::vector<std::string> center;
+  // The covariance of the parameter values simulated with (Estimates::covariance), in
+  // declaration order: it widens the noise band by the errors it gives the trajectory. Empty,
+  // or with an entry that is not finite (an unknown error): the values are taken as exact.
+  std::vector<std::vector<double>> covariance;
 
   static constexpr int kMaxLags = 1000;
   void validate() const;
@@ -186,7 +198,7 @@ struct Sensitivity {
 // `run_distances` each run's from the mean of the others; the band is 0..limit, from the runs'
 // distances (docs/cli/validate.md, "Statistics").
 struct StatisticCheck {
-  std::string output;  // the state's name
+  std::string output;  // the output's name (a state, or a measured derivative)
   std::string kind;    // "psd", "distribution", "crossings", "prediction" or "bias"
   // The statistic at `at` (frequencies in Hz, probabilities, levels, for "prediction" the time
   // ahead in s, where the statistic is the rms prediction error, and for "bias" the index of each
@@ -212,12 +224,45 @@ struct StatisticalValidation {
   std::size_t runs = 0;
   std::size_t segment = 0;       // Welch segment length in samples (Hann window, half overlap)
   double level = 0;              // the probability that every statistic of a right model is inside
-  std::vector<double> noise_sd;  // per measured state, the noise added to the simulations
+  std::vector<double> noise_sd;  // per output compared, the noise added to the simulations
   std::vector<StatisticCheck> checks;
   std::size_t outside() const;
 
   static constexpr std::size_t kRuns = 12;
   static constexpr std::size_t kMinSegment = 64, kMaxSegment = 1024, kMinSegments = 8;
+  static constexpr double kLevel = 0.99;
+};
+
+// Whether a reproducible trajectory's error is what the record's noise and the parameters'
+// uncertainty leave (docs/cli/validate.md, "Noise band"). Per output, the error's smooth mean
+// square (the median over segments of its mean square, less its white noise's variance, which
+// the autocorrelation shows) is compared with a limit from two sources: kSimulations replays
+// with white noise of each sampled input's estimated variance added to the input (each with white
+// noise of the error's own white variance added, so that their smooth parts are estimated
+// alike), whose prediction bound for one more (on a logarithmic scale when all are positive),
+// at least kFloor of the output's spread squared, is the noise's share; and, with
+// ValidateOptions::covariance, the quantile of the mean square that the estimates' errors leave
+// (from the output's sensitivities to the parameters). The limit is the root of their sum, at
+// kLevel for all outputs together; the figures are rms.
+struct NoiseBand {
+  struct Output {
+    std::string name;
+    double error = 0;                 // the record's error beyond its white noise (rms)
+    std::vector<double> simulations;  // the same of each replay's difference from the first
+    double estimates = 0;             // the estimates' errors' share of the limit (0 without)
+    double limit = 0;
+    bool inside() const { return error <= limit; }
+  };
+  bool compared = false;
+  std::string not_compared;         // why not, when not compared
+  std::vector<double> input_noise;  // per model input, the noise's standard deviation added
+  bool with_errors = false;         // the estimates' covariance widened the limits
+  double level = 0;                 // the probability that every output of a right model is inside
+  std::vector<Output> outputs;
+  std::size_t outside() const;
+
+  static constexpr std::size_t kSimulations = 8;
+  static constexpr double kFloor = 1e-3;
   static constexpr double kLevel = 0.99;
 };
 
@@ -241,8 +286,11 @@ struct ValidateResult {
   // Compared when the model is sensitive, or when its reproducible trajectory fails (to show
   // where the response differs); otherwise the trajectory judges the model alone.
   StatisticalValidation statistics;
-  // Sensitive: every statistic inside its band. Otherwise: no output's fit is below 0% or
-  // drifts (the warnings say which).
+  // Compared when the model is not sensitive: whether each output's error is what the noise
+  // leaves.
+  NoiseBand noise_band;
+  // Sensitive: every statistic inside its band. Otherwise: every output inside its noise band,
+  // none with a fit below 0%, none drifting beyond its band (the warnings say which).
   bool consistent = true;
   std::string verdict;  // one sentence: what judged the model, and what it found
   std::vector<std::string> warnings;

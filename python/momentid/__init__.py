@@ -395,7 +395,10 @@ def validate(model: Union[Model, PathLike], data: Any,
     """
     model = _model_of(model)
     origin = "the model's nominal values"
+    covariance = None
     if isinstance(params, IdentifyResult):
+        # The estimates' covariance widens the noise band, as `--estimates FILE` does.
+        covariance = params.diagnostics.get("covariance")
         params, origin = params.estimates, "the estimates of identify()"
     elif params:
         origin += " and params"
@@ -406,7 +409,7 @@ def validate(model: Union[Model, PathLike], data: Any,
                        dt=dt,
                        plot=None if plot is None else _os.fspath(plot), missing=missing,
                        skip_rows=skip_rows, decimal=decimal, names=names, dt_from=dt_from,
-                       center=center)
+                       center=center, covariance=covariance)
     text, value, series = _momentid._validate(model._model, source, name, metadata, options)
     del keep
     return ValidateResult(text, value, series)

@@ -448,8 +448,10 @@ class ValidateResult:
 
     sensitive: whether nearby trajectories separate to the spread within the record (then the
     trajectory cannot be reproduced and the statistics judge the model); `sensitivity` its
-    figures (dict: time_to_spread, lyapunov, ...); consistent: the overall verdict as a
-    boolean, `verdict` in words; `statistics`: None, or the statistics compared (dict with
+    figures (dict: time_to_spread, lyapunov, ...); noise_band: for a trajectory that can be
+    reproduced, whether each output's error is what the inputs' noise and the estimates'
+    errors leave (dict: compared, input_noise, with_errors, outputs {name: error, simulations,
+    estimates, limit, inside}); consistent: the overall verdict as a boolean, `verdict` in words; `statistics`: None, or the statistics compared (dict with
     `checks`, each with output, kind (psd, distribution, crossings, prediction, bias), distance,
     limit, inside and the arrays at, measured, mean, low, high).
 
@@ -470,6 +472,7 @@ class ValidateResult:
         self.consistent = bool(self._dict["consistent"])
         self.verdict = self._dict["verdict"]
         self.sensitivity = dict(self._dict["sensitivity"])
+        self.noise_band = self._dict["noise_band"]
         self.statistics = self._dict["statistics"]
         self.t = series["t"]
         self.run = series["run"]

@@ -295,6 +295,14 @@ ValidateOptions validate_options(const Model& model, const py::dict& options) {
   out.skip = get<std::size_t>(options, "skip");
   if (auto lags = get<int>(options, "lags")) out.lags = *lags;
   if (auto center = get<std::vector<std::string>>(options, "center")) out.center = *center;
+  // An IdentifyResult's covariance; None is an unknown error, as null in the file.
+  if (auto covariance =
+          get<std::vector<std::vector<std::optional<double>>>>(options, "covariance")) {
+    for (const auto& row : *covariance) {
+      std::vector<double>& values = out.covariance.emplace_back();
+      for (const auto& entry : row) values.push_back(entry.value_or(NAN));
+    }
+  }
   return out;
 }
 

@@ -260,6 +260,8 @@ def test_resid_and_fittedvalues_are_the_response_to_the_record_identified(duffin
     assert list(resid.columns) == ["y", "v"] and list(fitted.columns) == ["y", "v"]
     assert resid.index.equals(frame.index) and fitted.index.equals(frame.index)
     validation = result.validate()
+    # The estimates' covariance widens the noise band, and the model is consistent with its record.
+    assert validation.noise_band["with_errors"] and validation.consistent
     np.testing.assert_array_equal(fitted["y"].to_numpy(), validation.simulated["y"])
     assert np.array_equal(np.isnan(resid["y"].to_numpy()), ~validation.compared)
     assert 0 < (~validation.compared).sum() < len(frame) // 4

@@ -5,6 +5,7 @@
 #include <memory>
 
 #include "app/validate/fit.hpp"
+#include "app/validate/noise_band.hpp"
 #include "app/validate/record.hpp"
 #include "app/validate/replay.hpp"
 #include "app/validate/residuals.hpp"
@@ -98,6 +99,30 @@ void choose_skips(const Model& model, const RecordSimulator& simulator,
   }
 }
 
+// A warning for each output outside its noise band, which makes the result inconsistent; one
+// for a band that could not be compared.
+void add_band_warnings(const NoiseBand& band, ValidateResult& result) {
+  if (result.sensitivity.sensitive) return;
+  if (!band.compared) {
+    result.warnings.push_back("the noise band is not compared: " + band.not_compared);
+    return;
+  }
+  const std::string explained =
+      band.with_errors ? "the inputs' noise and the estimates' errors" : "the inputs' noise";
+  for (const NoiseBand::Output& output : band.outputs) {
+    if (output.inside()) continue;
+    char ratio[32];
+    std::snprintf(ratio, sizeof ratio, "%.3g", output.error / output.limit);
+    result.warnings.push_back(
+        output.name + ": the error beyond its white noise is " + ratio + " times what " +
+        explained + " can leave (the noise band): the model or its parameters are wrong" +
+        (band.with_errors ? ""
+                          : ", or the values simulated with are not exact (give the estimates' "
+                            "file, whose errors widen the band)"));
+    result.consistent = false;
+  }
+}
+
 // The overall verdict: the statistics judge a sensitive model, the trajectory fit any other
 // (whose warnings have set `consistent`).
 void judge(ValidateResult& result) {
@@ -107,7 +132,9 @@ void judge(ValidateResult& result) {
   if (!result.sensitivity.sensitive) {
     result.verdict = "the trajectory can be reproduced and its fit judges the model: ";
     if (result.consistent) {
-      result.verdict += "no output is worse than its mean or drifts";
+      result.verdict += result.noise_band.compared
+                            ? "every output's error is what the noise leaves (the noise band)"
+                            : "no output is worse than its mean or drifts";
     } else {
       result.verdict += "the warnings say where it fails";
       if (result.statistics.compared) {
@@ -168,6 +195,14 @@ ValidateResult validate(const Model& model, const DataSource& source,
     }
   }
   options.replay.record.validate(&model);
+  const std::size_t parameters = model.parameters().size();
+  const bool square = std::all_of(options.covariance.begin(), options.covariance.end(),
+                                  [&](const auto& row) { return row.size() == parameters; });
+  if (!options.covariance.empty() && (options.covariance.size() != parameters || !square)) {
+    throw UsageError("covariance", "expected " + std::to_string(parameters) + " rows of " +
+                                       std::to_string(parameters) +
+                                       " entries, one per parameter of model " + model.name());
+  }
   ValidateResult result;
   result.model = std::make_shared<const Model>(model);
   result.parameters = every_value(model, options.replay.parameters);
@@ -186,29 +221,31 @@ ValidateResult validate(const Model& model, const DataSource& source,
                                   replay.record.dt, replay.substeps);
   result.sensitivity = measure_sensitivity(model, simulator, replay);
   choose_skips(model, simulator, options, result);
-  for (std::size_t j : outputs) {
-    ComparedRows rows = compared_rows(model, replay, j, result.skip);
-    OutputFit fit = output_fit(model, j, rows);
-    add_correlation_checks(model, replay.record, result.skip, std::move(rows.error), options.lags,
-                           fit);
-    // A trajectory that cannot be reproduced says nothing against the model.
-    if (!result.sensitivity.sensitive && add_fit_warnings(fit, result.warnings)) {
+  // A trajectory that cannot be reproduced says nothing against the model.
+  std::vector<ComparedRows> rows;
+  for (std::size_t j : outputs) rows.push_back(compared_rows(model, replay, j, result.skip));
+  NoiseBand& band = result.noise_band;
+  if (result.sensitivity.sensitive) {
+    band.not_compared = "the trajectory cannot be reproduced: the statistics judge the model";
+  } else {
+    band = compare_noise_band(model, result.parameters, options.covariance, replay, result.skip,
+                              outputs, rows);
+  }
+  for (std::size_t o = 0; o < outputs.size(); ++o) {
+    OutputFit fit = output_fit(model, outputs[o], rows[o]);
+    add_correlation_checks(model, replay.record, result.skip, std::move(rows[o].error),
+                           options.lags, fit);
+    const bool inside = band.compared && band.outputs[o].inside();
+    if (!result.sensitivity.sensitive && add_fit_warnings(fit, inside, result.warnings)) {
       result.consistent = false;
     }
     result.outputs.push_back(std::move(fit));
   }
+  add_band_warnings(band, result);
   // The statistics judge a sensitive model, and show where a reproducible trajectory that
-  // fails differs: over the states the record has, which come first among the outputs.
+  // fails differs: over every output the record has, states and measured derivatives.
   if (result.sensitivity.sensitive || !result.consistent) {
-    std::vector<std::size_t> states;
-    for (std::size_t j : outputs) {
-      if (j < model.states().size()) states.push_back(j);
-    }
-    if (states.empty()) {
-      result.statistics.not_compared = "the record has no state's column";
-    } else {
-      result.statistics = compare_statistics(model, simulator, replay, states);
-    }
+    result.statistics = compare_statistics(model, simulator, replay, outputs);
   }
   judge(result);
   return result;

@@ -54,12 +54,21 @@ int run_validate(ValidateCommand& command) {
   std::string from = "the model's nominal values";
   if (!command.estimates.empty()) {
     from = command.estimates + (command.set.empty() ? "" : ", then --set");
-    replay.parameters = read_estimates(model, command.estimates);
+    Estimates estimates = read_estimates(model, command.estimates);
+    replay.parameters = std::move(estimates.values);
+    command.options.covariance = std::move(estimates.covariance);
   } else if (!command.set.empty()) {
     from += " and --set";
   }
   for (auto& [name, value] : parse_parameter_values(model, command.set)) {
     replay.parameters.insert_or_assign(name, value);
+    // A value set is exact: the estimates' errors do not widen the noise band for it.
+    if (!command.options.covariance.empty()) {
+      const auto p = static_cast<std::size_t>(model.parameter_index(name));
+      for (std::size_t q = 0; q < command.options.covariance.size(); ++q) {
+        command.options.covariance[p][q] = command.options.covariance[q][p] = 0;
+      }
+    }
   }
   if (!command.interpolation.empty()) {
     replay.interpolation = parse_interpolation(command.interpolation, "interpolation");

@@ -258,6 +258,14 @@ std::optional<Kinematic> Model::kinematic(int s) const {
   return std::nullopt;
 }
 
+int Model::integral_of(int w) const {
+  for (std::size_t y = 0; y < states_.size(); ++y) {
+    const std::optional<Kinematic> k = kinematic(static_cast<int>(y));
+    if (k && k->state == w) return static_cast<int>(y);
+  }
+  return -1;
+}
+
 int Model::parameter_index(std::string_view name) const {
   for (std::size_t i = 0; i < parameters_.size(); ++i) {
     if (parameters_[i].name == name) return static_cast<int>(i);

@@ -15,6 +15,10 @@ double chi_square_upper_tail(double x, double dof) {
   return boost::math::cdf(boost::math::complement(boost::math::chi_squared(dof), x));
 }
 
+double chi_square_quantile(double q, double dof) {
+  return boost::math::quantile(boost::math::chi_squared(dof), q);
+}
+
 double student_t_quantile(double q, double dof) {
   return boost::math::quantile(boost::math::students_t(dof), q);
 }

@@ -51,6 +51,11 @@ at each sample, computed from the exact states and force.
   validate            validate on the force and a alone of the one-mass chain, with the
                       estimates: it compares a (the record's only output) with the acceleration
                       of the simulation, fit above 95%, and judges the model consistent.
+  validate_chain3     validate on chain3's record (accelerations and the force alone): the true
+                      values and identify's estimates (--estimates) consistent, every output
+                      inside its noise band and no warning (the force's 1% noise moves the
+                      lightly damped chain in bursts, which the band's simulations reproduce);
+                      k1 1% off inconsistent, every output outside its band.
 
 Usage: accelerometer.py CASE MOMENTID MODELS WORKDIR
 """
@@ -289,6 +294,41 @@ def validate(momentid, models, workdir):
     return passed and list(outputs) == ["a1"] and outputs["a1"]["fit_percent"] > 95 and report["consistent"]
 
 
+def validate_chain3(momentid, models, workdir):
+    path, model = chain3_record(workdir, laser=False)
+
+    def verdict(label, *options):
+        result = subprocess.run([momentid, "validate", model, path, "--format", "json",
+                                 *options], capture_output=True, text=True)
+        if result.returncode != 0:
+            print(result.stderr)
+            return None
+        report = json.loads(result.stdout)
+        band = report["noise_band"]
+        ratios = {name: round(o["error"] / o["limit"], 2) for name, o in band["outputs"].items()}
+        print(f"  {label}: consistent {report['consistent']}, error / limit {ratios}, "
+              f"fits {[round(o['fit_percent'], 1) for o in report['outputs'].values()]}, "
+              f"warnings {len(report['warnings'])}")
+        return report
+
+    def inside(report, expected):
+        return (report is not None and report["noise_band"]["compared"]
+                and all(o["inside"] == expected for o in report["noise_band"]["outputs"].values()))
+    true = ",".join(f"{name}={value}" for name, value in CHAIN3.items())
+    off = true.replace(f"k1={CHAIN3['k1']}", f"k1={CHAIN3['k1'] * 1.01}")
+    estimates = f"{workdir}/estimates.json"
+    with open(estimates, "w") as out:
+        json.dump(lab.identify(momentid, model, path), out)
+    print("validate chain3.mom on chain3.csv:")
+    right = verdict("true values", "--set", true)
+    wrong = verdict("k1 1% off", "--set", off)
+    estimated = verdict("identify's estimates", "--estimates", estimates)
+    return (inside(right, True) and right["consistent"] and not right["warnings"]
+            and inside(estimated, True) and estimated["consistent"]
+            and estimated["noise_band"]["with_errors"]
+            and inside(wrong, False) and not wrong["consistent"])
+
+
 def acceleration_offset(momentid, models, workdir):
     truth = {"c": 10.0, "k": 4.0e4}
 
@@ -427,7 +467,7 @@ CASES = {"displacement": displacement, "all_channels": all_channels, "velocity":
          "chain3": chain3, "chain3_laser": chain3_laser,
          "integrate": integrate, "measured_nonlinear": measured_nonlinear,
          "base_excitation": base_excitation,
-         "validate": validate}
+         "validate": validate, "validate_chain3": validate_chain3}
 
 if __name__ == "__main__":
     case, momentid, models, workdir = sys.argv[1:5]

@@ -49,15 +49,12 @@ std::optional<double> state_variance(const Model& model, const DataMoments& data
   if (const ChannelStatistics* c = data.channel(model.states()[static_cast<std::size_t>(s)].name)) {
     return clean(*c);
   }
-  for (std::size_t y = 0; y < model.states().size(); ++y) {
-    const std::optional<Kinematic> k = model.kinematic(static_cast<int>(y));
-    if (!k || k->state != s) continue;
-    const ChannelStatistics* c = data.channel(model.states()[y].name);
-    if (!c || c->autocorrelation.empty()) continue;
-    const double step = k->ratio.to_double() * dt;
-    return std::max(2 * (clean(*c) - c->autocorrelation[0] * c->variance), 0.0) / (step * step);
-  }
-  return std::nullopt;
+  const int y = model.integral_of(s);
+  if (y < 0) return std::nullopt;
+  const ChannelStatistics* c = data.channel(model.states()[static_cast<std::size_t>(y)].name);
+  if (!c || c->autocorrelation.empty()) return std::nullopt;
+  const double step = model.kinematic(y)->ratio.to_double() * dt;
+  return std::max(2 * (clean(*c) - c->autocorrelation[0] * c->variance), 0.0) / (step * step);
 }
 
 }  // namespace

@@ -26,11 +26,7 @@ int single_rate(const Model& model, const VariableFunction& f) {
   const Monomial& m = f.argument[0].second;
   if (m.degree() != 1) return -1;
   const auto v = static_cast<int>(std::find(m.begin(), m.end(), 1) - m.begin());
-  for (std::size_t y = 0; y < model.states().size(); ++y) {
-    const std::optional<Kinematic> k = model.kinematic(static_cast<int>(y));
-    if (k && k->state == v) return v;
-  }
-  return -1;
+  return model.integral_of(v) >= 0 ? v : -1;
 }
 
 // The library target of equation `eq`: its label, or v' for the one state whose derivative it

@@ -177,6 +177,12 @@ void validate_best(SelectResult& out, const DataSource& source, const SelectOpti
     const Model model =
         parse_model(subset_model_text(out, out.ranking[rank].kept, estimated), library.file());
     SelectResult::Validated entry{rank};
+    // The estimates' errors widen the noise band, as `validate --estimates FILE` takes them.
+    validation.covariance.clear();
+    if (estimated.estimate.usable() &&
+        estimated.model->parameters().size() == model.parameters().size()) {
+      validation.covariance = estimated.estimate.main().covariance();
+    }
     try {
       const ValidateResult result = validate(model, *options.validation, validation);
       entry.consistent = result.consistent;

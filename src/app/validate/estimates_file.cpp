@@ -26,9 +26,33 @@ SourceLocation location(const std::string& path, const std::string& text, std::s
                         text.substr(begin, end - begin)};
 }
 
+// diagnostics.covariance: a row per parameter of as many entries, NaN for an entry that is not a
+// number (the JSON writes an unknown error as null); empty without it.
+std::vector<std::vector<double>> covariance_of(const nlohmann::json& document,
+                                               std::size_t parameters,
+                                               const SourceLocation& where) {
+  if (!document.contains("diagnostics") || !document["diagnostics"].is_object() ||
+      !document["diagnostics"].contains("covariance")) {
+    return {};
+  }
+  const nlohmann::json& matrix = document["diagnostics"]["covariance"];
+  const std::string shape = "\"covariance\": expected " + std::to_string(parameters) + " rows of " +
+                            std::to_string(parameters) + " entries, one per parameter";
+  if (!matrix.is_array() || matrix.size() != parameters) throw DataError(where, shape);
+  std::vector<std::vector<double>> out;
+  for (const nlohmann::json& row : matrix) {
+    if (!row.is_array() || row.size() != parameters) throw DataError(where, shape);
+    std::vector<double>& values = out.emplace_back();
+    for (const nlohmann::json& entry : row) {
+      values.push_back(entry.is_number() ? entry.get<double>() : NAN);
+    }
+  }
+  return out;
+}
+
 }  // namespace
 
-ParameterValues read_estimates(const Model& model, const std::string& path) {
+Estimates read_estimates(const Model& model, const std::string& path) {
   const AlgebraLock lock;
   std::ifstream in(path, std::ios::binary);
   if (!in) throw DataError(file_start(path), "cannot open the estimates file");
@@ -65,7 +89,8 @@ ParameterValues read_estimates(const Model& model, const std::string& path) {
   }
   const std::size_t parameters_at = key_at("parameters", 0);
   const nlohmann::json& parameters = document["parameters"];
-  ParameterValues out;
+  Estimates estimates;
+  ParameterValues& out = estimates.values;
   for (const Declaration& p : model.parameters()) {
     if (!parameters.contains(p.name)) {
       throw DataError(at(parameters_at), "no estimate of parameter '" + p.name + "'" + expected);
@@ -86,7 +111,9 @@ ParameterValues read_estimates(const Model& model, const std::string& path) {
                       "'" + name + "' is not a parameter of model " + model.name());
     }
   }
-  return out;
+  estimates.covariance =
+      covariance_of(document, model.parameters().size(), at(key_at("covariance", 0)));
+  return estimates;
 }
 
 }  // namespace momentid

@@ -75,14 +75,15 @@ OutputFit output_fit(const Model& model, std::size_t output, const ComparedRows&
   return fit;
 }
 
-bool add_fit_warnings(const OutputFit& fit, std::vector<std::string>& warnings) {
+bool add_fit_warnings(const OutputFit& fit, bool noise_explains,
+                      std::vector<std::string>& warnings) {
   const std::size_t before = warnings.size();
   if (fit.fit < 0) {
     warnings.push_back(fit.name +
                        ": the simulation is further from the data than their mean "
                        "(fit below 0%): the model or its parameters are wrong");
   }
-  if (fit.rms_rest > 2 * fit.rms_start && fit.rms_start > 0) {
+  if (!noise_explains && fit.rms_rest > 2 * fit.rms_start && fit.rms_start > 0) {
     warnings.push_back(fit.name +
                        ": the error grows along the record (its rms after the first 10% "
                        "is more than twice the rms over them): the simulation drifts");

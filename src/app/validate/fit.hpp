@@ -28,8 +28,10 @@ ComparedRows compared_rows(const Model& model, const Replay& replay, std::size_t
 // correlation checks (residuals.hpp).
 OutputFit output_fit(const Model& model, std::size_t output, const ComparedRows& rows);
 
-// The warnings about a fit: worse than the data's mean, or an error that grows along the record.
-// Returns whether it warned.
-bool add_fit_warnings(const OutputFit& fit, std::vector<std::string>& warnings);
+// The warnings about a fit: worse than the data's mean, or an error that grows along the record
+// unless `noise_explains` it (the output is inside its noise band: the noise's effect comes in
+// bursts). Returns whether it warned.
+bool add_fit_warnings(const OutputFit& fit, bool noise_explains,
+                      std::vector<std::string>& warnings);
 
 }  // namespace momentid

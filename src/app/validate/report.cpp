@@ -64,6 +64,37 @@ std::string check_text(const CorrelationCheck& c, bool sensitive) {
   return out;
 }
 
+// The noise band's section: a line per output, or why it was not compared (nothing for a
+// sensitive model, whose statistics judge it).
+std::string noise_band_text(const ValidateResult& r) {
+  const NoiseBand& band = r.noise_band;
+  if (r.sensitivity.sensitive) return "";
+  if (!band.compared) return "noise band: not compared: " + band.not_compared + "\n\n";
+  std::string out =
+      "noise band (the error's rms beyond its white noise, the median over "
+      "segments, against " +
+      std::to_string(band.outputs.front().simulations.size()) +
+      " simulations with the inputs' noise added (";
+  for (std::size_t i = 0; i < band.input_noise.size(); ++i) {
+    const bool held = r.replay.interpolation[i] == Interpolation::kHold;
+    out += (i ? ", " : "") + r.model->inputs()[i].name + " " +
+           (held ? "held: exact" : number(band.input_noise[i], "%.3g"));
+  }
+  out += std::string(")") + (band.with_errors ? " and the estimates' errors" : "") + "; " +
+         number(100 * band.level, "%g") + "% band for all " + std::to_string(band.outputs.size()) +
+         " together):\n";
+  for (const NoiseBand::Output& o : band.outputs) {
+    const auto [low, high] = std::minmax_element(o.simulations.begin(), o.simulations.end());
+    out += "  " + o.name + ": " + number(o.error, "%.4g") + " (simulations " +
+           number(*low, "%.3g") + " to " + number(*high, "%.3g") +
+           (band.with_errors ? ", the estimates' errors " + number(o.estimates, "%.3g") : "") +
+           ", limit " + number(o.limit, "%.3g") + ")" +
+           (o.inside() ? "" : "  <- " + number(o.error / o.limit, "%.3g") + " times the limit") +
+           "\n";
+  }
+  return out + "\n";
+}
+
 }  // namespace
 
 std::string format_text(const ValidateResult& r) {
@@ -124,7 +155,7 @@ std::string format_text(const ValidateResult& r) {
       out += "  " + f.name + ": " + check_text(c, sensitive) + "\n";
     }
   }
-  out += "\n";
+  out += "\n" + noise_band_text(r);
   out += statistics_text(r);
   if (r.warnings.empty()) out += "warnings: none\n";
   for (const std::string& w : r.warnings) out += "warning: " + w + "\n";
@@ -134,6 +165,25 @@ std::string format_text(const ValidateResult& r) {
 namespace {
 
 using Json = nlohmann::ordered_json;
+
+Json noise_band_json(const NoiseBand& band, const Model& model) {
+  Json out = {{"compared", band.compared}, {"not_compared", band.not_compared}};
+  Json& noise = out["input_noise"] = Json::object();
+  for (std::size_t i = 0; i < band.input_noise.size(); ++i) {
+    noise[model.inputs()[i].name] = json_value(band.input_noise[i]);
+  }
+  out["with_errors"] = band.with_errors;
+  out["level"] = band.level;
+  Json& outputs = out["outputs"] = Json::object();
+  for (const NoiseBand::Output& o : band.outputs) {
+    outputs[o.name] = {{"error", json_value(o.error)},
+                       {"simulations", json_value(o.simulations)},
+                       {"estimates", json_value(o.estimates)},
+                       {"limit", json_value(o.limit)},
+                       {"inside", o.inside()}};
+  }
+  return out;
+}
 
 Json check_json(const CorrelationCheck& c) {
   Json lags = Json::array();
@@ -201,6 +251,7 @@ nlohmann::ordered_json json_value(const ValidateResult& r) {
   }
   Json& outputs = out["outputs"] = Json::object();
   for (const OutputFit& f : r.outputs) outputs[f.name] = output_json(f);
+  out["noise_band"] = noise_band_json(r.noise_band, model);
   statistics_json(out, r);
   out["warnings"] = r.warnings;
   return out;

@@ -108,7 +108,7 @@ std::pair<double, double> mean_and_spread(const std::vector<std::vector<double>>
   return {mean, std::sqrt(squares / count)};
 }
 
-double white_noise_variance(const std::vector<std::vector<double>>& runs) {
+double white_noise_variance(const std::vector<std::vector<double>>& runs, bool held) {
   const auto [mean, spread] = mean_and_spread(runs);
   if (!(spread > 0)) return 0;
   std::vector<double> rho(4);
@@ -122,7 +122,7 @@ double white_noise_variance(const std::vector<std::vector<double>>& runs) {
     }
     rho[lag - 1] = products / pairs / (spread * spread);
   }
-  return std::max(0.0, spread * spread * (1 - smooth_lag_zero(rho)));
+  return std::max(0.0, spread * spread * (1 - smooth_lag_zero(rho, held)));
 }
 
 }  // namespace momentid

@@ -35,8 +35,9 @@ std::vector<double> upcrossing_rates(const std::vector<std::vector<double>>& run
 std::pair<double, double> mean_and_spread(const std::vector<std::vector<double>>& runs);
 
 // The variance of white noise on a series that is smooth apart from it: the excess of its lag-0
-// autocovariance over the extrapolation from lags 1 to 4 (as identify estimates it); 0 when the
-// estimate is not positive.
-double white_noise_variance(const std::vector<std::vector<double>>& runs);
+// autocovariance over the extrapolation from lags 1 to 4 (as identify estimates it, with the
+// form for a series driven by inputs `held` over each sample or for a smooth one:
+// smooth_lag_zero); 0 when the estimate is not positive.
+double white_noise_variance(const std::vector<std::vector<double>>& runs, bool held = true);
 
 }  // namespace momentid

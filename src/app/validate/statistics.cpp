@@ -7,6 +7,7 @@
 #include <numeric>
 #include <random>
 
+#include "app/validate/fit.hpp"
 #include "app/validate/record.hpp"
 #include "app/validate/series_statistics.hpp"
 #include "solve/distributions.hpp"
@@ -65,6 +66,12 @@ std::vector<std::vector<Runs>> simulations(const Model& model, const RecordSimul
       for (const std::vector<double>& state : replay.simulated[r]) initial.push_back(state[row]);
       std::vector<std::vector<double>> states =
           simulator.run(inputs, initial, run_start(run), run_label(record, r), run.rows());
+      // The measured derivatives (accelerations) after the states, as the outputs number them.
+      if (outputs.back() >= states.size()) {
+        for (std::vector<double>& d : simulator.derivatives(states, inputs)) {
+          states.push_back(std::move(d));
+        }
+      }
       std::mt19937_64 random(kNoiseSeed + kRuns * r + k);
       for (std::size_t o = 0; o < outputs.size(); ++o) {
         std::vector<double>& series = states[outputs[o]];
@@ -354,7 +361,7 @@ StatisticalValidation compare_statistics(const Model& model, const RecordSimulat
   out.level = StatisticalValidation::kLevel;
   std::vector<Runs> measured;
   for (std::size_t j : outputs) {
-    const auto column = static_cast<std::size_t>(record.column_of(j));
+    const auto column = static_cast<std::size_t>(record.column_of(output_variable(model, j)));
     Runs series;
     for (const RecordRun& run : record.runs) series.push_back(run.columns[column]);
     out.noise_sd.push_back(std::sqrt(white_noise_variance(series)));
@@ -365,17 +372,23 @@ StatisticalValidation compare_statistics(const Model& model, const RecordSimulat
   for (std::size_t o = 0; o < outputs.size(); ++o) {
     std::vector<Runs> of_output;
     for (const std::vector<Runs>& run : runs) of_output.push_back(run[o]);
-    add_checks(model.states()[outputs[o]].name, measured[o], of_output, record.dt, out.segment,
-               out.noise_sd[o], out.checks);
+    add_checks(model.variables()[output_variable(model, outputs[o])].name, measured[o], of_output,
+               record.dt, out.segment, out.noise_sd[o], out.checks);
   }
-  // With every state measured (and in order), the response predicted a short time ahead from the
-  // measured state: what a wrong parameter changes even where the trajectory cannot be
-  // reproduced.
-  bool every_state = outputs.size() == model.states().size();
-  for (std::size_t o = 0; o < outputs.size() && every_state; ++o) every_state = outputs[o] == o;
+  // With every state measured (the first outputs, in order), the response predicted a short time
+  // ahead from the measured state: what a wrong parameter changes even where the trajectory
+  // cannot be reproduced.
+  const std::size_t states = model.states().size();
+  bool every_state = outputs.size() >= states;
+  for (std::size_t o = 0; o < states && every_state; ++o) every_state = outputs[o] == o;
   if (every_state) {
     const StatisticCheck psd = out.checks.front();  // a copy: the checks grow
-    add_prediction_checks(model, simulator, record, measured, runs, psd, out.checks);
+    const auto first = [&](const std::vector<Runs>& all) {
+      return std::vector<Runs>(all.begin(), all.begin() + static_cast<std::ptrdiff_t>(states));
+    };
+    std::vector<std::vector<Runs>> state_runs;
+    for (const std::vector<Runs>& run : runs) state_runs.push_back(first(run));
+    add_prediction_checks(model, simulator, record, first(measured), state_runs, psd, out.checks);
   }
   set_limits(out.checks, out.level);
   return out;

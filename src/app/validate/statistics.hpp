@@ -11,9 +11,10 @@
 
 namespace momentid {
 
-// Compares the measured states `outputs` (model state indices the record has) of the replayed
-// record with StatisticalValidation::kRuns simulations; not compared (with the reason) when
-// the shortest run has fewer than kMinSegment * kMinSegments rows.
+// Compares the outputs `outputs` (fit.hpp: model states, then measured derivatives, those the
+// record has, in order) of the replayed record with StatisticalValidation::kRuns simulations;
+// not compared (with the reason) when the shortest run has fewer than kMinSegment *
+// kMinSegments rows. The prediction checks need every state among them.
 StatisticalValidation compare_statistics(const Model& model, const RecordSimulator& simulator,
                                          const Replay& replay,
                                          const std::vector<std::size_t>& outputs);
