@@ -2,6 +2,7 @@
 
 #include <ginac/ginac.h>
 
+#include <algorithm>
 #include <cstddef>
 #include <map>
 #include <memory>
@@ -68,6 +69,11 @@ struct Replay {
   Record record;
   std::vector<Interpolation> interpolation;  // per model input
   int substeps = 1;
+  // Held inputs put kinks into the states at the samples (smooth_lag_zero's two forms).
+  bool holds_an_input() const {
+    return std::find(interpolation.begin(), interpolation.end(), Interpolation::kHold) !=
+           interpolation.end();
+  }
   bool substeps_chosen = false;
   // Chosen: how much halving the step changed the trial simulation (relative to each state's
   // spread); at least ReplayOptions::kSubstepTolerance when even the most substeps fell short.

@@ -192,9 +192,7 @@ NoiseBand compare_noise_band(const Model& model, const ParameterValues& paramete
                              const std::vector<std::size_t>& outputs,
                              const std::vector<ComparedRows>& rows) {
   const Record& record = replay.record;
-  // Held inputs put kinks into the states at the samples (smooth_lag_zero's two forms).
-  const bool held = std::find(replay.interpolation.begin(), replay.interpolation.end(),
-                              Interpolation::kHold) != replay.interpolation.end();
+  const bool held = replay.holds_an_input();
   NoiseBand band;
   for (std::size_t i = 0; i < model.inputs().size(); ++i) {
     // A held input is the sequence of values that drove the system (a generator's, a DAC's):

@@ -38,6 +38,6 @@ std::pair<double, double> mean_and_spread(const std::vector<std::vector<double>>
 // autocovariance over the extrapolation from lags 1 to 4 (as identify estimates it, with the
 // form for a series driven by inputs `held` over each sample or for a smooth one:
 // smooth_lag_zero); 0 when the estimate is not positive.
-double white_noise_variance(const std::vector<std::vector<double>>& runs, bool held = true);
+double white_noise_variance(const std::vector<std::vector<double>>& runs, bool held);
 
 }  // namespace momentid

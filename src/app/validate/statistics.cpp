@@ -364,7 +364,7 @@ StatisticalValidation compare_statistics(const Model& model, const RecordSimulat
     const auto column = static_cast<std::size_t>(record.column_of(output_variable(model, j)));
     Runs series;
     for (const RecordRun& run : record.runs) series.push_back(run.columns[column]);
-    out.noise_sd.push_back(std::sqrt(white_noise_variance(series)));
+    out.noise_sd.push_back(std::sqrt(white_noise_variance(series, replay.holds_an_input())));
     measured.push_back(std::move(series));
   }
   const std::vector<std::vector<Runs>> runs =
