@@ -43,13 +43,19 @@ double smooth_square(const Runs& runs, bool held) {
 // The rms that a smooth mean square stands for (0 for one that is not positive).
 double root(double square) { return std::sqrt(std::max(square, 0.0)); }
 
-// One more replay: each input with white noise of standard deviation noise_sd[i] added, the
-// parameters `values`; per output, its difference from the replay over the compared rows, run
-// by run. Throws Error when it blows up.
+// White noise added to each input: of standard deviation sd[i] on input i, drawn from `random`.
+struct InputNoise {
+  const std::vector<double>& sd;
+  std::mt19937_64& random;
+};
+
+// One more replay with the parameters `values`, the inputs as recorded or with `noise` added;
+// per output, its difference from the replay over the compared rows, run by run. Throws Error
+// when it blows up.
 std::vector<Runs> replay_again(const Model& model, const ParameterValues& values,
                                const Replay& replay, const std::vector<std::size_t>& skip,
                                const std::vector<std::size_t>& outputs,
-                               const std::vector<double>& noise_sd, std::mt19937_64& random) {
+                               const InputNoise* noise = nullptr) {
   const Record& record = replay.record;
   const RecordSimulator simulator(model, values, replay.interpolation, record.dt, replay.substeps);
   const std::size_t states = model.states().size();
@@ -57,10 +63,10 @@ std::vector<Runs> replay_again(const Model& model, const ParameterValues& values
   for (std::size_t r = 0; r < record.runs.size(); ++r) {
     const RecordRun& run = record.runs[r];
     std::vector<std::vector<double>> inputs = run_inputs(model, record, run);
-    for (std::size_t i = 0; i < inputs.size(); ++i) {
-      if (!(noise_sd[i] > 0)) continue;
-      std::normal_distribution<double> noise(0.0, noise_sd[i]);
-      for (double& x : inputs[i]) x += noise(random);
+    for (std::size_t i = 0; noise && i < inputs.size(); ++i) {
+      if (!(noise->sd[i] > 0)) continue;
+      std::normal_distribution<double> draw(0.0, noise->sd[i]);
+      for (double& x : inputs[i]) x += draw(noise->random);
     }
     const std::vector<std::vector<double>> simulated =
         simulator.run(inputs, replay.initial[r], run_start(run), run_label(record, r), run.rows());
@@ -130,8 +136,6 @@ std::vector<double> estimate_errors(const Model& model, const ParameterValues& p
   }
   // sensitivity[o](row, a): output o's change per unit of parameter free[a].
   std::vector<Eigen::MatrixXd> sensitivity(outputs.size());
-  std::mt19937_64 unused;
-  const std::vector<double> exact(model.inputs().size(), 0.0);
   for (Eigen::Index a = 0; a < n; ++a) {
     const std::size_t p = free[static_cast<std::size_t>(a)];
     const std::string& name = model.parameters()[p].name;
@@ -139,7 +143,7 @@ std::vector<double> estimate_errors(const Model& model, const ParameterValues& p
     ParameterValues moved = parameters;
     moved[name] = parameters.at(name).value + step;
     const std::vector<Runs> differences =
-        replay_again(model, moved, replay, skip, outputs, exact, unused);
+        replay_again(model, moved, replay, skip, outputs);
     for (std::size_t o = 0; o < outputs.size(); ++o) {
       std::size_t rows = 0;
       for (const std::vector<double>& run : differences[o]) rows += run.size();
@@ -163,20 +167,6 @@ std::vector<double> estimate_errors(const Model& model, const ParameterValues& p
     out.push_back(std::sqrt(squares / mean * chi_square_quantile(q, dof)));
   }
   return out;
-}
-
-// A prediction bound for one more of `values`, at `t` (Student's t at the level,
-// values.size() - 1 degrees of freedom): on a logarithmic scale when every value is positive
-// (the inputs' noise dominates them, whose effect comes in bursts and is skewed), else normal
-// (the white noise's estimation dominates, symmetric about 0).
-double prediction_bound(const std::vector<double>& values, double t) {
-  const auto k = static_cast<double>(values.size());
-  const bool positive = std::all_of(values.begin(), values.end(), [](double v) { return v > 0; });
-  double mean = 0, squares = 0;
-  for (double v : values) mean += (positive ? std::log(v) : v) / k;
-  for (double v : values) squares += std::pow((positive ? std::log(v) : v) - mean, 2);
-  const double bound = mean + t * std::sqrt(squares / (k - 1)) * std::sqrt(1 + 1 / k);
-  return positive ? std::exp(bound) : bound;
 }
 
 }  // namespace
@@ -226,11 +216,12 @@ NoiseBand compare_noise_band(const Model& model, const ParameterValues& paramete
   std::vector<std::vector<double>> simulations;  // per simulation, per output: smooth_square
   for (std::size_t k = 0; k < NoiseBand::kSimulations; ++k) {
     std::mt19937_64 random(kSeed + k);
+    const InputNoise noise{band.input_noise, random};
     std::vector<Runs> differences(outputs.size());
     try {
       if (noisy) {
         differences =
-            replay_again(model, parameters, replay, skip, outputs, band.input_noise, random);
+            replay_again(model, parameters, replay, skip, outputs, &noise);
       }
     } catch (const Error&) {
       continue;

@@ -125,4 +125,14 @@ double white_noise_variance(const std::vector<std::vector<double>>& runs, bool h
   return std::max(0.0, spread * spread * (1 - smooth_lag_zero(rho, held)));
 }
 
+double prediction_bound(const std::vector<double>& values, double t) {
+  const auto k = static_cast<double>(values.size());
+  const bool positive = std::all_of(values.begin(), values.end(), [](double v) { return v > 0; });
+  double mean = 0, squares = 0;
+  for (double v : values) mean += (positive ? std::log(v) : v) / k;
+  for (double v : values) squares += std::pow((positive ? std::log(v) : v) - mean, 2);
+  const double bound = mean + t * std::sqrt(squares / (k - 1)) * std::sqrt(1 + 1 / k);
+  return positive ? std::exp(bound) : bound;
+}
+
 }  // namespace momentid

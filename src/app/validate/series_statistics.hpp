@@ -40,4 +40,10 @@ std::pair<double, double> mean_and_spread(const std::vector<std::vector<double>>
 // smooth_lag_zero); 0 when the estimate is not positive.
 double white_noise_variance(const std::vector<std::vector<double>>& runs, bool held);
 
+// A prediction bound for one more of `values` (at least two), at `t` (Student's t at the level,
+// values.size() - 1 degrees of freedom): on a logarithmic scale when every value is positive
+// (distances, and effects that come in bursts, are skewed), else on a linear one (where the
+// estimation of white noise dominates, symmetric about 0).
+double prediction_bound(const std::vector<double>& values, double t);
+
 }  // namespace momentid

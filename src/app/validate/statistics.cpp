@@ -131,13 +131,9 @@ void set_limits(std::vector<StatisticCheck>& checks, double level) {
   const double t = student_t_quantile(1 - (1 - level) / static_cast<double>(checks.size()), k - 1);
   for (StatisticCheck& c : checks) {
     // Runs that agree exactly have a distance of 0: the smallest double stands for it.
-    std::vector<double> logs;
-    for (double d : c.run_distances) logs.push_back(std::log(std::max(d, DBL_MIN)));
-    double mean = 0, squares = 0;
-    for (double l : logs) mean += l / k;
-    for (double l : logs) squares += (l - mean) * (l - mean);
-    const double sd = std::sqrt(squares / (k - 1));
-    c.limit = std::exp(mean + t * sd * std::sqrt(1 + 1 / k));
+    std::vector<double> distances;
+    for (double d : c.run_distances) distances.push_back(std::max(d, DBL_MIN));
+    c.limit = prediction_bound(distances, t);
   }
 }
 
