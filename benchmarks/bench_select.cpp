@@ -63,7 +63,7 @@ int main(int argc, char** argv) {
       rows, result.candidates.size(), result.scored, repetitions);
   std::printf("%-34s %10s\n", "", "seconds");
   std::printf("%-34s %10.3f\n", "the library's pass (identify)", pass);
-  std::printf("%-34s %10.3f\n", "select", select);
+  std::printf("%-34s %10.3f  (%.2f times the library's pass)\n", "select", select, select / pass);
   std::printf("%-34s %10.3f\n", "the chosen model's pass (identify)", second);
   std::printf("%-34s %10.3f  (%.1f%% of the pass)\n", "the selection (the rest)", selection,
               100 * selection / pass);

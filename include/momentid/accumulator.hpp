@@ -103,8 +103,10 @@ class MomentAccumulator {
   void collapse();
   // Appends the stretches of `other` (finished, the shard after this one's rows) after this
   // one's, closing this one's current run first. Throws Error if `other` is in the middle of a
-  // run or if its moments, hold or channel counts differ.
+  // run or if its moments, hold or channel counts differ. The second form takes the stretches
+  // over rather than copying them.
   void merge(const MomentAccumulator& other);
+  void merge(MomentAccumulator&& other);
 
   // The state of a finished accumulator as bytes, for deserialize() (throws Error in the middle
   // of a run). Layout version 2, integers and IEEE-754 doubles little-endian:

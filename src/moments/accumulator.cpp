@@ -167,12 +167,12 @@ std::string channel_counts(std::size_t states, std::size_t inputs) {
 }  // namespace
 
 void MomentAccumulator::merge(const MomentAccumulator& other) {
-  if (this == &other) {
-    // Appending its own stretches would read them while they grow.
-    const MomentAccumulator copy = other;
-    merge(copy);
-    return;
-  }
+  // A copy, also when `other` is this one: appending its own stretches would read them while they
+  // grow.
+  merge(MomentAccumulator(other));
+}
+
+void MomentAccumulator::merge(MomentAccumulator&& other) {
   if (other.seen_rows_ > 0) {
     throw Error(
         "cannot merge a moment accumulator in the middle of a run: call finish() on it first");
@@ -200,9 +200,12 @@ void MomentAccumulator::merge(const MomentAccumulator& other) {
     }
   }
   finish_run();
-  if (stretches_.back().intervals == 0) stretches_.pop_back();
-  for (const Stretch& s : other.stretches_) {
-    if (s.intervals > 0) stretches_.push_back(s);
+  if (stretches_.back().intervals == 0) {
+    spare_sums_.push_back(std::move(stretches_.back().sums));
+    stretches_.pop_back();
+  }
+  for (Stretch& s : other.stretches_) {
+    if (s.intervals > 0) stretches_.push_back(std::move(s));
   }
   intervals_ += other.intervals_;
   open_stretch();

@@ -122,7 +122,7 @@ class RangeReading {
       ShardState shard = std::move(*done_[next_merge_ - begin_]);
       done_[next_merge_ - begin_].reset();
       try {
-        out_.state->moments.merge(shard.moments);
+        out_.state->moments.merge(std::move(shard.moments));
         out_.state->lags.merge(shard.lags);
         out_.state->rows += shard.rows;
         out_.state->runs += shard.runs;

@@ -138,7 +138,7 @@ RangeResult merge_ranges(std::vector<RangeResult> ranges) {
   for (std::size_t r = 1; r < ranges.size(); ++r) {
     RangeResult& next = ranges[r];
     if (out.error) break;
-    out.state->moments.merge(next.state->moments);
+    out.state->moments.merge(std::move(next.state->moments));
     out.state->lags.merge(next.state->lags);
     out.state->rows += next.state->rows;
     out.state->runs += next.state->runs;

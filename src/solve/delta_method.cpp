@@ -17,7 +17,6 @@ using Eigen::VectorXd;
 MatrixXd batch_deviations(const MomentEstimates& estimates) {
   const auto b = static_cast<Index>(estimates.batch_means.size());
   const auto k = static_cast<Index>(estimates.mean.size());
-  MatrixXd means(b, k);
   VectorXd length = VectorXd::Ones(b);
   for (Index i = 0; i < b; ++i) {
     const auto row = static_cast<std::size_t>(i);
@@ -26,16 +25,34 @@ MatrixXd batch_deviations(const MomentEstimates& estimates) {
                                   std::to_string(estimates.batch_means[row].size()) +
                                   " means for " + std::to_string(k) + " moments");
     }
-    for (Index j = 0; j < k; ++j)
-      means(i, j) = estimates.batch_means[row][static_cast<std::size_t>(j)];
     if (!estimates.batch_intervals.empty()) {
       length(i) = static_cast<double>(estimates.batch_intervals[row]);
     }
   }
-  if (b == 0) return means;
+  MatrixXd out(b, k);
+  if (b == 0) return out;
   length /= length.mean();
-  const Eigen::RowVectorXd mean = (length.transpose() * means) / static_cast<double>(b);
-  return length.asDiagonal() * (means.rowwise() - mean);
+  // The batch means are stored batch by batch and the series go down columns: the means are
+  // summed along the batches' rows, and the series filled in tiles small enough for the cache
+  // (the lagged equations read thousands of moments over a thousand batches).
+  std::vector<double> mean(static_cast<std::size_t>(k), 0.0);
+  for (Index i = 0; i < b; ++i) {
+    const std::vector<double>& row = estimates.batch_means[static_cast<std::size_t>(i)];
+    for (std::size_t j = 0; j < mean.size(); ++j) mean[j] += length(i) * row[j];
+  }
+  for (double& m : mean) m /= static_cast<double>(b);
+  constexpr Index kTile = 64;
+  for (Index i0 = 0; i0 < b; i0 += kTile) {
+    const Index i1 = std::min(b, i0 + kTile);
+    for (Index j = 0; j < k; ++j) {
+      const auto column = static_cast<std::size_t>(j);
+      for (Index i = i0; i < i1; ++i) {
+        out(i, j) =
+            length(i) * (estimates.batch_means[static_cast<std::size_t>(i)][column] - mean[column]);
+      }
+    }
+  }
+  return out;
 }
 
 MatrixXd sensitivity(const LinearSystem& system, const VectorXd& scale,

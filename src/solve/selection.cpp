@@ -18,7 +18,7 @@ using Eigen::MatrixXd;
 using Eigen::VectorXd;
 
 FixedWeighting::FixedWeighting(const MomentRows& rows, std::size_t parameters,
-                               const MomentEstimates& estimates,
+                               const MomentEstimates& estimates, const MatrixXd& deviations,
                                const std::vector<double>& moment_variance, bool normalise_rows,
                                const std::string& what) {
   const auto params = static_cast<Index>(parameters);
@@ -35,7 +35,6 @@ FixedWeighting::FixedWeighting(const MomentRows& rows, std::size_t parameters,
     throw Error(what + ": weighting the library's " + std::to_string(rows.a.size()) +
                 " equations needs more batches than equations, found " + std::to_string(batches));
   }
-  const MatrixXd deviations = batch_deviations(estimates);
   const KnownCovariance known = diagonal_covariance(moment_variance, estimates);
   const OptimalWeighting gmm = optimal_weighting(system, ls, deviations, known, ls.theta);
   const JTest test = j_test(system, ls, gmm, deviations, known, batches);

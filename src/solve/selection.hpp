@@ -21,10 +21,11 @@ class FixedWeighting {
   // weighting of solve_rows is. Throws Error when the library's equations cannot be weighted
   // (rank-deficient, fewer batches than rows plus two, no more equations than parameters, or no
   // sampling error to calibrate J by): `what` names the library in the message.
-  // `moment_variance`: as SolveOptions::moment_variance.
+  // `deviations`: the moments' batch series, batch_deviations(estimates), which the weightings
+  // of one library's windows share. `moment_variance`: as SolveOptions::moment_variance.
   FixedWeighting(const MomentRows& rows, std::size_t parameters, const MomentEstimates& estimates,
-                 const std::vector<double>& moment_variance, bool normalise_rows,
-                 const std::string& what);
+                 const Eigen::MatrixXd& deviations, const std::vector<double>& moment_variance,
+                 bool normalise_rows, const std::string& what);
 
   // J of the subset `kept` (a flag per parameter): the library's calibrated J test statistic
   // (j_test) plus the Wald statistic of the parameters the subset drops, on the library's

@@ -13,6 +13,7 @@
 #include "common/number.hpp"
 #include "momentid/algebra_lock.hpp"
 #include "momentid/validate.hpp"
+#include "solve/delta_method.hpp"
 #include "solve/distributions.hpp"
 #include "solve/fixed.hpp"
 #include "solve/selection.hpp"
@@ -257,9 +258,14 @@ struct Scoring {
   std::vector<bool> always;
   std::vector<std::size_t> free_candidates;
   double penalty = 0;
+  Eigen::MatrixXd deviations;  // the library's moments' batch series, for every window
 
   Scoring(const Model& m, const SelectResult& out, const std::vector<std::optional<double>>& f)
-      : model(m), library(out.library), fixed(f), penalty(out.penalty) {
+      : model(m),
+        library(out.library),
+        fixed(f),
+        penalty(out.penalty),
+        deviations(batch_deviations(library.data.estimates)) {
     for (std::size_t p = 0; p < fixed.size(); ++p) {
       if (fixed[p]) continue;
       const bool candidate =
@@ -271,7 +277,7 @@ struct Scoring {
   // The fixed weighting of the equations of `system`.
   FixedWeighting weighting(const LaggedSystem& system) const {
     return FixedWeighting(free_rows(library, system, fixed), always.size(), library.data.estimates,
-                          library.lagged->moment_variance, true,
+                          deviations, library.lagged->moment_variance, true,
                           "term selection of model " + model.name());
   }
   Scorer scorer(const FixedWeighting& w) const {
