@@ -1,11 +1,12 @@
 // The warnings of identify that fire when they should and stay quiet when they should: a model
 // that the J test rejects, an identity violated, a sensor offset, weakly determined and strongly
-// correlated estimates.
+// correlated estimates, standard errors on few degrees of freedom.
 
 #include <doctest/doctest.h>
 
 #include <algorithm>
 #include <cmath>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -65,6 +66,32 @@ TEST_SUITE("warnings") {
     CHECK(doubts(ls).empty());
     CHECK(status(ls) == Status::kUntested);
     CHECK(mentions(warnings(ls), "no test checked the model: least squares was asked for"));
+  }
+
+  TEST_CASE("standard errors on fewer than 10 degrees of freedom are a doubt") {
+    // Sensor noise of 2% on y and v: the lagged equations, whose errors come from the batches.
+    Record record(20000);
+    std::mt19937_64 random(11);
+    for (const char* name : {"y", "v"}) {
+      std::vector<double>& x = record.column(name);
+      double squares = 0;
+      for (double value : x) squares += value * value;
+      std::normal_distribution<double> noise(0, 0.02 * std::sqrt(squares / double(x.size())));
+      for (double& value : x) value += noise(random);
+    }
+    const Model model = model_file("duffing.mom");
+    const IdentifyResult enough = identify(model, record.source(), {});
+    CHECK(enough.estimate.main().dof >= 10);
+    CHECK_FALSE(mentions(doubts(enough), "degrees of freedom"));
+    // Eight batches: the batch means taken as independent, on 7 degrees of freedom.
+    const IdentifyResult few = identify(model, record.source(), {.batches = 8});
+    MESSAGE("degrees of freedom: " << enough.estimate.main().dof << ", "
+                                   << few.estimate.main().dof);
+    REQUIRE(few.estimate.main().dof < 10);
+    CHECK(mentions(doubts(few),
+                   "the standard errors rest on 7 degrees of freedom (their long-run "
+                   "covariance, from 8 batches): they are rough"));
+    CHECK(status(few) == Status::kDoubtful);
   }
 
   TEST_CASE("a square system is untested, and says why") {

@@ -339,7 +339,7 @@ std::string format_json(const IdentifyResult& result);
 // (p < 0.01), a zero-lag check that does, a law check beyond kLawZ, a stationarity identity
 // violated (|z| > 4), a state with
 // a mean of more than 0.2 of its standard deviation when the model is symmetric and its inputs have
-// none.
+// none, standard errors that rest on fewer than 10 degrees of freedom.
 std::vector<std::string> doubts(const IdentifyResult& result);
 // The solver's status; when it is kOk, kDoubtful when there are doubts, else kUntested when no
 // J test was made.

@@ -128,9 +128,6 @@ void warn_about_errors(Estimate& out, const LongRunCovariance& errors) {
                            " batches: the standard errors take the batch means as independent, "
                            "which overstates them for records without noise (use a longer record "
                            "or more batches)");
-  } else if (errors.dof < 10) {
-    out.warnings.push_back("the standard errors rest on " + format_number(errors.dof) +
-                           " degrees of freedom: they are rough (use a longer record)");
   }
 }
 

@@ -40,7 +40,9 @@ std::vector<std::vector<double>> rows_of(const Eigen::MatrixXd& matrix);
 // `estimate` with its standard error and the interval estimate -+ t975 standard errors.
 void set_error(ParameterEstimate& estimate, double std_error, double t975);
 
-// The warnings that say the standard errors are rough.
+// The warning that says the standard errors take the batch means as independent: too few
+// batches for the long-run covariance's spectral fit. (identify's doubts name errors that rest on
+// few degrees of freedom.)
 void warn_about_errors(Estimate& out, const LongRunCovariance& errors);
 
 }  // namespace momentid

@@ -142,8 +142,7 @@ std::vector<double> estimate_errors(const Model& model, const ParameterValues& p
     const double step = std::sqrt(covariance[p][p]);
     ParameterValues moved = parameters;
     moved[name] = parameters.at(name).value + step;
-    const std::vector<Runs> differences =
-        replay_again(model, moved, replay, skip, outputs);
+    const std::vector<Runs> differences = replay_again(model, moved, replay, skip, outputs);
     for (std::size_t o = 0; o < outputs.size(); ++o) {
       std::size_t rows = 0;
       for (const std::vector<double>& run : differences[o]) rows += run.size();
@@ -220,8 +219,7 @@ NoiseBand compare_noise_band(const Model& model, const ParameterValues& paramete
     std::vector<Runs> differences(outputs.size());
     try {
       if (noisy) {
-        differences =
-            replay_again(model, parameters, replay, skip, outputs, &noise);
+        differences = replay_again(model, parameters, replay, skip, outputs, &noise);
       }
     } catch (const Error&) {
       continue;
