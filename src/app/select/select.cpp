@@ -178,12 +178,10 @@ void validate_best(SelectResult& out, const DataSource& source, const SelectOpti
     const Model model =
         parse_model(subset_model_text(out, out.ranking[rank].kept, estimated), library.file());
     SelectResult::Validated entry{rank};
-    // The estimates' errors widen the noise band, as `validate --estimates FILE` takes them.
+    // The estimates' errors widen the noise band, as `validate --estimates FILE` takes them
+    // (the subset's model and the one written from it have the same parameters).
     validation.covariance.clear();
-    if (estimated.estimate.usable() &&
-        estimated.model->parameters().size() == model.parameters().size()) {
-      validation.covariance = estimated.estimate.main().covariance();
-    }
+    if (estimated.estimate.usable()) validation.covariance = estimated.estimate.main().covariance();
     try {
       const ValidateResult result = validate(model, *options.validation, validation);
       entry.consistent = result.consistent;
