@@ -238,6 +238,22 @@ struct IdentifyResult {
     bool by_default = false;
   };
   std::optional<Integration> integration;
+  // Where the record shows some states in no way (latent states, docs/latent-states.md): the
+  // equations with them eliminated, whose coefficients the lagged pass estimated (lagged->system
+  // reads coefficient_model), and the parameters found from the coefficients c by minimum
+  // distance: the p that brings the coefficients f(p) nearest c in the metric of c's covariance
+  // V. `distance`, Q = (c - f(p))' V^-1 (c - f(p)) at p, tests the restrictions that the model
+  // puts on the coefficients: chi-square on `dof` (coefficients less parameters).
+  struct Latent {
+    std::vector<std::string> states;
+    std::string equations;  // the elimination, as `momentid derive` prints it
+    std::shared_ptr<const Model> coefficient_model;
+    std::vector<ParameterEstimate> coefficients;  // the main fit's, named by their expressions
+    std::optional<double> distance, pvalue;
+    int dof = 0;
+    bool converged = false;
+  };
+  std::optional<Latent> latent;
   // The identified model runs away from its equilibrium (runaway()): a doubt.
   std::optional<Runaway> runaway;
   // The law check (docs/measured-data.md, "The law check"): for a damping term of quadratic

@@ -84,6 +84,9 @@ struct Term {
   int parameter = -1;   // index into Model::parameters(), or -1
   Monomial monomial;    // over Model::variables()
   int derivative = -1;  // index of the state whose time derivative is a factor, or -1
+  // Time derivatives taken of the whole term: d^order/dt^order (y^3) in an equation with latent
+  // states eliminated (latent.hpp), which only the lagged equations read; 0 in a model as parsed.
+  int order = 0;
 };
 
 // One equation of a model, `lhs = rhs`. Constants are already replaced by their values.
@@ -113,6 +116,8 @@ struct MultiplierSet {
   std::vector<Monomial> monomials;
   SourceLocation where;
 };
+
+struct Elimination;
 
 // A model read from the model language (grammar/README.md) and checked for meaning: every name
 // declared once, equations polynomial in the states, inputs, derivatives and functions
@@ -192,6 +197,7 @@ class Model {
 
  private:
   friend class ModelBuilder;
+  friend Model coefficient_model(const Model& model, const Elimination& elimination);
   detail::AlgebraSpanStart algebra_start_;  // copies and destruction hold the AlgebraLock
   std::string name_, title_, file_, text_;
   std::vector<Declaration> states_, inputs_, parameters_, constants_;

@@ -227,6 +227,9 @@ class IdentifyResult(Fit):
       response (NaN on the rows before each run's skip, where the response still carries the
       initial state), arrays in a dict, or a DataFrame when the record was one.
     plot_engineering(): the restoring force and the backbone drawn (momentid.plots).
+    latent: for a model with states the record does not show (docs/latent-states.md), the
+      `latent` section of the JSON: the states, the equations without them, their coefficients'
+      estimates and the minimum distance's test; None otherwise.
 
     IdentifyResult(text, value) reads a saved result of the program as well: `value` is its
     JSON text or the dict json.load() made of it (text may be ""); `model` the Model it is of,
@@ -260,6 +263,7 @@ class IdentifyResult(Fit):
         self.nobs = self.diagnostics["samples"]
         self.jval = self.diagnostics["j_statistic"]
         self.engineering = self._dict.get("engineering", {})
+        self.latent = self._dict.get("latent")
         self.natural_frequencies, self.damping_ratios = (
             _read_only(_np.reshape([[_number(m["estimate"]), _number(m["std_error"])]
                                     for m in self.engineering.get(key, [])], (-1, 2)))

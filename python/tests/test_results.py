@@ -433,3 +433,19 @@ def test_check_values_are_the_programs_json(case, cli, cli_csv, duffing):
     assert result.warnings == expected["warnings"]
     assert bool(result.identities) == with_model
     assert str(result) == cli("check", *files, *options)
+
+
+def test_latent_states_from_arrays():
+    """The filter's output z has no array: identify eliminates it and says so in `latent`."""
+    model = momentid.Model.from_file(str(ROOT / "models" / "filtered_duffing.mom"))
+    record = momentid.simulate(model, samples=100_000, inputs={"x": INPUT}, noise={"y": 0.02})
+    result = momentid.identify(model, {"y": record["y"], "x": record["x"]}, dt=0.01,
+                               input_hold="zoh")
+    assert result.latent["states"] == ["z"]
+    assert result.latent["dof"] == 1 and result.latent["converged"]
+    assert result.status == "ok"
+    truth = {"c": 0.5, "k": 4.0, "eps": 1.0, "a": 2.0, "g": 1.0}
+    for name, value in truth.items():
+        assert abs(result.estimates[name] - value) < 4 * result.std_errors[name], name
+    assert result.to_dict()["latent"]["coefficients"].keys() == {
+        "-c - a", "-c*a - k", "-k*a", "-eps", "-eps*a", "2*g"}

@@ -8,6 +8,7 @@
 
 #include "cli/commands.hpp"
 #include "momentid/lagged.hpp"
+#include "momentid/latent.hpp"
 #include "momentid/model.hpp"
 #include "momentid/option_table.hpp"
 #include "momentid/writer.hpp"
@@ -33,6 +34,16 @@ int run_lagged(const DeriveCommand& command, const Model& model) {
   }
   if (!command.measured.empty()) {
     options.measured = variable_flags(model, command.measured, "--measured");
+    const Elimination elimination = eliminate_latent(model, options.measured);
+    if (!elimination.latent.empty()) {
+      if (command.format == "latex") {
+        throw UsageError("format",
+                         "the elimination of latent states prints as text or json, not latex");
+      }
+      write_whole_file("-", command.format == "json" ? format_json(model, elimination)
+                                                     : format_text(model, elimination));
+      return 0;
+    }
   }
   const LaggedSystem system = derive_lagged(model, options);
   write_whole_file("-", command.format == "latex"  ? format_latex(system)

@@ -102,7 +102,7 @@ std::pair<LagFunction, numeric> LagDeriver::lag_function(const Equation& eq, con
       read(o.base, o.order + 1, 1);
     }
   }
-  if (derivatives.empty()) return {{instrument, measured, 0}, scale};
+  if (derivatives.empty()) return {{instrument, measured, t.order}, scale};
   const auto [base, order] = derivatives.front();
   const int power = measured[base];
   measured[base] = 0;
@@ -114,7 +114,7 @@ std::pair<LagFunction, numeric> LagDeriver::lag_function(const Equation& eq, con
     // negative k an integral, which derive_lagged differentiates away.
     Monomial function(variables_, 0);
     function[base] = power + 1;
-    return {{instrument, function, order}, scale / (power + 1)};
+    return {{instrument, function, order + t.order}, scale / (power + 1)};
   }
   reject_term(eq, t);
 }

@@ -97,6 +97,15 @@ LaggedEquation lagged_equation(const Model& model, const LagDeriver& deriver, st
   for (std::size_t i = 0; i < terms.size(); ++i) {
     auto& [f, w] = terms[i];
     f.order -= lowest;
+    if (f.order > kMaxLagOrder && eq.terms[i].order > 0) {
+      throw ModelError(eq.where, "term '" + term_text(model, eq.terms[i]) + "' of equation " +
+                                     eq.name() + " needs the derivative of order " +
+                                     std::to_string(f.order) + " in the lag, above " +
+                                     std::to_string(kMaxLagOrder) +
+                                     ": the latent states' elimination raised the equation's "
+                                     "order beyond what the lagged equations read (measure one "
+                                     "of the latent states)");
+    }
     if (f.order > kMaxLagOrder) {
       const std::string integrals = deriver.integral_states();
       throw FormStatesError(

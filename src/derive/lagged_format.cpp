@@ -36,6 +36,16 @@ std::string term_text(const Model& model, const Term& t) {
     factors.push_back(format_monomial(model, t.monomial));
   }
   if (t.derivative >= 0) factors.push_back(model.states()[t.derivative].name + "'");
+  if (t.order > 0) {
+    // d^k/dt^k of the factors after the number and the parameter.
+    const std::size_t first = (a != 1 ? 1 : 0) + (t.parameter >= 0 ? 1 : 0);
+    std::string signal;
+    for (std::size_t i = first; i < factors.size(); ++i)
+      signal += (i > first ? "*" : "") + factors[i];
+    const bool single = factors.size() == first + 1 && signal.find('^') == std::string::npos;
+    factors.resize(first);
+    factors.push_back((single ? signal : "(" + signal + ")") + primes(t.order));
+  }
   if (factors.empty()) factors.push_back("1");
   for (std::size_t i = 0; i < factors.size(); ++i) out += (i ? "*" : "") + factors[i];
   return out;

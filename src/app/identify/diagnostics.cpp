@@ -218,6 +218,21 @@ std::vector<std::string> doubts(const IdentifyResult& r) {
                   "the two with 'momentid select'");
   }
   if (r.runaway) out.push_back(runaway_text(*r.runaway));
+  if (const auto& l = r.latent; l && e.usable()) {
+    if (!l->converged) {
+      out.push_back(
+          "the search for the parameters from the coefficients of the equations without the "
+          "latent states did not converge from the model's nominal values: give values nearer "
+          "the truth in the model (docs/latent-states.md)");
+    } else if (l->pvalue && *l->pvalue < kJRejection) {
+      out.push_back(
+          "the coefficients of the equations without the latent states contradict "
+          "the model's relations between them (Q = " +
+          number(*l->distance, "%.4g") + " on " + std::to_string(l->dof) +
+          " degrees of freedom, p = " + number(*l->pvalue, "%.2g") +
+          "): the latent dynamics may be wrong (docs/latent-states.md)");
+    }
+  }
   const Fit& main = e.main();
   const bool has_errors =
       std::any_of(main.parameters.begin(), main.parameters.end(), [](const ParameterEstimate& p) {

@@ -6,6 +6,7 @@
 
 #include "app/identify/integrate.hpp"
 #include "app/identify/lagged.hpp"
+#include "app/identify/latent.hpp"
 #include "app/identify/law_check.hpp"
 #include "app/identify/plan.hpp"
 #include "app/identify/zero_lag.hpp"
@@ -31,7 +32,11 @@ IdentifyResult identify_with(const Model& model, const DataSource& source,
       identify_zero_lag(result, source, options);
       break;
     case EquationKind::kLagged:
-      identify_lagged(result, source, options, record.present);
+      if (!latent_model(model, record.present)) {
+        identify_lagged(result, source, options, record.present);
+      } else {
+        identify_latent(result, source, options, record.present);
+      }
       break;
   }
   result.runaway = runaway(result);

@@ -20,11 +20,27 @@ bool channels_derivable(const Model& model, const std::vector<bool>& measured) {
 
 }  // namespace
 
+bool latent_model(const Model& model, const std::vector<bool>& measured) {
+  const std::vector<VariableReading> readings = variable_readings(model, measured);
+  const std::size_t states = model.states().size(), inputs = model.inputs().size();
+  const auto shown = [](const VariableReading& r) { return r.base >= 0; };
+  const auto end = readings.begin() + static_cast<long>(states);
+  return std::any_of(readings.begin(), end, shown) && !std::all_of(readings.begin(), end, shown) &&
+         std::all_of(measured.begin() + static_cast<long>(states),
+                     measured.begin() + static_cast<long>(states + inputs),
+                     [](bool m) { return m; });
+}
+
 EquationChoice choose_equations(const Model& model, const RecordSurvey& record,
                                 const IdentifyOptions& options) {
   using enum EquationKind;
   const std::vector<bool>& measured = record.present;
   if (options.method == Method::kZeroLag) return {kZeroLag, "asked for"};
+  if (latent_model(model, measured)) {
+    return {kLagged,
+            "the record shows some states in no way: the equations with these latent "
+            "states eliminated are lagged ones (docs/latent-states.md)"};
+  }
   if (options.method == Method::kLagged) return {kLagged, "asked for"};
   if (options.lags || options.instruments) return {kLagged, "lags or instruments were given"};
   if (!options.integrate.empty())

@@ -30,6 +30,12 @@ struct EquationChoice {
 // options (multipliers, a degree, extrapolate) on records with every state. Models with abs and
 // sign terms alike: a record that lacks the column of such a term's argument, while showing
 // every state, gets the lagged equations, which refuse the term by name.
+// Whether the channels flagged in `measured` (per channel) leave some state latent, shown
+// neither as a column nor through a kinematic equation or a derivative column
+// (docs/latent-states.md), while they show another state and hold every input: a record whose
+// columns miss the model altogether gets the message naming the missing column instead.
+bool latent_model(const Model& model, const std::vector<bool>& measured);
+
 EquationChoice choose_equations(const Model& model, const RecordSurvey& record,
                                 const IdentifyOptions& options);
 

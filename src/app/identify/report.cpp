@@ -136,9 +136,11 @@ void diagnostics_text(std::ostringstream& out, const IdentifyResult& r) {
   const std::vector<std::string> all = warnings(r);
   if (all.empty()) out << "  warnings: none\n";
   for (const std::string& w : all) out << "  warning: " << w << "\n";
+  // With latent states, the equations are in the coefficients of the equations without them.
   out << "  equations: " << e.rows << ", rank " << e.rank << " of "
-      << e.least_squares.parameters.size() << ", condition number " << number(e.condition, "%.3g")
-      << "\n";
+      << (r.latent ? std::to_string(r.latent->coefficients.size()) + " coefficients"
+                   : std::to_string(e.least_squares.parameters.size()))
+      << ", condition number " << number(e.condition, "%.3g") << "\n";
   out << "  batches: " << e.batches;
   if (e.least_squares.dof > 0) {
     const bool ends =
@@ -424,6 +426,25 @@ std::string integration_text(const IdentifyResult::Integration& f) {
   return out;
 }
 
+// The latent states' section: the equations without them, their coefficients' estimates and
+// the minimum distance that gave the parameters.
+std::string latent_text(const IdentifyResult::Latent& l) {
+  std::string out = l.equations;
+  out += "coefficients estimated (lagged equations of the equations without them)\n";
+  for (const ParameterEstimate& c : l.coefficients) {
+    out += "  " + c.name + " = " + number(c.estimate, "%.6g") + " +- " +
+           number(c.std_error, "%.3g") + "\n";
+  }
+  out += "parameters from the coefficients by minimum distance";
+  if (l.distance && l.pvalue) {
+    out += ": Q = " + number(*l.distance, "%.4g") + " on " + std::to_string(l.dof) +
+           (l.dof == 1 ? " degree" : " degrees") + " of freedom, p = " + number(*l.pvalue, "%.3g");
+  } else if (l.dof == 0) {
+    out += " (as many coefficients as parameters: no test)";
+  }
+  return out + "\n";
+}
+
 }  // namespace
 
 std::string format_text(const IdentifyResult& r) {
@@ -440,6 +461,7 @@ std::string format_text(const IdentifyResult& r) {
   if (r.lagged && !r.lagged->cut.empty()) out << "  " << r.lagged->cut << "\n";
   if (r.lagged && !noise_text(r).empty()) out << noise_text(r) << "\n";
   if (r.integration) out << integration_text(*r.integration) << "\n";
+  if (r.latent) out << latent_text(*r.latent);
   // The derivative columns' means apart: they are removed whether or not --center names them.
   std::string asked, offsets;
   for (const auto& [name, mean] : r.centered) {
@@ -491,6 +513,15 @@ nlohmann::ordered_json json_value(const IdentifyResult& r) {
                           {"band", f->band},
                           {"settle_rows", f->settle},
                           {"by_default", f->by_default}};
+  }
+  if (const auto& l = r.latent) {
+    out["latent"] = {{"states", l->states},
+                     {"equations", l->equations},
+                     {"coefficients", parameters_json(l->coefficients)},
+                     {"distance", l->distance ? json_value(*l->distance) : Json()},
+                     {"dof", l->dof},
+                     {"pvalue", l->pvalue ? json_value(*l->pvalue) : Json()},
+                     {"converged", l->converged}};
   }
   if (!r.centered.empty()) {
     Json& centered = out["centered"] = Json::object();

@@ -1,0 +1,294 @@
+// Models with latent states (latent.hpp): the coefficients of the equations without them, and
+// the parameters from the coefficients by minimum distance.
+//
+// With c the coefficients' estimates, V their covariance and f(p) the coefficients as functions
+// of the free parameters, the parameters minimise Q(p) = (c - f(p))' V^-1 (c - f(p))
+// (Levenberg-Marquardt from the model's nominal values); their covariance is (F' V^-1 F)^-1, F
+// the Jacobian of f there (the delta method), and Q at the minimum is chi-square on
+// coefficients - parameters degrees of freedom when the model's restrictions on the
+// coefficients hold.
+
+#include "app/identify/latent.hpp"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <memory>
+
+#include "app/identify/lagged.hpp"
+#include "momentid/algebra_lock.hpp"
+#include "momentid/lagged.hpp"
+#include "momentid/latent.hpp"
+#include "solve/distributions.hpp"
+
+namespace momentid {
+namespace {
+
+using Eigen::Index;
+using Eigen::MatrixXd;
+using Eigen::VectorXd;
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// The coefficients f(p) and their Jacobian, evaluated at values of the free parameters.
+class CoefficientMap {
+ public:
+  CoefficientMap(const Model& model, const Elimination& e) : elimination_(e) {
+    for (int p : e.parameters) symbols_.push_back(model.parameter_symbol(p));
+    for (const GiNaC::ex& c : e.coefficients) {
+      std::vector<GiNaC::ex> row;
+      for (const GiNaC::symbol& s : symbols_) row.push_back(c.diff(s));
+      jacobian_.push_back(std::move(row));
+    }
+  }
+
+  Index parameters() const { return static_cast<Index>(symbols_.size()); }
+  Index coefficients() const { return static_cast<Index>(elimination_.coefficients.size()); }
+
+  VectorXd value(const VectorXd& p) const {
+    const GiNaC::exmap at = point(p);
+    VectorXd out(coefficients());
+    for (Index i = 0; i < out.size(); ++i) {
+      out(i) = number(elimination_.coefficients[static_cast<std::size_t>(i)], at);
+    }
+    return out;
+  }
+
+  MatrixXd jacobian(const VectorXd& p) const {
+    const GiNaC::exmap at = point(p);
+    MatrixXd out(coefficients(), parameters());
+    for (Index i = 0; i < out.rows(); ++i) {
+      for (Index k = 0; k < out.cols(); ++k) {
+        out(i, k) = number(jacobian_[static_cast<std::size_t>(i)][static_cast<std::size_t>(k)], at);
+      }
+    }
+    return out;
+  }
+
+ private:
+  GiNaC::exmap point(const VectorXd& p) const {
+    GiNaC::exmap at;
+    for (Index k = 0; k < p.size(); ++k) at[symbols_[static_cast<std::size_t>(k)]] = p(k);
+    return at;
+  }
+  static double number(const GiNaC::ex& e, const GiNaC::exmap& at) {
+    const GiNaC::ex value = e.subs(at).evalf();
+    return GiNaC::is_a<GiNaC::numeric>(value) ? GiNaC::ex_to<GiNaC::numeric>(value).to_double()
+                                              : kNaN;
+  }
+
+  const Elimination& elimination_;
+  std::vector<GiNaC::symbol> symbols_;
+  std::vector<std::vector<GiNaC::ex>> jacobian_;
+};
+
+// The minimum-distance fit of one fit of the coefficients.
+struct Distance {
+  VectorXd p;
+  MatrixXd covariance;  // NaN when the coefficients' covariance is unknown
+  double q = kNaN;
+  bool converged = false;
+};
+
+// V^-1 from the coefficients' covariance, its negligible directions dropped; empty when an
+// error is unknown.
+MatrixXd inverse_covariance(const Fit& coefficients) {
+  const std::vector<std::vector<double>> v = coefficients.covariance();
+  const auto n = static_cast<Index>(v.size());
+  MatrixXd out(n, n);
+  for (Index i = 0; i < n; ++i) {
+    for (Index j = 0; j < n; ++j) {
+      out(i, j) = v[static_cast<std::size_t>(i)][static_cast<std::size_t>(j)];
+      if (!std::isfinite(out(i, j))) return {};
+    }
+  }
+  const Eigen::SelfAdjointEigenSolver<MatrixXd> eigen(out);
+  const VectorXd& lambda = eigen.eigenvalues();
+  VectorXd inverse = VectorXd::Zero(n);
+  for (Index i = 0; i < n; ++i) {
+    if (lambda(i) > 1e-12 * lambda.maxCoeff()) inverse(i) = 1 / lambda(i);
+  }
+  return eigen.eigenvectors() * inverse.asDiagonal() * eigen.eigenvectors().transpose();
+}
+
+Distance minimum_distance(const CoefficientMap& f, const Fit& coefficients, VectorXd start) {
+  Distance out;
+  VectorXd c(f.coefficients());
+  for (Index i = 0; i < c.size(); ++i) {
+    c(i) = coefficients.parameters[static_cast<std::size_t>(i)].estimate;
+  }
+  MatrixXd w = inverse_covariance(coefficients);
+  const bool weighted = w.size() > 0;
+  if (!weighted) w = MatrixXd::Identity(c.size(), c.size());
+  const auto cost = [&](const VectorXd& p) {
+    const VectorXd r = c - f.value(p);
+    return r.allFinite() ? r.dot(w * r) : std::numeric_limits<double>::infinity();
+  };
+  VectorXd p = std::move(start);
+  double now = cost(p), damping = 1e-3;
+  constexpr int kIterations = 500;
+  for (int iteration = 0; iteration < kIterations && std::isfinite(now); ++iteration) {
+    const MatrixXd jac = f.jacobian(p);
+    const MatrixXd normal = jac.transpose() * w * jac;
+    const VectorXd gradient = jac.transpose() * w * (c - f.value(p));
+    bool stepped = false;
+    while (damping < 1e12) {
+      MatrixXd damped = normal;
+      damped.diagonal() += damping * normal.diagonal().cwiseMax(1e-12);
+      const VectorXd step = damped.ldlt().solve(gradient);
+      const double next = cost(p + step);
+      if (next <= now) {
+        const bool small = step.norm() <= 1e-12 * (1 + p.norm());
+        p += step;
+        stepped = true;
+        out.converged = small || now - next <= 1e-14 * (1 + now);
+        now = next;
+        damping = std::max(damping / 4, 1e-12);
+        break;
+      }
+      damping *= 8;
+    }
+    if (!stepped || out.converged) {
+      out.converged = out.converged || stepped || now == 0;
+      break;
+    }
+  }
+  out.p = p;
+  out.q = weighted ? now : kNaN;
+  const MatrixXd jac = f.jacobian(p);
+  const MatrixXd information = jac.transpose() * w * jac;
+  const Eigen::FullPivLU<MatrixXd> lu(information);
+  out.covariance = weighted && lu.isInvertible() ? MatrixXd(lu.inverse())
+                                                 : MatrixXd::Constant(p.size(), p.size(), kNaN);
+  return out;
+}
+
+// The parameters' fit from the coefficients' fit.
+Fit physical_fit(const Model& model, const Elimination& e, const Fit& coefficients,
+                 const Distance& d) {
+  Fit out;
+  out.dof = coefficients.dof;
+  out.objective = coefficients.objective;
+  const double t = student_t_quantile(0.975, std::max(1.0, coefficients.dof));
+  std::vector<Index> at(model.parameters().size(), -1);
+  for (std::size_t k = 0; k < e.parameters.size(); ++k) {
+    at[static_cast<std::size_t>(e.parameters[k])] = static_cast<Index>(k);
+  }
+  for (std::size_t p = 0; p < model.parameters().size(); ++p) {
+    ParameterEstimate estimate{.name = model.parameters()[p].name};
+    if (const auto known = e.fixed.find(static_cast<int>(p)); known != e.fixed.end()) {
+      estimate.estimate = estimate.ci_low = estimate.ci_high = known->second.to_double();
+      estimate.fixed = true;
+    } else {
+      const Index k = at[p];
+      estimate.estimate = d.p(k);
+      estimate.std_error = std::sqrt(d.covariance(k, k));
+      estimate.ci_low = estimate.estimate - t * estimate.std_error;
+      estimate.ci_high = estimate.estimate + t * estimate.std_error;
+    }
+    out.parameters.push_back(std::move(estimate));
+  }
+  if (!coefficients.correlation.empty()) {
+    const std::size_t n = out.parameters.size();
+    out.correlation.assign(n, std::vector<double>(n, kNaN));
+    for (std::size_t i = 0; i < n; ++i) {
+      for (std::size_t j = 0; j < n; ++j) {
+        if (at[i] < 0 || at[j] < 0) continue;
+        out.correlation[i][j] = d.covariance(at[i], at[j]) /
+                                (out.parameters[i].std_error * out.parameters[j].std_error);
+      }
+    }
+  }
+  return out;
+}
+
+// ModelError at the first parameter the coefficients leave undetermined.
+void refuse_undetermined(const Model& model, const Elimination& e) {
+  if (e.undetermined.empty()) return;
+  const Elimination::Undetermined& u = e.undetermined.front();
+  std::string names;
+  for (std::size_t i = 0; i < u.parameters.size(); ++i) {
+    names += (i == 0                         ? ""
+              : i + 1 == u.parameters.size() ? " and "
+                                             : ", ") +
+             model.parameters()[static_cast<std::size_t>(u.parameters[i])].name;
+  }
+  const Declaration& first = model.parameters()[static_cast<std::size_t>(u.parameters.front())];
+  std::string latent;
+  for (int j : e.latent) {
+    latent += (latent.empty() ? "" : ", ") + model.states()[static_cast<std::size_t>(j)].name;
+  }
+  throw ModelError(
+      first.where,
+      (u.parameters.size() == 1 ? "parameter " + names + " is" : "parameters " + names + " are") +
+          " not determined by the record's channels once the latent states " + latent +
+          " are eliminated: " +
+          (u.parameters.size() == 1
+               ? "no coefficient of the equations without them holds it (fix it"
+               : "the coefficients of the equations without them hold them only in "
+                 "combinations (fix " +
+                     std::to_string(u.to_fix) + " of them") +
+          ", e.g. " + UsageError::mention("fix") + " " + first.name + "=1, or `param " +
+          first.name + " = 1 fixed`; docs/latent-states.md)");
+}
+
+}  // namespace
+
+void identify_latent(IdentifyResult& result, const DataSource& source,
+                     const IdentifyOptions& options, const std::vector<bool>& measured) {
+  const AlgebraLock lock;
+  const std::shared_ptr<const Model> model = result.model;
+  const Elimination elimination = eliminate_latent(*model, measured, options.fixed);
+  refuse_undetermined(*model, elimination);
+  IdentifyResult::Latent latent;
+  for (int j : elimination.latent)
+    latent.states.push_back(model->states()[static_cast<std::size_t>(j)].name);
+  latent.equations = format_text(*model, elimination);
+  latent.coefficient_model = std::make_shared<const Model>(coefficient_model(*model, elimination));
+  // The coefficients' model has parameters of its own: none of the model's is fixed there.
+  IdentifyOptions coefficients_options = options;
+  coefficients_options.fixed.clear();
+  result.model = latent.coefficient_model;
+  identify_lagged(result, source, coefficients_options, measured);
+  result.model = model;
+
+  Estimate& estimate = result.estimate;
+  latent.coefficients = estimate.main().parameters;
+  latent.dof = static_cast<int>(elimination.coefficients.size()) - elimination.rank;
+  const CoefficientMap f(*model, elimination);
+  VectorXd start(f.parameters());
+  for (Index k = 0; k < start.size(); ++k) {
+    const Declaration& d = model->parameters()[static_cast<std::size_t>(
+        elimination.parameters[static_cast<std::size_t>(k)])];
+    start(k) = d.value ? d.value->to_double() : 1.0;
+  }
+  if (!estimate.usable()) {
+    // Nothing to map: the parameters' errors stay unknown, the status says why.
+    for (Fit* fit : {&estimate.least_squares, estimate.optimal ? &*estimate.optimal : nullptr}) {
+      if (fit == nullptr) continue;
+      Distance none{.p = VectorXd::Constant(start.size(), kNaN),
+                    .covariance = MatrixXd::Constant(start.size(), start.size(), kNaN)};
+      *fit = physical_fit(*model, elimination, *fit, none);
+      for (ParameterEstimate& p : fit->parameters) p.identifiable = p.fixed;
+    }
+    result.latent = std::move(latent);
+    return;
+  }
+  const Distance main = minimum_distance(f, estimate.main(), start);
+  latent.distance = main.q;
+  latent.converged = main.converged;
+  if (std::isfinite(main.q) && latent.dof > 0) {
+    latent.pvalue = chi_square_upper_tail(main.q, latent.dof);
+  }
+  if (estimate.optimal) {
+    const Distance least = minimum_distance(f, estimate.least_squares, main.p);
+    estimate.least_squares = physical_fit(*model, elimination, estimate.least_squares, least);
+    *estimate.optimal = physical_fit(*model, elimination, *estimate.optimal, main);
+  } else {
+    estimate.least_squares = physical_fit(*model, elimination, estimate.least_squares, main);
+  }
+  result.latent = std::move(latent);
+}
+
+}  // namespace momentid
