@@ -41,6 +41,18 @@ y' = v
 v' = -c*v - k*y - eps*y^3 + x
 )";
 
+// The Duffing oscillator behind an input filter, whose output z a record of y and x leaves latent
+// (models/filtered_duffing.mom).
+const char* kFiltered = R"(model filtered_duffing
+state y, v, z
+input x
+param c = 0.5, k = 4, eps = 1, a = 2, g = 1
+const b = 2
+y' = v
+v' = -c*v - k*y - eps*y^3 + g*z
+z' = -a*z + b*x
+)";
+
 std::vector<momentid::Monomial> moments(const momentid::Model& model) {
   momentid::DeriveOptions options;
   options.degree = 3;
@@ -132,15 +144,21 @@ std::size_t csv_header_bytes(const std::string& path) {
   return bytes;
 }
 
-// `lagged`: the lagged equations at lags 3..42 (40 lags) with the instruments y, y^2, y^3 and x, on
-// a file without the velocity; otherwise the zero-lag equations of degree 3.
-int one_pass(const std::string& path, bool lagged) {
-  const momentid::Model model = momentid::parse_model(kModel, "duffing.mom");
+enum class PassKind { kZeroLag, kLagged, kLatent, kDefaults };
+
+// kLagged: the lagged equations at lags 3..42 (40 lags) with the instruments y, y^2, y^3 and x,
+// on a file without the velocity; kZeroLag: the zero-lag equations of degree 3; kLatent: the
+// filtered oscillator with z latent, and kDefaults the Duffing model, with no options, on a file
+// of y and x.
+int one_pass(const std::string& path, PassKind kind) {
+  const momentid::Model model = kind == PassKind::kLatent
+                                    ? momentid::parse_model(kFiltered, "filtered_duffing.mom")
+                                    : momentid::parse_model(kModel, "duffing.mom");
   momentid::IdentifyOptions options;
-  if (lagged) {
+  if (kind == PassKind::kLagged) {
     options.lags = {{3, 42}};
     options.instruments = {{{1, 0, 0}, {2, 0, 0}, {3, 0, 0}, {0, 0, 1}}};
-  } else {
+  } else if (kind == PassKind::kZeroLag) {
     options.degree = 3;
   }
   const Stopwatch clock;
@@ -160,9 +178,24 @@ struct Pass {
   std::size_t rows = 0, moments = 0;
 };
 
-Pass run_pass(const std::string& self, const std::string& path, bool lagged = false) {
+const char* pass_flag(PassKind kind) {
+  switch (kind) {
+    case PassKind::kLagged:
+      return "--lagged-pass";
+    case PassKind::kLatent:
+      return "--latent-pass";
+    case PassKind::kDefaults:
+      return "--defaults-pass";
+    case PassKind::kZeroLag:
+      break;
+  }
+  return "--pass";
+}
+
+Pass run_pass(const std::string& self, const std::string& path,
+              PassKind kind = PassKind::kZeroLag) {
   std::string command = "'";
-  command.append(self).append(lagged ? "' --lagged-pass '" : "' --pass '").append(path).append("'");
+  command.append(self).append("' ").append(pass_flag(kind)).append(" '").append(path).append("'");
   FILE* pipe = popen(command.c_str(), "r");
   Pass p;
   if (pipe == nullptr ||
@@ -175,9 +208,10 @@ Pass run_pass(const std::string& self, const std::string& path, bool lagged = fa
 }
 
 // The faster of two passes.
-Pass best_pass(const std::string& self, const std::string& path, bool lagged = false) {
-  const Pass first = run_pass(self, path, lagged);
-  const Pass second = run_pass(self, path, lagged);
+Pass best_pass(const std::string& self, const std::string& path,
+               PassKind kind = PassKind::kZeroLag) {
+  const Pass first = run_pass(self, path, kind);
+  const Pass second = run_pass(self, path, kind);
   return second.seconds < first.seconds ? second : first;
 }
 
@@ -187,8 +221,10 @@ int main(int argc, char** argv) {
   if (asked_for_help(argc, argv,
                      "usage: bench_identify [rows=10000000] [directory=/tmp] [--no-baseline]"))
     return 0;
-  if (argc == 3 && std::string(argv[1]) == "--pass") return one_pass(argv[2], false);
-  if (argc == 3 && std::string(argv[1]) == "--lagged-pass") return one_pass(argv[2], true);
+  for (const PassKind kind :
+       {PassKind::kZeroLag, PassKind::kLagged, PassKind::kLatent, PassKind::kDefaults}) {
+    if (argc == 3 && std::string(argv[1]) == pass_flag(kind)) return one_pass(argv[2], kind);
+  }
   const std::size_t rows = argc > 1 ? std::strtoull(argv[1], nullptr, 10) : 10000000;
   const std::filesystem::path dir = argc > 2 ? argv[2] : "/tmp";
   std::filesystem::create_directories(dir);
@@ -220,10 +256,18 @@ int main(int argc, char** argv) {
   // The lagged pass on the same record without its velocity column.
   const std::string displacement = (dir / "bench_identify_displacement.csv").string();
   write_data(model, displacement, rows, {"y", "x"});
-  const Pass lagged = best_pass(argv[0], displacement, true);
+  const Pass lagged = best_pass(argv[0], displacement, PassKind::kLagged);
   const double displacement_megabytes =
       static_cast<double>(std::filesystem::file_size(displacement)) / 1e6;
   std::filesystem::remove(displacement);
+  // A model with a latent state, and the Duffing model, with the defaults on a record of y and x
+  // of the filtered oscillator; the reading floor of that file.
+  const std::string filtered = (dir / "bench_identify_filtered.csv").string();
+  write_data(momentid::parse_model(kFiltered, "filtered_duffing.mom"), filtered, rows, {"y", "x"});
+  const Pass latent = best_pass(argv[0], filtered, PassKind::kLatent);
+  const Pass defaults = best_pass(argv[0], filtered, PassKind::kDefaults);
+  const double filtered_floor = floor_of(filtered, true, csv_header_bytes(filtered));
+  std::filesystem::remove(filtered);
 
   std::string numpy = "/usr/bin/python3 '" MOMENTID_SOURCE_DIR "/benchmarks/numpy_moments.py' '";
   numpy.append(big).append("' y,v x");
@@ -279,5 +323,16 @@ int main(int argc, char** argv) {
   std::printf("  ratio lagged / zero-lag: %.2f in time, %.2f in peak memory\n",
               lagged.seconds / pass.seconds,
               static_cast<double>(lagged.peak_kib) / static_cast<double>(pass.peak_kib));
+  std::printf(
+      "a latent state: the Duffing oscillator behind an input filter from y and x (z not "
+      "measured), defaults, best of 2\n");
+  std::printf(
+      "  %zu rows: %.2f s (%zu moments); the Duffing model on the same file: %.2f s (%zu "
+      "moments), ratio %.2f\n",
+      latent.rows, latent.seconds, latent.moments, defaults.seconds, defaults.moments,
+      latent.seconds / defaults.seconds);
+  std::printf(
+      "  reading floor (every field parsed): %.3f s; the latent model runs at %.0f%% of it\n",
+      filtered_floor, 100 * filtered_floor / latent.seconds);
   return 0;
 }

@@ -120,14 +120,18 @@ std::vector<VariableReading> variable_readings(const Model& model,
 // sign factor; UsageError for bad options.
 LaggedSystem derive_lagged(const Model& model, const LagOptions& options);
 
-// Central stencils for the order-k lag derivative (k = 0..3): C^(k)(s) ~ sum_j w_j C(s + j) /
-// dt^k over j = -reach..reach, exact for polynomials of degree 2 reach (Fornberg's weights).
-// The reach is `reach` for orders up to 2 and one more for order 3, so that the error is
-// O(dt^(2 reach)) for every order. Reach 2 (error O(dt^4)) suits records with inputs held over
-// each sample, whose states have kinks at the samples that a wider stencil would straddle;
-// band-limited records take a wider one (kWideStencilReach: O(dt^12)), which keeps its accuracy
-// at a few samples per period.
+// Central stencils for the order-k lag derivative: C^(k)(s) ~ sum_j w_j C(s + j) / dt^k over
+// j = -reach..reach, exact for polynomials of degree 2 reach (Fornberg's weights). The reach is
+// `reach` for orders up to 2 and (k - 1) / 2 more above, so that the error is O(dt^(2 reach))
+// for every order. Reach 2 (error O(dt^4)) suits records with inputs held over each sample,
+// whose states have kinks at the samples that a wider stencil would straddle; band-limited
+// records take a wider one (kWideStencilReach: O(dt^12)), which keeps its accuracy at a few
+// samples per period. A model's terms read orders up to kMaxLagOrder (a state read through a
+// derivative column beyond it is formed instead, --integrate); an equation with latent states
+// eliminated (Term::order, latent.hpp) up to kMaxEliminatedOrder, its test functions kept the
+// wider stencils' reach inside the window.
 inline constexpr int kMaxLagOrder = 3;
+inline constexpr int kMaxEliminatedOrder = 6;
 inline constexpr int kStencilReach = 2;
 inline constexpr int kWideStencilReach = 6;
 int stencil_reach(int order, int reach);
@@ -137,7 +141,9 @@ std::vector<double> stencil_weights(int order, int reach = kStencilReach);
 // the widest stencil's reach inside the window: twenty overlapping ones across it, where the
 // damping shows, and six narrower ones over its first fifth, where the instantaneous stiffness
 // shows, when that fifth is wide enough to resolve them (half supports of at least 10 lags).
-std::vector<LagTestFunction> lag_test_functions(int first_lag, int last_lag);
+// `highest`: the highest order of the lag derivatives the equations read.
+std::vector<LagTestFunction> lag_test_functions(int first_lag, int last_lag,
+                                                int highest = kMaxLagOrder);
 
 // The lagged moments E[ψ(t − s)·F(t)] behind C[ψ;F](s), as accumulator keys over the
 // model's variables.

@@ -148,7 +148,7 @@ double LagTestFunction::operator()(double s) const {
   return std::abs(u) < 1 ? std::pow(1 - u * u, power) : 0.0;
 }
 
-std::vector<LagTestFunction> lag_test_functions(int first_lag, int last_lag) {
+std::vector<LagTestFunction> lag_test_functions(int first_lag, int last_lag, int highest) {
   // Evenly spread functions whose supports, each 4/(count + 1) of the window, overlap.
   std::vector<LagTestFunction> out;
   const auto spread = [&](double low, double high, int count, int power) {
@@ -161,7 +161,7 @@ std::vector<LagTestFunction> lag_test_functions(int first_lag, int last_lag) {
     }
   };
   // The supports end where the functions vanish, the widest stencil's reach inside the lags.
-  const int inset = stencil_reach(kMaxLagOrder, kWideStencilReach);
+  const int inset = stencil_reach(std::max(highest, kMaxLagOrder), kWideStencilReach);
   const double low = first_lag - 1 + inset;
   const double high = last_lag + 1 - inset;
   constexpr double kMinHalfWidth = 10;  // samples: finer ones the sums over lags do not resolve

@@ -9,13 +9,13 @@
 
 namespace momentid {
 
-int stencil_reach(int order, int reach) { return order == 3 ? reach + 1 : reach; }
+int stencil_reach(int order, int reach) { return order <= 2 ? reach : reach + (order - 1) / 2; }
 
 std::vector<double> stencil_weights(int order, int reach) {
-  if (order < 0 || order > kMaxLagOrder || reach < 1) {
+  if (order < 0 || order > kMaxEliminatedOrder || reach < 1) {
     throw std::invalid_argument("stencil_weights: order " + std::to_string(order) + ", reach " +
                                 std::to_string(reach) + ": expected an order from 0 to " +
-                                std::to_string(kMaxLagOrder) + " and a reach from 1");
+                                std::to_string(kMaxEliminatedOrder) + " and a reach from 1");
   }
   // Fornberg's recursion for the weights at the points -R..R of every derivative up to `order`
   // at 0 (B. Fornberg, Math. Comp. 51 (1988) 699-706).

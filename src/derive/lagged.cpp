@@ -97,16 +97,16 @@ LaggedEquation lagged_equation(const Model& model, const LagDeriver& deriver, st
   for (std::size_t i = 0; i < terms.size(); ++i) {
     auto& [f, w] = terms[i];
     f.order -= lowest;
-    if (f.order > kMaxLagOrder && eq.terms[i].order > 0) {
+    if (f.order > kMaxEliminatedOrder && eq.terms[i].order > 0) {
       throw ModelError(eq.where, "term '" + term_text(model, eq.terms[i]) + "' of equation " +
                                      eq.name() + " needs the derivative of order " +
                                      std::to_string(f.order) + " in the lag, above " +
-                                     std::to_string(kMaxLagOrder) +
+                                     std::to_string(kMaxEliminatedOrder) +
                                      ": the latent states' elimination raised the equation's "
                                      "order beyond what the lagged equations read (measure one "
                                      "of the latent states)");
     }
-    if (f.order > kMaxLagOrder) {
+    if (f.order > kMaxLagOrder && eq.terms[i].order == 0) {
       const std::string integrals = deriver.integral_states();
       throw FormStatesError(
           eq.where,
@@ -185,7 +185,14 @@ LaggedSystem derive_lagged(const Model& model, const LagOptions& options) {
     }
   }
   options.validate(model);
-  system.test_functions = lag_test_functions(system.first_lag, system.last_lag);
+  int highest = 0;
+  for (const LaggedEquation& row : system.equations) {
+    for (const LagCombination& c : row.coefficients) {
+      for (const auto& [f, w] : c) highest = std::max(highest, f.order);
+    }
+    for (const auto& [f, w] : row.rhs) highest = std::max(highest, f.order);
+  }
+  system.test_functions = lag_test_functions(system.first_lag, system.last_lag, highest);
 
   system.needed = needed_variables(system);
   return system;
