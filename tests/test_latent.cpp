@@ -49,17 +49,6 @@ v' = -c*v - k*y - eps*y^3 + g*z
 z' = -a*z + b*x
 )";
 
-// Two masses, the sensor on the second: the first mass is latent.
-const char* const kChain = R"(model chain "two masses, a sensor on the second"
-state y1, v1, y2, v2
-input x
-param c1 = 0.3, k1 = 5, c2 = 0.2, k2 = 3, eps = 1
-y1' = v1
-v1' = -c1*v1 - k1*y1 - c2*(v1 - v2) - k2*(y1 - y2)
-y2' = v2
-v2' = -c2*(v2 - v1) - k2*(y2 - y1) - eps*y2^3 + x
-)";
-
 // The filtered oscillator simulated (2*10^5 samples, 2% noise on y) and identified from y and x.
 momentid::IdentifyResult identify_filtered(const Model& model, const Model& truth) {
   momentid::SimulationOptions options;
@@ -119,7 +108,7 @@ TEST_SUITE("latent") {
 
   TEST_CASE("an unmeasured mass of a chain is eliminated, its spring and damper determined") {
     momentid::AlgebraLock lock;
-    const Model model = model_text(kChain);
+    const Model model = momentid::testing::model_file("chain_sensed.mom");
     const Elimination e = momentid::eliminate_latent(model, {false, false, true, false, true});
     CHECK(e.latent == std::vector<int>{0, 1});
     const EliminatedTerm& lead = e.equations.at(0).terms.front();
@@ -207,7 +196,7 @@ TEST_SUITE("latent") {
   }
 
   TEST_CASE("a chain's unmeasured mass is identified from the other mass's displacement") {
-    const Model model = model_text(kChain);
+    const Model model = momentid::testing::model_file("chain_sensed.mom");
     momentid::SimulationOptions options;
     options.inputs = {momentid::InputSpec::parse("ma:K=10,w=0.1,sigma=20", "test")};
     options.samples = 200000;

@@ -23,6 +23,6 @@ TEST_SUITE("models") {
         CHECK_MESSAGE(p.value.has_value() == (model.name().rfind("kozin_example", 0) != 0), p.name);
       }
     }
-    CHECK(count == 15);
+    CHECK(count == 16);
   }
 }

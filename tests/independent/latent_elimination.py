@@ -4,12 +4,13 @@ trajectories that scipy integrates from the full models, written here in numpy.
 
 Two models: the Duffing oscillator behind a first-order input filter (models/filtered_duffing.mom,
 the filter's output z latent, y and x measured), and a two-mass chain with a cubic spring at the
-second mass, sensed there only (mass 1 latent). The force is a sum of sinusoids, differentiated
-exactly; the states come from DOP853 at a tolerance of 1e-12, and the highest derivatives of the
-measured displacement from five-point central differences of the model's accelerations (step
-0.01 s, error about 1e-8 of the terms). On the trajectory of the right parameters the printed equation's
-residual must be below 1e-5 of its terms' size; on one whose parameter is 10% off (the filter's
-pole, the first mass's spring) it must be above 1e-3, so the check can tell a wrong equation.
+second mass, sensed there only (models/chain_sensed.mom, mass 1 latent). The force is a sum of
+sinusoids, differentiated exactly; the states come from DOP853 at a tolerance of 1e-12, and the
+highest derivatives of the measured displacement from five-point central differences of the
+model's accelerations (step 0.01 s, error about 1e-8 of the terms). On the trajectory of the
+right parameters the printed equation's residual must be below 1e-5 of its terms' size; on one
+whose parameter is 10% off (the filter's pole, the first mass's spring) it must be above 1e-3, so
+the check can tell a wrong equation.
 
 Usage: latent_elimination.py MOMENTID MODELS_DIR WORKDIR
 """
@@ -20,16 +21,6 @@ import sys
 
 import numpy as np
 from scipy.integrate import solve_ivp
-
-CHAIN = """model chain "two masses, a sensor on the second"
-state y1, v1, y2, v2
-input x
-param c1 = 0.3, k1 = 5, c2 = 0.2, k2 = 3, eps = 1
-y1' = v1
-v1' = -c1*v1 - k1*y1 - c2*(v1 - v2) - k2*(y1 - y2)
-y2' = v2
-v2' = -c2*(v2 - v1) - k2*(y2 - y1) - eps*y2^3 + x
-"""
 
 
 class Force:
@@ -114,13 +105,10 @@ def residual(equation, values, d, force, times):
 
 def main():
     momentid, models, workdir = sys.argv[1:4]
-    chain_path = f"{workdir}/latent_chain.mom"
-    with open(chain_path, "w") as out:
-        out.write(CHAIN)
     cases = [
         ("filtered_duffing", f"{models}/filtered_duffing.mom", "y,x", filtered,
          {"c": 0.5, "k": 4, "eps": 1, "a": 2, "g": 1, "b": 2}, "a"),
-        ("chain", chain_path, "y2,x", chain,
+        ("chain", f"{models}/chain_sensed.mom", "y2,x", chain,
          {"c1": 0.3, "k1": 5, "c2": 0.2, "k2": 3, "eps": 1}, "k1"),
     ]
     rng = np.random.default_rng(20261130)
