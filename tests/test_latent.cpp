@@ -49,20 +49,30 @@ v' = -c*v - k*y - eps*y^3 + g*z
 z' = -a*z + b*x
 )";
 
-// The filtered oscillator simulated (2*10^5 samples, 2% noise on y) and identified from y and x.
-momentid::IdentifyResult identify_filtered(const Model& model, const Model& truth) {
+// `truth` simulated (2*10^5 samples, 2% noise on `state`) and `model` identified from that
+// state's column and x's.
+momentid::IdentifyResult identify_sensed(const Model& model, const Model& truth,
+                                         const std::string& state) {
   momentid::SimulationOptions options;
   options.inputs = {momentid::InputSpec::parse("ma:K=10,w=0.1,sigma=20", "test")};
   options.samples = 200000;
-  options.noise = {{"y", 0.02}};
+  options.noise = {{state, 0.02}};
   momentid::testing::Recorder recorder(truth.channel_count());
   momentid::simulate(truth, options, recorder);
-  std::vector<double> y = recorder.column(1), x = recorder.column(4);
+  // The recorder's columns: t, the states, the input.
+  std::vector<double> y =
+      recorder.column(1 + static_cast<std::size_t>(truth.variable_index(state)));
+  std::vector<double> x = recorder.column(1 + truth.states().size());
   momentid::MemoryData data;
   data.rows = options.samples;
-  data.columns = {{"y", y.data()}, {"x", x.data()}};
+  data.columns = {{state, y.data()}, {"x", x.data()}};
   data.metadata.add_line({{"dt", "0.01"}, {"input-hold", "zoh"}});
   return momentid::identify(model, momentid::DataSource::memory(std::move(data)));
+}
+
+// The filtered oscillator from y and x.
+momentid::IdentifyResult identify_filtered(const Model& model, const Model& truth) {
+  return identify_sensed(model, truth, "y");
 }
 
 }  // namespace
@@ -197,19 +207,7 @@ TEST_SUITE("latent") {
 
   TEST_CASE("a chain's unmeasured mass is identified from the other mass's displacement") {
     const Model model = momentid::testing::model_file("chain_sensed.mom");
-    momentid::SimulationOptions options;
-    options.inputs = {momentid::InputSpec::parse("ma:K=10,w=0.1,sigma=20", "test")};
-    options.samples = 200000;
-    options.noise = {{"y2", 0.02}};
-    momentid::testing::Recorder recorder(model.channel_count());
-    momentid::simulate(model, options, recorder);
-    std::vector<double> y2 = recorder.column(3), x = recorder.column(5);
-    momentid::MemoryData data;
-    data.rows = options.samples;
-    data.columns = {{"y2", y2.data()}, {"x", x.data()}};
-    data.metadata.add_line({{"dt", "0.01"}, {"input-hold", "zoh"}});
-    const momentid::IdentifyResult r =
-        momentid::identify(model, momentid::DataSource::memory(std::move(data)));
+    const momentid::IdentifyResult r = identify_sensed(model, model, "y2");
     REQUIRE(r.latent);
     CHECK(r.latent->states == std::vector<std::string>{"y1", "v1"});
     CHECK(r.latent->dof == 4);
