@@ -15,6 +15,7 @@
 #include "momentid/moment.hpp"
 #include "momentid/reader.hpp"
 #include "momentid/record_options.hpp"
+#include "momentid/refine.hpp"
 #include "momentid/types.hpp"
 
 // This header, and those it includes, do not include GiNaC (the test library.ginac_free
@@ -80,6 +81,10 @@ struct IdentifyOptions {
   // difference estimates the bias of the estimate at the data's dt, which is removed
   // (Richardson's extrapolation to dt = 0) when it exceeds its standard error.
   bool extrapolate = false;
+  // The simulation-error refinement (`--refine`, docs/refine.md): the model simulated through
+  // the record's inputs, its error in the measured channels minimised from the estimate
+  // (IdentifyResult::refinement). A refined value outside the estimate's 95% interval is a doubt.
+  bool refine = false;
   // The law check of a drag or friction term (IdentifyResult::law_checks): a second
   // identification with the other law added. `select` leaves it to the chosen model.
   bool law_check = true;
@@ -254,6 +259,9 @@ struct IdentifyResult {
     bool converged = false;
   };
   std::optional<Latent> latent;
+  // IdentifyOptions::refine: the refinement from the main estimate, of the parameters it
+  // estimated.
+  std::optional<RefineResult> refinement;
   // The identified model runs away from its equilibrium (runaway()): a doubt.
   std::optional<Runaway> runaway;
   // The law check (docs/measured-data.md, "The law check"): for a damping term of quadratic

@@ -16,6 +16,7 @@ struct CheckResult;
 struct IdentifyResult;
 struct LaggedSystem;
 struct MomentSystem;
+struct RefineResult;
 struct SelectResult;
 struct ValidateResult;
 
@@ -29,6 +30,8 @@ nlohmann::ordered_json json_value(const IdentifyResult& result);
 nlohmann::ordered_json json_value(const SelectResult& result);
 // docs/json.md, "check".
 nlohmann::ordered_json json_value(const CheckResult& result);
+// docs/json.md, "refine".
+nlohmann::ordered_json json_value(const RefineResult& result);
 // docs/json.md, "validate".
 nlohmann::ordered_json json_value(const ValidateResult& result);
 

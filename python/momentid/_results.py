@@ -230,6 +230,9 @@ class IdentifyResult(Fit):
     latent: for a model with states the record does not show (docs/latent-states.md), the
       `latent` section of the JSON: the states, the equations without them, their coefficients'
       estimates and the minimum distance's test; None otherwise.
+    refinement: with refine=True (docs/refine.md), the `refinement` section of the JSON: each
+      parameter's start and refined value with their intervals, the simulation error before and
+      after, the inputs' noise and its bias removed; None otherwise.
 
     IdentifyResult(text, value) reads a saved result of the program as well: `value` is its
     JSON text or the dict json.load() made of it (text may be ""); `model` the Model it is of,
@@ -264,6 +267,7 @@ class IdentifyResult(Fit):
         self.jval = self.diagnostics["j_statistic"]
         self.engineering = self._dict.get("engineering", {})
         self.latent = self._dict.get("latent")
+        self.refinement = self._dict.get("refinement")
         self.natural_frequencies, self.damping_ratios = (
             _read_only(_np.reshape([[_number(m["estimate"]), _number(m["std_error"])]
                                     for m in self.engineering.get(key, [])], (-1, 2)))

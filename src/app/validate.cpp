@@ -32,24 +32,6 @@ void ValidateOptions::validate() const {
 
 namespace {
 
-// The outputs the record has (fit.hpp): its states, then its measured derivatives, in model
-// order; DataError when it has none.
-std::vector<std::size_t> measured_outputs(const Model& model, const Record& record) {
-  std::vector<std::size_t> out;
-  const std::size_t outputs = model.states().size() + model.measured_derivatives().size();
-  for (std::size_t j = 0; j < outputs; ++j) {
-    if (record.column_of(output_variable(model, j)) >= 0) out.push_back(j);
-  }
-  if (out.empty()) {
-    throw DataError(
-        file_start(record.name),
-        "none of the states of model " + model.name() +
-            (model.measured_derivatives().empty() ? "" : ", nor of its measured columns,") +
-            " is a column of the data: there is nothing to compare");
-  }
-  return out;
-}
-
 std::string substep_warning(const Replay& replay) {
   char text[32];
   std::snprintf(text, sizeof text, "%.2g", replay.substep_change);

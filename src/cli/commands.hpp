@@ -30,6 +30,7 @@ Command add_identify(CLI::App& app);
 Command add_select(CLI::App& app);
 Command add_check(CLI::App& app);
 Command add_validate(CLI::App& app);
+Command add_refine(CLI::App& app);
 Command add_convert(CLI::App& app);
 
 // The command-line option that sets the options field `field` (UsageError::option()): the flag

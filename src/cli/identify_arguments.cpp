@@ -12,6 +12,11 @@ std::string text_of(const CLI::Option& option) {
   return out;
 }
 
+// A switch without a value name (--refine) is a flag.
+bool is_flag(const OptionDescription& option) {
+  return option.value == OptionValue::kSwitch && option.value_name.empty();
+}
+
 }  // namespace
 
 IdentifyInputs read_identify_arguments(IdentifyArguments& a, const std::string& usage) {
@@ -20,7 +25,8 @@ IdentifyInputs read_identify_arguments(IdentifyArguments& a, const std::string& 
   DataSource source = data_sources(a.data);
   std::vector<GivenOption> given;
   for (const auto& [option, cli] : a.added) {
-    if (cli->count() > 0) given.push_back({option, text_of(*cli), std::string(option->flag)});
+    if (cli->count() == 0) continue;
+    given.push_back({option, is_flag(*option) ? "" : text_of(*cli), std::string(option->flag)});
   }
   Model model = apply_options(given, file, source, a.options);
   return {std::move(model), std::move(source)};
@@ -38,9 +44,14 @@ void add_identify_arguments(CLI::App* sub, IdentifyArguments& a, const std::stri
     const std::string flag(option->flag), fallback(option->default_text);
     const std::string help(std::string(option->help) +
                            (fallback.empty() ? "" : " (default: " + fallback + ")"));
-    CLI::Option* added = option->repeated ? sub->add_option(flag, a.lists.emplace_back(), help)
-                                          : sub->add_option(flag, a.single.emplace_back(), help);
-    added->type_name(std::string(option->value_name))->default_str("");
+    CLI::Option* added = nullptr;
+    if (is_flag(*option)) {
+      added = sub->add_flag(flag, help);
+    } else {
+      added = option->repeated ? sub->add_option(flag, a.lists.emplace_back(), help)
+                               : sub->add_option(flag, a.single.emplace_back(), help);
+      added->type_name(std::string(option->value_name))->default_str("");
+    }
     a.added.emplace_back(option, added);
   }
   for (const auto& [option, cli] : a.added) {

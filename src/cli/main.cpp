@@ -75,7 +75,8 @@ int main(int argc, char** argv) {
       "-V,--version",
       "momentid " MOMENTID_VERSION "\ndata formats: " + momentid::data_formats() +
           "\nvalidate plots: SVG (written by momentid)"
-          "\ndistributions: Boost.Math; linear algebra: Eigen; algebra: GiNaC" +
+          "\ndistributions: Boost.Math; linear algebra: Eigen; algebra: GiNaC; nonlinear least "
+          "squares: Ceres Solver" +
           (mpi_library.empty() ? std::string()
                                : "\nMPI: " + mpi_library + ", passes shared under mpirun"));
 
@@ -83,7 +84,7 @@ int main(int argc, char** argv) {
       momentid::cli::add_derive(app),   momentid::cli::add_simulate(app),
       momentid::cli::add_identify(app), momentid::cli::add_select(app),
       momentid::cli::add_check(app),    momentid::cli::add_validate(app),
-      momentid::cli::add_convert(app)};
+      momentid::cli::add_refine(app),   momentid::cli::add_convert(app)};
 
   try {
     app.parse(argc, argv);

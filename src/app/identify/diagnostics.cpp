@@ -233,6 +233,11 @@ std::vector<std::string> doubts(const IdentifyResult& r) {
           "): the latent dynamics may be wrong (docs/latent-states.md)");
     }
   }
+  if (r.refinement) {
+    for (const std::string& w : r.refinement->warnings) {
+      out.push_back("the simulation-error refinement: " + w);
+    }
+  }
   const Fit& main = e.main();
   const bool has_errors =
       std::any_of(main.parameters.begin(), main.parameters.end(), [](const ParameterEstimate& p) {

@@ -90,6 +90,14 @@ IdentifyResult identify(const Model& model, const DataSource& source,
   IdentifyResult result = identify_unchecked(model, source, options);
   check_laws(result, options,
              [&](const Model& extended) { return identify_unchecked(extended, source, options); });
+  if (options.refine && result.estimate.usable()) {
+    RefineOptions refine_options;
+    refine_options.replay.record = options.record;
+    refine_options.center = options.center;
+    refine_options.start = result.parameters();
+    result.refinement = refine(*result.model, source, refine_options);
+    result.refinement->start_from = "the moment estimate";
+  }
   return result;
 }
 

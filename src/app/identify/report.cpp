@@ -490,6 +490,7 @@ std::string format_text(const IdentifyResult& r) {
     for (const std::string& line : equations) out << "  " << line << "\n";
   }
   modes_text(out, r);
+  if (r.refinement) out << "\n" << refinement_text(*r.refinement);
   diagnostics_text(out, r);
   return out.str();
 }
@@ -527,6 +528,7 @@ nlohmann::ordered_json json_value(const IdentifyResult& r) {
     Json& centered = out["centered"] = Json::object();
     for (const auto& [name, mean] : r.centered) centered[name] = json_value(mean);
   }
+  if (r.refinement) out["refinement"] = json_value(*r.refinement);
   out["equations"] = identified_equations(r);
   out["engineering"] = engineering_json(r);
   out["moments"] = moments_json(r);

@@ -305,6 +305,11 @@ void set_extrapolate(SelectOptions& o, const Model&, const std::string& text,
   o.identify.extrapolate = true;
 }
 
+void set_refine(SelectOptions& o, const Model&, const std::string& text, const std::string& n) {
+  if (!text.empty()) throw UsageError(n, "takes no value, found '" + text + "'");
+  o.identify.refine = true;
+}
+
 void set_exhaustive(SelectOptions& o, const Model&, const std::string& text, const std::string& n) {
   o.exhaustive = count_in(text, n, 0, SelectOptions::kMaxExhaustive);
 }

@@ -52,6 +52,7 @@ Setter set_degree;
 Setter set_method;
 Setter set_weighting;
 Setter set_extrapolate;
+Setter set_refine;
 
 // select's own.
 Setter set_exhaustive;

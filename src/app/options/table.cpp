@@ -83,6 +83,9 @@ constexpr std::array kOptions = {
     "estimate the bias of sampling from every other sample, and remove it when it exceeds its "
     "error (zero-lag equations, inputs sampled, not held)", C::kIdentify, S::kRecord, false, {},
     "", set_extrapolate},
+  OptionDescription{"--refine", "refine", "refine", "", V::kSwitch, "",
+    "refine the estimate by the simulation error of the model through the record's inputs "
+    "(docs/refine.md), shown beside it", C::kIdentify, S::kRecord, false, {}, "", set_refine},
   OptionDescription{"--skip-rows", "skip_rows", "skip_rows", "N", V::kCount, "0",
     "lines after the header that are not data (descriptions), skipped; a units row is skipped "
     "without it", C::kBoth, S::kRecord, false, {}, "", set_skip_rows},

@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <cmath>
 
+#include "app/validate/record.hpp"
+#include "momentid/error.hpp"
+
 namespace momentid {
 namespace {
 
@@ -16,6 +19,22 @@ std::size_t start_rows(std::size_t compared) {
 std::size_t output_variable(const Model& model, std::size_t j) {
   const std::size_t states = model.states().size();
   return j < states ? j : j + model.inputs().size();
+}
+
+std::vector<std::size_t> measured_outputs(const Model& model, const Record& record) {
+  std::vector<std::size_t> out;
+  const std::size_t outputs = model.states().size() + model.measured_derivatives().size();
+  for (std::size_t j = 0; j < outputs; ++j) {
+    if (record.column_of(output_variable(model, j)) >= 0) out.push_back(j);
+  }
+  if (out.empty()) {
+    throw DataError(
+        file_start(record.name),
+        "none of the states of model " + model.name() +
+            (model.measured_derivatives().empty() ? "" : ", nor of its measured columns,") +
+            " is a column of the data: there is nothing to compare");
+  }
+  return out;
 }
 
 const std::vector<double>& simulated_output(const Model& model, const Replay& replay, std::size_t r,

@@ -16,6 +16,10 @@ struct ComparedRows {
   std::vector<std::vector<double>> measured;  // the state's column
 };
 
+// The outputs the record has: its states, then its measured derivatives, in model order;
+// DataError when it has none.
+std::vector<std::size_t> measured_outputs(const Model& model, const Record& record);
+
 // Output j in run r as the replay simulated it.
 const std::vector<double>& simulated_output(const Model& model, const Replay& replay, std::size_t r,
                                             std::size_t j);

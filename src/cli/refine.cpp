@@ -1,0 +1,122 @@
+// momentid refine MODEL DATA [--estimates FILE.json] [--set p=v,...] [--free p,...] [options]
+
+#include "momentid/refine.hpp"
+
+#include <cmath>
+#include <memory>
+
+#include "cli/commands.hpp"
+#include "momentid/model.hpp"
+#include "momentid/writer.hpp"
+
+namespace momentid::cli {
+namespace {
+
+struct RefineCommand {
+  std::string model;
+  std::string data;
+  std::vector<std::string> set;
+  std::string estimates;
+  std::string interpolation;
+  std::optional<double> dt;
+  std::vector<std::string> columns;
+  std::vector<std::string> center;
+  std::string format = "text";
+  RefineOptions options;
+};
+
+// The start an `identify --format json` result gives: its values, with intervals of 1.96
+// standard errors from its covariance (a parameter with error 0 was fixed there).
+std::vector<ParameterEstimate> start_of(const Model& model, const Estimates& estimates) {
+  std::vector<ParameterEstimate> out;
+  for (std::size_t p = 0; p < model.parameters().size(); ++p) {
+    ParameterEstimate e;
+    e.name = model.parameters()[p].name;
+    e.estimate = estimates.values.at(e.name).value;
+    e.std_error = estimates.covariance.empty() ? NAN : std::sqrt(estimates.covariance[p][p]);
+    e.fixed = e.std_error == 0;
+    e.identifiable = !std::isnan(e.std_error);
+    e.ci_low = e.estimate - 1.96 * e.std_error;
+    e.ci_high = e.estimate + 1.96 * e.std_error;
+    out.push_back(e);
+  }
+  return out;
+}
+
+int run_refine(RefineCommand& command) {
+  RefineOptions& options = command.options;
+  ReplayOptions& replay = options.replay;
+  replay.record.columns = column_map(command.columns);
+  const Model file = model_argument(command.model, command.data, "refine MODEL DATA");
+  const DataSource source = data_source(command.data);
+  const Model model = declare_derivative_columns(file, replay.record, source);
+  std::string from = "the model's nominal values";
+  if (!command.estimates.empty()) {
+    from = command.estimates;
+    options.start = start_of(model, read_estimates(model, command.estimates));
+  }
+  if (!command.set.empty()) from += ", then --set";
+  for (auto& [name, value] : parse_parameter_values(model, command.set)) {
+    // A value set replaces the estimate's, interval and all.
+    std::erase_if(options.start, [&](const ParameterEstimate& e) { return e.name == name; });
+    replay.parameters.insert_or_assign(name, value);
+  }
+  if (!command.interpolation.empty()) {
+    replay.interpolation = parse_interpolation(command.interpolation, "interpolation");
+  }
+  replay.record.dt = command.dt;
+  options.center = command.center.size() == 1 && command.center[0] == "all" ? model.channel_names()
+                                                                            : command.center;
+  RefineResult result = refine(model, source, options);
+  result.start_from = from;
+  write_whole_file("-", command.format == "json" ? format_json(result) : format_text(result));
+  return 0;
+}
+
+}  // namespace
+
+Command add_refine(CLI::App& app) {
+  auto command = std::make_shared<RefineCommand>();
+  CLI::App* sub = app.add_subcommand(
+      "refine",
+      "fit a model's simulation through a record's inputs to the record's states by nonlinear "
+      "least squares, from the model's values or an identify result");
+  sub->add_option("MODEL", command->model, "model file")->required();
+  sub->add_option("DATA", command->data, "data file (CSV or binary), - for standard input")
+      ->required();
+  sub->add_option("--estimates", command->estimates,
+                  "start from the values of an 'identify --format json' result; its intervals "
+                  "show how far the refinement moved them");
+  sub->add_option("--set", command->set,
+                  "start values NAME=VALUE, overriding the model's nominal values and --estimates")
+      ->delimiter(',');
+  sub->add_option("--free", command->options.free,
+                  "the parameters refined (default: those --estimates estimated, else every "
+                  "parameter not declared fixed)")
+      ->delimiter(',');
+  sub->add_option("--max-iterations", command->options.max_iterations,
+                  "the most iterations of the search (default 100)")
+      ->check(CLI::Range(1, RefineOptions::kMaxIterations));
+  sub->add_option("--interpolation", command->interpolation,
+                  "the inputs between samples: zoh, foh, cubic or sinc (default: zoh for "
+                  "held inputs, sinc otherwise)");
+  sub->add_option("--dt", command->dt, "sample interval, overriding the data's");
+  sub->add_option("--substeps", command->options.replay.substeps,
+                  "Runge-Kutta steps per sample interval (default: the fewest that change the "
+                  "simulation at the start by less than 1e-6)")
+      ->check(CLI::Range(1, RecordSimulator::kMaxSubsteps));
+  sub->add_option("--skip", command->options.skip,
+                  "rows left out at the start of each run (default: until the model at the start "
+                  "values has forgotten its initial state)");
+  sub->add_option("--columns", command->columns, "NAME=COLUMN: where a model variable is");
+  sub->add_option("--center", command->center,
+                  "remove the means of these channels (NAME,... or all) first")
+      ->delimiter(',');
+  sub->add_option("--format", command->format, "output format")
+      ->check(CLI::IsMember({"text", "json"}));
+  add_layout_options(sub, command->options.replay.record.layout);
+  add_stdin_limit(sub);
+  return {sub, [command] { return run_refine(*command); }};
+}
+
+}  // namespace momentid::cli
