@@ -73,7 +73,7 @@ def problems(source, momentid_path, command):
     out += [f"{page} names {flag}, which `{command} --help` lacks"
             for flag in sorted(set(docs) - set(cli))]
     for option in table:
-        flag, value = option["flag"], option["value_name"]
+        flag, value = option["flag"], option["value_name"] or None  # a flag has none
         if cli.get(flag, value) != value:
             out.append(f"`{command} --help` shows {flag} {cli.get(flag)}, the table {value}")
         if flag not in cli:

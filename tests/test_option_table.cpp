@@ -48,7 +48,8 @@ TEST_SUITE("options") {
     std::set<std::string_view> flags, keywords, fields;
     for (const momentid::OptionDescription& option : momentid::option_table()) {
       CHECK(option.flag.starts_with("--"));
-      CHECK(!option.value_name.empty());
+      // A switch without a value name is a flag (--refine).
+      CHECK((!option.value_name.empty() || option.value == momentid::OptionValue::kSwitch));
       CHECK(!option.help.empty());
       CHECK((option.set != nullptr));
       CHECK(flags.insert(option.flag).second);
@@ -57,7 +58,7 @@ TEST_SUITE("options") {
       CHECK(find_option(option.keyword) == &option);
       CHECK(momentid::option_of_field(option.field) == &option);
     }
-    CHECK(momentid::options_of("identify").size() == 25);
+    CHECK(momentid::options_of("identify").size() == 26);
     CHECK(momentid::options_of("select").size() == 23);
   }
 

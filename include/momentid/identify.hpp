@@ -15,13 +15,14 @@
 #include "momentid/moment.hpp"
 #include "momentid/reader.hpp"
 #include "momentid/record_options.hpp"
-#include "momentid/refine.hpp"
 #include "momentid/types.hpp"
 
 // This header, and those it includes, do not include GiNaC (the test library.ginac_free
 // checks it): a program that identifies a record needs no computer algebra. The model and the
 // moment equations stay incomplete types here; model.hpp, derive.hpp and lagged.hpp define them.
 namespace momentid {
+
+struct RefineResult;  // momentid/refine.hpp
 
 class Model;
 struct MomentSystem;
@@ -260,8 +261,8 @@ struct IdentifyResult {
   };
   std::optional<Latent> latent;
   // IdentifyOptions::refine: the refinement from the main estimate, of the parameters it
-  // estimated.
-  std::optional<RefineResult> refinement;
+  // estimated (momentid/refine.hpp); null otherwise.
+  std::shared_ptr<const RefineResult> refinement;
   // The identified model runs away from its equilibrium (runaway()): a doubt.
   std::optional<Runaway> runaway;
   // The law check (docs/measured-data.md, "The law check"): for a damping term of quadratic

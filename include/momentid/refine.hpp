@@ -44,6 +44,9 @@ struct RefineOptions {
   int max_iterations = 100;
 
   static constexpr int kMaxIterations = 10000;
+  // The search stops when an iteration changes the cost, or the values, by less than this
+  // fraction; the replicates that measure the inputs' noise's bias (below) stop sooner.
+  static constexpr double kTolerance = 1e-12, kReplicateTolerance = 1e-9;
   // The refinements with the inputs' noise doubled that measure its bias, and their first seed.
   static constexpr std::size_t kNoiseReplicates = 4;
   static constexpr std::uint64_t kNoiseSeed = 20261130;
@@ -70,12 +73,13 @@ struct RefinedParameter {
   bool moved = false;
 };
 
-// An input's white sensor noise, which drives the simulation with a force the system never
-// felt and biases the refinement (errors in variables), and, for a sampled input (not held), its
-// band: where the noise dominates beyond the band's edge, the input the simulation reads is
-// low-passed there (docs/refine.md, "Noise on the inputs").
+// A sampled input's (not held) white sensor noise, which drives the simulation with a force the
+// system never felt and biases the refinement (errors in variables), and its band: where the noise
+// dominates beyond the band's edge, the input the simulation reads is low-passed there
+// (docs/refine.md, "Noise on the inputs").
 struct InputBand {
   std::string input;
+  std::size_t index = 0;        // among the model's inputs
   double noise_rms = 0;         // the white noise on the column
   double edge = 0, cutoff = 0;  // Hz: the gain falls from 1 at the edge to 0 at the cutoff
   bool filtered = false;
@@ -97,7 +101,7 @@ struct RefineResult {
   std::vector<RefinedParameter> parameters;     // the refined ones, in declaration order
   std::vector<std::vector<double>> covariance;  // of their refined values
   std::vector<RefinedOutput> outputs;           // the compared channels, in model order
-  std::vector<InputBand> inputs;                // every input, in model order
+  std::vector<InputBand> inputs;                // the sampled inputs (a held one is exact)
   std::size_t noise_replicates = 0;  // refinements that measured the inputs' noise's bias
   std::vector<std::size_t> skip;     // per run
   int substeps = 1;

@@ -9,6 +9,7 @@
 #include "common/number.hpp"
 #include "momentid/identify.hpp"
 #include "momentid/lagged.hpp"
+#include "momentid/refine.hpp"
 
 namespace momentid {
 namespace {

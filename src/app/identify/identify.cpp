@@ -12,6 +12,7 @@
 #include "app/identify/zero_lag.hpp"
 #include "momentid/algebra_lock.hpp"
 #include "momentid/error.hpp"
+#include "momentid/refine.hpp"
 
 namespace momentid {
 
@@ -95,8 +96,9 @@ IdentifyResult identify(const Model& model, const DataSource& source,
     refine_options.replay.record = options.record;
     refine_options.center = options.center;
     refine_options.start = result.parameters();
-    result.refinement = refine(*result.model, source, refine_options);
-    result.refinement->start_from = "the moment estimate";
+    RefineResult refined = refine(*result.model, source, refine_options);
+    refined.start_from = "the moment estimate";
+    result.refinement = std::make_shared<const RefineResult>(std::move(refined));
   }
   return result;
 }

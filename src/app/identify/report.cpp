@@ -11,6 +11,7 @@
 #include "momentid/identify.hpp"
 #include "momentid/json.hpp"
 #include "momentid/lagged.hpp"
+#include "momentid/refine.hpp"
 
 namespace momentid {
 namespace {

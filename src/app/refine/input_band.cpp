@@ -11,12 +11,11 @@
 namespace momentid {
 
 InputBand input_band(const std::string& name, const std::vector<std::vector<double>>& runs,
-                     double dt, bool held) {
+                     double dt) {
   InputBand out;
   out.input = name;
-  const double variance = white_noise_variance(runs, held);
+  const double variance = white_noise_variance(runs, false);
   out.noise_rms = std::sqrt(variance);
-  if (held) return out;
   std::size_t longest = 0;
   for (const auto& run : runs) longest = std::max(longest, run.size());
   std::size_t segment = 4096;

@@ -15,9 +15,8 @@ namespace momentid {
 // frequency where the spectrum exceeds InputBand::kFloorRatio times that level, the cutoff half
 // as far again. `filtered` when the noise is not 0 and the cutoff lies below kMaxCutoff of the
 // Nyquist frequency.
-// A `held` input has its noise in the form for a held series and no band: it is not filtered.
 InputBand input_band(const std::string& name, const std::vector<std::vector<double>>& runs,
-                     double dt, bool held);
+                     double dt);
 
 // Removes from `x` what lies above `band.edge`: a zero-phase filter whose gain falls from 1 at the
 // edge to 0 at the cutoff along a raised cosine, applied through the FFT of the series extended

@@ -22,12 +22,12 @@ std::string interval_text(double low, double high) {
 }  // namespace
 
 std::string refinement_text(const RefineResult& r) {
-  std::string out = "simulation-error refinement from " + r.start_from + ": " +
-                    std::to_string(r.samples) + " errors compared (" +
-                    std::to_string(r.parameters.size()) + " parameters), " +
-                    std::to_string(r.substeps) + " Runge-Kutta steps per sample, the first " +
-                    std::to_string(*std::max_element(r.skip.begin(), r.skip.end())) +
-                    " rows of each run skipped\n";
+  std::string out =
+      "simulation-error refinement from " + r.start_from + ": " + std::to_string(r.samples) +
+      " errors compared (" + std::to_string(r.parameters.size()) + " parameters), " +
+      std::to_string(r.substeps) + (r.substeps == 1 ? " Runge-Kutta step" : " Runge-Kutta steps") +
+      " per sample, the first " + std::to_string(*std::max_element(r.skip.begin(), r.skip.end())) +
+      " rows of each run skipped\n";
   for (const InputBand& b : r.inputs) {
     out += "input " + b.input + ": ";
     if (b.filtered) {
