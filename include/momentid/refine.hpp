@@ -36,22 +36,27 @@ struct RefineOptions {
   // The parameters refined; empty: those of `start` that it estimated, or without `start` every
   // parameter the model does not declare fixed.
   std::vector<std::string> free;
-  // Rows left out at the start of each run; nullopt: until the simulation at the start values has
-  // forgotten its initial state, as validate chooses them.
+  // Rows left out at the start of each run; nullopt: none (each segment's initial state is
+  // refined with the parameters).
   std::optional<std::size_t> skip;
   // States and inputs whose mean is removed from their columns first (ValidateOptions::center).
   std::vector<std::string> center;
-  int max_iterations = 100;
+  int max_iterations = 50;
 
   static constexpr int kMaxIterations = 10000;
   // The search stops when an iteration changes the cost, or the values, by less than this
   // fraction; the replicates that measure the inputs' noise's bias (below) stop sooner.
   static constexpr double kTolerance = 1e-12, kReplicateTolerance = 1e-9;
-  // The refinements with the inputs' noise doubled that measure its bias, and their first seed.
+  // The refinements with the inputs' noise doubled that measure its bias, the most iterations
+  // each takes from the refined values, and their first seed.
   static constexpr std::size_t kNoiseReplicates = 4;
+  static constexpr int kReplicateIterations = 20;
   static constexpr std::uint64_t kNoiseSeed = 20261130;
-  // The batches whose sums of the error's gradient give the long-run covariance.
-  static constexpr std::size_t kBatches = 32;
+  // The rows of a segment: each run is simulated in stretches of this many rows, each from an
+  // initial state refined with the parameters (the last stretch of a run takes the remainder);
+  // shorter, down to kMinSegmentRows, where the record would give fewer than kMinSegments, whose
+  // spread gives the errors.
+  static constexpr std::size_t kSegmentRows = 2000, kMinSegmentRows = 200, kMinSegments = 16;
   // Throws UsageError for a name in `free` that is not a parameter of `model`, or
   // `max_iterations` out of 1..kMaxIterations.
   void validate(const Model& model) const;
@@ -104,6 +109,8 @@ struct RefineResult {
   std::vector<InputBand> inputs;                // the sampled inputs (a held one is exact)
   std::size_t noise_replicates = 0;  // refinements that measured the inputs' noise's bias
   std::vector<std::size_t> skip;     // per run
+  std::size_t segments = 0;          // simulated each from its own initial state
+  std::size_t segment_rows = 0;      // their length (the last of a run takes the remainder)
   int substeps = 1;
   std::size_t samples = 0;  // residuals compared: rows after the skips times outputs
   // Half the sum of the squared errors, each channel's divided by its rms at the start (Ceres'
@@ -112,7 +119,7 @@ struct RefineResult {
   int iterations = 0;
   bool converged = false;
   std::string solver;  // the solver's own account of how it ended
-  // Degrees of freedom of the intervals: the batches less one.
+  // Degrees of freedom of the intervals: the segments less one.
   double dof = 0;
   std::vector<std::string> warnings;
 
@@ -120,12 +127,13 @@ struct RefineResult {
   bool moved() const;
 };
 
-// Simulates `model` through the record's inputs and minimises its error in the measured states
-// and measured derivatives over the parameters refined. Standard errors are the sandwich of the
-// error's Jacobian J and the long-run covariance of J'e from kBatches batches of rows, so that
-// an error correlated in time (noise on the inputs, a model's own error) does not make them too
-// narrow. Throws UsageError for invalid options, DataError for a record that cannot be compared,
-// and Error when the simulation at the start blows up.
+// Simulates `model` through the record's inputs, in segments (RefineOptions::kSegmentRows) each
+// from its own initial state, and minimises the error in the measured states and measured
+// derivatives over the parameters refined and the segments' initial states. Standard errors are the
+// sandwich of the error's Jacobian and the covariance of the segments' scores (the initial states
+// profiled out), so that an error correlated in time (noise on the inputs, a model's own error)
+// does not make them too narrow. Throws UsageError for invalid options, DataError for a record that
+// cannot be compared, and Error when the simulation at the start blows up.
 RefineResult refine(const Model& model, const DataSource& source, const RefineOptions& options);
 
 // The refinement's section of a report: the table of parameters beside their start, the

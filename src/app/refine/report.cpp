@@ -22,12 +22,15 @@ std::string interval_text(double low, double high) {
 }  // namespace
 
 std::string refinement_text(const RefineResult& r) {
+  const std::size_t skipped = *std::max_element(r.skip.begin(), r.skip.end());
   std::string out =
       "simulation-error refinement from " + r.start_from + ": " + std::to_string(r.samples) +
-      " errors compared (" + std::to_string(r.parameters.size()) + " parameters), " +
-      std::to_string(r.substeps) + (r.substeps == 1 ? " Runge-Kutta step" : " Runge-Kutta steps") +
-      " per sample, the first " + std::to_string(*std::max_element(r.skip.begin(), r.skip.end())) +
-      " rows of each run skipped\n";
+      " errors compared (" + std::to_string(r.parameters.size()) + " parameters) in " +
+      std::to_string(r.segments) + " segments of " + std::to_string(r.segment_rows) +
+      " rows, each simulated from its own initial state, " + std::to_string(r.substeps) +
+      (r.substeps == 1 ? " Runge-Kutta step" : " Runge-Kutta steps") + " per sample" +
+      (skipped > 0 ? ", the first " + std::to_string(skipped) + " rows of each run skipped" : "") +
+      "\n";
   for (const InputBand& b : r.inputs) {
     out += "input " + b.input + ": ";
     if (b.filtered) {
@@ -77,7 +80,7 @@ std::string refinement_text(const RefineResult& r) {
          number(r.cost_start, "%.6g") + " to " + number(r.cost, "%.6g") + ", " +
          (r.converged ? "converged" : "did not converge") + " (" + r.solver + ")\n";
   out += "intervals: t on " + number(r.dof, "%.0f") +
-         " degrees of freedom, the errors' long-run covariance from batches of rows\n";
+         " degrees of freedom, from the spread of the segments' scores\n";
   return out;
 }
 
@@ -123,6 +126,8 @@ nlohmann::ordered_json json_value(const RefineResult& r) {
           {"noise_replicates", r.noise_replicates},
           {"samples", r.samples},
           {"skip", r.skip},
+          {"segments", r.segments},
+          {"segment_rows", r.segment_rows},
           {"substeps", r.substeps},
           {"cost_start", json_value(r.cost_start)},
           {"cost", json_value(r.cost)},
