@@ -36,8 +36,9 @@ struct RefineOptions {
   // The parameters refined; empty: those of `start` that it estimated, or without `start` every
   // parameter the model does not declare fixed.
   std::vector<std::string> free;
-  // Rows left out at the start of each run; nullopt: none (each segment's initial state is
-  // refined with the parameters).
+  // Rows left out at the start of each run; nullopt: until the simulation at the start values has
+  // forgotten its initial state (as validate chooses them), where the segments' initial states
+  // are taken from it.
   std::optional<std::size_t> skip;
   // States and inputs whose mean is removed from their columns first (ValidateOptions::center).
   std::vector<std::string> center;

@@ -106,8 +106,8 @@ Command add_refine(CLI::App& app) {
                   "simulation at the start by less than 1e-6)")
       ->check(CLI::Range(1, RecordSimulator::kMaxSubsteps));
   sub->add_option("--skip", command->options.skip,
-                  "rows left out at the start of each run (default 0: each segment's initial "
-                  "state is refined)");
+                  "rows left out at the start of each run (default: until the simulation at the "
+                  "start values has forgotten its initial state)");
   sub->add_option("--columns", command->columns, "NAME=COLUMN: where a model variable is");
   sub->add_option("--center", command->center,
                   "remove the means of these channels (NAME,... or all) first")

@@ -1,7 +1,8 @@
 // refine: the simulation error of a model through a record's inputs, minimised over its
 // parameters by Ceres Solver from a start (docs/refine.md). The record is read and replayed as
-// validate does (validate/record.cpp, validate/replay.cpp); each evaluation of the error compiles
-// the model at the trial values and simulates every run.
+// validate does (validate/record.cpp, validate/replay.cpp); the error is simulated segment by
+// segment, each segment's a residual block of Ceres' problem, the model compiled once for each
+// trial value of the parameters and shared by the segments.
 
 #include "momentid/refine.hpp"
 
@@ -49,9 +50,12 @@ namespace {
 // start slowly, or a lightly damped chain whose simulation error over a whole run has narrow
 // valleys in the parameters, is fitted piece by piece, where the error is nearly quadratic.
 struct Segment {
+  static constexpr std::size_t kInputMargin = 32;
   std::size_t run = 0, first = 0, rows = 0;
-  std::vector<std::vector<double>> inputs;  // from the segment's first row to the run's end
-  std::vector<double> initial;              // the state at its first row
+  // The inputs over its rows and up to kInputMargin rows beyond, which the interpolation between
+  // the last samples reads.
+  std::vector<std::vector<double>> inputs;
+  std::vector<double> initial;  // the state at its first row
 };
 
 // The record as the error compares it: its segments, and per compared output its weight (one
@@ -200,8 +204,10 @@ std::vector<Segment> segments_of(const Model& model, const Replay& replay,
       s.run = r;
       s.first = skip[r] + k * length;
       s.rows = k + 1 < count ? length : rows - s.first;
+      const std::size_t end = std::min(rows, s.first + s.rows + Segment::kInputMargin);
       for (const std::vector<double>& input : inputs[r]) {
-        s.inputs.emplace_back(input.begin() + static_cast<long>(s.first), input.end());
+        s.inputs.emplace_back(input.begin() + static_cast<long>(s.first),
+                              input.begin() + static_cast<long>(end));
       }
       for (std::size_t j = 0; j < model.states().size(); ++j) {
         s.initial.push_back(replay.simulated[r][j][s.first]);
@@ -329,7 +335,8 @@ std::vector<double> noise_shift(const Comparison& c,
     for (Segment& s : noisy.segments) {
       for (const InputBand& band : bands) {
         const std::vector<double>& x = inputs[s.run][band.index];
-        s.inputs[band.index].assign(x.begin() + static_cast<long>(s.first), x.end());
+        s.inputs[band.index].assign(x.begin() + static_cast<long>(s.first),
+                                    x.begin() + static_cast<long>(s.first + s.inputs[0].size()));
       }
     }
     Unknowns v = u;
@@ -382,9 +389,21 @@ RefineResult refine(const Model& model, const DataSource& source, const RefineOp
     }
     result.inputs.push_back(band);
   }
+  const RecordSimulator start_simulator(model, replay_options.parameters, replay.interpolation,
+                                        replay.record.dt, replay.substeps);
   for (std::size_t r = 0; r < replay.record.runs.size(); ++r) {
-    const std::size_t rows = replay.record.runs[r].rows();
-    const std::size_t skip = options.skip.value_or(0);
+    const RecordRun& run = replay.record.runs[r];
+    const std::size_t rows = run.rows();
+    // The segments start from the simulation at the start values: where it still carries its
+    // own initial state (a latent state from 0), their initial states would start the search
+    // far off, and a strongly nonlinear segment can settle on another solution.
+    std::size_t skip = options.skip.value_or(0);
+    if (!options.skip && !model.inputs().empty()) {
+      skip =
+          forgetting_row(start_simulator, run_inputs(model, replay.record, run), replay.initial[r],
+                         replay.simulated[r], run_start(run), run_label(replay.record, r))
+              .first;
+    }
     if (skip >= rows) {
       throw DataError(file_start(replay.record.name),
                       "run " + std::to_string(run_label(replay.record, r)) + " has " +
