@@ -14,6 +14,7 @@
 #include "momentid/model.hpp"
 #include "momentid/moment.hpp"
 #include "momentid/reader.hpp"
+#include "momentid/validate.hpp"
 
 namespace momentid::cli {
 
@@ -48,6 +49,21 @@ Model model_argument(const std::string& model, const std::string& data, const st
 // The layout options of option_table() (--skip-rows, --decimal, --missing, --names, --runs,
 // --dt-from) for the commands that do not take identify's options, into `layout`.
 void add_layout_options(CLI::App* command, FileLayout& layout);
+
+// The options of the commands that drive a model with a record's inputs (validate, refine):
+// --interpolation, --dt, --substeps, --columns and --center, the layout options and
+// --stdin-limit. read_replay_arguments() is called in two steps: the columns before the model is
+// completed by them (declare_derivative_columns), the rest with the completed model; it returns
+// the channels --center names (`all`: every channel of the model).
+struct ReplayArguments {
+  std::string interpolation;
+  std::optional<double> dt;
+  std::vector<std::string> columns, center;
+};
+void add_replay_arguments(CLI::App* command, ReplayArguments& a, ReplayOptions& replay);
+void read_replay_columns(const ReplayArguments& a, ReplayOptions& replay);
+std::vector<std::string> read_replay_arguments(const ReplayArguments& a, const Model& model,
+                                               ReplayOptions& replay);
 
 // --threads and --shard-size, into `control`.
 void add_pass_options(CLI::App* command, PassControl& control);

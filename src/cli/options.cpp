@@ -192,4 +192,37 @@ std::vector<bool> variable_flags(const Model& model, const std::vector<std::stri
   return out;
 }
 
+void add_replay_arguments(CLI::App* command, ReplayArguments& a, ReplayOptions& replay) {
+  command->add_option("--interpolation", a.interpolation,
+                      "the inputs between samples: zoh, foh, cubic or sinc (default: zoh for "
+                      "held inputs, sinc otherwise)");
+  command->add_option("--dt", a.dt, "sample interval, overriding the data's");
+  command
+      ->add_option("--substeps", replay.substeps,
+                   "Runge-Kutta steps per sample interval (default: the fewest that change the "
+                   "result by less than 1e-6)")
+      ->check(CLI::Range(1, RecordSimulator::kMaxSubsteps));
+  command->add_option("--columns", a.columns, "NAME=COLUMN: where a model variable is");
+  command
+      ->add_option("--center", a.center,
+                   "remove the means of these channels (NAME,... or all) before simulating and "
+                   "comparing: a sensor offset on a symmetric system")
+      ->delimiter(',');
+  add_layout_options(command, replay.record.layout);
+  add_stdin_limit(command);
+}
+
+void read_replay_columns(const ReplayArguments& a, ReplayOptions& replay) {
+  replay.record.columns = column_map(a.columns);
+}
+
+std::vector<std::string> read_replay_arguments(const ReplayArguments& a, const Model& model,
+                                               ReplayOptions& replay) {
+  if (!a.interpolation.empty()) {
+    replay.interpolation = parse_interpolation(a.interpolation, "interpolation");
+  }
+  replay.record.dt = a.dt;
+  return a.center.size() == 1 && a.center[0] == "all" ? model.channel_names() : a.center;
+}
+
 }  // namespace momentid::cli

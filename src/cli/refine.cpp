@@ -17,10 +17,7 @@ struct RefineCommand {
   std::string data;
   std::vector<std::string> set;
   std::string estimates;
-  std::string interpolation;
-  std::optional<double> dt;
-  std::vector<std::string> columns;
-  std::vector<std::string> center;
+  ReplayArguments replay;
   std::string format = "text";
   RefineOptions options;
 };
@@ -46,7 +43,7 @@ std::vector<ParameterEstimate> start_of(const Model& model, const Estimates& est
 int run_refine(RefineCommand& command) {
   RefineOptions& options = command.options;
   ReplayOptions& replay = options.replay;
-  replay.record.columns = column_map(command.columns);
+  read_replay_columns(command.replay, replay);
   const Model file = model_argument(command.model, command.data, "refine MODEL DATA");
   const DataSource source = data_source(command.data);
   const Model model = declare_derivative_columns(file, replay.record, source);
@@ -61,12 +58,7 @@ int run_refine(RefineCommand& command) {
     std::erase_if(options.start, [&](const ParameterEstimate& e) { return e.name == name; });
     replay.parameters.insert_or_assign(name, value);
   }
-  if (!command.interpolation.empty()) {
-    replay.interpolation = parse_interpolation(command.interpolation, "interpolation");
-  }
-  replay.record.dt = command.dt;
-  options.center = command.center.size() == 1 && command.center[0] == "all" ? model.channel_names()
-                                                                            : command.center;
+  options.center = read_replay_arguments(command.replay, model, replay);
   RefineResult result = refine(model, source, options);
   result.start_from = from;
   write_whole_file("-", command.format == "json" ? format_json(result) : format_text(result));
@@ -97,25 +89,12 @@ Command add_refine(CLI::App& app) {
   sub->add_option("--max-iterations", command->options.max_iterations,
                   "the most iterations of the search (default 50)")
       ->check(CLI::Range(1, RefineOptions::kMaxIterations));
-  sub->add_option("--interpolation", command->interpolation,
-                  "the inputs between samples: zoh, foh, cubic or sinc (default: zoh for "
-                  "held inputs, sinc otherwise)");
-  sub->add_option("--dt", command->dt, "sample interval, overriding the data's");
-  sub->add_option("--substeps", command->options.replay.substeps,
-                  "Runge-Kutta steps per sample interval (default: the fewest that change the "
-                  "simulation at the start by less than 1e-6)")
-      ->check(CLI::Range(1, RecordSimulator::kMaxSubsteps));
   sub->add_option("--skip", command->options.skip,
                   "rows left out at the start of each run (default: until the simulation at the "
                   "start values has forgotten its initial state)");
-  sub->add_option("--columns", command->columns, "NAME=COLUMN: where a model variable is");
-  sub->add_option("--center", command->center,
-                  "remove the means of these channels (NAME,... or all) first")
-      ->delimiter(',');
   sub->add_option("--format", command->format, "output format")
       ->check(CLI::IsMember({"text", "json"}));
-  add_layout_options(sub, command->options.replay.record.layout);
-  add_stdin_limit(sub);
+  add_replay_arguments(sub, command->replay, command->options.replay);
   return {sub, [command] { return run_refine(*command); }};
 }
 

@@ -18,11 +18,8 @@ struct ValidateCommand {
   std::string data;
   std::vector<std::string> set;
   std::string estimates;
-  std::string interpolation;
-  std::optional<double> dt;
+  ReplayArguments replay;
   std::optional<std::size_t> skip;
-  std::vector<std::string> columns;
-  std::vector<std::string> center;
   std::string format = "text";
   std::string plot;
   std::string window;
@@ -46,7 +43,7 @@ std::pair<double, double> window_option(const std::string& text) {
 
 int run_validate(ValidateCommand& command) {
   ReplayOptions& replay = command.options.replay;
-  replay.record.columns = column_map(command.columns);
+  read_replay_columns(command.replay, replay);
   const Model file = model_argument(command.model, command.data, "validate MODEL DATA");
   // Once: a pipe or standard input is read whole into a file of its own.
   const DataSource source = data_source(command.data);
@@ -70,14 +67,8 @@ int run_validate(ValidateCommand& command) {
       }
     }
   }
-  if (!command.interpolation.empty()) {
-    replay.interpolation = parse_interpolation(command.interpolation, "interpolation");
-  }
-  replay.record.dt = command.dt;
+  command.options.center = read_replay_arguments(command.replay, model, replay);
   command.options.skip = command.skip;
-  command.options.center = command.center.size() == 1 && command.center[0] == "all"
-                               ? model.channel_names()
-                               : command.center;
   std::optional<std::pair<double, double>> window;
   if (!command.window.empty()) window = window_option(command.window);
   ValidateResult result = validate(model, source, command.options);
@@ -103,32 +94,18 @@ Command add_validate(CLI::App& app) {
       ->delimiter(',');
   sub->add_option("--estimates", command->estimates,
                   "the parameter values of an 'identify --format json' result");
-  sub->add_option("--interpolation", command->interpolation,
-                  "the inputs between samples: zoh, foh, cubic or sinc (default: zoh for "
-                  "held inputs, sinc otherwise)");
-  sub->add_option("--dt", command->dt, "sample interval, overriding the data's");
-  sub->add_option("--substeps", command->options.replay.substeps,
-                  "Runge-Kutta steps per sample interval (default: the fewest that change the "
-                  "result by less than 1e-6)")
-      ->check(CLI::Range(1, RecordSimulator::kMaxSubsteps));
   sub->add_option("--skip", command->skip,
                   "rows left out at the start of each run (default: until the model has "
                   "forgotten its initial state)");
   sub->add_option("--lags", command->options.lags, "lags of the correlation checks (default 25)")
       ->check(CLI::Range(1, ValidateOptions::kMaxLags));
-  sub->add_option("--columns", command->columns, "NAME=COLUMN: where a model variable is");
-  sub->add_option("--center", command->center,
-                  "remove the means of these channels (NAME,... or all) before simulating and "
-                  "comparing: a sensor offset on a symmetric system")
-      ->delimiter(',');
   sub->add_option("--format", command->format, "output format")
       ->check(CLI::IsMember({"text", "json"}));
   auto* plot = sub->add_option("--plot", command->plot, "draw the comparison into this SVG file");
   sub->add_option("--window", command->window,
                   "FROM:TO, the times the plot shows (default: the first 2000 compared rows)")
       ->needs(plot);
-  add_layout_options(sub, command->options.replay.record.layout);
-  add_stdin_limit(sub);
+  add_replay_arguments(sub, command->replay, command->options.replay);
   return {sub, [command] { return run_validate(*command); }};
 }
 
