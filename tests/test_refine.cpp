@@ -91,6 +91,25 @@ v' = -c*v - k*y + x
     CHECK(momentid::status(r) == momentid::Status::kDoubtful);
   }
 
+  TEST_CASE("a refinement that cannot run leaves the moment estimate with a doubt") {
+    // A softening cubic of this size makes the identified oscillator run away in the simulation.
+    const NoisyDuffing record;
+    const Model softening = momentid::parse_model(R"(model softening "a cubic that runs away"
+state y, v
+input x
+param c = 0.5, k = 4
+const eps = -3
+y' = v
+v' = -c*v - k*y - eps*y^3 + x
+)",
+                                                  "softening.mom");
+    const momentid::IdentifyResult r =
+        momentid::identify(softening, momentid::DataSource::file(record.path), {.refine = true});
+    CHECK_FALSE(r.refinement);
+    CHECK(r.refinement_failure.find("the simulation blew up") != std::string::npos);
+    CHECK(momentid::status(r) == momentid::Status::kDoubtful);
+  }
+
   TEST_CASE("options that cannot be refined with are refused, naming the option") {
     const NoisyDuffing record;
     RefineOptions options;

@@ -263,6 +263,8 @@ struct IdentifyResult {
   // IdentifyOptions::refine: the refinement from the main estimate, of the parameters it
   // estimated (momentid/refine.hpp); null otherwise.
   std::shared_ptr<const RefineResult> refinement;
+  // Why the refinement asked for could not run (its error's message), a doubt; empty otherwise.
+  std::string refinement_failure;
   // The identified model runs away from its equilibrium (runaway()): a doubt.
   std::optional<Runaway> runaway;
   // The law check (docs/measured-data.md, "The law check"): for a damping term of quadratic

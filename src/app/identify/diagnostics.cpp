@@ -239,6 +239,9 @@ std::vector<std::string> doubts(const IdentifyResult& r) {
       out.push_back("the simulation-error refinement: " + w);
     }
   }
+  if (!r.refinement_failure.empty()) {
+    out.push_back("the simulation-error refinement could not run: " + r.refinement_failure);
+  }
   const Fit& main = e.main();
   const bool has_errors =
       std::any_of(main.parameters.begin(), main.parameters.end(), [](const ParameterEstimate& p) {

@@ -96,9 +96,17 @@ IdentifyResult identify(const Model& model, const DataSource& source,
     refine_options.replay.record = options.record;
     refine_options.center = options.center;
     refine_options.start = result.parameters();
-    RefineResult refined = refine(*result.model, source, refine_options);
-    refined.start_from = "the moment estimate";
-    result.refinement = std::make_shared<const RefineResult>(std::move(refined));
+    // A refinement that cannot run (the identified model blows up in the simulation) leaves the
+    // moment estimate standing, with a doubt that says why.
+    try {
+      RefineResult refined = refine(*result.model, source, refine_options);
+      refined.start_from = "the moment estimate";
+      result.refinement = std::make_shared<const RefineResult>(std::move(refined));
+    } catch (const Interrupted&) {
+      throw;
+    } catch (const Error& e) {
+      result.refinement_failure = e.what();
+    }
   }
   return result;
 }

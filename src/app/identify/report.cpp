@@ -530,6 +530,7 @@ nlohmann::ordered_json json_value(const IdentifyResult& r) {
     for (const auto& [name, mean] : r.centered) centered[name] = json_value(mean);
   }
   if (r.refinement) out["refinement"] = json_value(*r.refinement);
+  if (!r.refinement_failure.empty()) out["refinement"] = {{"failure", r.refinement_failure}};
   out["equations"] = identified_equations(r);
   out["engineering"] = engineering_json(r);
   out["moments"] = moments_json(r);
