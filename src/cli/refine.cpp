@@ -53,10 +53,10 @@ int run_refine(RefineCommand& command) {
     options.start = start_of(model, read_estimates(model, command.estimates));
   }
   if (!command.set.empty()) from += ", then --set";
-  for (auto& [name, value] : parse_parameter_values(model, command.set)) {
+  for (const auto& given : parse_parameter_values(model, command.set)) {
     // A value set replaces the estimate's, interval and all.
-    std::erase_if(options.start, [&](const ParameterEstimate& e) { return e.name == name; });
-    replay.parameters.insert_or_assign(name, value);
+    std::erase_if(options.start, [&](const ParameterEstimate& e) { return e.name == given.first; });
+    replay.parameters.insert_or_assign(given.first, given.second);
   }
   options.center = read_replay_arguments(command.replay, model, replay);
   RefineResult result = refine(model, source, options);
