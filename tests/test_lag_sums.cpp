@@ -1,24 +1,45 @@
 // The channel sums of a pass (LagSums): taken a block at a time, or in shards merged in record
-// order, they are the sums taken row by row, up to the order of the additions.
+// order, they are the sums taken row by row, up to the order of the additions. The point sums
+// are the means of every row of a short record, and of a thinning sample of a long one.
 
 #include <doctest/doctest.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
 #include <random>
 #include <vector>
 
+#include "common/bytes.hpp"
+#include "momentid/error.hpp"
 #include "moments/lag_sums.hpp"
 
 namespace {
 
 using momentid::ChannelStatistics;
 using momentid::LagSums;
+using momentid::Monomial;
 
 constexpr std::size_t kChannels = 3, kLags = 4, kRows = 200;
 // Two runs: rows [0, kSecondRun) and [kSecondRun, kRows).
 constexpr std::size_t kSecondRun = 120;
+
+// x0^2, x0 x2, x1 x2^2 and x0^2 again (a product that repeats), over the three channels.
+const std::vector<Monomial> kPoints = {{2, 0, 0}, {1, 0, 1}, {0, 1, 2}, {2, 0, 0}};
+
+// The mean of point monomial k over rows [begin, end).
+double direct_mean(const std::vector<double>& rows, std::size_t k, std::size_t begin,
+                   std::size_t end) {
+  double sum = 0;
+  for (std::size_t r = begin; r < end; ++r) {
+    double p = 1;
+    for (std::size_t c = 0; c < kChannels; ++c)
+      p *= std::pow(rows[r * kChannels + c], kPoints[k][c]);
+    sum += p;
+  }
+  return sum / static_cast<double>(end - begin);
+}
 
 // Rows about a large mean (the offset's case), with one outlier per channel.
 std::vector<double> make_rows() {
@@ -99,5 +120,69 @@ TEST_SUITE("lag sums") {
       first.merge(second);
       check_same(first, whole);
     }
+  }
+
+  TEST_CASE("the point sums of a short record are the means of every row, in any shards") {
+    const std::vector<double> rows = make_rows();
+    LagSums whole(kChannels, kLags, kPoints);
+    add_rows(whole, rows, 0, kRows, 7);
+    const std::vector<double> means = whole.point_means();
+    REQUIRE(means.size() == kPoints.size());
+    for (std::size_t k = 0; k < kPoints.size(); ++k) {
+      CHECK(means[k] == doctest::Approx(direct_mean(rows, k, 0, kRows)).epsilon(1e-12));
+    }
+    CHECK(means[3] == means[0]);
+    // Two shards, the second through the bytes another process would send.
+    LagSums first(kChannels, kLags, kPoints), second(kChannels, kLags, kPoints);
+    add_rows(first, rows, 0, 90, 16);
+    second.start_run();
+    add_rows(second, rows, 90, kRows, 16);
+    momentid::ByteWriter out;
+    second.save(out);
+    const std::vector<std::uint8_t> bytes = out.take();
+    momentid::ByteReader in(bytes, "the test's bytes");
+    first.merge(LagSums::load(in, kChannels, kLags));
+    const std::vector<double> merged = first.point_means();
+    for (std::size_t k = 0; k < kPoints.size(); ++k) {
+      CHECK(merged[k] == doctest::Approx(means[k]).epsilon(1e-12));
+    }
+    // Sums of other monomials do not merge.
+    LagSums other(kChannels, kLags, {{1, 0, 0}});
+    add_rows(other, rows, 0, kRows, 50);
+    CHECK_THROWS_AS(first.merge(other), momentid::Error);
+  }
+
+  TEST_CASE("a long shard's point sums thin out, each row sampled standing for those it skips") {
+    // Channel 0 white noise, channel 1 a ramp, channel 2 constant: the ramp's weighted mean is
+    // its mean up to half the largest stride, the constant's exact, the square's within four
+    // standard errors of the weighted sample (every row of the first 2^14, every 2nd to 2^15,
+    // ..., every 32nd from 2^18 on).
+    constexpr std::size_t kLong = 400000;
+    std::mt19937 random(5);
+    std::normal_distribution<double> noise(0.0, 1.0);
+    std::vector<double> rows(kLong * kChannels);
+    for (std::size_t r = 0; r < kLong; ++r) {
+      rows[r * kChannels] = noise(random);
+      rows[r * kChannels + 1] = static_cast<double>(r) / kLong;
+      rows[r * kChannels + 2] = 3.0;
+    }
+    LagSums sums(kChannels, 1, {{2, 0, 0}, {0, 1, 0}, {0, 0, 1}});
+    sums.start_run();
+    for (std::size_t r = 0; r < kLong; r += 1000) sums.add(rows.data() + r * kChannels, 1000);
+    const std::vector<double> means = sums.point_means();
+    double square = 0;
+    for (std::size_t r = 0; r < kLong; ++r) square += rows[r * kChannels] * rows[r * kChannels];
+    square /= kLong;
+    // The weights: 1 for 2^14 rows, then 2^(k+1) for 2^(13-k)... rows sampled: sum of w^2.
+    double weights_squared = 16384;
+    for (std::size_t stride = 2, end = 32768; stride <= 32; stride *= 2, end *= 2) {
+      const std::size_t last = stride == 32 ? kLong : end;
+      weights_squared += static_cast<double>((last - end / 2) / stride) * stride * stride;
+    }
+    const double error = std::sqrt(2 * weights_squared) / kLong;  // Var(x^2) = 2
+    CHECK(error < 0.02);
+    CHECK(std::abs(means[0] - square) < 4 * error);
+    CHECK(means[1] == doctest::Approx(0.5).epsilon(32.0 / kLong));
+    CHECK(means[2] == doctest::Approx(3.0).epsilon(1e-15));
   }
 }

@@ -83,6 +83,12 @@ struct DataOptions {
   std::vector<double> offsets;
   // Channels computed from the others, after the offsets are subtracted.
   std::vector<ComputedChannel> computed;
+  // Monomials of the channels read (states, inputs, then derivatives) whose means are wanted to a
+  // few digits only (the variances behind the errors the record's ends leave): taken from a
+  // sample of the rows each shard owns, every row at first, thinning as its rows grow to every
+  // kPointStride-th (DataMoments::point_means), without their cost at every row of a long record.
+  std::vector<Monomial> point_moments;
+  static constexpr std::size_t kPointStride = 32;
 
   // Channels formed from a column of their derivative (identify's --integrate): every channel
   // goes through a linear-phase high-pass with the magnitude of a fourth-order Butterworth
@@ -111,6 +117,8 @@ struct DataMoments {
   std::size_t rows = 0;
   std::size_t runs = 0;
   MissingSummary missing;  // rows dropped for missing values
+  // The means of DataOptions::point_moments over the rows sampled, in their order.
+  std::vector<double> point_means;
 
   // The statistics of the channel named `name`, or nullptr when the pass read none.
   const ChannelStatistics* channel(const std::string& name) const;

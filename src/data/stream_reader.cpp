@@ -20,12 +20,12 @@ constexpr double kTimeRounding = 4 * 5.9604644775390625e-8;
 
 }  // namespace
 
-double StreamReader::step_allowance(double t, double reference) const {
+double StreamReader::step_allowance(double t, double previous, double reference) const {
   // Times printed to a few decimals: one unit in the last place, but never half a step, so that
   // a missing or doubled sample is refused whatever the precision.
   const double printed = std::min(precision_.unit(), reference / 2);
   return kStepTolerance * reference + printed +
-         kTimeRounding * std::max(std::abs(t), std::abs(previous_time_));
+         kTimeRounding * std::max(std::abs(t), std::abs(previous));
 }
 
 bool to_run(double value, long& run) {
@@ -82,12 +82,10 @@ std::size_t StreamReader::take_rows(DataBlock& block, std::size_t max_rows) {
     for (const auto& [to, from] : map_.copies) rows[r * width + to] = rows[r * width + from];
   }
   if (timed) {
-    for (std::size_t r = 0; r < n; ++r) {
-      if (!steady_step(times_[r])) {
-        unread_rows(n - r);
-        n = r;
-        break;
-      }
+    const std::size_t steady = steady_steps(times_.data(), n);
+    if (steady < n) {
+      unread_rows(n - steady);
+      n = steady;
     }
   }
   block.rows += n;
@@ -197,17 +195,27 @@ void StreamReader::non_uniform_step(double t, double step) const {
            UsageError::mention("dt") + " " + number(mean) + " if the samples are equally spaced");
 }
 
-// check_time's common case, without its messages: take_rows gives a row it questions back.
-bool StreamReader::steady_step(double t) {
-  precision_.see(t);
-  const double step = t - previous_time_;
-  if (!(step > 0) || std::abs(step - *step_) > step_allowance(t, *step_)) return false;
-  run_span_ += step;
-  ++run_steps_;
-  span_ += step;
-  ++steps_;
-  previous_time_ = t;
-  return true;
+// check_time's common case, without its messages: take_rows gives the rows it questions back.
+// The steps' sum is the span from the last time to the newest (it is what adding them gives,
+// without a rounding per step).
+std::size_t StreamReader::steady_steps(const double* times, std::size_t count) {
+  const double reference = *step_;
+  double previous = previous_time_;
+  std::size_t r = 0;
+  for (; r < count; ++r) {
+    const double t = times[r];
+    precision_.see(t);
+    const double step = t - previous;
+    if (!(step > 0) || std::abs(step - reference) > step_allowance(t, previous, reference)) break;
+    previous = t;
+  }
+  const double span = previous - previous_time_;
+  run_span_ += span;
+  run_steps_ += r;
+  span_ += span;
+  steps_ += r;
+  previous_time_ = previous;
+  return r;
 }
 
 void StreamReader::check_time(double t, bool owned) {
@@ -223,13 +231,13 @@ void StreamReader::check_time(double t, bool owned) {
       // Rows dropped for missing values lie between: the step is not a sample interval.
     } else if (!step_) {
       const std::optional<double> dt = header_.metadata_dt;
-      if (dt && std::abs(step - *dt) > step_allowance(t, *dt)) {
+      if (dt && std::abs(step - *dt) > step_allowance(t, previous_time_, *dt)) {
         fail(field_location(map_.time), "time step " + distinguished(step, *dt).first +
                                             " of column 't' disagrees with " +
                                             header_.metadata_dt_source);
       }
       step_ = step;
-    } else if (std::abs(step - *step_) > step_allowance(t, *step_)) {
+    } else if (std::abs(step - *step_) > step_allowance(t, previous_time_, *step_)) {
       non_uniform_step(t, step);
     }
   }

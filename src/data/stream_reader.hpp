@@ -133,11 +133,13 @@ class StreamReader : public DataReader {
   bool next_rows(DataBlock& block, std::size_t max_rows);
   std::size_t take_rows(DataBlock& block, std::size_t max_rows);
   void check_time(double t, bool owned);
-  // For an owned row after the first step, none dropped before it: takes time t when its step
-  // from the last is the first step within the allowance; false (nothing taken) otherwise.
-  bool steady_step(double t);
-  // How far a step at time t may differ from `reference`, the first step or the metadata's dt.
-  double step_allowance(double t, double reference) const;
+  // For owned rows after the first step, none dropped before them: takes the times from the
+  // first while each step from the one before is the first step within the allowance. Returns
+  // how many it took.
+  std::size_t steady_steps(const double* times, std::size_t count);
+  // How far a step from `previous` to time t may differ from `reference`, the first step or the
+  // metadata's dt.
+  double step_allowance(double t, double previous, double reference) const;
   [[noreturn]] void non_uniform_step(double t, double step) const;
   RowZone zone_of_last_row() const;
 

@@ -334,6 +334,14 @@ DataMoments moments_from_data(const DataSource& source, const std::vector<std::s
   for (ComputedChannel& c : read_options.computed) {
     for (auto& [coefficient, monomial] : c.argument) monomial = order.monomial(monomial);
   }
+  for (Monomial& m : read_options.point_moments) {
+    m = order.monomial(m);
+    m.resize(std::max(m.size(), channels));
+    if (std::any_of(m.begin() + static_cast<std::ptrdiff_t>(channels), m.end(),
+                    [](int e) { return e != 0; })) {
+      throw std::logic_error("a point moment holds a computed channel");
+    }
+  }
   if (options.integration) {
     read_options.integration->integrals = order.values(options.integration->integrals);
   }
@@ -422,6 +430,7 @@ DataMoments moments_from_data(const DataSource& source, const std::vector<std::s
                        DataOptions::kMinAutoBatches, batches));
   out.channels = channel_statistics(result.state->lags, request.names, order,
                                     out.hold == InputHold::kZeroOrderHold && !inputs.empty());
+  out.point_means = result.state->lags.point_means();
   return out;
 }
 

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <map>
+#include <utility>
 
 namespace momentid {
 
@@ -59,6 +61,32 @@ PairSums sum_pairs(const double* x, const double* y, std::size_t n) {
   return out;
 }
 
+// The sum of x[i] * y[i] over i < n.
+double sum_products(const double* x, const double* y, std::size_t n) {
+  std::array<Double2, kVectors> products{};
+  std::size_t i = 0;
+  for (; i + kLanes <= n; i += kLanes) {
+    for (std::size_t v = 0; v < kVectors; ++v) {
+      Double2 xv, yv;
+      std::memcpy(&xv, x + i + 2 * v, sizeof xv);
+      std::memcpy(&yv, y + i + 2 * v, sizeof yv);
+      products[v] += xv * yv;
+    }
+  }
+  Double2 t = products[0];
+  for (std::size_t v = 1; v < kVectors; ++v) t += products[v];
+  double out = t[0] + t[1];
+  for (; i < n; ++i) out += x[i] * y[i];
+  return out;
+}
+
+// The sum of x[i] over first <= i < last (a few terms).
+double range_sum(const double* x, std::ptrdiff_t first, std::ptrdiff_t last) {
+  double out = 0;
+  for (std::ptrdiff_t i = first; i < last; ++i) out += x[i];
+  return out;
+}
+
 // The largest |x[i]| over i < n.
 double largest_magnitude(const double* x, std::size_t n) {
   std::array<double, kLanes> top{};
@@ -72,7 +100,7 @@ double largest_magnitude(const double* x, std::size_t n) {
 
 }  // namespace
 
-LagSums::LagSums(std::size_t channels, std::size_t lags)
+LagSums::LagSums(std::size_t channels, std::size_t lags, std::vector<Monomial> points)
     : channels_(channels),
       lags_(lags),
       history_(lags * channels, 0.0),
@@ -83,7 +111,30 @@ LagSums::LagSums(std::size_t channels, std::size_t lags)
       lagged_(lags * channels, 0.0),
       pairs_(lags, 0),
       largest_(channels, 0.0),
-      largest_row_(channels, 0) {}
+      largest_row_(channels, 0),
+      points_(std::move(points)) {
+  // The power table: powers 0 .. the largest exponent of each channel.
+  power_at_.assign(channels + 1, 0);
+  for (std::size_t c = 0; c < channels; ++c) {
+    int top = 0;
+    for (const Monomial& m : points_) top = std::max(top, m[c]);
+    power_at_[c + 1] = power_at_[c] + static_cast<std::size_t>(top) + 1;
+  }
+  powers_.assign(power_at_[channels], 1.0);
+  // Each distinct monomial once (products of pairs repeat): the sums are the distinct ones'.
+  point_factors_.push_back(0);
+  std::map<Monomial, std::size_t> distinct;
+  for (const Monomial& m : points_) {
+    const auto [at, added] = distinct.try_emplace(m, distinct.size());
+    point_index_.push_back(at->second);
+    if (!added) continue;
+    for (std::size_t c = 0; c < channels; ++c) {
+      if (m[c] > 0) factors_.push_back(static_cast<std::uint32_t>(power_at_[c]) + m[c]);
+    }
+    point_factors_.push_back(static_cast<std::uint32_t>(factors_.size()));
+  }
+  point_sums_.assign(distinct.size(), 0.0);
+}
 
 void LagSums::add_history(const double* rows, std::size_t count) {
   // Remembered as read: the offset is not known before the shard's first row.
@@ -119,20 +170,73 @@ void LagSums::add(const double* rows, std::size_t count) {
     const PairSums own = sum_pairs(x, x, count);
     sum_[c] += own.lead;
     sum_squares_[c] += own.products;
-    // Lag l pairs each row with the one l rows earlier in the run, history included.
+    // Lag l pairs each row with the one l rows earlier in the run, history included. The sums
+    // of the values paired are the block's sum less the few rows at its ends that lag l leaves
+    // out, with the history's rows it takes.
     for (std::size_t l = 1; l <= lags_; ++l) {
       const std::size_t first = first_paired(l);
-      const PairSums pairs = sum_pairs(x + first, x + first - l, count - first);
       const std::size_t i = (l - 1) * channels_ + c;
-      products_[i] += pairs.products;
-      lead_[i] += pairs.lead;
-      lagged_[i] += pairs.lagged;
+      if (count < 2 * l) {
+        const PairSums pairs = sum_pairs(x + first, x + first - l, count - first);
+        products_[i] += pairs.products;
+        lead_[i] += pairs.lead;
+        lagged_[i] += pairs.lagged;
+        continue;
+      }
+      const auto lag = static_cast<std::ptrdiff_t>(l), begin = static_cast<std::ptrdiff_t>(first),
+                 end = static_cast<std::ptrdiff_t>(count);
+      products_[i] += sum_products(x + first, x + first - l, count - first);
+      lead_[i] += own.lead - range_sum(x, 0, begin);
+      lagged_[i] += own.lead - range_sum(x, end - lag, end) + range_sum(x, begin - lag, 0);
     }
     keep_history(c);
   }
   for (std::size_t l = 1; l <= lags_; ++l) pairs_[l - 1] += count - first_paired(l);
   filled_ += count;
   count_ += count;
+  add_points(rows, count);
+}
+
+namespace {
+
+// The stride of the point sums at the `position`-th row a shard adds: every row of the first
+// kPointRows, then every 2nd up to twice as many, every 4th up to four times as many, and so on to
+// every DataOptions::kPointStride-th, so that a short record gives every row and a long one a
+// small fraction of the work. Each row sampled stands for `stride` rows.
+constexpr std::size_t kPointRows = std::size_t{1} << 14;
+std::size_t point_stride(std::size_t position) {
+  std::size_t stride = 1;
+  while (stride < DataOptions::kPointStride && position >= stride * kPointRows) stride *= 2;
+  return stride;
+}
+
+}  // namespace
+
+void LagSums::add_points(const double* rows, std::size_t count) {
+  if (points_.empty()) return;
+  // Each row's powers of its channels, then each monomial a product of a few of them.
+  const std::size_t first = count_ - count;  // the rows added before these
+  std::size_t r = point_skip_;
+  for (std::size_t stride = point_stride(first + r); r < count;
+       r += stride, stride = point_stride(first + r)) {
+    const auto weight = static_cast<double>(stride);
+    const double* row = rows + r * channels_;
+    for (std::size_t c = 0; c < channels_; ++c) {
+      double* power = powers_.data() + power_at_[c];
+      for (std::size_t e = 1; e < power_at_[c + 1] - power_at_[c]; ++e) {
+        power[e] = power[e - 1] * row[c];
+      }
+    }
+    for (std::size_t k = 0; k + 1 < point_factors_.size(); ++k) {
+      double p = 1;
+      for (std::uint32_t f = point_factors_[k]; f < point_factors_[k + 1]; ++f) {
+        p *= powers_[factors_[f]];
+      }
+      point_sums_[k] += weight * p;
+    }
+    point_rows_ += stride;
+  }
+  point_skip_ = r - count;
 }
 
 void LagSums::fill_column(std::size_t c, const double* rows, std::size_t count) {
@@ -157,6 +261,15 @@ void LagSums::save(ByteWriter& out) const {
     out.f64(largest_[c]);
     out.u64(largest_row_[c]);
   }
+  out.u64(point_index_.size());
+  for (std::size_t k : point_index_) out.u64(k);
+  out.u64(point_sums_.size());
+  out.u64(point_parts_.size());
+  for (std::size_t p = 0; p <= point_parts_.size(); ++p) {
+    const bool own = p == 0;
+    out.u64(own ? point_rows_ : point_parts_[p - 1].rows);
+    for (double x : own ? point_sums_ : point_parts_[p - 1].sums) out.f64(x);
+  }
 }
 
 LagSums LagSums::load(ByteReader& in, std::size_t channels, std::size_t lags) {
@@ -176,6 +289,26 @@ LagSums LagSums::load(ByteReader& in, std::size_t channels, std::size_t lags) {
     out.largest_[c] = in.f64("a channel's largest value");
     out.largest_row_[c] = in.u64("the row of a channel's largest value");
   }
+  out.point_index_.resize(in.count(8, "point moments"));
+  for (std::size_t& k : out.point_index_) k = in.u64("a point moment's sum");
+  const std::size_t distinct = in.count(8, "point sums");
+  out.point_parts_.resize(in.count(8, "parts of the point sums"));
+  for (std::size_t p = 0; p <= out.point_parts_.size(); ++p) {
+    PointPart part;
+    part.rows = in.u64("the row count of point sums");
+    part.sums.resize(distinct);
+    for (double& x : part.sums) x = in.f64("a point sum");
+    if (p == 0) {
+      out.point_rows_ = part.rows;
+      out.point_sums_ = std::move(part.sums);
+    } else {
+      out.point_parts_[p - 1] = std::move(part);
+    }
+  }
+  if (std::any_of(out.point_index_.begin(), out.point_index_.end(),
+                  [&](std::size_t k) { return k >= out.point_sums_.size(); })) {
+    throw Error("the result of another process does not match this one's point sums");
+  }
   return out;
 }
 
@@ -185,6 +318,11 @@ void LagSums::merge(const LagSums& other) {
     *this = other;
     return;
   }
+  if (other.point_sums_.size() != point_sums_.size() || other.point_index_ != point_index_) {
+    throw Error("the result of another process does not match this one's point sums");
+  }
+  point_parts_.push_back({other.point_rows_, other.point_sums_});
+  point_parts_.insert(point_parts_.end(), other.point_parts_.begin(), other.point_parts_.end());
   for (std::size_t c = 0; c < channels_; ++c) {
     if (other.largest_[c] > largest_[c]) {
       largest_[c] = other.largest_[c];
@@ -234,6 +372,21 @@ ChannelStatistics LagSums::statistics(std::size_t c, bool held) const {
     s.noise_variance = s.variance * (1 - smooth_lag_zero(s.autocorrelation, held));
   }
   return s;
+}
+
+std::vector<double> LagSums::point_means() const {
+  std::vector<double> sums = point_sums_;
+  std::size_t rows = point_rows_;
+  for (const PointPart& part : point_parts_) {
+    for (std::size_t k = 0; k < sums.size(); ++k) sums[k] += part.sums[k];
+    rows += part.rows;
+  }
+  std::vector<double> out(point_index_.size(), std::nan(""));
+  if (rows == 0) return out;
+  for (std::size_t k = 0; k < out.size(); ++k) {
+    out[k] = sums[point_index_[k]] / static_cast<double>(rows);
+  }
+  return out;
 }
 
 double smooth_lag_zero(const std::vector<double>& rho, bool held) {

@@ -1,8 +1,10 @@
 #pragma once
 // The channel statistics of a pass: sums for the mean, variance and autocorrelations of every
-// channel, mergeable across shards.
+// channel, and the sums of a few monomials of them over a sample of the rows (point sums),
+// mergeable across shards.
 
 #include <cstddef>
+#include <cstdint>
 #include <vector>
 
 #include "common/bytes.hpp"
@@ -17,7 +19,8 @@ namespace momentid {
 // (add_history).
 class LagSums {
  public:
-  LagSums(std::size_t channels, std::size_t lags);
+  // `points`: monomials of the channels, summed over a sample of the rows added (add_points).
+  LagSums(std::size_t channels, std::size_t lags, std::vector<Monomial> points = {});
 
   void start_run() { filled_ = 0; }
   // Rows of the run before the shard, which only pair with the shard's own rows.
@@ -33,12 +36,16 @@ class LagSums {
 
   // `held`: the inputs are held over each sample (smooth_lag_zero).
   ChannelStatistics statistics(std::size_t c, bool held) const;
+  // The means of the points' monomials over the rows sampled (NaN without any).
+  std::vector<double> point_means() const;
 
  private:
   // Fills column_ with channel c: its history, then the block's values as they are.
   void fill_column(std::size_t c, const double* rows, std::size_t count);
   // Keeps the column's last `lags_` values as channel c's history.
   void keep_history(std::size_t c);
+  // Adds the rows sampled among `count` rows to the point sums.
+  void add_points(const double* rows, std::size_t count);
 
   std::size_t channels_, lags_;
   // Per channel, the run's last `lags_` values less the offset, oldest first (the last
@@ -53,6 +60,25 @@ class LagSums {
   std::vector<double> largest_;
   std::vector<std::size_t> largest_row_;
   std::size_t filled_ = 0, count_ = 0;
+  // The point sums: the monomials, each one's among the distinct ones, the distinct ones' sums
+  // over the rows sampled, how many, and the rows to pass before the next. load() restores the
+  // index and the sums alone, to be merged and read.
+  std::vector<Monomial> points_;
+  std::vector<std::size_t> point_index_;
+  std::vector<double> point_sums_;
+  std::size_t point_rows_ = 0, point_skip_ = 0;
+  // The point sums of the shards merged after this one's rows, in record order: added up only
+  // in point_means(), so that sums merged in any grouping (threads, processes) add alike.
+  struct PointPart {
+    std::size_t rows = 0;
+    std::vector<double> sums;
+  };
+  std::vector<PointPart> point_parts_;
+  // A row's powers of each channel c from power_at_[c] (its power 0) on; each distinct monomial
+  // k the product of the powers factors_[point_factors_[k] .. point_factors_[k + 1]).
+  std::vector<std::size_t> power_at_;
+  std::vector<double> powers_;
+  std::vector<std::uint32_t> factors_, point_factors_;
 };
 
 }  // namespace momentid

@@ -13,9 +13,10 @@ namespace {
 // The empty sums of a pass, into which its shards are merged.
 ShardState empty_state(const Pass& pass) {
   const PassSetup& setup = pass.setup;
-  return ShardState{MomentAccumulator(setup.moments, setup.layout.states, setup.layout.inputs,
-                                      setup.hold, pass.merged_batches, setup.options->held_rule),
-                    LagSums(setup.states + setup.inputs, setup.options->lags)};
+  return ShardState{
+      MomentAccumulator(setup.moments, setup.layout.states, setup.layout.inputs, setup.hold,
+                        pass.merged_batches, setup.options->held_rule),
+      LagSums(setup.states + setup.inputs, setup.options->lags, setup.options->point_moments)};
 }
 
 // Shards [begin, end) read by `workers` threads, each taking the next shard not yet started,

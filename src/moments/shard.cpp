@@ -169,7 +169,7 @@ class ShardPass {
         channels_(setup.states + setup.inputs),
         out_{MomentAccumulator(setup.moments, setup.layout.states, setup.layout.inputs, setup.hold,
                                setup.batches, options_.held_rule),
-             LagSums(channels_, options_.lags)},
+             LagSums(channels_, options_.lags, options_.point_moments)},
         filtered_whole_(filtered_whole(options_)),
         widen_(setup, filtered_whole_),
         shift_(setup.layout.states, setup.layout.inputs, options_.input_shift),

@@ -3,10 +3,6 @@
 
 #include "app/identify/end_values.hpp"
 
-#include <map>
-
-#include "app/identify/moment_lists.hpp"
-
 namespace momentid {
 
 void increments_to_rates(const std::vector<Monomial>& moments, std::optional<double> interval,
@@ -28,16 +24,13 @@ std::vector<Monomial> rate_monomials(const std::vector<Monomial>& moments) {
 }
 
 std::vector<std::vector<double>> rate_covariance(const std::vector<Monomial>& g,
-                                                 const std::vector<Monomial>& moments,
-                                                 const MomentEstimates& estimates, std::size_t runs,
+                                                 const std::vector<double>& means, std::size_t runs,
                                                  double duration) {
-  std::map<Monomial, double> mean;
-  for (std::size_t k = 0; k < moments.size(); ++k) mean.emplace(moments[k], estimates.mean[k]);
-  const std::vector<Monomial> all = with_products(g);
+  // with_products(g): the g, then g_i g_j for i <= j.
   std::vector<std::vector<double>> out(g.size(), std::vector<double>(g.size()));
   for (std::size_t i = 0, next = g.size(); i < g.size(); ++i) {
     for (std::size_t j = i; j < g.size(); ++j, ++next) {
-      const double c = mean.at(all[next]) - mean.at(g[i]) * mean.at(g[j]);
+      const double c = means.at(next) - means.at(i) * means.at(j);
       out[i][j] = out[j][i] = 2 * static_cast<double>(runs) * c / (duration * duration);
     }
   }

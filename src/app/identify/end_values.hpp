@@ -22,12 +22,11 @@ void increments_to_rates(const std::vector<Monomial>& moments, std::optional<dou
                          MomentEstimates& estimates);
 
 // The covariance of the record's rates of change (g(end) - g(start)) / T summed over its runs,
-// for the monomials `g` whose moments and products (with_products) are among `moments` with
-// `estimates`: each run's ends, far apart, are independent draws of the stationary states, so
-// that the covariance is 2 runs Cov(g_i, g_j) / T^2 (docs/uncertainty.md, "End values").
+// for the monomials `g`, from `means`, those of with_products(g) in its order: each run's ends,
+// far apart, are independent draws of the stationary states, so that the covariance is
+// 2 runs Cov(g_i, g_j) / T^2 (docs/uncertainty.md, "End values").
 std::vector<std::vector<double>> rate_covariance(const std::vector<Monomial>& g,
-                                                 const std::vector<Monomial>& moments,
-                                                 const MomentEstimates& estimates, std::size_t runs,
+                                                 const std::vector<double>& means, std::size_t runs,
                                                  double duration);
 
 }  // namespace momentid

@@ -29,8 +29,9 @@ ZeroLagPlan plan_zero_lag(const Model& model, const IdentifyOptions& options) {
   if (!model.inputs().empty() && options.record.hold != InputHold::kSample) {
     plan.held = held_input_corrections(model, without_rates(plan.moments));
   }
-  // The ends of the record: the rates of change, with the products their covariance needs,
-  // unless these would more than double the pass.
+  // The ends of the record: the rates of change, with the products their covariance needs
+  // (from a sample of the rows, DataOptions::point_moments), unless these would outnumber the
+  // pass's moments.
   plan.rated = rate_monomials(plan.moments);
   plan.pass_moments = plan.moments;
   const std::vector<Monomial> means = not_among(
@@ -45,8 +46,6 @@ ZeroLagPlan plan_zero_lag(const Model& model, const IdentifyOptions& options) {
                             " more moments than the " + std::to_string(plan.pass_moments.size()) +
                             " the pass reads (the products of " +
                             std::to_string(plan.rated.size()) + " rates of change)";
-  } else {
-    plan.pass_moments.insert(plan.pass_moments.end(), products.begin(), products.end());
   }
   return plan;
 }
@@ -103,7 +102,11 @@ void identify_zero_lag(IdentifyResult& result, const DataSource& source,
     data_options.min_batches = kBatchesPerEquation * zero_lag.system->equations.size();
   data_options.offsets = channel_offsets(source, state_names(model), input_names(model),
                                          data_options, options.center, result.centered);
+  if (!plan.rated.empty() && plan.ends_unavailable.empty()) {
+    data_options.point_moments = with_products(plan.rated);
+  }
   const MomentEstimates all = read_zero_lag(result, plan, source, data_options);
+  data_options.point_moments.clear();
   std::vector<std::size_t> mean_index;
   for (const Monomial& m : first_moments_of(model.channel_count(), model.variables().size())) {
     mean_index.push_back(
@@ -118,7 +121,7 @@ void identify_zero_lag(IdentifyResult& result, const DataSource& source,
     zero_lag.end_values.emplace().unavailable = plan.ends_unavailable;
     if (plan.ends_unavailable.empty() && result.data.estimates.intervals > 0) {
       solve_options.rate_covariance = rate_covariance(
-          plan.rated, plan.pass_moments, all, std::max<std::size_t>(result.data.runs, 1),
+          plan.rated, result.data.point_means, std::max<std::size_t>(result.data.runs, 1),
           static_cast<double>(result.data.estimates.intervals) * *result.data.time_step);
     }
   }

@@ -18,8 +18,7 @@ namespace momentid {
 struct ZeroLagPlan {
   MomentSystem system;
   std::vector<Monomial> moments;  // the system's, as moments_to_estimate lists them
-  // `moments`, then the channels' means, those the held-input correction adds, and the
-  // products the record's ends need (unless `ends_unavailable` says why not).
+  // `moments`, then the channels' means and those the held-input correction adds.
   std::vector<Monomial> pass_moments;
   HeldInputCorrections held;
   std::vector<Monomial> rated;  // the monomials g of the rates of change E[(g)'] in `moments`
@@ -28,8 +27,9 @@ struct ZeroLagPlan {
 };
 
 // Derives the equations with the record's rates of change kept (DeriveOptions::rates) and plans
-// the pass: the held-input correction's moments unless the inputs are known to be sampled, and
-// the products of the rated monomials unless these would more than double the pass.
+// the pass: the held-input correction's moments unless the inputs are known to be sampled; the
+// record's ends are unavailable when the products of the rated monomials would outnumber the
+// pass's moments.
 ZeroLagPlan plan_zero_lag(const Model& model, const IdentifyOptions& options);
 
 // The zero-lag identification into `result` (whose model is set): the plan, one pass, the
