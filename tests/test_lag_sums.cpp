@@ -155,8 +155,8 @@ TEST_SUITE("lag sums") {
   TEST_CASE("a long shard's point sums thin out, each row sampled standing for those it skips") {
     // Channel 0 white noise, channel 1 a ramp, channel 2 constant: the ramp's weighted mean is
     // its mean up to half the largest stride, the constant's exact, the square's within four
-    // standard errors of the weighted sample (every row of the first 2^14, every 2nd to 2^15,
-    // ..., every 32nd from 2^18 on).
+    // standard errors of the weighted sample (every row of the first 2^12, every 2nd to 2^13,
+    // ..., every 32nd from 2^16 on).
     constexpr std::size_t kLong = 400000;
     std::mt19937 random(5);
     std::normal_distribution<double> noise(0.0, 1.0);
@@ -173,9 +173,10 @@ TEST_SUITE("lag sums") {
     double square = 0;
     for (std::size_t r = 0; r < kLong; ++r) square += rows[r * kChannels] * rows[r * kChannels];
     square /= kLong;
-    // The weights: 1 for 2^14 rows, then 2^(k+1) for 2^(13-k)... rows sampled: sum of w^2.
-    double weights_squared = 16384;
-    for (std::size_t stride = 2, end = 32768; stride <= 32; stride *= 2, end *= 2) {
+    // The weights: 1 for the first 2^12 rows, then stride s over [2^12 s / 2, 2^12 s): the sum
+    // of their squares.
+    double weights_squared = 4096;
+    for (std::size_t stride = 2, end = 8192; stride <= 32; stride *= 2, end *= 2) {
       const std::size_t last = stride == 32 ? kLong : end;
       weights_squared += static_cast<double>((last - end / 2) / stride) * stride * stride;
     }

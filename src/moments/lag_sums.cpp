@@ -87,6 +87,34 @@ double range_sum(const double* x, std::ptrdiff_t first, std::ptrdiff_t last) {
   return out;
 }
 
+// The sum over i < n of w[i] times the product of the columns `factors` (`count` of them, each
+// kPointGroup values from `table`) at i.
+double weighted_sum(const double* w, const std::uint32_t* factors, std::size_t count,
+                    const double* table, std::size_t n) {
+  std::array<Double2, kVectors> sums{};
+  std::size_t i = 0;
+  for (; i + kLanes <= n; i += kLanes) {
+    for (std::size_t v = 0; v < kVectors; ++v) {
+      Double2 p, q;
+      std::memcpy(&p, w + i + 2 * v, sizeof p);
+      for (std::size_t f = 0; f < count; ++f) {
+        std::memcpy(&q, table + factors[f] * LagSums::kPointGroup + i + 2 * v, sizeof q);
+        p *= q;
+      }
+      sums[v] += p;
+    }
+  }
+  Double2 t = sums[0];
+  for (std::size_t v = 1; v < kVectors; ++v) t += sums[v];
+  double out = t[0] + t[1];
+  for (; i < n; ++i) {
+    double p = w[i];
+    for (std::size_t f = 0; f < count; ++f) p *= table[factors[f] * LagSums::kPointGroup + i];
+    out += p;
+  }
+  return out;
+}
+
 // The largest |x[i]| over i < n.
 double largest_magnitude(const double* x, std::size_t n) {
   std::array<double, kLanes> top{};
@@ -119,8 +147,10 @@ LagSums::LagSums(std::size_t channels, std::size_t lags, std::vector<Monomial> p
     int top = 0;
     for (const Monomial& m : points_) top = std::max(top, m[c]);
     power_at_[c + 1] = power_at_[c] + static_cast<std::size_t>(top) + 1;
+    if (top > 0) point_channels_.push_back(c);
   }
-  powers_.assign(power_at_[channels], 1.0);
+  powers_.assign(power_at_[channels] * kPointGroup, 1.0);
+  point_weights_.assign(kPointGroup, 0.0);
   // Each distinct monomial once (products of pairs repeat): the sums are the distinct ones'.
   point_factors_.push_back(0);
   std::map<Monomial, std::size_t> distinct;
@@ -203,7 +233,7 @@ namespace {
 // kPointRows, then every 2nd up to twice as many, every 4th up to four times as many, and so on to
 // every DataOptions::kPointStride-th, so that a short record gives every row and a long one a
 // small fraction of the work. Each row sampled stands for `stride` rows.
-constexpr std::size_t kPointRows = std::size_t{1} << 14;
+constexpr std::size_t kPointRows = std::size_t{1} << 12;
 std::size_t point_stride(std::size_t position) {
   std::size_t stride = 1;
   while (stride < DataOptions::kPointStride && position >= stride * kPointRows) stride *= 2;
@@ -214,27 +244,32 @@ std::size_t point_stride(std::size_t position) {
 
 void LagSums::add_points(const double* rows, std::size_t count) {
   if (points_.empty()) return;
-  // Each row's powers of its channels, then each monomial a product of a few of them.
   const std::size_t first = count_ - count;  // the rows added before these
+  const auto column = [&](std::size_t j) { return powers_.data() + j * kPointGroup; };
   std::size_t r = point_skip_;
-  for (std::size_t stride = point_stride(first + r); r < count;
-       r += stride, stride = point_stride(first + r)) {
-    const auto weight = static_cast<double>(stride);
-    const double* row = rows + r * channels_;
-    for (std::size_t c = 0; c < channels_; ++c) {
-      double* power = powers_.data() + power_at_[c];
-      for (std::size_t e = 1; e < power_at_[c + 1] - power_at_[c]; ++e) {
-        power[e] = power[e - 1] * row[c];
+  while (r < count) {
+    // Up to kPointGroup rows sampled, a column each: their weights, each channel's value.
+    std::size_t n = 0;
+    for (std::size_t stride = point_stride(first + r); r < count && n < kPointGroup;
+         r += stride, stride = point_stride(first + r), ++n) {
+      point_weights_[n] = static_cast<double>(stride);
+      for (const std::size_t c : point_channels_)
+        column(power_at_[c] + 1)[n] = rows[r * channels_ + c];
+      point_rows_ += stride;
+    }
+    // The higher powers, then each monomial's weighted sum along the columns of its factors.
+    for (const std::size_t c : point_channels_) {
+      const double* value = column(power_at_[c] + 1);
+      for (std::size_t j = power_at_[c] + 2; j < power_at_[c + 1]; ++j) {
+        const double* lower = column(j - 1);
+        double* power = column(j);
+        for (std::size_t i = 0; i < n; ++i) power[i] = lower[i] * value[i];
       }
     }
-    for (std::size_t k = 0; k + 1 < point_factors_.size(); ++k) {
-      double p = 1;
-      for (std::uint32_t f = point_factors_[k]; f < point_factors_[k + 1]; ++f) {
-        p *= powers_[factors_[f]];
-      }
-      point_sums_[k] += weight * p;
+    for (std::size_t k = 0; k < point_sums_.size(); ++k) {
+      point_sums_[k] += weighted_sum(point_weights_.data(), factors_.data() + point_factors_[k],
+                                     point_factors_[k + 1] - point_factors_[k], powers_.data(), n);
     }
-    point_rows_ += stride;
   }
   point_skip_ = r - count;
 }

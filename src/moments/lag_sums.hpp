@@ -19,6 +19,8 @@ namespace momentid {
 // (add_history).
 class LagSums {
  public:
+  // The rows sampled for the point sums taken together.
+  static constexpr std::size_t kPointGroup = 256;
   // `points`: monomials of the channels, summed over a sample of the rows added (add_points).
   LagSums(std::size_t channels, std::size_t lags, std::vector<Monomial> points = {});
 
@@ -74,10 +76,11 @@ class LagSums {
     std::vector<double> sums;
   };
   std::vector<PointPart> point_parts_;
-  // A row's powers of each channel c from power_at_[c] (its power 0) on; each distinct monomial
-  // k the product of the powers factors_[point_factors_[k] .. point_factors_[k + 1]).
-  std::vector<std::size_t> power_at_;
-  std::vector<double> powers_;
+  // Of up to kPointGroup rows sampled at a time: their weights, and a column of each power of
+  // each channel c from power_at_[c] (its power 0, unused) on; each distinct monomial k the
+  // product of the powers factors_[point_factors_[k] .. point_factors_[k + 1]).
+  std::vector<std::size_t> power_at_, point_channels_;  // the latter: those with powers
+  std::vector<double> powers_, point_weights_;
   std::vector<std::uint32_t> factors_, point_factors_;
 };
 
