@@ -29,11 +29,12 @@ using Double2 = double __attribute__((vector_size(2 * sizeof(double))));
 constexpr std::size_t kVectors = 4;
 constexpr std::size_t kLanes = 2 * kVectors;
 
-// Over i < n: the sums of x[i] * y[i], of x[i] and of y[i].
+// Over i < n: the sums of x[i] * y[i], and with Sums of x[i] and of y[i].
 struct PairSums {
   double products = 0, lead = 0, lagged = 0;
 };
 
+template <bool Sums>
 PairSums sum_pairs(const double* x, const double* y, std::size_t n) {
   std::array<Double2, kVectors> products{}, lead{}, lagged{};
   std::size_t i = 0;
@@ -43,8 +44,10 @@ PairSums sum_pairs(const double* x, const double* y, std::size_t n) {
       std::memcpy(&xv, x + i + 2 * v, sizeof xv);
       std::memcpy(&yv, y + i + 2 * v, sizeof yv);
       products[v] += xv * yv;
-      lead[v] += xv;
-      lagged[v] += yv;
+      if constexpr (Sums) {
+        lead[v] += xv;
+        lagged[v] += yv;
+      }
     }
   }
   const auto total = [](const std::array<Double2, kVectors>& s) {
@@ -55,28 +58,11 @@ PairSums sum_pairs(const double* x, const double* y, std::size_t n) {
   PairSums out{total(products), total(lead), total(lagged)};
   for (; i < n; ++i) {
     out.products += x[i] * y[i];
-    out.lead += x[i];
-    out.lagged += y[i];
-  }
-  return out;
-}
-
-// The sum of x[i] * y[i] over i < n.
-double sum_products(const double* x, const double* y, std::size_t n) {
-  std::array<Double2, kVectors> products{};
-  std::size_t i = 0;
-  for (; i + kLanes <= n; i += kLanes) {
-    for (std::size_t v = 0; v < kVectors; ++v) {
-      Double2 xv, yv;
-      std::memcpy(&xv, x + i + 2 * v, sizeof xv);
-      std::memcpy(&yv, y + i + 2 * v, sizeof yv);
-      products[v] += xv * yv;
+    if constexpr (Sums) {
+      out.lead += x[i];
+      out.lagged += y[i];
     }
   }
-  Double2 t = products[0];
-  for (std::size_t v = 1; v < kVectors; ++v) t += products[v];
-  double out = t[0] + t[1];
-  for (; i < n; ++i) out += x[i] * y[i];
   return out;
 }
 
@@ -141,6 +127,7 @@ LagSums::LagSums(std::size_t channels, std::size_t lags, std::vector<Monomial> p
       largest_(channels, 0.0),
       largest_row_(channels, 0),
       points_(std::move(points)) {
+  if (points_.empty()) return;
   // The power table: powers 0 .. the largest exponent of each channel.
   power_at_.assign(channels + 1, 0);
   for (std::size_t c = 0; c < channels; ++c) {
@@ -197,7 +184,7 @@ void LagSums::add(const double* rows, std::size_t count) {
       largest_row_[c] = count_ + static_cast<std::size_t>(at - x);
     }
     for (std::size_t r = 0; r < count; ++r) x[r] -= offset_[c];
-    const PairSums own = sum_pairs(x, x, count);
+    const PairSums own = sum_pairs<true>(x, x, count);
     sum_[c] += own.lead;
     sum_squares_[c] += own.products;
     // Lag l pairs each row with the one l rows earlier in the run, history included. The sums
@@ -207,7 +194,7 @@ void LagSums::add(const double* rows, std::size_t count) {
       const std::size_t first = first_paired(l);
       const std::size_t i = (l - 1) * channels_ + c;
       if (count < 2 * l) {
-        const PairSums pairs = sum_pairs(x + first, x + first - l, count - first);
+        const PairSums pairs = sum_pairs<true>(x + first, x + first - l, count - first);
         products_[i] += pairs.products;
         lead_[i] += pairs.lead;
         lagged_[i] += pairs.lagged;
@@ -215,7 +202,7 @@ void LagSums::add(const double* rows, std::size_t count) {
       }
       const auto lag = static_cast<std::ptrdiff_t>(l), begin = static_cast<std::ptrdiff_t>(first),
                  end = static_cast<std::ptrdiff_t>(count);
-      products_[i] += sum_products(x + first, x + first - l, count - first);
+      products_[i] += sum_pairs<false>(x + first, x + first - l, count - first).products;
       lead_[i] += own.lead - range_sum(x, 0, begin);
       lagged_[i] += own.lead - range_sum(x, end - lag, end) + range_sum(x, begin - lag, 0);
     }
