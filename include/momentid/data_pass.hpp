@@ -86,9 +86,8 @@ struct DataOptions {
   // Monomials of the channels read (states, inputs, then derivatives) whose means are wanted to a
   // few digits only (the variances behind the errors the record's ends leave): taken from a
   // sample of the rows each shard owns, every row at first, thinning as its rows grow to every
-  // kPointStride-th (DataMoments::point_means), without their cost at every row of a long record.
+  // 32nd (DataMoments::point_means), without their cost at every row of a long record.
   std::vector<Monomial> point_moments;
-  static constexpr std::size_t kPointStride = 32;
 
   // Channels formed from a column of their derivative (identify's --integrate): every channel
   // goes through a linear-phase high-pass with the magnitude of a fourth-order Butterworth

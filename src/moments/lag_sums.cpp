@@ -114,7 +114,7 @@ double largest_magnitude(const double* x, std::size_t n) {
 
 }  // namespace
 
-LagSums::LagSums(std::size_t channels, std::size_t lags, std::vector<Monomial> points)
+LagSums::LagSums(std::size_t channels, std::size_t lags, const std::vector<Monomial>& points)
     : channels_(channels),
       lags_(lags),
       history_(lags * channels, 0.0),
@@ -125,14 +125,13 @@ LagSums::LagSums(std::size_t channels, std::size_t lags, std::vector<Monomial> p
       lagged_(lags * channels, 0.0),
       pairs_(lags, 0),
       largest_(channels, 0.0),
-      largest_row_(channels, 0),
-      points_(std::move(points)) {
-  if (points_.empty()) return;
+      largest_row_(channels, 0) {
+  if (points.empty()) return;
   // The power table: powers 0 .. the largest exponent of each channel.
   power_at_.assign(channels + 1, 0);
   for (std::size_t c = 0; c < channels; ++c) {
     int top = 0;
-    for (const Monomial& m : points_) top = std::max(top, m[c]);
+    for (const Monomial& m : points) top = std::max(top, m[c]);
     power_at_[c + 1] = power_at_[c] + static_cast<std::size_t>(top) + 1;
     if (top > 0) point_channels_.push_back(c);
   }
@@ -141,7 +140,7 @@ LagSums::LagSums(std::size_t channels, std::size_t lags, std::vector<Monomial> p
   // Each distinct monomial once (products of pairs repeat): the sums are the distinct ones'.
   point_factors_.push_back(0);
   std::map<Monomial, std::size_t> distinct;
-  for (const Monomial& m : points_) {
+  for (const Monomial& m : points) {
     const auto [at, added] = distinct.try_emplace(m, distinct.size());
     point_index_.push_back(at->second);
     if (!added) continue;
@@ -218,19 +217,19 @@ namespace {
 
 // The stride of the point sums at the `position`-th row a shard adds: every row of the first
 // kPointRows, then every 2nd up to twice as many, every 4th up to four times as many, and so on to
-// every DataOptions::kPointStride-th, so that a short record gives every row and a long one a
-// small fraction of the work. Each row sampled stands for `stride` rows.
-constexpr std::size_t kPointRows = std::size_t{1} << 12;
+// every kPointStride-th, so that a short record gives every row and a long one a small fraction
+// of the work. Each row sampled stands for `stride` rows.
+constexpr std::size_t kPointRows = std::size_t{1} << 12, kPointStride = 32;
 std::size_t point_stride(std::size_t position) {
   std::size_t stride = 1;
-  while (stride < DataOptions::kPointStride && position >= stride * kPointRows) stride *= 2;
+  while (stride < kPointStride && position >= stride * kPointRows) stride *= 2;
   return stride;
 }
 
 }  // namespace
 
 void LagSums::add_points(const double* rows, std::size_t count) {
-  if (points_.empty()) return;
+  if (point_sums_.empty()) return;
   const std::size_t first = count_ - count;  // the rows added before these
   const auto column = [&](std::size_t j) { return powers_.data() + j * kPointGroup; };
   std::size_t r = point_skip_;

@@ -22,7 +22,7 @@ class LagSums {
   // The rows sampled for the point sums taken together.
   static constexpr std::size_t kPointGroup = 256;
   // `points`: monomials of the channels, summed over a sample of the rows added (add_points).
-  LagSums(std::size_t channels, std::size_t lags, std::vector<Monomial> points = {});
+  LagSums(std::size_t channels, std::size_t lags, const std::vector<Monomial>& points = {});
 
   void start_run() { filled_ = 0; }
   // Rows of the run before the shard, which only pair with the shard's own rows.
@@ -62,10 +62,9 @@ class LagSums {
   std::vector<double> largest_;
   std::vector<std::size_t> largest_row_;
   std::size_t filled_ = 0, count_ = 0;
-  // The point sums: the monomials, each one's among the distinct ones, the distinct ones' sums
-  // over the rows sampled, how many, and the rows to pass before the next. load() restores the
-  // index and the sums alone, to be merged and read.
-  std::vector<Monomial> points_;
+  // The point sums: each monomial's among the distinct ones, the distinct ones' sums over the
+  // rows sampled, how many, and the rows to pass before the next (none without monomials).
+  // load() restores the index and the sums alone, to be merged and read.
   std::vector<std::size_t> point_index_;
   std::vector<double> point_sums_;
   std::size_t point_rows_ = 0, point_skip_ = 0;
