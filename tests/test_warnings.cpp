@@ -120,6 +120,28 @@ TEST_SUITE("warnings") {
     CHECK(warnings(r).front().find("the J test rejects the model") == 0);
   }
 
+  TEST_CASE(
+      "the J test's doubt names what the filter cuts from a formed state in a nonlinear "
+      "term, and only then") {
+    const Record record(50000);
+    const Model linear =
+        parse_model("model linear\nstate y, v\ninput x\nparam c, k\ny' = v\nv' = -c*v - k*y + x\n",
+                    "linear.mom");
+    IdentifyResult r =
+        identify(linear, record.source(), {.degree = 3, .weighting = Weighting::kGmm});
+    REQUIRE(r.estimate.j_pvalue);
+    REQUIRE(*r.estimate.j_pvalue < 0.01);
+    const std::string cut = "the filter cuts from 'y', formed from accelerations";
+    CHECK_FALSE(mentions(doubts(r), cut));
+    r.integration = IdentifyResult::Integration{};
+    r.integration->formed.push_back({.state = "y", .variable = "a", .column = "a", .integrals = 2});
+    CHECK_FALSE(mentions(doubts(r), cut));  // y held linearly
+    r.integration->formed.back().cut = true;
+    CHECK(mentions(doubts(r), cut));
+    r.estimate.j_pvalue = 0.5;
+    CHECK_FALSE(mentions(doubts(r), cut));
+  }
+
   TEST_CASE("a velocity column shifted in time violates the identities: doubtful") {
     Record record(50000);
     std::vector<double>& v = record.column("v");

@@ -233,6 +233,8 @@ struct IdentifyResult {
       int integrals = 0;             // 2 for y from a (y'' = a), 1 for v from it
       // The formed channel's noise variance per unit of the column's (both through the filter).
       double noise_gain = 0;
+      // The equations hold it nonlinearly: their terms lose the low frequencies the filter cuts.
+      bool cut = false;
     };
     std::vector<Formed> formed;
     double corner = 0;  // Hz

@@ -24,9 +24,12 @@ at each sample, computed from the exact states and force.
                       --integrate-corner alone sets the corner of the states formed by default.
   chain3              three masses, a cubic spring at mass 1, the force on mass 3, an accelerometer
                       on each mass (2% noise) and the force (1%), a CSV with a units row: y1, y2
-                      and y3 formed by default, `ok` within 3 standard errors, no offset named
-                      (the mean of an acceleration over a record is the velocity's change over it,
-                      in its standard error); the cubic spring put at mass 2: not `ok`.
+                      and y3 formed by default, within 3 standard errors, no offset named (the
+                      mean of an acceleration over a record is the velocity's change over it, in
+                      its standard error), and `ok` unless the J test sees what the filter cuts
+                      from y1^3 (on about half of such records of 2e5 samples; k1 and e1 then
+                      lie 1.4 standard errors off on average), a doubt that must say so; the
+                      cubic spring put at mass 2: not `ok`.
   integrate           the force and a alone of lab.hardening (physical units, 5-150 Hz), with
                       --integrate y: y formed, the bias warned of, no offset named on the
                       formed y (the filter removes its mean), and c, k and k3 within 3
@@ -437,7 +440,11 @@ def chain3(momentid, models, workdir):
     worst = lab.describe(report, CHAIN3)
     if "failed" in report:
         return False
-    passed = (report["diagnostics"]["status"] == "ok" and worst <= 3
+    d = report["diagnostics"]
+    cut = any(w.startswith("the J test rejects") and "the filter cuts from 'y1', formed" in w
+              for w in d["warnings"])
+    print(f"  J {d['j_statistic']:.1f} on {d['j_dof']}, p {d['j_pvalue']:.2g}")
+    passed = ((d["status"] == "ok" or (d["status"] == "doubtful" and cut)) and worst <= 3
               and formed_by_default(report, ["y1", "y2", "y3"], ["a1", "a2", "a3"]))
     print("the cubic spring at mass 2:")
     misplaced = lab.identify(momentid, wrong, path)

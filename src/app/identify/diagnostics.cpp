@@ -184,12 +184,25 @@ std::vector<std::string> doubts(const IdentifyResult& r) {
         seen += " (see below)";
       }
     }
+    // A state formed from an acceleration in a nonlinear term is a misfit of the model's own.
+    std::string cut;
+    if (r.integration) {
+      for (const IdentifyResult::Integration::Formed& f : r.integration->formed) {
+        if (f.cut) cut += (cut.empty() ? "'" : ", '") + f.state + "'";
+      }
+    }
+    if (!cut.empty()) {
+      cut = "; or the low frequencies the filter cuts from " + cut +
+            ", formed from accelerations, in the nonlinear terms (see the warning): a misfit "
+            "of the right model too, which a precise record shows and a displacement sensor's "
+            "column for that state removes";
+    }
     out.push_back("the J test rejects the model (p = " + number(*e.j_pvalue, "%.2g") +
                   "): its moment equations disagree with each other more than their errors "
                   "allow. A term may be missing, a noise or an offset not modelled, or the "
                   "record too coarsely sampled: check the estimates with 'momentid validate' "
                   "before using them" +
-                  seen);
+                  seen + cut);
   }
   if (const auto* check = r.zero_lag_check(); check && check->rejects()) {
     out.push_back("the zero-lag check rejects the model (p = " + number(*check->pvalue, "%.2g") +

@@ -334,13 +334,41 @@ std::vector<double> noise_variances(const IdentifyResult& result, const LaggedCh
   return noise;
 }
 
+// A channel carries sensor noise when its noise variance (given, estimated, or a formed state's
+// through the filter) exceeds this share of its variance: a noise amplitude of 1e-4, above a
+// 16-bit converter's rounding.
+constexpr double kNoiseShare = 1e-8;
+
+// Per channel of the pass (the channels read, then the computed ones): whether it carries sensor
+// noise, a computed channel when one of its arguments does.
+std::vector<bool> noisy_channels(const IdentifyResult& result, const LaggedChannels& channels) {
+  const std::vector<double>& noise = result.lagged->noise;
+  std::vector<bool> out(noise.size() + channels.computed.size(), false);
+  for (std::size_t c = 0; c < noise.size(); ++c) {
+    out[c] = noise[c] > kNoiseShare * result.data.channels[c].variance;
+  }
+  for (std::size_t k = 0; k < channels.computed.size(); ++k) {
+    for (const auto& [coefficient, monomial] : channels.computed[k].argument) {
+      for (std::size_t c = 0; c < std::min(monomial.size(), noise.size()); ++c) {
+        if (monomial[c] != 0 && out[c]) out[noise.size() + k] = true;
+      }
+    }
+  }
+  return out;
+}
+
 // The accuracy floor of the lagged moments (docs/measured-data.md, "The accuracy floor"): the
 // variance of an error of kAccuracyFloor times the largest magnitude that the pair psi, F
-// reaches over the lags, for each E[psi(t - s) F(t)], as if independent.
+// reaches over the lags, for each E[psi(t - s) F(t)] none of whose channels is `noisy`, as if
+// independent. A moment of a noisy channel has none: its sampling error covers the stencils'
+// error, and an error independent from lag to lag would outweigh it in the directions where
+// the sampling error is smooth across the lags (a formed state's noise), leaving the J test
+// nothing to see there.
 constexpr double kAccuracyFloor = 1e-6;
 
 std::vector<double> accuracy_floor(const std::vector<Moment>& moments,
-                                   const std::vector<double>& mean) {
+                                   const std::vector<double>& mean,
+                                   const std::vector<bool>& noisy) {
   const auto pair_of = [](const Moment& m) {
     std::vector<MomentFactor> key = m.factors();
     for (MomentFactor& f : key) f.lag = std::min(f.lag, 1);
@@ -351,8 +379,15 @@ std::vector<double> accuracy_floor(const std::vector<Moment>& moments,
     double& p = peak[pair_of(moments[k])];
     p = std::max(p, std::abs(mean[k]));
   }
-  std::vector<double> variance(moments.size());
+  std::vector<double> variance(moments.size(), 0.0);
   for (std::size_t k = 0; k < moments.size(); ++k) {
+    const std::vector<MomentFactor> factors = moments[k].factors();
+    if (std::any_of(factors.begin(), factors.end(), [&](const MomentFactor& f) {
+          return static_cast<std::size_t>(f.channel) < noisy.size() &&
+                 noisy[static_cast<std::size_t>(f.channel)];
+        })) {
+      continue;
+    }
     const double floor = kAccuracyFloor * peak[pair_of(moments[k])];
     variance[k] = floor * floor;
   }
@@ -425,8 +460,8 @@ void solve_lagged(IdentifyResult& result, const LaggedPlan& plan, const LaggedCh
   std::vector<std::string> names;
   for (const Declaration& p : model.parameters()) names.push_back(p.name);
   result.gmm = optimal_weighting(options, plan.fixed, rows.rows.a.size());
-  result.lagged->moment_variance =
-      accuracy_floor(result.lagged->moments, result.data.estimates.mean);
+  result.lagged->moment_variance = accuracy_floor(
+      result.lagged->moments, result.data.estimates.mean, noisy_channels(result, channels));
   result.estimate = solve_rows(rows.rows, names, result.data.estimates,
                                {.gmm = result.gmm,
                                 .fixed = plan.fixed,
@@ -488,22 +523,16 @@ void add_lagged_warnings(IdentifyResult& result, const LaggedChannels& channels)
           "cuts, a bias the intervals do not include, and which the J test can see on a precise "
           "record (docs/model-language.md, \"Forming a state from its acceleration\")");
     }
-    for (const auto& formed : integration->formed) {
+    for (auto& formed : result.integration->formed) {
       const auto v = static_cast<std::size_t>(model.variable_index(formed.state));
-      if (!nonlinear_in(model, *result.lagged->system, v)) continue;
+      formed.cut = nonlinear_in(model, *result.lagged->system, v);
+      if (!formed.cut) continue;
       result.estimate.warnings.push_back(
           "'" + formed.state + "' was formed from '" + formed.column + "' inside a high-pass at " +
           corner +
           " Hz: the terms nonlinear in it lose the low frequencies the filter cuts, a bias "
           "the intervals do not include, small where the force has no power below the corner "
           "(docs/model-language.md, \"Forming a state from its acceleration\")");
-    }
-    if (result.estimate.j_statistic) {
-      result.estimate.warnings.push_back(
-          "the J test is conservative where a state is formed (--integrate): on true models J "
-          "stays far below its degrees of freedom (a fifth of them, median "
-          "of 20 shaker records), so it rejects only a gross misfit and its p-value overstates "
-          "the fit (docs/uncertainty.md, \"Optimal weighting and the J test\")");
     }
   }
 }
