@@ -788,18 +788,3 @@ TEST_SUITE("shared noise") {
     CHECK_FALSE(noise.shared(2, 2));
   }
 }
-
-TEST_SUITE("noise share") {
-  // An acceleration's band, 5-150 Hz flat at 2048 Hz, with white noise of 4e-4 of the variance:
-  // the extrapolation in s^2 finds the share within 5%, the form for held inputs (|s|^3) does not.
-  TEST_CASE("the noise share of a broad-band smooth channel, by extrapolation in s squared") {
-    const double pi = 3.141592653589793, fs = 2048, f1 = 5, f2 = 150, share = 4e-4;
-    std::vector<double> rho;
-    for (int s = 1; s <= 4; ++s) {
-      const double x = 2 * pi * s / fs;
-      rho.push_back((1 - share) * (std::sin(f2 * x) - std::sin(f1 * x)) / ((f2 - f1) * x));
-    }
-    CHECK(1 - momentid::smooth_lag_zero(rho, false) == doctest::Approx(share).epsilon(0.05));
-    CHECK(std::abs(1 - momentid::smooth_lag_zero(rho, true) - share) > 0.3 * share);
-  }
-}

@@ -11,15 +11,26 @@
 namespace momentid {
 
 // Mean, variance and autocorrelations of one channel (pairs never span two runs).
-// White noise adds to the autocovariance at lag 0 only: the autocorrelation at lag 0 of the
-// smooth part of a channel, extrapolated through its `autocorrelation` at lags 1 .. 4 (at least
-// four of them). 1 minus it is the noise's share of the channel's variance. Under inputs held
-// over each sample (`held`) as a + b s^2 + c |s|^3 + d s^4, the |s|^3 term being that of a state
-// whose derivative jumps with the input; otherwise, for channels of smooth signals, as a
-// polynomial in s^2 of degree 3, which an acceleration's broad band needs: on a shaker record
-// (2048 Hz, 5-150 Hz force, 2% noise) the noise's share 4.1e-4 for the true 4.0e-4, where the
-// |s|^3 form gave 1.7e-4 and a stiffness identified through the formed displacement 3.6% low.
-double smooth_lag_zero(const std::vector<double>& autocorrelation, bool held = true);
+// White noise of variance s2 on a channel that is smooth apart from it. For a channel of a
+// smooth signal it is the mean square of the channel's sixth difference over
+// kSixthDifferenceGain (the sum of the squares of its weights, C(12, 6)): the difference's weight
+// on a signal's spectrum, (2 sin(w/2))^12 / 924, is 15 to 300 times smaller than the fourth
+// difference's below a third of the sample rate, and the squares are summed over the rows as
+// they come, where the same from the autocovariances at lags 0 .. 6 is a difference of sums
+// taken over rows that differ at the record's ends: on a noise-free shaker record of an
+// acceleration (2048 Hz, 5-150 Hz force) that way found a noise of 8e-5 of its variance, which
+// a displacement formed from the acceleration took into its cubic term, moving the stiffness by
+// 14 standard errors; the sixth difference found 2e-7. Under inputs held over each sample, the
+// states' derivatives jump at the samples, and the autocorrelation's smooth part is
+// a + b s^2 + c |s|^3 + d s^4: held_lag_zero extrapolates it to lag 0 through lags 1 .. 4, and 1
+// minus that is the noise's share of the variance.
+inline constexpr std::size_t kNoiseLags = 6;
+inline constexpr double kSixthDifferenceGain = 924;
+// The sixth difference at p[0] (p[-6] .. p[0]).
+inline double sixth_difference(const double* p) {
+  return p[0] - 6 * p[-1] + 15 * p[-2] - 20 * p[-3] + 15 * p[-4] - 6 * p[-5] + p[-6];
+}
+double held_lag_zero(const std::vector<double>& autocorrelation);
 
 struct ChannelStatistics {
   std::string name;
@@ -33,7 +44,7 @@ struct ChannelStatistics {
   // Samples until the autocorrelation first drops below 1/e (L + 1 if it never does).
   std::size_t correlation_time = 0;
   // The variance of white noise on the channel: the excess of the lag-0 autocovariance over its
-  // extrapolation from lags 1 to 4 (with 4 lags or more). Meaningful for a channel that
+  // extrapolation from lags 1 to 6 (with kNoiseLags lags or more). Meaningful for a channel that
   // is smooth apart from the noise, such as a measured state.
   std::optional<double> noise_variance;
   // The noise's standard deviation as a fraction of the channel's (a negative estimate counts

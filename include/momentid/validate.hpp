@@ -69,7 +69,7 @@ struct Replay {
   Record record;
   std::vector<Interpolation> interpolation;  // per model input
   int substeps = 1;
-  // Held inputs put kinks into the states at the samples (smooth_lag_zero's two forms).
+  // Held inputs put kinks into the states at the samples (the noise estimate's two forms).
   bool holds_an_input() const {
     return std::find(interpolation.begin(), interpolation.end(), Interpolation::kHold) !=
            interpolation.end();

@@ -121,6 +121,7 @@ LagSums::LagSums(std::size_t channels, std::size_t lags, const std::vector<Monom
       sum_(channels, 0.0),
       sum_squares_(channels, 0.0),
       products_(lags * channels, 0.0),
+      differences_(channels, 0.0),
       lead_(lags * channels, 0.0),
       lagged_(lags * channels, 0.0),
       pairs_(lags, 0),
@@ -205,6 +206,14 @@ void LagSums::add(const double* rows, std::size_t count) {
       lead_[i] += own.lead - range_sum(x, 0, begin);
       lagged_[i] += own.lead - range_sum(x, end - lag, end) + range_sum(x, begin - lag, 0);
     }
+    if (lags_ >= kNoiseLags) {
+      double squares = 0;
+      for (std::size_t r = first_paired(kNoiseLags); r < count; ++r) {
+        const double d = sixth_difference(x + r);
+        squares += d * d;
+      }
+      differences_[c] += squares;
+    }
     keep_history(c);
   }
   for (std::size_t l = 1; l <= lags_; ++l) pairs_[l - 1] += count - first_paired(l);
@@ -273,7 +282,8 @@ void LagSums::keep_history(std::size_t c) {
 
 void LagSums::save(ByteWriter& out) const {
   out.u64(count_);
-  for (const auto* v : {&offset_, &sum_, &sum_squares_, &products_, &lead_, &lagged_}) {
+  for (const auto* v :
+       {&offset_, &sum_, &sum_squares_, &products_, &lead_, &lagged_, &differences_}) {
     out.u64(v->size());
     for (double x : *v) out.f64(x);
   }
@@ -296,8 +306,8 @@ void LagSums::save(ByteWriter& out) const {
 LagSums LagSums::load(ByteReader& in, std::size_t channels, std::size_t lags) {
   LagSums out(channels, lags);
   out.count_ = in.u64("the row count of the channel sums");
-  for (auto* v :
-       {&out.offset_, &out.sum_, &out.sum_squares_, &out.products_, &out.lead_, &out.lagged_}) {
+  for (auto* v : {&out.offset_, &out.sum_, &out.sum_squares_, &out.products_, &out.lead_,
+                  &out.lagged_, &out.differences_}) {
     const std::uint64_t n = in.u64("a count of channel sums");
     if (n != v->size() && !(v == &out.offset_ && n == channels)) {
       throw Error("the result of another process does not match this one's channels");
@@ -354,6 +364,7 @@ void LagSums::merge(const LagSums& other) {
     const auto n = static_cast<double>(other.count_);
     sum_[c] += other.sum_[c] - n * d;
     sum_squares_[c] += other.sum_squares_[c] - 2 * d * other.sum_[c] + n * d * d;
+    differences_[c] += other.differences_[c];
     for (std::size_t l = 0; l < lags_; ++l) {
       const std::size_t i = l * channels_ + c;
       const auto p = static_cast<double>(other.pairs_[l]);
@@ -389,8 +400,11 @@ ChannelStatistics LagSums::statistics(std::size_t c, bool held) const {
     s.autocorrelation.push_back(rho);
     if (s.correlation_time == lags_ + 1 && rho < std::exp(-1.0)) s.correlation_time = l + 1;
   }
-  if (lags_ >= 4 && s.variance > 0) {
-    s.noise_variance = s.variance * (1 - smooth_lag_zero(s.autocorrelation, held));
+  if (held && lags_ >= 4 && s.variance > 0) {
+    s.noise_variance = s.variance * (1 - held_lag_zero(s.autocorrelation));
+  } else if (!held && lags_ >= kNoiseLags && pairs_[kNoiseLags - 1] > 0) {
+    s.noise_variance =
+        differences_[c] / static_cast<double>(pairs_[kNoiseLags - 1]) / kSixthDifferenceGain;
   }
   return s;
 }
@@ -410,10 +424,8 @@ std::vector<double> LagSums::point_means() const {
   return out;
 }
 
-double smooth_lag_zero(const std::vector<double>& rho, bool held) {
-  if (held) return 1.92 * rho[0] - 1.44 * rho[1] + 0.64 * rho[2] - 0.12 * rho[3];
-  // Lagrange's extrapolation to s^2 = 0 through s^2 = 1, 4, 9, 16.
-  return 1.6 * rho[0] - 0.8 * rho[1] + 1.6 / 7 * rho[2] - 0.2 / 7 * rho[3];
+double held_lag_zero(const std::vector<double>& rho) {
+  return 1.92 * rho[0] - 1.44 * rho[1] + 0.64 * rho[2] - 0.12 * rho[3];
 }
 
 }  // namespace momentid

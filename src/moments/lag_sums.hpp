@@ -36,7 +36,7 @@ class LagSums {
   // Adds the sums of `other`, the shard after this one's rows.
   void merge(const LagSums& other);
 
-  // `held`: the inputs are held over each sample (smooth_lag_zero).
+  // `held`: the inputs are held over each sample (the noise estimate's form: data_pass.hpp).
   ChannelStatistics statistics(std::size_t c, bool held) const;
   // The means of the points' monomials over the rows sampled (NaN without any).
   std::vector<double> point_means() const;
@@ -55,6 +55,9 @@ class LagSums {
   // its history, then its values less the offset.
   std::vector<double> history_, column_;
   std::vector<double> offset_, sum_, sum_squares_, products_;
+  // Per channel, with kNoiseLags lags or more: the sum of the squares of the sixth differences
+  // over the rows with six rows of the run before them (as many as the pairs at lag 6).
+  std::vector<double> differences_;
   // Per lag and channel: the sums of the later and of the earlier values of the pairs.
   std::vector<double> lead_, lagged_;
   std::vector<std::size_t> pairs_;

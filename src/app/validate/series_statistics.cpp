@@ -111,6 +111,17 @@ std::pair<double, double> mean_and_spread(const std::vector<std::vector<double>>
 double white_noise_variance(const std::vector<std::vector<double>>& runs, bool held) {
   const auto [mean, spread] = mean_and_spread(runs);
   if (!(spread > 0)) return 0;
+  if (!held) {
+    double squares = 0, rows = 0;
+    for (const std::vector<double>& run : runs) {
+      for (std::size_t n = kNoiseLags; n < run.size(); ++n) {
+        const double d = sixth_difference(run.data() + n);
+        squares += d * d;
+        ++rows;
+      }
+    }
+    return rows > 0 ? squares / rows / kSixthDifferenceGain : 0.0;
+  }
   std::vector<double> rho(4);
   for (std::size_t lag = 1; lag <= 4; ++lag) {
     double products = 0, pairs = 0;
@@ -122,7 +133,7 @@ double white_noise_variance(const std::vector<std::vector<double>>& runs, bool h
     }
     rho[lag - 1] = products / pairs / (spread * spread);
   }
-  return std::max(0.0, spread * spread * (1 - smooth_lag_zero(rho, held)));
+  return std::max(0.0, spread * spread * (1 - held_lag_zero(rho)));
 }
 
 double prediction_bound(const std::vector<double>& values, double t) {

@@ -34,10 +34,10 @@ std::vector<double> upcrossing_rates(const std::vector<std::vector<double>>& run
 // The mean and standard deviation of every run's values together.
 std::pair<double, double> mean_and_spread(const std::vector<std::vector<double>>& runs);
 
-// The variance of white noise on a series that is smooth apart from it: the excess of its lag-0
-// autocovariance over the extrapolation from lags 1 to 4 (as identify estimates it, with the
-// form for a series driven by inputs `held` over each sample or for a smooth one:
-// smooth_lag_zero); 0 when the estimate is not positive.
+// The variance of white noise on a series that is smooth apart from it, as identify estimates
+// it (data_pass.hpp): the mean square of its sixth difference, or for a series driven by inputs
+// `held` over each sample the excess of its lag-0 autocovariance over held_lag_zero's
+// extrapolation; 0 when the estimate is not positive.
 double white_noise_variance(const std::vector<std::vector<double>>& runs, bool held);
 
 // A prediction bound for one more of `values` (at least two), at `t` (Student's t at the level,
