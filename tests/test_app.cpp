@@ -504,14 +504,14 @@ TEST_SUITE("app") {
     const auto source = momentid::DataSource::memory(arrays.data);
     for (const momentid::Model* with : {static_cast<const momentid::Model*>(nullptr), &model}) {
       CAPTURE(with != nullptr);
-      const momentid::CheckResult r = momentid::check(source, with, {.lags = 6});
+      const momentid::CheckResult r = momentid::check(source, with, {.lags = 4});
       const nlohmann::ordered_json value = momentid::json_value(r);
       CHECK(nlohmann::ordered_json::parse(momentid::format_json(r)) == value);
       CHECK(value["data"] == "arrays");
       CHECK(value["rows"] == 500);
       CHECK(value["runs"] == 1);
       CHECK(value["dt"].is_null());  // neither a time column nor metadata
-      CHECK(value["lags"] == 6);
+      CHECK(value["lags"] == 4);
       CHECK(value["with_model"] == (with != nullptr));
       CHECK(value["missing_inputs"].get<std::vector<std::string>>() == r.missing_inputs);
       CHECK(value["missing_states"].get<std::vector<std::string>>() == r.missing_states);
@@ -523,8 +523,8 @@ TEST_SUITE("app") {
         CHECK(json["input"] == c.is_input);
         CHECK(json["mean"].get<double>() == c.mean);
         CHECK(json["variance"].get<double>() == c.variance);
-        REQUIRE(json["autocorrelation"].size() == 6);
-        for (std::size_t l = 0; l < 6; ++l) {
+        REQUIRE(json["autocorrelation"].size() == 4);
+        for (std::size_t l = 0; l < 4; ++l) {
           const double rho = c.autocorrelation[l];
           CHECK((std::isfinite(rho) ? json["autocorrelation"][l].get<double>() == rho
                                     : json["autocorrelation"][l].is_null()));

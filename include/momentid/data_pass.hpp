@@ -24,7 +24,7 @@ namespace momentid {
 // states' derivatives jump at the samples, and the autocorrelation's smooth part is
 // a + b s^2 + c |s|^3 + d s^4: held_lag_zero extrapolates it to lag 0 through lags 1 .. 4, and 1
 // minus that is the noise's share of the variance.
-inline constexpr std::size_t kNoiseLags = 6;
+inline constexpr std::size_t kNoiseDifference = 6;
 inline constexpr double kSixthDifferenceGain = 924;
 // The sixth difference at p[0] (p[-6] .. p[0]).
 inline double sixth_difference(const double* p) {
@@ -43,9 +43,8 @@ struct ChannelStatistics {
   std::vector<double> autocorrelation;  // lags 1..L
   // Samples until the autocorrelation first drops below 1/e (L + 1 if it never does).
   std::size_t correlation_time = 0;
-  // The variance of white noise on the channel: the excess of the lag-0 autocovariance over its
-  // extrapolation from lags 1 to 6 (with kNoiseLags lags or more). Meaningful for a channel that
-  // is smooth apart from the noise, such as a measured state.
+  // The variance of white noise on the channel, in one of the forms above. Meaningful for a
+  // channel that is smooth apart from the noise, such as a measured state.
   std::optional<double> noise_variance;
   // The noise's standard deviation as a fraction of the channel's (a negative estimate counts
   // as none); nullopt without an estimate or a variance.

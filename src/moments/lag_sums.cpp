@@ -66,6 +66,30 @@ PairSums sum_pairs(const double* x, const double* y, std::size_t n) {
   return out;
 }
 
+// The sum over i < n of the square of the sixth difference at x[i] (x[i - 6] .. x[i]).
+double sum_sixth_differences(const double* x, std::size_t n) {
+  std::array<Double2, kVectors> sums{};
+  std::size_t i = 0;
+  for (; i + kLanes <= n; i += kLanes) {
+    for (std::size_t v = 0; v < kVectors; ++v) {
+      std::array<Double2, kNoiseDifference + 1> p;
+      for (std::size_t j = 0; j <= kNoiseDifference; ++j) {
+        std::memcpy(&p[j], x + i + 2 * v - j, sizeof p[j]);
+      }
+      const Double2 d = p[0] - 6 * p[1] + 15 * p[2] - 20 * p[3] + 15 * p[4] - 6 * p[5] + p[6];
+      sums[v] += d * d;
+    }
+  }
+  Double2 t = sums[0];
+  for (std::size_t v = 1; v < kVectors; ++v) t += sums[v];
+  double out = t[0] + t[1];
+  for (; i < n; ++i) {
+    const double d = sixth_difference(x + i);
+    out += d * d;
+  }
+  return out;
+}
+
 // The sum of x[i] over first <= i < last (a few terms).
 double range_sum(const double* x, std::ptrdiff_t first, std::ptrdiff_t last) {
   double out = 0;
@@ -117,7 +141,8 @@ double largest_magnitude(const double* x, std::size_t n) {
 LagSums::LagSums(std::size_t channels, std::size_t lags, const std::vector<Monomial>& points)
     : channels_(channels),
       lags_(lags),
-      history_(lags * channels, 0.0),
+      reach_(std::max(lags, kNoiseDifference)),
+      history_(reach_ * channels, 0.0),
       sum_(channels, 0.0),
       sum_squares_(channels, 0.0),
       products_(lags * channels, 0.0),
@@ -167,7 +192,7 @@ void LagSums::add(const double* rows, std::size_t count) {
   if (count_ == 0) {
     offset_.assign(rows, rows + channels_);
     // The rows before the shard, remembered as read, less the offset now known.
-    for (std::size_t k = 0; k < history_.size(); ++k) history_[k] -= offset_[k / lags_];
+    for (std::size_t k = 0; k < history_.size(); ++k) history_[k] -= offset_[k / reach_];
   }
   // The first row of the block that lag l pairs: the run's (l + 1)-th.
   const auto first_paired = [&](std::size_t l) {
@@ -175,7 +200,7 @@ void LagSums::add(const double* rows, std::size_t count) {
   };
   for (std::size_t c = 0; c < channels_; ++c) {
     fill_column(c, rows, count);
-    double* const x = column_.data() + lags_;  // the block's values
+    double* const x = column_.data() + reach_;  // the block's values
     // The block's largest |value|, then the first row that has it.
     const double top = largest_magnitude(x, count);
     if (top > largest_[c]) {
@@ -206,17 +231,12 @@ void LagSums::add(const double* rows, std::size_t count) {
       lead_[i] += own.lead - range_sum(x, 0, begin);
       lagged_[i] += own.lead - range_sum(x, end - lag, end) + range_sum(x, begin - lag, 0);
     }
-    if (lags_ >= kNoiseLags) {
-      double squares = 0;
-      for (std::size_t r = first_paired(kNoiseLags); r < count; ++r) {
-        const double d = sixth_difference(x + r);
-        squares += d * d;
-      }
-      differences_[c] += squares;
-    }
+    const std::size_t first = first_paired(kNoiseDifference);
+    differences_[c] += sum_sixth_differences(x + first, count - first);
     keep_history(c);
   }
   for (std::size_t l = 1; l <= lags_; ++l) pairs_[l - 1] += count - first_paired(l);
+  differenced_ += count - first_paired(kNoiseDifference);
   filled_ += count;
   count_ += count;
   add_points(rows, count);
@@ -270,14 +290,14 @@ void LagSums::add_points(const double* rows, std::size_t count) {
 }
 
 void LagSums::fill_column(std::size_t c, const double* rows, std::size_t count) {
-  column_.resize(lags_ + count);
-  std::copy_n(history_.begin() + static_cast<std::ptrdiff_t>(c * lags_), lags_, column_.begin());
-  for (std::size_t r = 0; r < count; ++r) column_[lags_ + r] = rows[r * channels_ + c];
+  column_.resize(reach_ + count);
+  std::copy_n(history_.begin() + static_cast<std::ptrdiff_t>(c * reach_), reach_, column_.begin());
+  for (std::size_t r = 0; r < count; ++r) column_[reach_ + r] = rows[r * channels_ + c];
 }
 
 void LagSums::keep_history(std::size_t c) {
-  std::copy(column_.end() - static_cast<std::ptrdiff_t>(lags_), column_.end(),
-            history_.begin() + static_cast<std::ptrdiff_t>(c * lags_));
+  std::copy(column_.end() - static_cast<std::ptrdiff_t>(reach_), column_.end(),
+            history_.begin() + static_cast<std::ptrdiff_t>(c * reach_));
 }
 
 void LagSums::save(ByteWriter& out) const {
@@ -288,6 +308,7 @@ void LagSums::save(ByteWriter& out) const {
     for (double x : *v) out.f64(x);
   }
   for (std::size_t p : pairs_) out.u64(p);
+  out.u64(differenced_);
   for (std::size_t c = 0; c < channels_; ++c) {
     out.f64(largest_[c]);
     out.u64(largest_row_[c]);
@@ -316,6 +337,7 @@ LagSums LagSums::load(ByteReader& in, std::size_t channels, std::size_t lags) {
     for (double& x : *v) x = in.f64("a channel sum");
   }
   for (std::size_t& p : out.pairs_) p = in.u64("a count of pairs");
+  out.differenced_ = in.u64("a count of differences");
   for (std::size_t c = 0; c < channels; ++c) {
     out.largest_[c] = in.f64("a channel's largest value");
     out.largest_row_[c] = in.u64("the row of a channel's largest value");
@@ -374,6 +396,7 @@ void LagSums::merge(const LagSums& other) {
     }
   }
   for (std::size_t l = 0; l < lags_; ++l) pairs_[l] += other.pairs_[l];
+  differenced_ += other.differenced_;
   count_ += other.count_;
 }
 
@@ -402,9 +425,8 @@ ChannelStatistics LagSums::statistics(std::size_t c, bool held) const {
   }
   if (held && lags_ >= 4 && s.variance > 0) {
     s.noise_variance = s.variance * (1 - held_lag_zero(s.autocorrelation));
-  } else if (!held && lags_ >= kNoiseLags && pairs_[kNoiseLags - 1] > 0) {
-    s.noise_variance =
-        differences_[c] / static_cast<double>(pairs_[kNoiseLags - 1]) / kSixthDifferenceGain;
+  } else if (!held && differenced_ > 0) {
+    s.noise_variance = differences_[c] / static_cast<double>(differenced_) / kSixthDifferenceGain;
   }
   return s;
 }

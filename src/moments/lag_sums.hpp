@@ -44,19 +44,20 @@ class LagSums {
  private:
   // Fills column_ with channel c: its history, then the block's values as they are.
   void fill_column(std::size_t c, const double* rows, std::size_t count);
-  // Keeps the column's last `lags_` values as channel c's history.
+  // Keeps the column's last `reach_` values as channel c's history.
   void keep_history(std::size_t c);
   // Adds the rows sampled among `count` rows to the point sums.
   void add_points(const double* rows, std::size_t count);
 
-  std::size_t channels_, lags_;
-  // Per channel, the run's last `lags_` values less the offset, oldest first (the last
-  // min(filled_, lags_) of them are rows of the run). The block at hand, one channel at a time:
+  // reach_: the rows kept before each block, for the lags and the sixth difference.
+  std::size_t channels_, lags_, reach_;
+  // Per channel, the run's last `reach_` values less the offset, oldest first (the last
+  // min(filled_, reach_) of them are rows of the run). The block at hand, one channel at a time:
   // its history, then its values less the offset.
   std::vector<double> history_, column_;
   std::vector<double> offset_, sum_, sum_squares_, products_;
-  // Per channel, with kNoiseLags lags or more: the sum of the squares of the sixth differences
-  // over the rows with six rows of the run before them (as many as the pairs at lag 6).
+  // Per channel: the sum of the squares of the sixth differences over the rows with six rows of
+  // the run before them, `differenced_` of them.
   std::vector<double> differences_;
   // Per lag and channel: the sums of the later and of the earlier values of the pairs.
   std::vector<double> lead_, lagged_;
@@ -64,7 +65,7 @@ class LagSums {
   // Per channel: the largest |value| and its row among the rows added (the first such row).
   std::vector<double> largest_;
   std::vector<std::size_t> largest_row_;
-  std::size_t filled_ = 0, count_ = 0;
+  std::size_t filled_ = 0, count_ = 0, differenced_ = 0;
   // The point sums: each monomial's among the distinct ones, the distinct ones' sums over the
   // rows sampled, how many, and the rows to pass before the next (none without monomials).
   // load() restores the index and the sums alone, to be merged and read.

@@ -64,7 +64,7 @@ DataOptions pass_options(const Model& model, const IdentifyOptions& options) {
   data_options.batches = options.batches.value_or(0);
   data_options.min_rows = 2 * (options.batches ? *options.batches : DataOptions::kMinAutoBatches);
   data_options.input_shift = options.input_shift;
-  data_options.lags = kNoiseLags;  // for the noise estimates
+  data_options.lags = 4;  // for the noise estimates of held inputs
   return data_options;
 }
 

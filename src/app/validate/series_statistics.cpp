@@ -114,7 +114,7 @@ double white_noise_variance(const std::vector<std::vector<double>>& runs, bool h
   if (!held) {
     double squares = 0, rows = 0;
     for (const std::vector<double>& run : runs) {
-      for (std::size_t n = kNoiseLags; n < run.size(); ++n) {
+      for (std::size_t n = kNoiseDifference; n < run.size(); ++n) {
         const double d = sixth_difference(run.data() + n);
         squares += d * d;
         ++rows;
