@@ -12,7 +12,8 @@
 
 namespace momentid {
 
-// Sums for the mean, variance and lagged products of every channel, over pairs within runs.
+// Sums for the mean, variance and lagged products of every channel, over pairs within runs, and
+// of the squares of its sixth differences (the noise estimate, data_pass.hpp).
 // Values are summed less an offset, the first row's, so that a large mean does not cancel the
 // variance away in sum(x^2)/n - mean^2. Sums of shards merge: the pairs a shard owns are those
 // whose later row is its own, and their earlier rows may come from the rows before the shard

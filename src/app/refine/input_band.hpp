@@ -10,8 +10,8 @@
 
 namespace momentid {
 
-// The input's band from its Welch spectrum against the level of its white noise (the excess of
-// its lag-0 autocovariance over the extrapolation from lags 1 to 6): the edge is the highest
+// The input's band from its Welch spectrum against the level of its white noise (the mean square
+// of its sixth difference, as white_noise_variance estimates it): the edge is the highest
 // frequency where the spectrum exceeds InputBand::kFloorRatio times that level, the cutoff half
 // as far again. `filtered` when the noise is not 0 and the cutoff lies below kMaxCutoff of the
 // Nyquist frequency.
