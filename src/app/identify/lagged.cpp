@@ -523,9 +523,7 @@ void add_lagged_warnings(IdentifyResult& result, const LaggedChannels& channels)
           "cuts, a bias the intervals do not include, and which the J test can see on a precise "
           "record (docs/model-language.md, \"Forming a state from its acceleration\")");
     }
-    for (auto& formed : result.integration->formed) {
-      const auto v = static_cast<std::size_t>(model.variable_index(formed.state));
-      formed.cut = nonlinear_in(model, *result.lagged->system, v);
+    for (const auto& formed : integration->formed) {
       if (!formed.cut) continue;
       result.estimate.warnings.push_back(
           "'" + formed.state + "' was formed from '" + formed.column + "' inside a high-pass at " +
@@ -550,6 +548,13 @@ void identify_lagged(IdentifyResult& result, const DataSource& source,
                          (plan.instruments_cut.empty() || window_cut.empty() ? "" : " and ") +
                          window_cut + " to stay within " +
                          std::to_string(IdentifyOptions::kMaxLaggedMoments) + " moments";
+  }
+  if (result.integration) {
+    for (auto& formed : result.integration->formed) {
+      formed.cut =
+          nonlinear_in(*result.model, *result.lagged->system,
+                       static_cast<std::size_t>(result.model->variable_index(formed.state)));
+    }
   }
   solve_lagged(result, plan, pass.channels, options);
   if (plan.check && pass.check_moments && result.estimate.j_pvalue) {
