@@ -11,7 +11,9 @@
 #include "common/json.hpp"
 #include "momentid/estimate.hpp"
 #include "momentid/random.hpp"
+#include "solve/delta_method.hpp"
 #include "solve/distributions.hpp"
+#include "solve/linear_system.hpp"
 #include "solve/long_run.hpp"
 #include "test_support.hpp"
 
@@ -376,6 +378,29 @@ TEST_SUITE("solve") {
     CHECK(e.j_dof == 2);
     CHECK(e.optimal->objective * static_cast<double>(e.intervals) ==
           doctest::Approx(*e.j_statistic).epsilon(1e-12));
+  }
+
+  TEST_CASE("the equations' batch series at any theta are the moments' through d g / d mu") {
+    // Coefficients and right-hand sides that read several moments each, some twice: D g_mu(theta)'
+    // summed from the columns' series equals the product at theta, to rounding.
+    MomentRows rows;
+    rows.a = {{{1.0, {{0, 2.0}, {3, -1.0}}}, {0.0, {{1, 0.5}}}},
+              {{0.0, {{2, 1.0}, {2, 1.0}}}, {-2.0, {{0, 1.5}, {4, 3.0}}}},
+              {{0.5, {}}, {0.0, {{3, -2.0}}}}};
+    rows.b = {{0.0, {{4, 1.0}}}, {1.0, {{1, -1.0}, {0, 2.0}}}, {0.0, {{2, 0.25}}}};
+    const MomentEstimates estimates = random_estimates({1, 2, 3, 4, 5}, 20, 5);
+    const momentid::LinearSystem system =
+        momentid::evaluate(rows, 2, estimates.mean, /*normalise_rows=*/false);
+    const Eigen::MatrixXd deviations = momentid::batch_deviations(estimates);
+    const momentid::EquationSeries series(system, deviations);
+    for (const Eigen::Vector2d& theta : {Eigen::Vector2d(0, 0), Eigen::Vector2d(1.5, -0.7)}) {
+      const Eigen::MatrixXd want =
+          deviations * momentid::equations_jacobian(system, theta).transpose();
+      const Eigen::MatrixXd got = series.at(theta);
+      REQUIRE(got.rows() == 20);
+      REQUIRE(got.cols() == 3);
+      CHECK((got - want).norm() <= 1e-12 * want.norm());
+    }
   }
 
   TEST_CASE("the result holds the batch series of the main estimate's errors") {

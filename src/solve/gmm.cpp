@@ -11,13 +11,18 @@ using Eigen::Index;
 using Eigen::MatrixXd;
 using Eigen::VectorXd;
 
+MatrixXd known_part(const LinearSystem& system, const KnownCovariance& known, const VectorXd& at) {
+  const Index rows = system.a.rows();
+  if (known.nonZeros() == 0) return MatrixXd::Zero(rows, rows);
+  const Eigen::SparseMatrix<double> g_mu = equations_jacobian(system, at);
+  return MatrixXd(g_mu * known * g_mu.transpose());
+}
+
 OptimalWeighting optimal_weighting(const LinearSystem& system, const LeastSquares& first,
-                                   const MatrixXd& deviations, const KnownCovariance& known,
+                                   const EquationSeries& series, const KnownCovariance& known,
                                    const VectorXd& at) {
   const Index rows = system.a.rows(), params = system.a.cols();
-  const Eigen::SparseMatrix<double> g_mu = equations_jacobian(system, at);
-  const MatrixXd s =
-      batch_covariance(deviations * g_mu.transpose()) + MatrixXd(g_mu * known * g_mu.transpose());
+  const MatrixXd s = batch_covariance(series.at(at)) + known_part(system, known, at);
   Eigen::SelfAdjointEigenSolver<MatrixXd> eigen(s);
   const VectorXd lambda = eigen.eigenvalues();
   const double lambda_max = lambda.maxCoeff();
@@ -43,12 +48,12 @@ OptimalWeighting optimal_weighting(const LinearSystem& system, const LeastSquare
 }
 
 IteratedWeighting iterated_weighting(const LinearSystem& system, const LeastSquares& first,
-                                     const MatrixXd& deviations, const KnownCovariance& known,
+                                     const EquationSeries& series, const KnownCovariance& known,
                                      bool twice) {
   IteratedWeighting out;
-  out.pilot = optimal_weighting(system, first, deviations, known, first.theta);
+  out.pilot = optimal_weighting(system, first, series, known, first.theta);
   out.weighted =
-      twice ? optimal_weighting(system, first, deviations, known, out.pilot.theta) : out.pilot;
+      twice ? optimal_weighting(system, first, series, known, out.pilot.theta) : out.pilot;
   return out;
 }
 
@@ -68,23 +73,6 @@ MatrixXd sensitivity_of(const LinearSystem& system, const LeastSquares& first,
                      gmm.weight * gmm.residual, gmm.theta_scaled);
 }
 
-// d a_p / d mu for each column p of A: how it moves with the moments (rows x moments).
-std::vector<Eigen::SparseMatrix<double>> column_jacobians(const LinearSystem& system) {
-  std::vector<std::vector<Eigen::Triplet<double>>> entries(
-      static_cast<std::size_t>(system.a.cols()));
-  for (std::size_t k = 0; k < system.uses.size(); ++k) {
-    for (const auto& [r, q, w] : system.uses[k].a) {
-      entries[static_cast<std::size_t>(q)].emplace_back(r, static_cast<Index>(k), w);
-    }
-  }
-  std::vector<Eigen::SparseMatrix<double>> out;
-  for (const auto& column : entries) {
-    out.emplace_back(system.a.rows(), static_cast<Index>(system.uses.size()));
-    out.back().setFromTriplets(column.begin(), column.end());
-  }
-  return out;
-}
-
 MatrixXd centred(const MatrixXd& x) { return x.rowwise() - x.colwise().mean(); }
 
 // d theta / d theta_at (unscaled), for weights W = S(theta_at)^-1: column j is
@@ -92,21 +80,24 @@ MatrixXd centred(const MatrixXd& x) { return x.rowwise() - x.colwise().mean(); }
 // / (B (B - 1)) + G K G' over the centred batch deviations x_k is quadratic in theta through
 // G = d g / d mu, whose derivative in theta_j is d a_j / d mu.
 MatrixXd weight_sensitivity(const LinearSystem& system, const LeastSquares& first,
-                            const OptimalWeighting& gmm, const MatrixXd& deviations,
+                            const OptimalWeighting& gmm, const EquationSeries& series,
                             const KnownCovariance& known, const VectorXd& at) {
-  const auto b = static_cast<double>(deviations.rows());
-  const Eigen::SparseMatrix<double> g_mu = equations_jacobian(system, at);
-  const MatrixXd u = centred(deviations * g_mu.transpose());
+  const auto b = static_cast<double>(series.deviations().rows());
+  const MatrixXd u = centred(series.at(at));
   const VectorXd h = -(gmm.weight * gmm.residual);  // W g
   const VectorXd uh = u * h;
-  const VectorXd known_h = known * (g_mu.transpose() * h);
-  const std::vector<Eigen::SparseMatrix<double>> columns = column_jacobians(system);
+  const bool with_known = known.nonZeros() > 0;
+  const Eigen::SparseMatrix<double> g_mu =
+      with_known ? equations_jacobian(system, at) : Eigen::SparseMatrix<double>();
+  const VectorXd known_h = with_known ? VectorXd(known * (g_mu.transpose() * h)) : VectorXd();
   MatrixXd out(system.a.cols(), system.a.cols());
   for (Index j = 0; j < system.a.cols(); ++j) {
-    const Eigen::SparseMatrix<double>& g_j = columns[static_cast<std::size_t>(j)];
-    const MatrixXd a_j = centred(deviations * g_j.transpose());
-    const VectorXd ds_h = (a_j.transpose() * uh + u.transpose() * (a_j * h)) / (b * (b - 1)) +
-                          g_j * known_h + g_mu * (known * (g_j.transpose() * h));
+    const MatrixXd a_j = centred(series.column(j));
+    VectorXd ds_h = (a_j.transpose() * uh + u.transpose() * (a_j * h)) / (b * (b - 1));
+    if (with_known) {
+      const Eigen::SparseMatrix<double>& g_j = series.gradient(j);
+      ds_h += g_j * known_h + g_mu * (known * (g_j.transpose() * h));
+    }
     out.col(j) = (gmm.left * ds_h).cwiseQuotient(first.scale);
   }
   return out;
@@ -115,9 +106,10 @@ MatrixXd weight_sensitivity(const LinearSystem& system, const LeastSquares& firs
 }  // namespace
 
 GmmErrors gmm_errors(const LinearSystem& system, const LeastSquares& first,
-                     const OptimalWeighting& gmm, const MatrixXd& deviations,
+                     const OptimalWeighting& gmm, const EquationSeries& series,
                      const KnownCovariance& known, std::size_t batches,
                      const OptimalWeighting* pilot) {
+  const MatrixXd& deviations = series.deviations();
   const double root = std::sqrt(finite_sample_factor(batches, gmm.rank, system.a.cols()));
   const MatrixXd jacobian = sensitivity_of(system, first, gmm);
   GmmErrors out;
@@ -125,7 +117,7 @@ GmmErrors gmm_errors(const LinearSystem& system, const LeastSquares& first,
   MatrixXd corrected = out.series;
   if (pilot) {
     const MatrixXd through_weights =
-        weight_sensitivity(system, first, gmm, deviations, known, pilot->theta) *
+        weight_sensitivity(system, first, gmm, series, known, pilot->theta) *
         sensitivity_of(system, first, *pilot);
     corrected += root * deviations * through_weights.transpose();
   }

@@ -25,11 +25,15 @@ struct OptimalWeighting {
   double objective = 0;
 };
 
-// `deviations`: the moments' batch series (batch_deviations); `known`: a covariance of the
-// moments' record means known from elsewhere, added to S.
+// `series`: the equations' batch series; `known`: a covariance of the moments' record means
+// known from elsewhere, added to S.
 OptimalWeighting optimal_weighting(const LinearSystem& system, const LeastSquares& first,
-                                   const Eigen::MatrixXd& deviations, const KnownCovariance& known,
+                                   const EquationSeries& series, const KnownCovariance& known,
                                    const Eigen::VectorXd& at);
+
+// G K G' at `at`: what `known` adds to the equations' covariance (zero without it).
+Eigen::MatrixXd known_part(const LinearSystem& system, const KnownCovariance& known,
+                           const Eigen::VectorXd& at);
 
 // The weights taken twice: S at the least-squares estimate gives the pilot (the two-step
 // estimate), S at the pilot's estimate the estimate reported. The weights at the least-squares
@@ -43,8 +47,8 @@ struct IteratedWeighting {
 };
 // `twice` false: the pilot alone (`weighted` is the pilot).
 IteratedWeighting iterated_weighting(const LinearSystem& system, const LeastSquares& first,
-                                     const Eigen::MatrixXd& deviations,
-                                     const KnownCovariance& known, bool twice);
+                                     const EquationSeries& series, const KnownCovariance& known,
+                                     bool twice);
 
 // The weights come from the same batches as the errors, which makes the batch series of the
 // estimate's errors look too small by (n - m + q) / n and the estimate less efficient than with
@@ -67,7 +71,7 @@ struct GmmErrors {
   LongRunCovariance errors;
 };
 GmmErrors gmm_errors(const LinearSystem& system, const LeastSquares& first,
-                     const OptimalWeighting& gmm, const Eigen::MatrixXd& deviations,
+                     const OptimalWeighting& gmm, const EquationSeries& series,
                      const KnownCovariance& known, std::size_t batches,
                      const OptimalWeighting* pilot = nullptr);
 

@@ -34,7 +34,7 @@ using Eigen::MatrixXd;
 // standardised series). Reported: J d / tr(W V), whose mean is d for the right model whether the
 // equations telescope (W too small by a factor near B) or not.
 JTest j_test(const LinearSystem& system, const LeastSquares& first, const OptimalWeighting& gmm,
-             const MatrixXd& deviations, const KnownCovariance& known, std::size_t batches) {
+             const EquationSeries& series, const KnownCovariance& known, std::size_t batches) {
   const Index rows = system.a.rows(), params = system.a.cols();
   JTest out;
   out.dof = static_cast<int>(gmm.rank - params);
@@ -45,12 +45,10 @@ JTest j_test(const LinearSystem& system, const LeastSquares& first, const Optima
   const auto n = static_cast<double>(batches - 1);
   const auto d = static_cast<double>(out.dof);
   // M g_b for every batch, as g_b less its part along A: (I - A N^-1 A' W) g_b.
-  const Eigen::SparseMatrix<double> g_mu = equations_jacobian(system, gmm.theta);
-  const MatrixXd g = deviations * g_mu.transpose();
+  const MatrixXd g = series.at(gmm.theta);
   const MatrixXd free_g = g - (g * gmm.left.transpose()) * first.scaled.transpose();
   const MatrixXd free_part = MatrixXd::Identity(rows, rows) - first.scaled * gmm.left;
-  const MatrixXd added =
-      free_part * MatrixXd(g_mu * known * g_mu.transpose()) * free_part.transpose();
+  const MatrixXd added = free_part * known_part(system, known, gmm.theta) * free_part.transpose();
   const LongRunCovariance residual_errors = with_known(long_run_covariance(free_g), added);
   const MatrixXd wv = gmm.weight * residual_errors.linear;
   const double nu = residual_errors.dof, trace = wv.trace();

@@ -22,6 +22,6 @@ struct JTest {
 };
 
 JTest j_test(const LinearSystem& system, const LeastSquares& first, const OptimalWeighting& gmm,
-             const Eigen::MatrixXd& deviations, const KnownCovariance& known, std::size_t batches);
+             const EquationSeries& series, const KnownCovariance& known, std::size_t batches);
 
 }  // namespace momentid

@@ -110,4 +110,33 @@ Eigen::SparseMatrix<double> equations_jacobian(const LinearSystem& system, const
   return g_mu;
 }
 
+EquationSeries::EquationSeries(const LinearSystem& system, const MatrixXd& deviations)
+    : deviations_(deviations) {
+  const Index rows = system.a.rows(), moments = static_cast<Index>(system.uses.size());
+  std::vector<std::vector<Eigen::Triplet<double>>> entries(
+      static_cast<std::size_t>(system.a.cols()));
+  std::vector<Eigen::Triplet<double>> constant;
+  for (Index k = 0; k < moments; ++k) {
+    const MomentUse& use = system.uses[static_cast<std::size_t>(k)];
+    for (const auto& [r, p, w] : use.a) entries[static_cast<std::size_t>(p)].emplace_back(r, k, w);
+    for (const auto& [r, w] : use.b) constant.emplace_back(r, k, w);
+  }
+  for (const auto& column : entries) {
+    gradients_.emplace_back(rows, moments);
+    gradients_.back().setFromTriplets(column.begin(), column.end());
+    columns_.push_back(deviations * gradients_.back().transpose());
+  }
+  Eigen::SparseMatrix<double> g_b(rows, moments);
+  g_b.setFromTriplets(constant.begin(), constant.end());
+  constant_ = deviations * g_b.transpose();
+}
+
+MatrixXd EquationSeries::at(const VectorXd& theta) const {
+  MatrixXd out = -constant_;
+  for (std::size_t p = 0; p < columns_.size(); ++p) {
+    out += theta(static_cast<Index>(p)) * columns_[p];
+  }
+  return out;
+}
+
 }  // namespace momentid

@@ -41,6 +41,34 @@ LinearSystem evaluate(const MomentRows& rows, Eigen::Index parameters,
 Eigen::SparseMatrix<double> equations_jacobian(const LinearSystem& system,
                                                const Eigen::VectorXd& theta);
 
+// The equations' batch series D g_mu(theta)' at any theta, from the moments' batch series D
+// (batches x moments, batch_deviations). g_mu = sum_p theta_p G_p - G_b is linear in theta
+// (G_p = d a_p / d mu, the p-th column's gradient), so the series are kept per column and
+// summed: one product with the moments in all, not one per theta at which the weighting, its
+// sensitivity and the J test read them (an equation of the lagged system reads a thousand
+// moments, and there are thousands).
+class EquationSeries {
+ public:
+  // Keeps a reference to `deviations`.
+  EquationSeries(const LinearSystem& system, const Eigen::MatrixXd& deviations);
+  // D g_mu(theta)' (batches x rows).
+  Eigen::MatrixXd at(const Eigen::VectorXd& theta) const;
+  // G_p (rows x moments) and D G_p'.
+  const Eigen::SparseMatrix<double>& gradient(Eigen::Index p) const {
+    return gradients_[static_cast<std::size_t>(p)];
+  }
+  const Eigen::MatrixXd& column(Eigen::Index p) const {
+    return columns_[static_cast<std::size_t>(p)];
+  }
+  const Eigen::MatrixXd& deviations() const { return deviations_; }
+
+ private:
+  const Eigen::MatrixXd& deviations_;
+  std::vector<Eigen::SparseMatrix<double>> gradients_;
+  std::vector<Eigen::MatrixXd> columns_;
+  Eigen::MatrixXd constant_;  // D G_b'
+};
+
 // A covariance of the moments' record means known from elsewhere (moments x moments, nonzero
 // only over the few moments it concerns), and what it adds to the covariance of a series
 // J mu: J K J'.

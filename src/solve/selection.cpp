@@ -36,8 +36,9 @@ FixedWeighting::FixedWeighting(const MomentRows& rows, std::size_t parameters,
                 " equations needs more batches than equations, found " + std::to_string(batches));
   }
   const KnownCovariance known = diagonal_covariance(moment_variance, estimates);
-  const OptimalWeighting gmm = optimal_weighting(system, ls, deviations, known, ls.theta);
-  const JTest test = j_test(system, ls, gmm, deviations, known, batches);
+  const EquationSeries series(system, deviations);
+  const OptimalWeighting gmm = optimal_weighting(system, ls, series, known, ls.theta);
+  const JTest test = j_test(system, ls, gmm, series, known, batches);
   if (!test.statistic || !(gmm.objective > 0)) {
     throw Error(what + ": the library's J statistic cannot be calibrated (" +
                 (test.warning.empty() ? std::string("no residual") : test.warning) + ")");
@@ -46,7 +47,7 @@ FixedWeighting::FixedWeighting(const MomentRows& rows, std::size_t parameters,
   library_law_ = test.law;
   rank_ = gmm.rank;
   theta_ = gmm.theta;
-  covariance_ = gmm_errors(system, ls, gmm, deviations, known, batches).errors.covariance;
+  covariance_ = gmm_errors(system, ls, gmm, series, known, batches).errors.covariance;
 }
 
 double FixedWeighting::j(const std::vector<bool>& kept) const {

@@ -70,11 +70,11 @@ void report_least_squares(Estimate& out, const LinearSystem& system, const Least
 // The optimally weighted estimate's parameters, errors and objective, and the J test.
 void report_gmm(Estimate& out, const LinearSystem& system, const LeastSquares& ls,
                 const std::vector<bool>& identifiable, const MomentErrors& moments, bool iterate) {
-  const IteratedWeighting steps =
-      iterated_weighting(system, ls, moments.deviations, moments.known, iterate);
+  const EquationSeries equations(system, moments.deviations);
+  const IteratedWeighting steps = iterated_weighting(system, ls, equations, moments.known, iterate);
   const OptimalWeighting& gmm = steps.weighted;
-  const auto [series, errors] = gmm_errors(system, ls, gmm, moments.deviations, moments.known,
-                                           out.batches, iterate ? &steps.pilot : nullptr);
+  const auto [series, errors] = gmm_errors(system, ls, gmm, equations, moments.known, out.batches,
+                                           iterate ? &steps.pilot : nullptr);
   out.error_batches = rows_of(series);
   Fit& fit = out.optimal.emplace();
   fit.objective = out.intervals > 0 ? gmm.objective / static_cast<double>(out.intervals) : kNaN;
@@ -92,8 +92,7 @@ void report_gmm(Estimate& out, const LinearSystem& system, const LeastSquares& l
   // The J test at the pilot: the two-step J, whose law and power the studies measured
   // (docs/uncertainty.md); at weights taken from a wrong model's estimate its residual inflates
   // S, and J lost a third of its power against a wrong damping law.
-  const JTest test =
-      j_test(system, ls, steps.pilot, moments.deviations, moments.known, out.batches);
+  const JTest test = j_test(system, ls, steps.pilot, equations, moments.known, out.batches);
   out.j_dof = test.dof;
   out.j_statistic = test.statistic;
   out.j_pvalue = test.pvalue;
