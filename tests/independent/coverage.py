@@ -84,9 +84,34 @@ def held_duffing(rng, samples, dt=0.04, burn_in=625, substeps=16):
     return ys[burn_in:], vs[burn_in:], force[burn_in:steps]
 
 
+def path_of(case, workdir, seed):
+    return os.path.join(workdir, f"{case}_{seed}.csv")
+
+
+def duffing_records(case, workdir, seeds):
+    """The Duffing cases' records not written yet, integrated side by side."""
+    missing = [seed for seed in seeds if not os.path.exists(path_of(case, workdir, seed))]
+    rngs = [np.random.default_rng(seed) for seed in missing]
+    for seed, rng, clean in zip(missing, rngs, lab.sdofs(rngs, FS, 100000) if rngs else []):
+        write(path_of(case, workdir, seed), duffing_columns(rng, clean, CASES[case]))
+
+
+def duffing_columns(rng, clean, noise):
+    return {"t": clean["t"], "y": lab.measured(rng, clean["y"], noise),
+            "x": lab.measured(rng, clean["x"], 0.01)}
+
+
+def write(path, columns):
+    lab.write_csv(path + ".part", columns)
+    os.replace(path + ".part", path)
+
+
 def record(case, workdir, seed):
-    path = os.path.join(workdir, f"{case}_{seed}.csv")
+    path = path_of(case, workdir, seed)
     if os.path.exists(path):
+        return path
+    if case.startswith("duffing"):
+        duffing_records(case, workdir, [seed])
         return path
     rng = np.random.default_rng(seed)
     noise = CASES[case]
@@ -103,17 +128,12 @@ def record(case, workdir, seed):
         clean = lab.hardening(rng, 2048, 100000)
         columns = {"t": clean["t"], "a": lab.measured(rng, clean["a"], noise),
                    "x": lab.measured(rng, clean["x"], noise)}
-    elif case == "two_mass":
+    else:
         clean = lab.two_mass(rng, FS, 200000, rms=3000.0)
         columns = {"t": clean["t"], "y1": lab.measured(rng, clean["y1"], noise),
                    "y2": lab.measured(rng, clean["y2"], noise),
                    "x": lab.measured(rng, clean["x"], 0.01)}
-    else:
-        clean = lab.sdof(rng, FS, 100000)
-        columns = {"t": clean["t"], "y": lab.measured(rng, clean["y"], noise),
-                   "x": lab.measured(rng, clean["x"], 0.01)}
-    lab.write_csv(path + ".part", columns)
-    os.replace(path + ".part", path)
+    write(path, columns)
     return path
 
 
@@ -136,6 +156,8 @@ def main():
     with open(model, "w") as out:
         out.write(MODELS.get(case, DUFFING))
     truth = truth_of(case)
+    if case.startswith("duffing"):
+        duffing_records(case, workdir, range(first, first + seeds))
 
     def one(seed):
         path = record(case, workdir, seed)

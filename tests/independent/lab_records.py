@@ -44,9 +44,10 @@ def shaker_force(rng, samples, fs, band, rms):
 
 def integrate(rates, state, force, dt):
     """Classical Runge-Kutta with step dt for state' = rates(state, x), the force given on the
-    grid of dt/2; returns the states at the force's even grid points (rows)."""
+    grid of dt/2; returns the states at the force's even grid points (rows). Each state may be an
+    array over records, the force then (grid points x records)."""
     steps = (len(force) - 1) // 2
-    out = np.empty((steps + 1, len(state)))
+    out = np.empty((steps + 1, len(state)) + np.shape(state[0]))
     s = list(state)
     out[0] = s
     half = dt / 2
@@ -73,16 +74,37 @@ def oscillator(rng, rates, states, fs, samples, band, rms, burn_in):
     return record
 
 
-def sdof(rng, fs, samples, rms=800.0, p=SDOF, asymmetric=None):
-    """The Duffing oscillator of `p`; `asymmetric` adds {"k2": .., "c3": ..}, the terms
-    -k2 y^2 - c3 v^3 that a Duffing model lacks."""
-    c, k, eps = p["c"], p["k"], p["eps"]
-    k2, c3 = (asymmetric["k2"], asymmetric["c3"]) if asymmetric else (0.0, 0.0)
+def oscillators(rngs, rates, states, fs, samples, band, rms, burn_in):
+    """`oscillator` for each generator of `rngs`, integrated side by side (numpy over the
+    records, a step for all of them at once)."""
+    total = samples + int(burn_in * fs)
+    force = np.column_stack([shaker_force(rng, total, fs, band, rms) for rng in rngs])
+    path = integrate(rates, [np.zeros(len(rngs))] * len(states), force, 1 / fs)[-samples:]
+    return [{**{name: path[:, i, r] for i, name in enumerate(states)},
+             "x": force[2 * (total - samples) + 2::2, r], "t": np.arange(samples) / fs}
+            for r in range(len(rngs))]
 
-    def rates(s, x):
-        y, v = s
-        return (v, -c * v - k * y - eps * y**3 - k2 * y**2 - c3 * v**3 + x)
-    return oscillator(rng, rates, ("y", "v"), fs, samples, (1.0, 40.0), rms, 10.0)
+
+def sdof_rates(p=SDOF, asymmetric=None):
+    """The rates of the Duffing oscillator of `p`; `asymmetric` adds {"k2": .., "c3": ..}, the
+    terms -k2 y^2 - c3 v^3 that a Duffing model lacks."""
+    c, k, eps = p["c"], p["k"], p["eps"]
+    if not asymmetric:
+        return lambda s, x: (s[1], -c * s[1] - k * s[0] - eps * s[0]**3 + x)
+    k2, c3 = asymmetric["k2"], asymmetric["c3"]
+    return lambda s, x: (s[1], -c * s[1] - k * s[0] - eps * s[0]**3 - k2 * s[0]**2
+                         - c3 * s[1]**3 + x)
+
+
+def sdof(rng, fs, samples, rms=800.0, p=SDOF, asymmetric=None):
+    """The Duffing oscillator of `p` (see sdof_rates)."""
+    return oscillator(rng, sdof_rates(p, asymmetric), ("y", "v"), fs, samples, (1.0, 40.0), rms,
+                      10.0)
+
+
+def sdofs(rngs, fs, samples, rms=800.0, p=SDOF):
+    """sdof for each generator of `rngs`, side by side."""
+    return oscillators(rngs, sdof_rates(p), ("y", "v"), fs, samples, (1.0, 40.0), rms, 10.0)
 
 
 def hardening(rng, fs, samples):
