@@ -1,11 +1,15 @@
 // The momentid command line: maps options to library calls and prints. Exit status: 0 success,
 // 1 usage error, 2 bad model or data, 3 nothing identifiable.
 
+#include <malloc.h>
+#include <sys/mman.h>
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
 #include <chrono>
+#include <cstdint>
 #include <cstdio>
+#include <cstdlib>
 #include <iostream>
 #include <vector>
 
@@ -48,9 +52,34 @@ int exit_code_of(const std::exception& e) {
   return error != nullptr ? error->exit_code() : 2;
 }
 
+// The program's memory, before anything large is allocated. A lagged pass of 10^5 rows keeps
+// thousands of stretches of sums, each as long as its thousands of moments, then batch series
+// as large: about 100 MB touched once, a page fault every 4 KiB, each costly on a virtual
+// machine (a third of the identification's time where this was measured). So the pass's
+// threads take their memory from the main heap, where the solve after them finds it again,
+// rather than from arenas of their own; large blocks come from the heap too, which keeps what
+// is freed; and the heap grows 256 MiB at a time, its first growth advised as transparent huge
+// pages of 2 MiB (taken where the kernel gives them on request; elsewhere the advice is
+// ignored). See docs/benchmarks.md.
+void prepare_memory() {
+  mallopt(M_ARENA_MAX, 1);
+  constexpr int kGrowth = 256 << 20;
+  mallopt(M_MMAP_THRESHOLD, kGrowth);
+  mallopt(M_TRIM_THRESHOLD, 2 * kGrowth);
+  mallopt(M_TOP_PAD, kGrowth);
+  const auto start = reinterpret_cast<std::uintptr_t>(sbrk(0));
+  void* grow = std::malloc(1 << 20);  // extends the heap by the growth
+  const auto end = reinterpret_cast<std::uintptr_t>(sbrk(0));
+  constexpr std::uintptr_t kHugePage = 2 << 20;
+  const std::uintptr_t first = (start + kHugePage - 1) & ~(kHugePage - 1);
+  if (end > first) madvise(reinterpret_cast<void*>(first), end - first, MADV_HUGEPAGE);
+  std::free(grow);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
+  prepare_memory();
   // Under mpirun, the processes of the job share each pass over the data (identify, check);
   // the first prints, the others are silent.
   momentid::data::quiet_array_libraries();
