@@ -86,15 +86,15 @@ MatrixXd weight_sensitivity(const LinearSystem& system, const LeastSquares& firs
   const MatrixXd u = centred(series.at(at));
   const VectorXd h = -(gmm.weight * gmm.residual);  // W g
   const VectorXd uh = u * h;
-  const bool with_known = known.nonZeros() > 0;
+  const bool has_known = known.nonZeros() > 0;
   const Eigen::SparseMatrix<double> g_mu =
-      with_known ? equations_jacobian(system, at) : Eigen::SparseMatrix<double>();
-  const VectorXd known_h = with_known ? VectorXd(known * (g_mu.transpose() * h)) : VectorXd();
+      has_known ? equations_jacobian(system, at) : Eigen::SparseMatrix<double>();
+  const VectorXd known_h = has_known ? VectorXd(known * (g_mu.transpose() * h)) : VectorXd();
   MatrixXd out(system.a.cols(), system.a.cols());
   for (Index j = 0; j < system.a.cols(); ++j) {
     const MatrixXd a_j = centred(series.column(j));
     VectorXd ds_h = (a_j.transpose() * uh + u.transpose() * (a_j * h)) / (b * (b - 1));
-    if (with_known) {
+    if (has_known) {
       const Eigen::SparseMatrix<double>& g_j = series.gradient(j);
       ds_h += g_j * known_h + g_mu * (known * (g_j.transpose() * h));
     }
