@@ -94,6 +94,38 @@ TEST_SUITE("warnings") {
     CHECK(status(few) == Status::kDoubtful);
   }
 
+  TEST_CASE("a derivative order the data do not determine is a doubt, a determined mass is not") {
+    const Record record(50000);
+    // The Duffing record read by a model with a third derivative of y, whose coefficient m3 the
+    // oscillator gives no part: its estimate falls either side of zero.
+    const Model jerk = parse_model(R"(model jerk
+state y, v, a
+input x
+param m3 = 0.001, c = 0.5, k = 4, eps = 1
+y' = v
+v' = a
+m3*a' = -a - c*v - k*y - eps*y^3 + x
+)",
+                                   "jerk.mom");
+    const IdentifyResult r = identify(jerk, record.source(), {});
+    const ParameterEstimate& m3 = r.parameters().front();
+    MESSAGE("m3 = " << m3.estimate << " +- " << m3.std_error);
+    REQUIRE(std::abs(m3.estimate) < 2 * m3.std_error);
+    CHECK(mentions(doubts(r),
+                   "standard errors from zero: the data do not tell this model from "
+                   "one without a', a derivative order they do not determine"));
+    CHECK(status(r) == Status::kDoubtful);
+    const Model mass = parse_model(R"(model mass
+state y, v
+input x
+param m = 1, c = 0.5, k = 4, eps = 1
+y' = v
+m*v' = -c*v - k*y - eps*y^3 + x
+)",
+                                   "mass.mom");
+    CHECK_FALSE(mentions(doubts(identify(mass, record.source(), {})), "derivative order"));
+  }
+
   TEST_CASE("a square system is untested, and says why") {
     const Record record(50000);
     const Model model = model_file("duffing.mom");

@@ -167,6 +167,45 @@ bool undetermined(const IdentifyResult& r) {
   return any;
 }
 
+// The doubts of a state's derivative whose only coefficient is a free parameter within
+// kUndeterminedZ standard errors of zero (m3 of a' in m3*a' = -a - c*v + ...): the data do not
+// tell the model from one without that derivative, and the fast mode it adds is stable or
+// unstable as the estimate's sign falls (a third-order model of a second-order oscillator, on
+// records that differ in their noise alone: tests/independent/unstable.py jerk).
+std::vector<std::string> undetermined_orders(const IdentifyResult& r) {
+  std::vector<std::string> out;
+  const Model& model = *r.model;
+  for (std::size_t s = 0; s < model.states().size(); ++s) {
+    const Term* only = nullptr;
+    std::size_t count = 0;
+    for (const Equation& eq : model.equations()) {
+      for (const Term& t : eq.terms) {
+        if (t.derivative != static_cast<int>(s)) continue;
+        only = &t;
+        ++count;
+      }
+    }
+    if (count != 1 || only->parameter < 0) continue;
+    const std::string& name = model.parameters()[static_cast<std::size_t>(only->parameter)].name;
+    const std::vector<ParameterEstimate>& parameters = r.parameters();
+    const auto p = std::find_if(parameters.begin(), parameters.end(),
+                                [&](const ParameterEstimate& q) { return q.name == name; });
+    if (p == parameters.end() || p->fixed || !p->identifiable || !(p->std_error > 0) ||
+        !(std::abs(p->estimate) <= kUndeterminedZ * p->std_error)) {
+      continue;
+    }
+    const std::string derivative = model.states()[s].name + "'";
+    out.push_back("the coefficient " + name + " of " + derivative + " is " +
+                  number(std::abs(p->estimate) / p->std_error, "%.2g") +
+                  " standard errors from zero: the data do not tell this model from one without " +
+                  derivative +
+                  ", a derivative order they do not determine, and the mode it adds "
+                  "is stable or unstable as the estimate's sign falls. Write the model without " +
+                  derivative);
+  }
+  return out;
+}
+
 }  // namespace
 
 std::vector<std::string> doubts(const IdentifyResult& r) {
@@ -231,6 +270,8 @@ std::vector<std::string> doubts(const IdentifyResult& r) {
                   "sees the wrong one weakly; docs/measured-data.md, \"The law check\"). Compare "
                   "the two with 'momentid select'");
   }
+  const std::vector<std::string> orders = undetermined_orders(r);
+  out.insert(out.end(), orders.begin(), orders.end());
   if (r.runaway) out.push_back(runaway_text(*r.runaway));
   if (const auto& l = r.latent; l && e.usable()) {
     if (!l->converged) {
