@@ -145,11 +145,11 @@ MOMENTID_KERNEL void MomentAccumulator::form_chunk(const double* rows, std::size
   const auto column = [&](std::size_t index) { return chunk_.data() + index * stride_ + pad_; };
   const std::size_t variables = states_ + inputs_;
   for (std::size_t v = 0; v < variables; ++v) {
+    const double* const value = column(power_offset_[v] + 1);
     double* power = column(power_offset_[v] + 1);
     for (std::size_t r = 0; r < count; ++r) power[r] = rows[r * variables + v];
     for (int e = 2; e <= max_power_[v]; ++e, power += stride_) {
-      for (std::size_t r = 0; r < count; ++r)
-        power[stride_ + r] = power[r] * rows[r * variables + v];
+      column_product(power + stride_, {power, value, nullptr, nullptr}, 2, count);
     }
   }
   for (const ChunkProduct& p : products_) {

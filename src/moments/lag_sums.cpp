@@ -8,6 +8,8 @@
 #include <map>
 #include <utility>
 
+#include "moments/kernel.hpp"
+
 namespace momentid {
 
 const ChannelStatistics* DataMoments::channel(const std::string& name) const {
@@ -23,11 +25,48 @@ std::optional<double> ChannelStatistics::noise_fraction() const {
 
 namespace {
 
-// Two doubles, one SSE2 register (a vector type of GCC and Clang). A sum is kept in kVectors of
-// them, whose additions do not wait on one another.
-using Double2 = double __attribute__((vector_size(2 * sizeof(double))));
-constexpr std::size_t kVectors = 4;
-constexpr std::size_t kLanes = 2 * kVectors;
+// Eight doubles summed lane by lane, in two vectors of four (a vector type of GCC and Clang: an
+// AVX2 register each, two SSE2 ones without): the additions of different lanes do not wait on
+// one another. A sum's lanes are added up as ((0 + 2) + 4) + 6 and ((1 + 3) + 5) + 7, then the
+// two, in that order whatever the registers.
+using Four = double __attribute__((vector_size(4 * sizeof(double))));
+constexpr std::size_t kLanes = 8;
+
+struct Lanes {
+  Four low{}, high{};
+  Lanes& operator+=(const Lanes& o) {
+    low += o.low;
+    high += o.high;
+    return *this;
+  }
+  Lanes& operator*=(const Lanes& o) {
+    low *= o.low;
+    high *= o.high;
+    return *this;
+  }
+};
+[[gnu::always_inline]] inline Lanes operator*(Lanes a, const Lanes& b) { return a *= b; }
+[[gnu::always_inline]] inline Lanes operator*(double a, const Lanes& b) {
+  return {a * b.low, a * b.high};
+}
+[[gnu::always_inline]] inline Lanes operator+(const Lanes& a, const Lanes& b) {
+  return {a.low + b.low, a.high + b.high};
+}
+[[gnu::always_inline]] inline Lanes operator-(const Lanes& a, const Lanes& b) {
+  return {a.low - b.low, a.high - b.high};
+}
+
+[[gnu::always_inline]] inline Lanes load(const double* p) {
+  Lanes v;
+  std::memcpy(&v.low, p, sizeof v.low);
+  std::memcpy(&v.high, p + 4, sizeof v.high);
+  return v;
+}
+
+[[gnu::always_inline]] inline double total(const Lanes& s) {
+  return (((s.low[0] + s.low[2]) + s.high[0]) + s.high[2]) +
+         (((s.low[1] + s.low[3]) + s.high[1]) + s.high[3]);
+}
 
 // Over i < n: the sums of x[i] * y[i], and with Sums of x[i] and of y[i].
 struct PairSums {
@@ -35,26 +74,17 @@ struct PairSums {
 };
 
 template <bool Sums>
-PairSums sum_pairs(const double* x, const double* y, std::size_t n) {
-  std::array<Double2, kVectors> products{}, lead{}, lagged{};
+[[gnu::always_inline]] inline PairSums sum_pairs(const double* x, const double* y, std::size_t n) {
+  Lanes products{}, lead{}, lagged{};
   std::size_t i = 0;
   for (; i + kLanes <= n; i += kLanes) {
-    for (std::size_t v = 0; v < kVectors; ++v) {
-      Double2 xv, yv;
-      std::memcpy(&xv, x + i + 2 * v, sizeof xv);
-      std::memcpy(&yv, y + i + 2 * v, sizeof yv);
-      products[v] += xv * yv;
-      if constexpr (Sums) {
-        lead[v] += xv;
-        lagged[v] += yv;
-      }
+    const Lanes xv = load(x + i), yv = load(y + i);
+    products += xv * yv;
+    if constexpr (Sums) {
+      lead += xv;
+      lagged += yv;
     }
   }
-  const auto total = [](const std::array<Double2, kVectors>& s) {
-    Double2 t = s[0];
-    for (std::size_t v = 1; v < kVectors; ++v) t += s[v];
-    return t[0] + t[1];
-  };
   PairSums out{total(products), total(lead), total(lagged)};
   for (; i < n; ++i) {
     out.products += x[i] * y[i];
@@ -66,23 +96,27 @@ PairSums sum_pairs(const double* x, const double* y, std::size_t n) {
   return out;
 }
 
+MOMENTID_KERNEL PairSums sum_own(const double* x, std::size_t n) {
+  return sum_pairs<true>(x, x, n);
+}
+MOMENTID_KERNEL PairSums sum_lagged(const double* x, const double* y, std::size_t n) {
+  return sum_pairs<true>(x, y, n);
+}
+MOMENTID_KERNEL double sum_products(const double* x, const double* y, std::size_t n) {
+  return sum_pairs<false>(x, y, n).products;
+}
+
 // The sum over i < n of the square of the sixth difference at x[i] (x[i - 6] .. x[i]).
-double sum_sixth_differences(const double* x, std::size_t n) {
-  std::array<Double2, kVectors> sums{};
+MOMENTID_KERNEL double sum_sixth_differences(const double* x, std::size_t n) {
+  Lanes sums{};
   std::size_t i = 0;
   for (; i + kLanes <= n; i += kLanes) {
-    for (std::size_t v = 0; v < kVectors; ++v) {
-      std::array<Double2, kNoiseDifference + 1> p;
-      for (std::size_t j = 0; j <= kNoiseDifference; ++j) {
-        std::memcpy(&p[j], x + i + 2 * v - j, sizeof p[j]);
-      }
-      const Double2 d = p[0] - 6 * p[1] + 15 * p[2] - 20 * p[3] + 15 * p[4] - 6 * p[5] + p[6];
-      sums[v] += d * d;
-    }
+    std::array<Lanes, kNoiseDifference + 1> p;
+    for (std::size_t j = 0; j <= kNoiseDifference; ++j) p[j] = load(x + i - j);
+    const Lanes d = p[0] - 6 * p[1] + 15 * p[2] - 20 * p[3] + 15 * p[4] - 6 * p[5] + p[6];
+    sums += d * d;
   }
-  Double2 t = sums[0];
-  for (std::size_t v = 1; v < kVectors; ++v) t += sums[v];
-  double out = t[0] + t[1];
+  double out = total(sums);
   for (; i < n; ++i) {
     const double d = sixth_difference(x + i);
     out += d * d;
@@ -99,24 +133,17 @@ double range_sum(const double* x, std::ptrdiff_t first, std::ptrdiff_t last) {
 
 // The sum over i < n of w[i] times the product of the columns `factors` (`count` of them, each
 // kPointGroup values from `table`) at i.
-double weighted_sum(const double* w, const std::uint32_t* factors, std::size_t count,
-                    const double* table, std::size_t n) {
-  std::array<Double2, kVectors> sums{};
+MOMENTID_KERNEL double weighted_sum(const double* w, const std::uint32_t* factors,
+                                    std::size_t count, const double* table, std::size_t n) {
+  Lanes sums{};
   std::size_t i = 0;
   for (; i + kLanes <= n; i += kLanes) {
-    for (std::size_t v = 0; v < kVectors; ++v) {
-      Double2 p, q;
-      std::memcpy(&p, w + i + 2 * v, sizeof p);
-      for (std::size_t f = 0; f < count; ++f) {
-        std::memcpy(&q, table + factors[f] * LagSums::kPointGroup + i + 2 * v, sizeof q);
-        p *= q;
-      }
-      sums[v] += p;
-    }
+    Lanes p = load(w + i);
+    for (std::size_t f = 0; f < count; ++f)
+      p *= load(table + factors[f] * LagSums::kPointGroup + i);
+    sums += p;
   }
-  Double2 t = sums[0];
-  for (std::size_t v = 1; v < kVectors; ++v) t += sums[v];
-  double out = t[0] + t[1];
+  double out = total(sums);
   for (; i < n; ++i) {
     double p = w[i];
     for (std::size_t f = 0; f < count; ++f) p *= table[factors[f] * LagSums::kPointGroup + i];
@@ -126,7 +153,7 @@ double weighted_sum(const double* w, const std::uint32_t* factors, std::size_t c
 }
 
 // The largest |x[i]| over i < n.
-double largest_magnitude(const double* x, std::size_t n) {
+MOMENTID_KERNEL double largest_magnitude(const double* x, std::size_t n) {
   std::array<double, kLanes> top{};
   std::size_t i = 0;
   for (; i + kLanes <= n; i += kLanes) {
@@ -209,7 +236,7 @@ void LagSums::add(const double* rows, std::size_t count) {
       largest_row_[c] = count_ + static_cast<std::size_t>(at - x);
     }
     for (std::size_t r = 0; r < count; ++r) x[r] -= offset_[c];
-    const PairSums own = sum_pairs<true>(x, x, count);
+    const PairSums own = sum_own(x, count);
     sum_[c] += own.lead;
     sum_squares_[c] += own.products;
     // Lag l pairs each row with the one l rows earlier in the run, history included. The sums
@@ -219,7 +246,7 @@ void LagSums::add(const double* rows, std::size_t count) {
       const std::size_t first = first_paired(l);
       const std::size_t i = (l - 1) * channels_ + c;
       if (count < 2 * l) {
-        const PairSums pairs = sum_pairs<true>(x + first, x + first - l, count - first);
+        const PairSums pairs = sum_lagged(x + first, x + first - l, count - first);
         products_[i] += pairs.products;
         lead_[i] += pairs.lead;
         lagged_[i] += pairs.lagged;
@@ -227,7 +254,7 @@ void LagSums::add(const double* rows, std::size_t count) {
       }
       const auto lag = static_cast<std::ptrdiff_t>(l), begin = static_cast<std::ptrdiff_t>(first),
                  end = static_cast<std::ptrdiff_t>(count);
-      products_[i] += sum_pairs<false>(x + first, x + first - l, count - first).products;
+      products_[i] += sum_products(x + first, x + first - l, count - first);
       lead_[i] += own.lead - range_sum(x, 0, begin);
       lagged_[i] += own.lead - range_sum(x, end - lag, end) + range_sum(x, begin - lag, 0);
     }
