@@ -201,7 +201,8 @@ class MomentAccumulator {
   // that some moment needs (`products_`, each once, its factors' lags less the smallest). A
   // moment's `whole_` part is its product (for a held moment its state part), `held_input_` the
   // input part of the held ones (positions below increments_begin_): each a column read `lag`
-  // rows back. The intervals
+  // rows back, kept as the index in chunk_ of the value for the run's interval 0 (the row max_lag_
+  // into the run) less chunk_base_. The intervals
   // whose rows the chunk holds are then closed together, moment by moment along the rows
   // (sum_intervals), without the blocks, rings and per-row sums of the other moments.
   // `chunk_base_`: the run's row (of those this accumulator saw) at the chunk's first;
@@ -212,14 +213,11 @@ class MomentAccumulator {
     std::array<std::uint32_t, kChunkFactors> factors;  // columns of powers
     std::array<std::uint32_t, kChunkFactors> lags;
   };
-  struct ChunkPart {
-    std::uint32_t column, lag;
-  };
   bool chunked_ = false;
   std::size_t pad_ = 0, stride_ = 0;
   std::vector<double> chunk_;
   std::vector<ChunkProduct> products_;
-  std::vector<ChunkPart> whole_, held_input_;
+  std::vector<std::ptrdiff_t> whole_, held_input_;
   std::size_t chunk_base_ = 0, chunk_rows_ = 0, next_close_ = 0;
   // The product of factors [first, last) (1 without any) of a single.
   static double single_product(const Single& one, const double* history, std::uint32_t first,

@@ -191,18 +191,25 @@ class CsvReader final : public StreamReader {
   const char* read_field(std::size_t field, const char* p, double* row, RowKeys& keys) {
     const char* const end = line_.data() + line_.size();
     const char* const start = skip_blanks(p, end);
-    const char* const stop = field_end(start, end);
-    if (is_missing_value(trim(std::string_view(start, static_cast<std::size_t>(stop - start))))) {
-      if (!pass_over_missing(keys, field))
-        bad_field(field, p, "expected a number (" + missing_value_hint() + ")");
-      field_starts_[field] = start;
-      return stop;
+    // A field that starts as a number does is no missing value (empty, nan, na or n/a): its end
+    // is where the number ends.
+    const bool numeric = start != end && ((*start >= '0' && *start <= '9') || *start == '-' ||
+                                          *start == '+' || *start == '.');
+    if (!numeric) {
+      const char* const stop = field_end(start, end);
+      if (is_missing_value(trim(std::string_view(start, static_cast<std::size_t>(stop - start))))) {
+        if (!pass_over_missing(keys, field))
+          bad_field(field, p, "expected a number (" + missing_value_hint() + ")");
+        field_starts_[field] = start;
+        return stop;
+      }
     }
     double value = 0;
     const char* after = parse_number(start, end, value, request_.layout.decimal);
     if (after != nullptr && separator_ != ' ') after = skip_blanks(after, end);
     if (after == nullptr || (after != end && *after != separator_ && !is_blank(*after))) {
       // "1,5" in a ';'-separated file: a decimal comma.
+      const char* const stop = field_end(start, end);
       const bool comma = request_.layout.decimal == '.' && separator_ != ',' &&
                          std::memchr(start, ',', static_cast<std::size_t>(stop - start)) != nullptr;
       // A first row none of whose fields is a number: units or descriptions (`s`, `m/s^2`).

@@ -32,6 +32,7 @@ using Lanes = double __attribute__((vector_size(32)));
 [[gnu::always_inline]] inline void column_product(double* out,
                                                   const std::array<const double*, 4>& f,
                                                   std::uint32_t count, std::size_t rows) {
+#pragma GCC unroll 4
   for (std::size_t r = 0; r < rows; r += 4) {
     Lanes p = load(f[0] + r) * load(f[1] + r);
     if (count > 2) p *= load(f[2] + r);
@@ -53,6 +54,7 @@ template <bool Before, bool After>
   };
   Lanes lanes{};
   std::size_t k = 0;
+#pragma GCC unroll 4
   for (; k + 4 <= count; k += 4) lanes += term([&](const double* p) { return load(p + k); });
   double sum = (lanes[0] + lanes[1]) + (lanes[2] + lanes[3]);
   for (; k < count; ++k) sum += term([&](const double* p) { return p[k]; });
@@ -63,6 +65,7 @@ template <bool Before, bool After>
 [[gnu::always_inline]] inline double column_sum(const double* p, std::size_t count) {
   Lanes lanes{};
   std::size_t k = 0;
+#pragma GCC unroll 4
   for (; k + 4 <= count; k += 4) lanes += load(p + k);
   double sum = (lanes[0] + lanes[1]) + (lanes[2] + lanes[3]);
   for (; k < count; ++k) sum += p[k];
@@ -85,6 +88,9 @@ void MomentAccumulator::lay_out_chunks(const std::vector<Layout>& layouts) {
   std::map<std::vector<std::pair<std::uint32_t, std::uint32_t>>, std::uint32_t> columns;
   // The product of the factors [first, last) of a layout: a power's own column for one, the
   // column of ones (power 0 of channel 0) for none, read `lag` rows back.
+  struct ChunkPart {
+    std::uint32_t column, lag;
+  };
   const auto part = [&](const Layout& l, std::size_t first, std::size_t last) -> ChunkPart {
     if (first == last) return {0, 0};
     const auto lag = static_cast<std::uint32_t>(
@@ -112,8 +118,12 @@ void MomentAccumulator::lay_out_chunks(const std::vector<Layout>& layouts) {
   for (std::size_t i = 0; i < moments_.size(); ++i) {
     const Layout& l = layouts[order_[i]];
     const bool held = i < increments_begin_;
-    whole_[i] = part(l, 0, held ? l.state_factors : l.indices.size());
-    if (held) held_input_[i] = part(l, l.state_factors, l.indices.size());
+    const auto index = [&](const ChunkPart& p) {
+      return static_cast<std::ptrdiff_t>(p.column * stride_ + pad_ + max_lag_) -
+             static_cast<std::ptrdiff_t>(p.lag);
+    };
+    whole_[i] = index(part(l, 0, held ? l.state_factors : l.indices.size()));
+    if (held) held_input_[i] = index(part(l, l.state_factors, l.indices.size()));
   }
   chunk_.assign(next * stride_, 1.0);
 }
@@ -186,8 +196,10 @@ MOMENTID_KERNEL void MomentAccumulator::sum_intervals(std::size_t first, std::si
   const std::size_t rows = run_rows_;
   const bool cubic = rule_ == HeldRule::kCubic;
   // A part from interval `n`'s row on (max_lag_ rows into the run for interval 0).
-  const auto at = [&](const ChunkPart& part, std::size_t n) {
-    return chunk_.data() + (part.column * stride_ + pad_ + n + max_lag_ - part.lag - chunk_base_);
+  const double* const chunk = chunk_.data();
+  const auto base = static_cast<std::ptrdiff_t>(chunk_base_);
+  const auto at = [&](std::ptrdiff_t part, std::size_t n) {
+    return chunk + (part + (static_cast<std::ptrdiff_t>(n) - base));
   };
   double* sums = open_sums_.data();
   // The interior intervals [inner, outer) share one set of weights; a run's first and last
