@@ -19,6 +19,7 @@
 #include <utility>
 #include <vector>
 
+#include "common/decimal.hpp"
 #include "momentid/reader.hpp"
 #include "test_support.hpp"
 
@@ -1079,15 +1080,26 @@ TEST_SUITE("data reader") {
                      kBad + 1, 2, "");
     check_read_error(record(kBad, 3, kInf), columns({"x", "y"}),
                      "column 'x': expected a finite number, found 'inf'", kBad + 1, 4, "");
-    check_read_error(record(kBad, 0, kBad * 0.25 + 0.125), columns({"y"}),
-                     "non-uniform time step: 0.375 after 0.25 at t = 750.125 (the steps before "
-                     "it average 0.25): give the sample interval with dt 0.25 if the samples are "
-                     "equally spaced",
-                     kBad + 1, 1, "");
-    check_read_error(record(kBad, 0, 0), columns({"y"}),
-                     "non-increasing time: t = 0 after t = 749.75 (samples must be in increasing "
-                     "time order)",
-                     kBad + 1, 1, "");
+    // The time steps are checked four rows at a time: the row in each place of a four.
+    for (const int bad : {kBad, kBad + 1, kBad + 2, kBad + 3}) {
+      CAPTURE(bad);
+      const double t = bad * 0.25;
+      check_read_error(record(bad, 0, t + 0.125), columns({"y"}),
+                       "non-uniform time step: 0.375 after 0.25 at t = " +
+                           momentid::shortest_decimal(t + 0.125) +
+                           " (the steps before it average 0.25): give the sample interval with "
+                           "dt 0.25 if the samples are equally spaced",
+                       bad + 1, 1, "");
+      check_read_error(
+          record(bad, 0, 0), columns({"y"}),
+          "non-increasing time: t = 0 after t = " + momentid::shortest_decimal(t - 0.25) +
+              " (samples must be in increasing time order)",
+          bad + 1, 1, "");
+    }
+    // A value that is not finite in a column not read: every row delivered.
+    const Contents unread = read_text(record(kBad, 3, kNaN), columns({"y"}));
+    CHECK(unread.rows == kRows);
+    CHECK(unread.values[kBad] == kBad + 0.5);
     // A missing value dropped: the rows around it are delivered, in blocks of any size.
     ColumnRequest request = columns({"v", "y", "y"});
     request.layout.missing = momentid::MissingValues::kDropRow;

@@ -89,10 +89,11 @@ class BinaryReader final : public StreamReader {
       if (!map_.needed[field]) continue;
       needed_fields_.push_back(field);
       takes_.push_back({field, map_.output[field], static_cast<int>(field) == map_.time});
+      const std::size_t offset = sizeof(double) * field;
       if (map_.output[field] >= 0) {
-        outputs_.emplace_back(sizeof(double) * field, static_cast<std::size_t>(map_.output[field]));
+        outputs_.emplace_back(offset, static_cast<std::size_t>(map_.output[field]));
       }
-      if (static_cast<int>(field) == map_.time) time_field_ = sizeof(double) * field;
+      if (static_cast<int>(field) == map_.time) time_offset_ = offset;
     }
     row_bytes_ = sizeof(double) * header_.names.size();
     data_start_ = kMagic.size() + 4 + length;
@@ -120,8 +121,9 @@ class BinaryReader final : public StreamReader {
   }
 
   // The rows the buffer holds whole, up to the first with a value that is not finite. Where every
-  // value of the rows is finite (the common case, tested at once), each is copied where it goes
-  // without a test of its own.
+  // value of the rows is finite, the columns not read included (the common case, tested at once),
+  // each is copied where it goes without a test of its own; otherwise the rows are taken one by
+  // one, to stop before the first row with a requested value that is not finite.
   std::size_t read_rows(double* rows, double* times, std::size_t count) override {
     if (position_ == filled_ && !refill()) return 0;
     const std::size_t width = request_.names.size();
@@ -131,8 +133,8 @@ class BinaryReader final : public StreamReader {
       for (std::size_t r = 0; r < n; ++r) {
         const unsigned char* const bytes = first + r * row_bytes_;
         double* const row = rows + r * width;
-        for (const auto& [field, output] : outputs_) row[output] = load_double(bytes + field);
-        if (time_field_) times[r] = load_double(bytes + *time_field_);
+        for (const auto& [offset, output] : outputs_) row[output] = load_double(bytes + offset);
+        if (time_offset_) times[r] = load_double(bytes + *time_offset_);
       }
       position_ += n * row_bytes_;
       row_number_ += static_cast<long long>(n);
@@ -216,10 +218,10 @@ class BinaryReader final : public StreamReader {
     bool time;
   };
   std::vector<Take> takes_;
-  // The same for read_rows' rows of finite values: the byte offset of each field that goes to a
-  // row and where it goes, and of the time's.
+  // The same, as read_rows copies them: each field that goes to a row, its byte offset in the row
+  // and its place, and the time's offset.
   std::vector<std::pair<std::size_t, std::size_t>> outputs_;
-  std::optional<std::size_t> time_field_;
+  std::optional<std::size_t> time_offset_;
   std::size_t row_bytes_ = 0;
   std::uint64_t data_start_ = 0;       // the offset of the first row
   std::vector<unsigned char> buffer_;  // whole rows

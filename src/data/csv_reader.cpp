@@ -191,8 +191,8 @@ class CsvReader final : public StreamReader {
   const char* read_field(std::size_t field, const char* p, double* row, RowKeys& keys) {
     const char* const end = line_.data() + line_.size();
     const char* const start = skip_blanks(p, end);
-    // A field that starts as a number does is no missing value (empty, nan, na or n/a): its end
-    // is where the number ends.
+    // A field that starts like a number (a digit, a sign, a point) is not a missing value (empty,
+    // nan, na or n/a), and its end is where the number ends.
     const bool numeric = start != end && ((*start >= '0' && *start <= '9') || *start == '-' ||
                                           *start == '+' || *start == '.');
     if (!numeric) {

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 
 #include "common/decimal.hpp"
@@ -19,17 +20,29 @@ constexpr double kStepTolerance = 1e-6;
 // also covers times printed with seven or more significant digits.
 constexpr double kTimeRounding = 4 * 5.9604644775390625e-8;
 
-// Four doubles (a vector type of GCC and Clang).
-using Four = double __attribute__((vector_size(4 * sizeof(double))));
+}  // namespace
+
+namespace {
+
+// step_allowance past its part that does not depend on the times (`fixed`), for a double and for
+// four lanes (TimePrecision::Four) alike.
+template <class T>
+T time_allowance(double fixed, T t, T previous) {
+  using P = TimePrecision;
+  return fixed + kTimeRounding * P::larger(P::magnitude(t), P::magnitude(previous));
+}
 
 }  // namespace
 
-double StreamReader::step_allowance(double t, double previous, double reference) const {
+double StreamReader::fixed_allowance(double reference) const {
   // Times printed to a few decimals: one unit in the last place, but never half a step, so that
   // a missing or doubled sample is refused whatever the precision.
   const double printed = std::min(precision_.unit(), reference / 2);
-  return kStepTolerance * reference + printed +
-         kTimeRounding * std::max(std::abs(t), std::abs(previous));
+  return kStepTolerance * reference + printed;
+}
+
+double StreamReader::step_allowance(double t, double previous, double reference) const {
+  return time_allowance(fixed_allowance(reference), t, previous);
 }
 
 bool to_run(double value, long& run) {
@@ -204,26 +217,20 @@ void StreamReader::non_uniform_step(double t, double step) const {
 // without a rounding per step). Four rows at a time where none of them shows more decimals than
 // the times before (the allowance stays) and every step is within it; the others one by one.
 MOMENTID_KERNEL std::size_t StreamReader::steady_steps(const double* times, std::size_t count) {
+  using Four = TimePrecision::Four;
   const double reference = *step_;
   double previous = previous_time_;
   std::size_t r = 0;
-  const auto steady = [&](double t, double before, double allowance) {
-    const double step = t - before;
-    return step > 0 && !(std::abs(step - reference) > allowance);
-  };
   for (;;) {
-    // step_allowance's part that does not change with the time, whose unit changes only where
-    // see() finds more decimals.
-    const double fixed = kStepTolerance * reference + std::min(precision_.unit(), reference / 2);
+    // The unit of the times' precision changes only where see() finds more decimals.
+    const double fixed = fixed_allowance(reference);
     for (; r + 4 <= count && precision_.sees_nothing_new(times + r); r += 4) {
-      Four t, before;
+      Four t;
       std::memcpy(&t, times + r, sizeof t);
-      before = Four{previous, t[0], t[1], t[2]};
+      const Four before = {previous, t[0], t[1], t[2]};
       const Four step = t - before;
-      const Four off = step - reference;
-      const Four at = t < 0 ? -t : t, from = before < 0 ? -before : before;
-      const Four magnitude = at < from ? from : at;
-      const auto held = (step > 0) & ((off < 0 ? -off : off) <= fixed + kTimeRounding * magnitude);
+      const auto held = (step > 0) & (TimePrecision::magnitude(step - reference) <=
+                                      time_allowance(fixed, t, before));
       if (!(held[0] && held[1] && held[2] && held[3])) break;
       previous = t[3];
     }
@@ -232,7 +239,8 @@ MOMENTID_KERNEL std::size_t StreamReader::steady_steps(const double* times, std:
     for (; r < end; ++r) {
       const double t = times[r];
       precision_.see(t);
-      if (!steady(t, previous, step_allowance(t, previous, reference))) break;
+      const double step = t - previous;
+      if (!(step > 0) || std::abs(step - reference) > step_allowance(t, previous, reference)) break;
       previous = t;
     }
     if (r < end || r == count) break;

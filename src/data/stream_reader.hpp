@@ -140,6 +140,8 @@ class StreamReader : public DataReader {
   // How far a step from `previous` to time t may differ from `reference`, the first step or the
   // metadata's dt.
   double step_allowance(double t, double previous, double reference) const;
+  // Its part that does not depend on the times.
+  double fixed_allowance(double reference) const;
   [[noreturn]] void non_uniform_step(double t, double step) const;
   RowZone zone_of_last_row() const;
 

@@ -1,7 +1,5 @@
 #pragma once
 
-#include <algorithm>
-#include <cmath>
 #include <cstring>
 #include <limits>
 
@@ -25,34 +23,41 @@ class TimePrecision {
   }
   double unit() const { return unit_; }
   // Whether see() would change nothing for any of the four values t[0..3]: each of them needs no
-  // more decimals than those seen, as `whole` finds it (the same operations, four at a time).
+  // more decimals than those seen (`whole`, four lanes at a time).
   bool sees_nothing_new(const double* t) const {
     if (binary_) return true;
-    using Four = double __attribute__((vector_size(4 * sizeof(double))));
-    constexpr double kLimit = 4503599627370496.0;
-    constexpr double kRounding = 4 * std::numeric_limits<double>::epsilon();
     Four x;
     std::memcpy(&x, t, sizeof x);
-    x *= scale_;
-    const Four a = x < 0 ? -x : x;
-    const Four nearest = (a + kLimit) - kLimit;
-    const Four off = a - nearest;
-    const Four one = {1, 1, 1, 1};
-    const auto held = (a < kLimit) & ((off < 0 ? -off : off) <= kRounding * (a > one ? a : one));
+    const auto held = whole(x * scale_);
     return held[0] && held[1] && held[2] && held[3];
+  }
+
+  // Four doubles (a vector type of GCC and Clang).
+  using Four = double __attribute__((vector_size(4 * sizeof(double))));
+  // |x| and the larger of a and b, for a double and for each lane of Four alike (std::abs and
+  // std::max, but for the sign of a zero).
+  template <class T>
+  static T magnitude(T x) {
+    return x < 0 ? -x : x;
+  }
+  template <class T>
+  static T larger(T a, T b) {
+    return a < b ? b : a;
   }
 
  private:
   // Whether x, a value scaled by a power of ten, is a whole number up to the rounding of the
-  // value and of the scaling (a few units in the last place of a double).
-  static bool whole(double x) {
+  // value and of the scaling (a few units in the last place of a double); for Four, of each lane.
+  template <class T>
+  static auto whole(T x) -> decltype(x < 1.0) {
     constexpr double kLimit = 4503599627370496.0;  // 2^52: above it every double is whole
     constexpr double kRounding = 4 * std::numeric_limits<double>::epsilon();
-    const double a = std::abs(x);
+    const T a = magnitude(x);
     // a to the nearest whole number as std::nearbyint rounds it, without a library call for
     // every time stamp: in [2^52, 2^53) the doubles are the whole numbers.
-    const double nearest = (a + kLimit) - kLimit;
-    return a < kLimit && std::abs(a - nearest) <= kRounding * std::max(a, 1.0);
+    const T nearest = (a + kLimit) - kLimit;
+    const T one = T{} + 1.0;
+    return (a < kLimit) & (magnitude(a - nearest) <= kRounding * larger(a, one));
   }
   void see_more_decimals(double t);
 

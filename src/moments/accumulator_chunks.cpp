@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "momentid/accumulator.hpp"
+#include "moments/accumulator_layout.hpp"
 #include "moments/kernel.hpp"
 
 namespace momentid {
@@ -28,7 +29,9 @@ using Lanes = double __attribute__((vector_size(32)));
 }
 [[gnu::always_inline]] inline void store(double* p, Lanes v) { std::memcpy(p, &v, sizeof v); }
 
-// out[r] = the product of the columns f[0 .. count) (two to four) at row r, for r < rows.
+// out[r] = the product of the columns f[0 .. count) (two to four) at row r, for r < rows and up
+// to three rows past them (rows rounded up to a multiple of four): the columns have room for them
+// (kChunk is a multiple of four), and what those rows hold is never read as data.
 [[gnu::always_inline]] inline void column_product(double* out,
                                                   const std::array<const double*, 4>& f,
                                                   std::uint32_t count, std::size_t rows) {
@@ -115,13 +118,14 @@ void MomentAccumulator::lay_out_chunks(const std::vector<Layout>& layouts) {
   };
   whole_.resize(moments_.size());
   held_input_.resize(increments_begin_);
+  // A part's index in chunk_ for the run's interval 0, less chunk_base_ (sum_intervals).
+  const auto index = [&](const ChunkPart& p) {
+    return static_cast<std::ptrdiff_t>(p.column * stride_ + pad_ + max_lag_) -
+           static_cast<std::ptrdiff_t>(p.lag);
+  };
   for (std::size_t i = 0; i < moments_.size(); ++i) {
     const Layout& l = layouts[order_[i]];
     const bool held = i < increments_begin_;
-    const auto index = [&](const ChunkPart& p) {
-      return static_cast<std::ptrdiff_t>(p.column * stride_ + pad_ + max_lag_) -
-             static_cast<std::ptrdiff_t>(p.lag);
-    };
     whole_[i] = index(part(l, 0, held ? l.state_factors : l.indices.size()));
     if (held) held_input_[i] = index(part(l, l.state_factors, l.indices.size()));
   }
@@ -155,8 +159,8 @@ MOMENTID_KERNEL void MomentAccumulator::form_chunk(const double* rows, std::size
   const auto column = [&](std::size_t index) { return chunk_.data() + index * stride_ + pad_; };
   const std::size_t variables = states_ + inputs_;
   for (std::size_t v = 0; v < variables; ++v) {
-    const double* const value = column(power_offset_[v] + 1);
     double* power = column(power_offset_[v] + 1);
+    const double* const value = power;
     for (std::size_t r = 0; r < count; ++r) power[r] = rows[r * variables + v];
     for (int e = 2; e <= max_power_[v]; ++e, power += stride_) {
       column_product(power + stride_, {power, value, nullptr, nullptr}, 2, count);
@@ -195,9 +199,9 @@ void MomentAccumulator::close_chunked(std::size_t first, std::size_t last) {
 MOMENTID_KERNEL void MomentAccumulator::sum_intervals(std::size_t first, std::size_t last) {
   const std::size_t rows = run_rows_;
   const bool cubic = rule_ == HeldRule::kCubic;
-  // A part from interval `n`'s row on (max_lag_ rows into the run for interval 0).
   const double* const chunk = chunk_.data();
   const auto base = static_cast<std::ptrdiff_t>(chunk_base_);
+  // A part from interval `n`'s row on (max_lag_ rows into the run for interval 0).
   const auto at = [&](std::ptrdiff_t part, std::size_t n) {
     return chunk + (part + (static_cast<std::ptrdiff_t>(n) - base));
   };

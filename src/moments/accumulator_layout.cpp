@@ -2,6 +2,8 @@
 // the working order of the moments, and their grouping into blocks of products of contiguous
 // rows that the per-row kernels (accumulator_rows.cpp) sweep.
 
+#include "moments/accumulator_layout.hpp"
+
 #include <algorithm>
 #include <cstdint>
 #include <limits>
@@ -10,17 +12,8 @@
 #include <tuple>
 
 #include "data/text.hpp"
-#include "momentid/accumulator.hpp"
 
 namespace momentid {
-// A moment's factors as (lag, power-table index), state factors first.
-struct MomentAccumulator::Layout {
-  // Kinds in working order: products with a held input, increments, the other products.
-  enum Kind { kHeld, kIncrement, kPlain };
-  Kind kind = kPlain;
-  std::size_t state_factors = 0;
-  std::vector<std::size_t> indices, lags;
-};
 
 // Checks the moments' channels and sizes the power table and the history.
 void MomentAccumulator::size_history() {

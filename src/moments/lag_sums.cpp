@@ -32,38 +32,38 @@ namespace {
 using Four = double __attribute__((vector_size(4 * sizeof(double))));
 constexpr std::size_t kLanes = 8;
 
-struct Lanes {
+struct Eight {
   Four low{}, high{};
-  Lanes& operator+=(const Lanes& o) {
+  Eight& operator+=(const Eight& o) {
     low += o.low;
     high += o.high;
     return *this;
   }
-  Lanes& operator*=(const Lanes& o) {
+  Eight& operator*=(const Eight& o) {
     low *= o.low;
     high *= o.high;
     return *this;
   }
 };
-[[gnu::always_inline]] inline Lanes operator*(Lanes a, const Lanes& b) { return a *= b; }
-[[gnu::always_inline]] inline Lanes operator*(double a, const Lanes& b) {
+[[gnu::always_inline]] inline Eight operator*(Eight a, const Eight& b) { return a *= b; }
+[[gnu::always_inline]] inline Eight operator*(double a, const Eight& b) {
   return {a * b.low, a * b.high};
 }
-[[gnu::always_inline]] inline Lanes operator+(const Lanes& a, const Lanes& b) {
+[[gnu::always_inline]] inline Eight operator+(const Eight& a, const Eight& b) {
   return {a.low + b.low, a.high + b.high};
 }
-[[gnu::always_inline]] inline Lanes operator-(const Lanes& a, const Lanes& b) {
+[[gnu::always_inline]] inline Eight operator-(const Eight& a, const Eight& b) {
   return {a.low - b.low, a.high - b.high};
 }
 
-[[gnu::always_inline]] inline Lanes load(const double* p) {
-  Lanes v;
+[[gnu::always_inline]] inline Eight load_eight(const double* p) {
+  Eight v;
   std::memcpy(&v.low, p, sizeof v.low);
   std::memcpy(&v.high, p + 4, sizeof v.high);
   return v;
 }
 
-[[gnu::always_inline]] inline double total(const Lanes& s) {
+[[gnu::always_inline]] inline double total(const Eight& s) {
   return (((s.low[0] + s.low[2]) + s.high[0]) + s.high[2]) +
          (((s.low[1] + s.low[3]) + s.high[1]) + s.high[3]);
 }
@@ -75,10 +75,10 @@ struct PairSums {
 
 template <bool Sums>
 [[gnu::always_inline]] inline PairSums sum_pairs(const double* x, const double* y, std::size_t n) {
-  Lanes products{}, lead{}, lagged{};
+  Eight products{}, lead{}, lagged{};
   std::size_t i = 0;
   for (; i + kLanes <= n; i += kLanes) {
-    const Lanes xv = load(x + i), yv = load(y + i);
+    const Eight xv = load_eight(x + i), yv = load_eight(y + i);
     products += xv * yv;
     if constexpr (Sums) {
       lead += xv;
@@ -108,12 +108,12 @@ MOMENTID_KERNEL double sum_products(const double* x, const double* y, std::size_
 
 // The sum over i < n of the square of the sixth difference at x[i] (x[i - 6] .. x[i]).
 MOMENTID_KERNEL double sum_sixth_differences(const double* x, std::size_t n) {
-  Lanes sums{};
+  Eight sums{};
   std::size_t i = 0;
   for (; i + kLanes <= n; i += kLanes) {
-    std::array<Lanes, kNoiseDifference + 1> p;
-    for (std::size_t j = 0; j <= kNoiseDifference; ++j) p[j] = load(x + i - j);
-    const Lanes d = p[0] - 6 * p[1] + 15 * p[2] - 20 * p[3] + 15 * p[4] - 6 * p[5] + p[6];
+    std::array<Eight, kNoiseDifference + 1> p;
+    for (std::size_t j = 0; j <= kNoiseDifference; ++j) p[j] = load_eight(x + i - j);
+    const Eight d = p[0] - 6 * p[1] + 15 * p[2] - 20 * p[3] + 15 * p[4] - 6 * p[5] + p[6];
     sums += d * d;
   }
   double out = total(sums);
@@ -135,12 +135,12 @@ double range_sum(const double* x, std::ptrdiff_t first, std::ptrdiff_t last) {
 // kPointGroup values from `table`) at i.
 MOMENTID_KERNEL double weighted_sum(const double* w, const std::uint32_t* factors,
                                     std::size_t count, const double* table, std::size_t n) {
-  Lanes sums{};
+  Eight sums{};
   std::size_t i = 0;
   for (; i + kLanes <= n; i += kLanes) {
-    Lanes p = load(w + i);
+    Eight p = load_eight(w + i);
     for (std::size_t f = 0; f < count; ++f)
-      p *= load(table + factors[f] * LagSums::kPointGroup + i);
+      p *= load_eight(table + factors[f] * LagSums::kPointGroup + i);
     sums += p;
   }
   double out = total(sums);
