@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 #include <limits>
 
 #include "common/decimal.hpp"
@@ -25,7 +24,7 @@ constexpr double kTimeRounding = 4 * 5.9604644775390625e-8;
 namespace {
 
 // step_allowance past its part that does not depend on the times (`fixed`), for a double and for
-// four lanes (TimePrecision::Four) alike.
+// four lanes (Four) alike.
 template <class T>
 T time_allowance(double fixed, T t, T previous) {
   using P = TimePrecision;
@@ -217,7 +216,6 @@ void StreamReader::non_uniform_step(double t, double step) const {
 // without a rounding per step). Four rows at a time where none of them shows more decimals than
 // the times before (the allowance stays) and every step is within it; the others one by one.
 MOMENTID_KERNEL std::size_t StreamReader::steady_steps(const double* times, std::size_t count) {
-  using Four = TimePrecision::Four;
   const double reference = *step_;
   double previous = previous_time_;
   std::size_t r = 0;
@@ -225,8 +223,7 @@ MOMENTID_KERNEL std::size_t StreamReader::steady_steps(const double* times, std:
     // The unit of the times' precision changes only where see() finds more decimals.
     const double fixed = fixed_allowance(reference);
     for (; r + 4 <= count && precision_.sees_nothing_new(times + r); r += 4) {
-      Four t;
-      std::memcpy(&t, times + r, sizeof t);
+      const Four t = load_four(times + r);
       const Four before = {previous, t[0], t[1], t[2]};
       const Four step = t - before;
       const auto held = (step > 0) & (TimePrecision::magnitude(step - reference) <=

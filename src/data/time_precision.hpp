@@ -1,7 +1,8 @@
 #pragma once
 
-#include <cstring>
 #include <limits>
+
+#include "moments/kernel.hpp"
 
 namespace momentid::data {
 
@@ -26,16 +27,12 @@ class TimePrecision {
   // more decimals than those seen (`whole`, four lanes at a time).
   bool sees_nothing_new(const double* t) const {
     if (binary_) return true;
-    Four x;
-    std::memcpy(&x, t, sizeof x);
-    const auto held = whole(x * scale_);
+    const auto held = whole(load_four(t) * scale_);
     return held[0] && held[1] && held[2] && held[3];
   }
 
-  // Four doubles (a vector type of GCC and Clang).
-  using Four = double __attribute__((vector_size(4 * sizeof(double))));
-  // |x| and the larger of a and b, for a double and for each lane of Four alike (std::abs and
-  // std::max, but for the sign of a zero).
+  // |x| and the larger of a and b, for a double and for each lane of a Four (kernel.hpp) alike
+  // (std::abs and std::max, but for the sign of a zero).
   template <class T>
   static T magnitude(T x) {
     return x < 0 ? -x : x;

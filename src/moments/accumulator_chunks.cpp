@@ -7,7 +7,6 @@
 #include <algorithm>
 #include <array>
 #include <cstdint>
-#include <cstring>
 #include <map>
 #include <tuple>
 #include <utility>
@@ -20,15 +19,6 @@
 namespace momentid {
 namespace {
 
-// Four doubles in a vector register (two with SSE2 alone), read and written at any address.
-using Lanes = double __attribute__((vector_size(32)));
-[[gnu::always_inline]] inline Lanes load(const double* p) {
-  Lanes v;
-  std::memcpy(&v, p, sizeof v);
-  return v;
-}
-[[gnu::always_inline]] inline void store(double* p, Lanes v) { std::memcpy(p, &v, sizeof v); }
-
 // out[r] = the product of the columns f[0 .. count) (two to four) at row r, for r < rows and up
 // to three rows past them (rows rounded up to a multiple of four): the columns have room for them
 // (kChunk is a multiple of four), and what those rows hold is never read as data.
@@ -37,10 +27,10 @@ using Lanes = double __attribute__((vector_size(32)));
                                                   std::uint32_t count, std::size_t rows) {
 #pragma GCC unroll 4
   for (std::size_t r = 0; r < rows; r += 4) {
-    Lanes p = load(f[0] + r) * load(f[1] + r);
-    if (count > 2) p *= load(f[2] + r);
-    if (count > 3) p *= load(f[3] + r);
-    store(out + r, p);
+    Four p = load_four(f[0] + r) * load_four(f[1] + r);
+    if (count > 2) p *= load_four(f[2] + r);
+    if (count > 3) p *= load_four(f[3] + r);
+    store_four(out + r, p);
   }
 }
 
@@ -55,10 +45,10 @@ template <bool Before, bool After>
     if constexpr (After) integral += w[3] * at(g + 2);
     return at(u) * integral;
   };
-  Lanes lanes{};
+  Four lanes{};
   std::size_t k = 0;
 #pragma GCC unroll 4
-  for (; k + 4 <= count; k += 4) lanes += term([&](const double* p) { return load(p + k); });
+  for (; k + 4 <= count; k += 4) lanes += term([&](const double* p) { return load_four(p + k); });
   double sum = (lanes[0] + lanes[1]) + (lanes[2] + lanes[3]);
   for (; k < count; ++k) sum += term([&](const double* p) { return p[k]; });
   return sum;
@@ -66,10 +56,10 @@ template <bool Before, bool After>
 
 // The sum of p[k] over k < count.
 [[gnu::always_inline]] inline double column_sum(const double* p, std::size_t count) {
-  Lanes lanes{};
+  Four lanes{};
   std::size_t k = 0;
 #pragma GCC unroll 4
-  for (; k + 4 <= count; k += 4) lanes += load(p + k);
+  for (; k + 4 <= count; k += 4) lanes += load_four(p + k);
   double sum = (lanes[0] + lanes[1]) + (lanes[2] + lanes[3]);
   for (; k < count; ++k) sum += p[k];
   return sum;

@@ -11,3 +11,20 @@
 #else
 #define MOMENTID_KERNEL
 #endif
+
+#include <cstring>
+
+namespace momentid {
+
+// Four doubles in a vector register (a vector type of GCC and Clang: one AVX2 register, two SSE2
+// ones without), read and written at any address. The kernels' sums keep the same lanes in both
+// builds, so that they add alike.
+using Four = double __attribute__((vector_size(4 * sizeof(double))));
+[[gnu::always_inline]] inline Four load_four(const double* p) {
+  Four v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
+}
+[[gnu::always_inline]] inline void store_four(double* p, Four v) { std::memcpy(p, &v, sizeof v); }
+
+}  // namespace momentid

@@ -4,7 +4,6 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
-#include <cstring>
 #include <map>
 #include <utility>
 
@@ -25,11 +24,9 @@ std::optional<double> ChannelStatistics::noise_fraction() const {
 
 namespace {
 
-// Eight doubles summed lane by lane, in two vectors of four (a vector type of GCC and Clang: an
-// AVX2 register each, two SSE2 ones without): the additions of different lanes do not wait on
-// one another. A sum's lanes are added up as ((0 + 2) + 4) + 6 and ((1 + 3) + 5) + 7, then the
-// two, in that order whatever the registers.
-using Four = double __attribute__((vector_size(4 * sizeof(double))));
+// Eight doubles summed lane by lane, in two Four (kernel.hpp): the additions of different lanes
+// do not wait on one another. A sum's lanes are added up as ((0 + 2) + 4) + 6 and
+// ((1 + 3) + 5) + 7, then the two, in that order whatever the registers.
 constexpr std::size_t kLanes = 8;
 
 struct Eight {
@@ -57,10 +54,7 @@ struct Eight {
 }
 
 [[gnu::always_inline]] inline Eight load_eight(const double* p) {
-  Eight v;
-  std::memcpy(&v.low, p, sizeof v.low);
-  std::memcpy(&v.high, p + 4, sizeof v.high);
-  return v;
+  return {load_four(p), load_four(p + 4)};
 }
 
 [[gnu::always_inline]] inline double total(const Eight& s) {
