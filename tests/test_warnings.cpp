@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "common/number.hpp"
 #include "momentid/identify.hpp"
 #include "test_support.hpp"
 
@@ -20,15 +21,16 @@ using testing::model_file;
 using testing::options_for;
 using testing::Recorder;
 
-// A simulated Duffing record (c = 0.5, k = 4, eps = 1, MA input sigma = 20) in memory, whose
-// columns the tests may change before identifying.
+// A simulated Duffing record (c = 0.5, k = 4, eps = 1, MA input sigma = 20 unless `input` says
+// otherwise) in memory, whose columns the tests may change before identifying.
 struct Record {
   std::vector<std::string> names{"t", "y", "v", "x"};
   std::vector<std::vector<double>> columns;
-  explicit Record(std::size_t samples, std::uint64_t seed = 7) {
+  explicit Record(std::size_t samples, std::uint64_t seed = 7,
+                  const std::string& input = "ma:K=10,w=0.1,sigma=20") {
     const Model model = model_file("duffing.mom");
     SimulationOptions options = options_for(model, samples, seed);
-    options.inputs[0] = InputSpec::parse("ma:K=10,w=0.1,sigma=20", "--input");
+    options.inputs[0] = InputSpec::parse(input, "--input");
     Recorder recorder(model.channel_count());
     simulate(model, options, recorder);
     for (std::size_t c = 0; c < names.size(); ++c) columns.push_back(recorder.column(c));
@@ -198,6 +200,12 @@ m*v' = -c*v - k*y - eps*y^3 + x
     CHECK(momentid::to_string(status(r)) == "doubtful");
     CHECK(mentions(doubts(r), "'y' has the mean"));
     CHECK(mentions(doubts(r), "--center y"));
+    // The response to the record's zero-mean force, simulated for the check, follows the
+    // record but for the offset.
+    REQUIRE(r.response_means.size() == 2);
+    const IdentifyResult::ResponseMean& response = r.response_means[0];
+    CHECK(response.recorded - response.simulated == doctest::Approx(0.3 * sd).epsilon(0.01));
+    CHECK(std::abs(response.simulated) < 0.01 * sd);
     // Removing the mean restores the estimates the offset spoiled.
     const IdentifyResult centered =
         identify(model_file("duffing.mom"), record.source(), {.center = {"y"}});
@@ -218,6 +226,42 @@ m*v' = -c*v - k*y - eps*y^3 + x
         "v' = -c*v - k*y - q*y^2 + x\n",
         "quadratic.mom");
     CHECK(!mentions(doubts(identify(quadratic, record.source(), {})), "sensor offset"));
+  }
+
+  TEST_CASE(
+      "a mean of the response's own is no offset; an offset beside it is named with the amount "
+      "to subtract") {
+    // A periodic force gives a nonlinear model's states a mean of their own (an independent
+    // generator's multisine records: tests/independent/offsets.py multisine). Here the
+    // simulated response's means are set as such a record would give them.
+    const Record record(50000);
+    IdentifyResult r = identify(model_file("duffing.mom"), record.source(), {});
+    REQUIRE(r.means.front().name == "y");
+    CHECK(r.response_means.empty());  // nothing in doubt, nothing simulated
+    ChannelMean& y = r.means.front();
+    y.mean = 20 * y.std_error;
+    CHECK(mentions(doubts(r), "(20 standard errors from zero)"));
+    CHECK(!mentions(doubts(r), "A periodic input"));
+    r.response_failure = "the simulation does not follow the record";
+    CHECK(mentions(doubts(r),
+                   "remove it with --center y. A periodic input can give a state a "
+                   "mean of its own, which the identified model's response to the "
+                   "recorded inputs would show, but the simulation does not follow"));
+    r.response_failure.clear();
+    r.response_means = {{.name = "y", .recorded = y.mean, .simulated = y.mean, .std_error = 0}};
+    CHECK(momentid::to_string(status(r)) == "ok");
+    r.response_means[0].simulated = y.mean - 10 * y.std_error;
+    const std::string offset = number(10 * y.std_error, "%.3g");
+    CHECK(mentions(doubts(r), "'y' has the mean " + number(y.mean, "%.3g") + ", " + offset +
+                                  " from the " + number(10 * y.std_error, "%.3g") +
+                                  " of its response to the recorded inputs"));
+    CHECK(mentions(doubts(r), "10 standard errors)"));
+    CHECK(mentions(doubts(r), "subtract about " + offset + " from 'y'"));
+    CHECK(!mentions(doubts(r), "--center y"));
+    // A response that follows the record loosely widens the error of the difference.
+    r.response_means[0].std_error = 5 * y.std_error;
+    CHECK(mentions(doubts(r), "2 standard errors)") == false);
+    CHECK(momentid::to_string(status(r)) == "ok");
   }
 
   TEST_CASE("a short record's weakly determined parameters are named") {

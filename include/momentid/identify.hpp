@@ -283,6 +283,21 @@ struct IdentifyResult {
   static constexpr double kLawZ = 4;
   // The means of the channels read (after `centered` was removed), states then inputs.
   std::vector<ChannelMean> means;
+  // The identified model's response to the recorded inputs, simulated when the offset check would
+  // otherwise name a state's mean (docs/cli/identify.md, "Warnings"): per state with a column,
+  // its mean and the response's over the same rows (each run's from where the simulation has
+  // forgotten its start), and the standard error of their difference's mean from batches. A
+  // periodic force such as a multisine gives a nonlinear model's states a mean of their own,
+  // which the check then expects. Empty when nothing was simulated (no offset in doubt, an input
+  // without a column, a simulation that blows up or does not follow the record).
+  struct ResponseMean {
+    std::string name;
+    double recorded = 0, simulated = 0, std_error = 0;
+  };
+  std::vector<ResponseMean> response_means;
+  // Why the response was simulated but gave no means (a simulation that does not follow the
+  // record, an input without a column), or empty.
+  std::string response_failure;
 
   // The main result: the optimally weighted estimate when it was asked for and could be
   // computed, otherwise least squares.

@@ -6,6 +6,7 @@
 #include <numbers>
 
 #include "app/identify/linearise.hpp"
+#include "app/identify/response_means.hpp"
 #include "common/number.hpp"
 #include "momentid/identify.hpp"
 #include "momentid/lagged.hpp"
@@ -49,18 +50,26 @@ bool symmetric(const Model& model) {
 // A state whose mean lies off the mean the model gives it.
 struct Offset {
   const ChannelMean* mean;
-  bool responds = false;  // the inputs' means are off zero: `expected` is the response to them
-  double expected = 0;    // the mean the model gives the state
-  double std_error = 0;   // of mean - expected
-  double spread = 0;      // the state's standard deviation (0 when unknown)
+  // Where `expected` comes from: zero-mean inputs, the response to the inputs' means, or the
+  // simulated response to the recorded inputs (IdentifyResult::response_means).
+  enum class Expected { kZero, kInputMeans, kResponse } from = Expected::kZero;
+  double expected = 0;  // the mean the model gives the state
+  // The response has a mean of its own under zero-mean inputs (a periodic force on a nonlinear
+  // model), which --center would remove with the offset.
+  bool own_mean = false;
+  double std_error = 0;  // of mean - expected
+  double spread = 0;     // the state's standard deviation (0 when unknown)
 };
 
 // The states of a symmetric model whose means lie more than `z` standard errors from the mean the
-// model gives them. Zero-mean inputs give such a model zero-mean states; when an input's mean is
-// off zero (a DAQ offset on the force), a state's mean may be off zero by the response to it,
-// which the linearisation gives to first order (mean_response): the state is named when its mean
-// lies further from that response than its error and the response itself together allow (the
-// response of a hardening spring is smaller than the linearisation's, of a softening one larger).
+// model gives them. Zero-mean random inputs give such a model zero-mean states; when an input's
+// mean is off zero (a DAQ offset on the force), a state's mean may be off zero by the response to
+// it, which the linearisation gives to first order (mean_response): the state is named when its
+// mean lies further from that response than its error and the response itself together allow
+// (the response of a hardening spring is smaller than the linearisation's, of a softening one
+// larger). Where the model's response to the recorded inputs was simulated (response_means), its
+// mean over the same rows is the expected one: a periodic force gives a nonlinear model's states
+// a mean of their own, and the simulation has the inputs' means in it.
 std::vector<Offset> offsets(const IdentifyResult& r, double z) {
   std::vector<Offset> out;
   if (!symmetric(*r.model)) return out;
@@ -75,8 +84,12 @@ std::vector<Offset> offsets(const IdentifyResult& r, double z) {
   const bool inputs_off = std::any_of(r.means.begin(), r.means.end(), [&](const ChannelMean& m) {
     return input_of(m) != inputs.end() && off(m);
   });
+  const auto simulated = [&](const ChannelMean& m) {
+    return std::find_if(r.response_means.begin(), r.response_means.end(),
+                        [&](const auto& s) { return s.name == m.name; });
+  };
   MeanResponse response;
-  if (inputs_off) {
+  if (inputs_off && r.response_means.empty()) {
     response = mean_response(r);
     if (response.mean.empty()) return out;
   }
@@ -92,10 +105,18 @@ std::vector<Offset> offsets(const IdentifyResult& r, double z) {
     Offset o{&m};
     const auto state =
         std::find_if(states.begin(), states.end(), [&](const auto& d) { return d.name == m.name; });
-    if (inputs_off) {
-      if (state == states.end()) continue;  // a derivative column: its response is not known
+    if (const auto sim = simulated(m); sim != r.response_means.end()) {
+      o.from = Offset::Expected::kResponse;
+      o.expected = sim->simulated + (m.mean - sim->recorded);
+      // The pass's error of the mean, or the simulation's where it follows the record loosely.
+      o.std_error = std::max(m.std_error, sim->std_error);
+      o.own_mean = !inputs_off && std::abs(o.expected) > kWeakOffsetZ * o.std_error;
+      if (!(std::abs(m.mean - o.expected) > z * o.std_error)) continue;
+    } else if (inputs_off) {
+      // A derivative column: its response is not known (nor simulated).
+      if (state == states.end() || response.mean.empty()) continue;
       const auto s = static_cast<std::size_t>(state - states.begin());
-      o.responds = true;
+      o.from = Offset::Expected::kInputMeans;
       o.expected = response.mean[s];
       double variance = m.std_error * m.std_error;
       for (const ChannelMean& u : r.means) {
@@ -117,19 +138,39 @@ std::vector<Offset> offsets(const IdentifyResult& r, double z) {
 }
 
 // "'y' has the mean 0.0123, 0.12 of its standard deviation (5.1 standard errors from zero)", or
-// "... (5.1 standard errors from the 0.0004 that the inputs' means give it)".
+// "... (5.1 standard errors from the 0.0004 that the inputs' means give it)", or "'y' has the
+// mean 0.0123, 0.0119 from the 0.0004 of its response to the recorded inputs (0.12 of its
+// standard deviation, 5.1 standard errors)".
 std::string mean_text(const Offset& o) {
   const ChannelMean& m = *o.mean;
   std::string out = "'" + m.name + "' has the mean " + number(m.mean, "%.3g");
+  if (o.from == Offset::Expected::kResponse) {
+    out += ", " + number(m.mean - o.expected, "%.3g") + " from the " + number(o.expected, "%.3g") +
+           " of its response to the recorded inputs (";
+    if (o.spread > 0) {
+      out +=
+          number(std::abs(m.mean - o.expected) / o.spread, "%.2g") + " of its standard deviation, ";
+    }
+    return out + number(std::abs(m.mean - o.expected) / o.std_error, "%.2g") + " standard errors)";
+  }
   if (o.spread > 0) {
     out += ", " + number(std::abs(m.mean) / o.spread, "%.2g") + " of its standard deviation";
   }
   out += " (" + number(std::abs(m.mean - o.expected) / o.std_error, "%.2g") +
          " standard errors from " +
-         (!o.responds ? std::string("zero")
-                      : "the " + number(o.expected, "%.3g") + " that the inputs' means give it") +
+         (o.from == Offset::Expected::kZero
+              ? std::string("zero")
+              : "the " + number(o.expected, "%.3g") + " that the inputs' means give it") +
          ")";
   return out;
+}
+
+// How to remove the offset `o`: --center, unless the state's response has a mean of its own.
+std::string remedy(const Offset& o) {
+  const std::string& name = o.mean->name;
+  if (!o.own_mean) return "remove it with --center " + name;
+  return "subtract about " + number(o.mean->mean - o.expected, "%.3g") + " from '" + name +
+         "' (--center would remove the mean of the response too)";
 }
 
 // "the identified model is unstable: ..." (Runaway), with the damping ratio of the growing mode
@@ -217,7 +258,7 @@ std::vector<std::string> doubts(const IdentifyResult& r) {
     std::string seen;
     const std::vector<Offset> strong = offsets(r, kOffsetZ);
     for (const Offset& o : offsets(r, kWeakOffsetZ)) {
-      seen += "; " + mean_text(o) + ": an offset? remove it with --center " + o.mean->name;
+      seen += "; " + mean_text(o) + ": an offset? " + remedy(o);
       if (std::any_of(strong.begin(), strong.end(),
                       [&](const Offset& s) { return s.mean == o.mean; })) {
         seen += " (see below)";
@@ -315,16 +356,26 @@ std::vector<std::string> doubts(const IdentifyResult& r) {
                   "any of its terms. Excite the system more, measure longer, or remove terms");
   }
   for (const Offset& o : offsets(r, kOffsetZ)) {
-    out.push_back(mean_text(o) + ", but model " + r.model->name() +
-                  " is symmetric (every term odd), " +
-                  (!o.responds ? "and its inputs have no mean, so its states have none"
-                               : "so its states have no mean but the response to the "
-                                 "inputs' means") +
-                  ": a sensor offset? It biases the estimates; if it is one, remove it with "
-                  "--center " +
-                  o.mean->name);
+    out.push_back(
+        mean_text(o) + ", but model " + r.model->name() + " is symmetric (every term odd), " +
+        (o.from == Offset::Expected::kZero ? "and its inputs have no mean, so its states have none"
+         : o.from == Offset::Expected::kInputMeans
+             ? "so its states have no mean but the response to the inputs' means"
+             : "so its states have no mean but that of its response to the recorded "
+               "inputs (the identified model simulated through them)") +
+        ": a sensor offset? It biases the estimates; if it is one, " + remedy(o) +
+        (r.response_failure.empty()
+             ? ""
+             : ". A periodic input can give a state a mean of its own, which the "
+               "identified model's response to the recorded inputs would show, but " +
+                   r.response_failure));
   }
   return out;
+}
+
+bool offset_in_doubt(const IdentifyResult& r) {
+  return symmetric(*r.model) && (!offsets(r, kWeakOffsetZ).empty() ||
+                                 (r.estimate.j_pvalue && *r.estimate.j_pvalue < kJRejection));
 }
 
 Status status(const IdentifyResult& r) {

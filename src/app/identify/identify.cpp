@@ -9,6 +9,7 @@
 #include "app/identify/latent.hpp"
 #include "app/identify/law_check.hpp"
 #include "app/identify/plan.hpp"
+#include "app/identify/response_means.hpp"
 #include "app/identify/zero_lag.hpp"
 #include "momentid/algebra_lock.hpp"
 #include "momentid/error.hpp"
@@ -91,6 +92,7 @@ IdentifyResult identify(const Model& model, const DataSource& source,
   IdentifyResult result = identify_unchecked(model, source, options);
   check_laws(result, options,
              [&](const Model& extended) { return identify_unchecked(extended, source, options); });
+  simulate_response_means(result, source, options);
   if (options.refine && result.estimate.usable()) {
     RefineOptions refine_options;
     refine_options.replay.record = options.record;

@@ -53,7 +53,8 @@ std::vector<double> series_simulated(const Replay& replay, std::size_t j) {
 
 SourceLocation file_start(const std::string& name) { return {name, 1, 1, ""}; }
 
-Record read_record(const Model& model, const DataSource& source, const ReplayOptions& options) {
+Record read_record(const Model& model, const DataSource& source, const ReplayOptions& options,
+                   std::size_t most_rows) {
   const std::vector<bool> present = variables_present(model, source, options.record);
   Record record;
   record.name = source.name();
@@ -82,7 +83,9 @@ Record read_record(const Model& model, const DataSource& source, const ReplayOpt
   // A file that changes while it is read is said as such, also when the reader has met what a
   // cut leaves (a malformed last row).
   try {
-    while (reader->next(block, 65536)) {
+    for (std::size_t read = 0;
+         read < most_rows && reader->next(block, std::min<std::size_t>(65536, most_rows - read));
+         read += block.rows) {
       if (block.run_starts || record.runs.empty()) {
         record.runs.emplace_back();
         record.runs.back().number = block.run;

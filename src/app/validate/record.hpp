@@ -3,6 +3,7 @@
 // replay), and the facts about its runs that the replay and the comparison share.
 
 #include <cstddef>
+#include <limits>
 #include <map>
 #include <string>
 #include <vector>
@@ -16,9 +17,10 @@ namespace momentid {
 SourceLocation file_start(const std::string& name);
 
 // Reads the columns of the model's variables that `source` has, and every input (one the data
-// lack is reported as a missing column), run by run. Throws DataError when the data give no
-// sample interval.
-Record read_record(const Model& model, const DataSource& source, const ReplayOptions& options);
+// lack is reported as a missing column), run by run, the first `most_rows` rows. Throws
+// DataError when the data give no sample interval.
+Record read_record(const Model& model, const DataSource& source, const ReplayOptions& options,
+                   std::size_t most_rows = std::numeric_limits<std::size_t>::max());
 
 // Removes from the column of each variable named in `center` its mean over every run, and
 // returns the means removed, by name; a variable without a column is left alone.
