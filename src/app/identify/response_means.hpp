@@ -14,8 +14,9 @@ bool offset_in_doubt(const IdentifyResult& result);
 
 // Sets result.response_means when offset_in_doubt: the record's first rows read as validate
 // reads them (less the means the pass removed), the model at its estimates simulated through
-// its inputs. Leaves them empty where the response cannot be had (an input without a column, a
-// simulation that blows up or never forgets its start, an estimate that is not usable).
+// its inputs. Leaves them empty where the response cannot be had, saying why in
+// result.response_failure (an input without a column, a simulation that blows up or does not
+// follow the record); and where the estimate is not usable, silently.
 void simulate_response_means(IdentifyResult& result, const DataSource& source,
                              const IdentifyOptions& options);
 
