@@ -11,6 +11,7 @@
 #include "app/validate/replay.hpp"
 #include "common/number.hpp"
 #include "momentid/validate.hpp"
+#include "solve/long_run.hpp"
 
 namespace momentid {
 namespace {
@@ -20,8 +21,9 @@ namespace {
 // model several responses, and a chaotic one follows none: their means say nothing of this one.
 constexpr double kFollowed = 0.5;
 // The error's mean has a standard error from up to kBatches contiguous batches of at least
-// kBatchRows rows: a response that follows the record loosely (a chaotic stretch) carries a mean
-// error of its own, which a periodic record's own mean, nearly the same in every batch, does not.
+// kBatchRows rows (long_run_covariance, as the pass's means have theirs): a response that follows
+// the record loosely (a chaotic stretch) carries a mean error of its own, which a periodic
+// record's own mean, nearly the same in every batch, does not.
 constexpr std::size_t kBatches = 100, kBatchRows = 50;
 
 // The rows simulated, from the record's start: a constant offset shows in any stretch, and the
@@ -29,7 +31,7 @@ constexpr std::size_t kBatches = 100, kBatchRows = 50;
 constexpr std::size_t kMostRows = std::size_t{1} << 20;
 
 // The mean of `recorded` and of the response (`recorded` less `error`), with the standard error of
-// the error's mean from kBatches contiguous batches. Throws Error when the response does not
+// the error's mean from its batches. Throws Error when the response does not
 // follow the record (kFollowed) or too few rows are left.
 IdentifyResult::ResponseMean compare(const std::string& name, const std::vector<double>& recorded,
                                      const std::vector<double>& error) {
@@ -53,23 +55,18 @@ IdentifyResult::ResponseMean compare(const std::string& name, const std::vector<
         "' is " + number(std::sqrt(error_variance / variance), "%.2g") +
         " of its standard deviation: another of a periodic force's responses, or chaos)");
   }
-  std::vector<double> batch(batches, 0.0);
-  std::vector<std::size_t> size(batches, 0);
+  // Row b: n_b / n (the batch's mean less the whole's), as long_run_covariance reads them.
+  Eigen::MatrixXd deviations = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(batches), 1);
+  const double per_batch = static_cast<double>(rows) / static_cast<double>(batches);
   for (std::size_t n = 0; n < rows; ++n) {
-    const std::size_t b = n * batches / rows;
-    batch[b] += error[n];
-    ++size[b];
+    deviations(static_cast<Eigen::Index>(n * batches / rows), 0) +=
+        (error[n] - error_mean) / per_batch;
   }
-  double spread = 0;
-  for (std::size_t b = 0; b < batches; ++b) {
-    const double d = batch[b] / static_cast<double>(size[b]) - error_mean;
-    spread += d * d;
-  }
-  const double b = static_cast<double>(batches);
-  return IdentifyResult::ResponseMean{.name = name,
-                                      .recorded = mean,
-                                      .simulated = mean - error_mean,
-                                      .std_error = std::sqrt(spread / (b - 1) / b)};
+  return IdentifyResult::ResponseMean{
+      .name = name,
+      .recorded = mean,
+      .simulated = mean - error_mean,
+      .std_error = std::sqrt(std::max(0.0, long_run_covariance(deviations).covariance(0, 0)))};
 }
 
 }  // namespace

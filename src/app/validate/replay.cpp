@@ -1,5 +1,7 @@
 #include "app/validate/replay.hpp"
 
+#include <ceres/ceres.h>
+
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
@@ -45,6 +47,14 @@ double spread_of(const std::vector<double>& series) {
   return std::sqrt(squares / n);
 }
 
+// Whether state j without a column starts from a derivative of its base's column (a cubic through
+// the first samples).
+bool read_as_derivative(const Record& record, const std::vector<VariableReading>& readings,
+                        std::size_t j) {
+  const VariableReading& r = readings[j];
+  return record.column_of(j) < 0 && r.base >= 0 && r.order >= 0 && r.order <= 3;
+}
+
 // The initial value of each state in `run` and how it was found (see Replay).
 std::vector<double> initial_state(const Model& model, const Record& record, const RecordRun& run,
                                   const std::vector<VariableReading>& readings,
@@ -57,8 +67,7 @@ std::vector<double> initial_state(const Model& model, const Record& record, cons
     if (column >= 0) {
       out[j] = run.columns[static_cast<std::size_t>(column)][0];
       text = "its first sample";
-    } else if (const VariableReading& r = readings[j];
-               r.base >= 0 && r.order >= 0 && r.order <= 3) {
+    } else if (const VariableReading& r = readings[j]; read_as_derivative(record, readings, j)) {
       const std::vector<double>& base =
           run.columns[static_cast<std::size_t>(record.column_of(static_cast<std::size_t>(r.base)))];
       const std::size_t count = std::min(Replay::kStartSamples, base.size());
@@ -175,89 +184,77 @@ std::size_t start_fit_rows(const std::vector<double>& column) {
   return std::clamp(kStartFitSpan * lag, kStartFitRows.first, kStartFitRows.second);
 }
 
-// The initial values of the states that `free` marks, fitted by Gauss-Newton to the columns of
-// the measured states over the first rows of the run (start_fit_rows): the simulation's error in
-// each, relative to the column's spread, squared and summed. Returns the rows fitted, or 0 when
-// the fit did not lower that error (the start is left as it was).
+// The simulation's error in each measured state over the first `rows` rows of a run, relative to
+// the column's spread, as a function of the initial values of the states `unknown` names (the
+// others at `initial`): Ceres' residuals (false where the simulation fails).
+struct StartError {
+  const RecordSimulator* simulator;
+  const RecordRun* run;
+  const std::vector<std::vector<double>>* inputs;
+  std::vector<double> initial;
+  std::vector<std::size_t> unknown, states, columns;
+  std::vector<double> spread;
+  std::size_t rows = 0;
+  bool operator()(double const* const* x, double* residuals) const {
+    std::vector<double> start = initial;
+    for (std::size_t u = 0; u < unknown.size(); ++u) start[unknown[u]] = x[0][u];
+    std::vector<std::vector<double>> simulated;
+    try {
+      simulated = simulator->run(*inputs, start, run_start(*run), 0, rows);
+    } catch (const Error&) {
+      return false;
+    }
+    for (std::size_t i = 0; i < states.size(); ++i) {
+      for (std::size_t t = 0; t < rows; ++t) {
+        residuals[i * rows + t] =
+            (simulated[states[i]][t] - run->columns[columns[i]][t]) / spread[i];
+      }
+    }
+    return std::all_of(residuals, residuals + rows * states.size(),
+                       [](double e) { return std::isfinite(e); });
+  }
+};
+
+// The initial values of the states that `free` marks, fitted (Ceres' Levenberg-Marquardt) so that
+// the simulation follows the measured states' columns over the first rows of the run
+// (start_fit_rows, StartError). Returns the rows fitted, or 0 when the fit did not lower the error
+// (the start is left as it was).
 std::size_t fit_start(const Model& model, const Record& record, const RecordRun& run,
                       const RecordSimulator& simulator, const std::vector<bool>& free,
                       std::vector<double>& initial) {
-  std::vector<std::size_t> states, columns;
-  for (std::size_t j = 0; j < free.size(); ++j) {
-    const int c = record.column_of(j);
-    if (c < 0) continue;
-    states.push_back(j);
-    columns.push_back(static_cast<std::size_t>(c));
-  }
-  std::vector<std::size_t> unknown;
-  for (std::size_t j = 0; j < free.size(); ++j) {
-    if (free[j]) unknown.push_back(j);
-  }
-  if (states.empty() || unknown.empty() || run.rows() < kStartFitRows.first) return 0;
-  const std::size_t rows = std::min(run.rows(), start_fit_rows(run.columns[columns[0]]));
-  std::vector<double> spread;
-  for (std::size_t c : columns) {
-    const std::vector<double> head(run.columns[c].begin(),
-                                   run.columns[c].begin() + static_cast<std::ptrdiff_t>(rows));
-    const double s = spread_of(head);
-    spread.push_back(s > 0 ? s : 1.0);
-  }
   const std::vector<std::vector<double>> inputs = run_inputs(model, record, run);
-  const auto errors = [&](const std::vector<double>& x0) -> std::optional<Eigen::VectorXd> {
-    std::vector<std::vector<double>> simulated;
-    try {
-      simulated = simulator.run(inputs, x0, run_start(run), 0, rows);
-    } catch (const Error&) {
-      return std::nullopt;
+  StartError error{&simulator, &run, &inputs, initial, {}, {}, {}, {}, 0};
+  for (std::size_t j = 0; j < free.size(); ++j) {
+    if (free[j]) error.unknown.push_back(j);
+    if (const int c = record.column_of(j); c >= 0) {
+      error.states.push_back(j);
+      error.columns.push_back(static_cast<std::size_t>(c));
     }
-    Eigen::VectorXd e(static_cast<Eigen::Index>(rows * states.size()));
-    for (std::size_t i = 0; i < states.size(); ++i) {
-      for (std::size_t t = 0; t < rows; ++t) {
-        e(static_cast<Eigen::Index>(i * rows + t)) =
-            (simulated[states[i]][t] - run.columns[columns[i]][t]) / spread[i];
-      }
-    }
-    if (!e.allFinite()) return std::nullopt;
-    return e;
-  };
-  std::optional<Eigen::VectorXd> e = errors(initial);
-  if (!e) return 0;
-  const double first = e->squaredNorm();
-  std::vector<double> x = initial;
-  double cost = first;
-  for (int iteration = 0; iteration < kStartFitIterations; ++iteration) {
-    Eigen::MatrixXd jacobian(e->size(), static_cast<Eigen::Index>(unknown.size()));
-    for (std::size_t u = 0; u < unknown.size(); ++u) {
-      std::vector<double> moved = x;
-      const double h = 1e-6 * std::max(1.0, std::abs(x[unknown[u]]));
-      moved[unknown[u]] += h;
-      const std::optional<Eigen::VectorXd> d = errors(moved);
-      if (!d) return 0;
-      jacobian.col(static_cast<Eigen::Index>(u)) = (*d - *e) / h;
-    }
-    const Eigen::VectorXd step = jacobian.colPivHouseholderQr().solve(-*e);
-    // Halve the step until the error falls.
-    bool fell = false;
-    for (double scale = 1; scale > 1e-4 && !fell; scale /= 2) {
-      std::vector<double> tried = x;
-      for (std::size_t u = 0; u < unknown.size(); ++u) {
-        tried[unknown[u]] += scale * step(static_cast<Eigen::Index>(u));
-      }
-      const std::optional<Eigen::VectorXd> f = errors(tried);
-      if (f && f->squaredNorm() < cost) {
-        fell = true;
-        x = tried;
-        e = f;
-      }
-    }
-    if (!fell) break;
-    const double previous = cost;
-    cost = e->squaredNorm();
-    if (previous - cost < 1e-9 * previous) break;
   }
-  if (!(cost < first)) return 0;
-  initial = x;
-  return rows;
+  if (error.states.empty() || error.unknown.empty() || run.rows() < kStartFitRows.first) return 0;
+  error.rows = std::min(run.rows(), start_fit_rows(run.columns[error.columns[0]]));
+  for (std::size_t c : error.columns) {
+    const auto first = run.columns[c].begin();
+    const double s = spread_of({first, first + static_cast<std::ptrdiff_t>(error.rows)});
+    error.spread.push_back(s > 0 ? s : 1.0);
+  }
+  std::vector<double> x;
+  for (std::size_t j : error.unknown) x.push_back(initial[j]);
+  const auto residuals = static_cast<int>(error.rows * error.states.size());
+  auto* cost =
+      new ceres::DynamicNumericDiffCostFunction<StartError, ceres::CENTRAL>(new StartError(error));
+  cost->AddParameterBlock(static_cast<int>(x.size()));
+  cost->SetNumResiduals(residuals);
+  ceres::Problem problem;
+  problem.AddResidualBlock(cost, nullptr, x.data());
+  ceres::Solver::Options options;
+  options.max_num_iterations = kStartFitIterations;
+  options.logging_type = ceres::SILENT;
+  ceres::Solver::Summary summary;
+  ceres::Solve(options, &problem, &summary);
+  if (!summary.IsSolutionUsable() || !(summary.final_cost < summary.initial_cost)) return 0;
+  for (std::size_t u = 0; u < error.unknown.size(); ++u) initial[error.unknown[u]] = x[u];
+  return error.rows;
 }
 
 Replay replay_record(const Model& model, Record read, const ReplayOptions& options) {
@@ -290,22 +287,17 @@ Replay replay_record(const Model& model, Record read, const ReplayOptions& optio
   // The states read as derivatives of a column at each run's start are fitted to its first rows.
   std::vector<bool> derived(model.states().size(), false);
   for (std::size_t j = 0; j < derived.size(); ++j) {
-    derived[j] = record.column_of(j) < 0 && readings[j].base >= 0 && readings[j].order >= 1 &&
-                 readings[j].order <= 3;
+    derived[j] = read_as_derivative(record, readings, j) && readings[j].order >= 1;
   }
   for (std::size_t r = 0; r < record.runs.size(); ++r) {
     const RecordRun& run = record.runs[r];
     const std::size_t fitted = fit_start(model, record, run, simulator, derived, out.initial[r]);
-    if (r > 0 || fitted == 0) continue;
-    for (std::size_t j = 0; j < derived.size(); ++j) {
+    for (std::size_t j = 0; r == 0 && fitted > 0 && j < derived.size(); ++j) {
       if (derived[j]) {
         out.initial_how[j] += ", then fitted by least squares to the first " +
                               std::to_string(fitted) + " rows of the record";
       }
     }
-  }
-  for (std::size_t r = 0; r < record.runs.size(); ++r) {
-    const RecordRun& run = record.runs[r];
     const std::vector<std::vector<double>> inputs = run_inputs(model, record, run);
     out.simulated.push_back(
         simulator.run(inputs, out.initial[r], run_start(run), run_label(record, r), run.rows()));
