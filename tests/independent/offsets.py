@@ -18,8 +18,9 @@ that see the states' means, and no offset is named where there is none.
                 random phases), whose cubic gives y a mean of its own (0.3-5% of its sd, tens
                 of standard errors): six records without an offset are `ok`, nothing named; with
                 an offset of 0.02 sd (which that mean may hide from a test against zero) the
-                offset is named with its size and the amount to subtract (not --center), and
-                the record with that amount subtracted is `ok` within 3 standard errors.
+                offset is named with its size and the amount to subtract (not --center), the
+                JSON report's response_means giving that amount, and the record with that
+                amount subtracted is `ok` within 3 standard errors.
 
 Usage: offsets.py CASE MOMENTID MODELS WORKDIR [RECORDS]
 (the files go to WORKDIR/offsets_CASE)
@@ -154,6 +155,13 @@ def multisine(momentid, models, workdir, records):
     amount = float(found[0].group(1))
     true = 0.02 * np.std(clean["y"])
     print(f"  the offset named {amount:.4g}, the offset added {true:.4g}")
+    # The JSON report holds the means the amount came from.
+    means = report["diagnostics"]["response_means"]
+    y = [m for m in means["states"] if m["state"] == "y"]
+    if means["failure"] is not None or len(y) != 1 or \
+            abs(y[0]["recorded"] - y[0]["simulated"] - amount) > 5e-3 * abs(amount):
+        print(f"  WRONG response means in the JSON report: {means}")
+        return False
     columns = np.genfromtxt(path, delimiter=",", names=True)
     lab.write_csv(path, {"t": columns["t"], "y": columns["y"] - amount, "x": columns["x"]})
     status, worst, _ = identify(momentid, model, path)

@@ -391,6 +391,18 @@ Json diagnostics_json(const IdentifyResult& r) {
       checks.push_back({{"equation", c.equation}, {"term", c.term}, {"z", json_value(c.z)}});
     }
   }
+  if (!r.response_means.empty() || !r.response_failure.empty()) {
+    Json means = Json::array();
+    for (const IdentifyResult::ResponseMean& m : r.response_means) {
+      means.push_back({{"state", m.name},
+                       {"recorded", json_value(m.recorded)},
+                       {"simulated", json_value(m.simulated)},
+                       {"std_error", json_value(m.std_error)}});
+    }
+    out["response_means"] = {
+        {"states", means},
+        {"failure", r.response_failure.empty() ? Json() : Json(r.response_failure)}};
+  }
   refinements_json(out, r);
   Json& exact = out["taken_as_exact"] = Json::object();
   for (const auto& [name, value] : assumed(r)) exact[name] = json_value(value);
