@@ -1,5 +1,6 @@
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <string>
 #include <vector>
 
@@ -218,6 +219,37 @@ TEST_SUITE("latent") {
       INFO(p.name << " = " << p.estimate << " +- " << p.std_error);
       CHECK(std::abs(p.estimate - truth.at(p.name)) < 4 * p.std_error);
     }
+  }
+
+  TEST_CASE(
+      "a search from the nominal values that failed says it also ran from values around them") {
+    const Model model = momentid::testing::model_file("chain_sensed.mom");
+    momentid::IdentifyResult r = identify_sensed(model, model, "y2");
+    REQUIRE(r.latent);
+    CHECK(r.latent->starts == 0);  // accepted from the nominal values
+    CHECK(!r.latent->nominal_distance);
+    const auto said = [&](const std::string& text) {
+      const std::vector<std::string> d = momentid::doubts(r);
+      return std::any_of(d.begin(), d.end(),
+                         [&](const std::string& s) { return s.find(text) != std::string::npos; });
+    };
+    CHECK(!said("the latent dynamics may be wrong"));
+    // Rejected at the least Q of every search.
+    r.latent->starts = 64;
+    r.latent->nominal_distance = 452.3;
+    r.latent->distance = 40.65;
+    r.latent->pvalue = 1.1e-7;
+    CHECK(
+        said("(Q = 40.65 on 4 degrees of freedom, p = 1.1e-07, the least from the model's "
+             "nominal values and 64 values around them): the latent dynamics may be wrong, or "
+             "the nominal values too far from the truth for the search"));
+    r.latent->converged = false;
+    CHECK(
+        said("did not converge from the model's nominal values and 64 values around them: give "
+             "values nearer the truth"));
+    CHECK(momentid::format_text(r).find("; the least of 64 searches from values around the "
+                                        "model's nominal ones, from which it stopped at Q = "
+                                        "452.3") != std::string::npos);
   }
 
   TEST_CASE("an elimination beyond the sixth derivative is an error at the equation") {

@@ -105,6 +105,8 @@ struct Estimate {
   // Whether every parameter has an estimate and an error: the status is kOk (a rank-deficient
   // estimate has minimum-norm values only).
   bool usable() const { return status == Status::kOk; }
+  // The p-value below which a test of the model (J, and the latent path's Q) rejects it.
+  static constexpr double kJRejection = 0.01;
 };
 
 }  // namespace momentid

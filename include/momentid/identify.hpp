@@ -260,6 +260,11 @@ struct IdentifyResult {
     std::optional<double> distance, pvalue;
     int dof = 0;
     bool converged = false;
+    // The search starts from the model's nominal values; where it does not converge there or
+    // its Q is rejected at 1%, from `starts` more values around them (0: not needed), the
+    // lowest converged Q taken. `nominal_distance` is Q from the nominal values then.
+    int starts = 0;
+    std::optional<double> nominal_distance;
   };
   std::optional<Latent> latent;
   // IdentifyOptions::refine: the refinement from the main estimate, of the parameters it

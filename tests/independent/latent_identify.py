@@ -8,12 +8,20 @@ chain: two masses on linear springs and dampers to the ground and to each other,
   at mass 2, the force at mass 2, a sensor on mass 2 only (models/chain_sensed.mom, mass 1
   latent): y1'' = -c1 y1' - k1 y1 - c2 (y1' - y2') - k2 (y1 - y2), y2'' = -c2 (y2' - y1') -
   k2 (y2 - y1) - eps y2^3 + x, with c1 0.3, k1 5, c2 0.2, k2 3, eps 1. The record holds y2 and x.
+chain3: three masses, mass 1 to the ground, 1 to 2 and 2 to 3 on linear springs and dampers, a
+  cubic spring at mass 1, the force at mass 3, masses 2 and 3 unknown, a sensor on mass 1 only
+  (models/chain3_sensed.mom: c1 0.3, k1 4, e 1, c2 0.2, k2 8, c3 0.2, k3 5, m2 1, m3 2; y2, y3
+  and every velocity latent, a sixth-order equation with 14 coefficients for 9 parameters). The
+  model is given nominal values twice or half the truth: from them the minimum distance stops in
+  a local minimum of Q (Q 452 on 5 degrees of freedom on this record before the search tried
+  other starts), from starts around them it finds the truth's (Q 1.9).
 
-The force is a sum of 60 cosines of random frequencies in 0.3..6 rad/s (RMS 4), evaluated exactly
-by DOP853 (tolerance 1e-9); the record holds the measured displacement and the force at 0.01 s
-with 2% and 1% white noise (of their RMS), 10^5 samples. Each parameter must lie within 4 of its
-standard errors, status ok, on every record; the plain Duffing model (no filter, one mass) on the
-same displacement and force must not read ok: the check has power.
+The force is a sum of 60 cosines of random frequencies in 0.3..6 rad/s (RMS 4; for chain3 200
+cosines, RMS 2.6), evaluated exactly by DOP853 (tolerance 1e-9); the record holds the measured
+displacement and the force at 0.01 s (chain3: 0.05 s) with 2% and 1% white noise (of their RMS),
+10^5 samples (chain3: 2*10^5). Each parameter must lie within 4 of its standard errors, status ok,
+on every record; the plain Duffing model (no filter, one mass) on the same displacement and force
+must not read ok: the check has power.
 
 Usage: latent_identify.py MOMENTID MODELS_DIR WORKDIR CASE [RECORDS]
 """
@@ -41,16 +49,35 @@ def chain(p, force):
     return rates, 4, 2
 
 
+def chain3(p, force):
+    def rates(time, s):
+        y1, v1, y2, v2, y3, v3 = s
+        return [v1, -p["c1"] * v1 - p["k1"] * y1 - p["e"] * y1**3 - p["c2"] * (v1 - v2)
+                - p["k2"] * (y1 - y2),
+                v2, (-p["c2"] * (v2 - v1) - p["k2"] * (y2 - y1) - p["c3"] * (v2 - v3)
+                     - p["k3"] * (y2 - y3)) / p["m2"],
+                v3, (-p["c3"] * (v3 - v2) - p["k3"] * (y3 - y2) + force(time)) / p["m3"]]
+    return rates, 6, 0
+
+
 CASES = {
     "filtered": (filtered, {"c": 0.5, "k": 4.0, "eps": 1.0, "a": 2.0, "g": 1.0}, "y"),
     "chain": (chain, {"c1": 0.3, "k1": 5.0, "c2": 0.2, "k2": 3.0, "eps": 1.0}, "y2"),
+    "chain3": (chain3, {"c1": 0.3, "k1": 4.0, "e": 1.0, "c2": 0.2, "k2": 8.0, "c3": 0.2,
+                        "k3": 5.0, "m2": 1.0, "m3": 2.0}, "y1"),
 }
+MODELS = {"filtered": "filtered_duffing.mom", "chain": "chain_sensed.mom",
+          "chain3": "chain3_sensed.mom"}
+# Per case: the generator's seed, samples, sample interval, force lines and RMS.
+RECORDS = {"filtered": (20261130, 100000, 0.01, 60, 4.0),
+           "chain": (20261201, 100000, 0.01, 60, 4.0),
+           "chain3": (104, 200000, 0.05, 200, 2.6)}
 
 
-def record(rng, system, truth, samples, dt):
-    omega = rng.uniform(0.3, 6.0, 60)
-    phase = rng.uniform(0, 2 * np.pi, 60)
-    amplitude = 4.0 * np.sqrt(2 / 60)
+def record(rng, system, truth, samples, dt, lines=60, rms=4.0):
+    omega = rng.uniform(0.3, 6.0, lines)
+    phase = rng.uniform(0, 2 * np.pi, lines)
+    amplitude = rms * np.sqrt(2 / lines)
 
     def force(time):
         return amplitude * np.cos(np.multiply.outer(time, omega) + phase).sum(axis=-1)
@@ -82,11 +109,20 @@ def main():
     momentid, models, workdir, case = sys.argv[1:5]
     records = int(sys.argv[5]) if len(sys.argv) > 5 else 3
     system, truth, name = CASES[case]
-    model = f"{models}/" + {"filtered": "filtered_duffing.mom", "chain": "chain_sensed.mom"}[case]
-    rng = np.random.default_rng({"filtered": 20261130, "chain": 20261201}[case])
+    model = f"{models}/{MODELS[case]}"
+    if case == "chain3":
+        # Nominal values twice or half the truth.
+        far = {p: v * (2 if i % 2 == 0 else 0.5) for i, (p, v) in enumerate(truth.items())}
+        with open(model) as source, open(f"{workdir}/chain3_far.mom", "w") as out:
+            out.write("".join(
+                "param  " + ", ".join(f"{p} = {v:g}" for p, v in far.items()) + "\n"
+                if line.startswith("param") else line for line in source))
+        model = f"{workdir}/chain3_far.mom"
+    seed, samples, dt, lines, rms = RECORDS[case]
+    rng = np.random.default_rng(seed)
     failed = False
     for n in range(records):
-        t, y, x = record(rng, system, truth, 100000, 0.01)
+        t, y, x = record(rng, system, truth, samples, dt, lines, rms)
         path, plain_path = f"{workdir}/latent_{case}_{n}.csv", f"{workdir}/latent_{case}_plain.csv"
         write(path, name, t, y, x)
         write(plain_path, "y", t, y, x)

@@ -20,10 +20,9 @@ namespace {
 constexpr double kNoiseWarning = 0.02;
 
 // What makes a result doubtful, and what draws a warning (docs/cli/identify.md, "Warnings").
-constexpr double kIdentityZ = 4;      // |z| of a stationarity identity's violation
-constexpr double kJRejection = 0.01;  // p-value of the J test
-constexpr double kOffsetZ = 3;        // |mean| / its standard error, of a channel
-constexpr double kWeakOffsetZ = 2;    // the same, named when the J test rejects the model
+constexpr double kIdentityZ = 4;    // |z| of a stationarity identity's violation
+constexpr double kOffsetZ = 3;      // |mean| / its standard error, of a channel
+constexpr double kWeakOffsetZ = 2;  // the same, named when the J test rejects the model
 constexpr double kWeakRelativeError = 0.1;
 constexpr double kUndeterminedZ = 2;  // |estimate| / its standard error, of every free parameter
 constexpr double kStrongCorrelation = 0.95;
@@ -253,7 +252,8 @@ std::vector<std::string> doubts(const IdentifyResult& r) {
   std::vector<std::string> out;
   if (std::optional<std::string> outlier = outlier_warning(r.data)) out.push_back(*outlier);
   const Estimate& e = r.estimate;
-  if (e.j_pvalue && *e.j_pvalue < kJRejection) {  // the J test comes with the optimal weighting
+  // The J test comes with the optimal weighting.
+  if (e.j_pvalue && *e.j_pvalue < Estimate::kJRejection) {
     // Offsets too small for a warning of their own may still be what the test sees.
     std::string seen;
     const std::vector<Offset> strong = offsets(r, kOffsetZ);
@@ -315,18 +315,23 @@ std::vector<std::string> doubts(const IdentifyResult& r) {
   out.insert(out.end(), orders.begin(), orders.end());
   if (r.runaway) out.push_back(runaway_text(*r.runaway));
   if (const auto& l = r.latent; l && e.usable()) {
+    // Where the search from the nominal values failed, it ran from l->starts more values.
+    const std::string around =
+        l->starts > 0 ? " and " + std::to_string(l->starts) + " values around them" : "";
     if (!l->converged) {
       out.push_back(
           "the search for the parameters from the coefficients of the equations without the "
-          "latent states did not converge from the model's nominal values: give values nearer "
-          "the truth in the model (docs/latent-states.md)");
-    } else if (l->pvalue && *l->pvalue < kJRejection) {
+          "latent states did not converge from the model's nominal values" +
+          around + ": give values nearer the truth in the model (docs/latent-states.md)");
+    } else if (l->pvalue && *l->pvalue < Estimate::kJRejection) {
       out.push_back(
           "the coefficients of the equations without the latent states contradict "
           "the model's relations between them (Q = " +
           number(*l->distance, "%.4g") + " on " + std::to_string(l->dof) +
           " degrees of freedom, p = " + number(*l->pvalue, "%.2g") +
-          "): the latent dynamics may be wrong (docs/latent-states.md)");
+          (l->starts > 0 ? ", the least from the model's nominal values" + around : "") +
+          "): the latent dynamics may be wrong, or the nominal values too far from the truth "
+          "for the search (docs/latent-states.md)");
     }
   }
   if (r.refinement) {
@@ -374,8 +379,9 @@ std::vector<std::string> doubts(const IdentifyResult& r) {
 }
 
 bool offset_in_doubt(const IdentifyResult& r) {
-  return symmetric(*r.model) && (!offsets(r, kWeakOffsetZ).empty() ||
-                                 (r.estimate.j_pvalue && *r.estimate.j_pvalue < kJRejection));
+  return symmetric(*r.model) &&
+         (!offsets(r, kWeakOffsetZ).empty() ||
+          (r.estimate.j_pvalue && *r.estimate.j_pvalue < Estimate::kJRejection));
 }
 
 Status status(const IdentifyResult& r) {

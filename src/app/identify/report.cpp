@@ -455,6 +455,13 @@ std::string latent_text(const IdentifyResult::Latent& l) {
   } else if (l.dof == 0) {
     out += " (as many coefficients as parameters: no test)";
   }
+  if (l.starts > 0) {
+    out += "; the least of " + std::to_string(l.starts) +
+           " searches from values around the model's nominal ones, from which it stopped" +
+           (l.nominal_distance && std::isfinite(*l.nominal_distance)
+                ? " at Q = " + number(*l.nominal_distance, "%.4g")
+                : " without converging");
+  }
   return out + "\n";
 }
 
@@ -535,7 +542,11 @@ nlohmann::ordered_json json_value(const IdentifyResult& r) {
                      {"distance", l->distance ? json_value(*l->distance) : Json()},
                      {"dof", l->dof},
                      {"pvalue", l->pvalue ? json_value(*l->pvalue) : Json()},
-                     {"converged", l->converged}};
+                     {"converged", l->converged},
+                     {"starts", l->starts},
+                     {"nominal_distance", l->nominal_distance && std::isfinite(*l->nominal_distance)
+                                              ? json_value(*l->nominal_distance)
+                                              : Json()}};
   }
   if (!r.centered.empty()) {
     Json& centered = out["centered"] = Json::object();
