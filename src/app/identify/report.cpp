@@ -456,8 +456,8 @@ std::string latent_text(const IdentifyResult::Latent& l) {
     out += " (as many coefficients as parameters: no test)";
   }
   if (l.starts > 0) {
-    out += "; the least of " + std::to_string(l.starts) +
-           " searches from values around the model's nominal ones, from which it stopped" +
+    out += "; searched from " + std::to_string(l.starts) +
+           " values around the model's nominal ones too, from which it stopped" +
            (l.nominal_distance && std::isfinite(*l.nominal_distance)
                 ? " at Q = " + number(*l.nominal_distance, "%.4g")
                 : " without converging");
