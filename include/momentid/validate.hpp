@@ -44,12 +44,13 @@ struct Record {
 
 // How to drive a model with a record's inputs (docs/cli/validate.md, "momentid validate").
 struct ReplayOptions {
-  // The record's columns, sample interval and layout. `hold` and `control` are ignored: the
-  // inputs are interpolated (`interpolation`), and the record is read once, whole.
+  // The record's columns, sample interval, layout and input hold (`hold` chooses the
+  // interpolation below). `control` is ignored: the record is read once, whole.
   RecordOptions record;
   // By name; a parameter not given takes its nominal value.
   ParameterValues parameters;
-  // nullopt: per input, kHold when the metadata say it was held (`input-hold=zoh`), else kSinc.
+  // nullopt: per input, kHold when it was held (record.hold, else the metadata's
+  // `input-hold=zoh`), else kSinc.
   std::optional<Interpolation> interpolation;
   // Runge-Kutta steps per sample interval, 1..RecordSimulator::kMaxSubsteps; nullopt: the fewest
   // (1, 2, 4, ...) for which halving the step changes the simulation of the first

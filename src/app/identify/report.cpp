@@ -536,17 +536,16 @@ nlohmann::ordered_json json_value(const IdentifyResult& r) {
                           {"by_default", f->by_default}};
   }
   if (const auto& l = r.latent) {
-    out["latent"] = {{"states", l->states},
-                     {"equations", l->equations},
-                     {"coefficients", parameters_json(l->coefficients)},
-                     {"distance", l->distance ? json_value(*l->distance) : Json()},
-                     {"dof", l->dof},
-                     {"pvalue", l->pvalue ? json_value(*l->pvalue) : Json()},
-                     {"converged", l->converged},
-                     {"starts", l->starts},
-                     {"nominal_distance", l->nominal_distance && std::isfinite(*l->nominal_distance)
-                                              ? json_value(*l->nominal_distance)
-                                              : Json()}};
+    out["latent"] = {
+        {"states", l->states},
+        {"equations", l->equations},
+        {"coefficients", parameters_json(l->coefficients)},
+        {"distance", l->distance ? json_value(*l->distance) : Json()},
+        {"dof", l->dof},
+        {"pvalue", l->pvalue ? json_value(*l->pvalue) : Json()},
+        {"converged", l->converged},
+        {"starts", l->starts},
+        {"nominal_distance", l->nominal_distance ? json_value(*l->nominal_distance) : Json()}};
   }
   if (!r.centered.empty()) {
     Json& centered = out["centered"] = Json::object();

@@ -77,13 +77,6 @@ void simulate_response_means(IdentifyResult& result, const DataSource& source,
   const Model& model = *result.model;
   ReplayOptions replay_options;
   replay_options.record = options.record;
-  // A hold given with the record (arrays carry no metadata) is the one the pass took: the
-  // replay, which reads the metadata's, is told.
-  if (options.record.hold) {
-    replay_options.interpolation = *options.record.hold == InputHold::kZeroOrderHold
-                                       ? Interpolation::kHold
-                                       : Interpolation::kSinc;
-  }
   for (const ParameterEstimate& p : result.parameters()) {
     replay_options.parameters[p.name] = p.estimate;
   }

@@ -98,7 +98,8 @@ std::vector<Interpolation> interpolation_methods(const Model& model, const Recor
       out.push_back(*options.interpolation);
       continue;
     }
-    const InputHold hold = record.metadata.input_hold(input.name);
+    // A hold given with the record (arrays carry no metadata), else the metadata's.
+    const InputHold hold = options.record.hold.value_or(record.metadata.input_hold(input.name));
     out.push_back(hold == InputHold::kZeroOrderHold ? Interpolation::kHold : Interpolation::kSinc);
   }
   return out;
@@ -217,12 +218,12 @@ struct StartError {
 
 // The initial values of the states that `free` marks, fitted (Ceres' Levenberg-Marquardt) so that
 // the simulation follows the measured states' columns over the first rows of the run
-// (start_fit_rows, StartError). Returns the rows fitted, or 0 when the fit did not lower the error
-// (the start is left as it was).
-std::size_t fit_start(const Model& model, const Record& record, const RecordRun& run,
+// (start_fit_rows, StartError), `inputs` the run's (run_inputs). Returns the rows fitted, or 0
+// when the fit did not lower the error (the start is left as it was).
+std::size_t fit_start(const Record& record, const RecordRun& run,
+                      const std::vector<std::vector<double>>& inputs,
                       const RecordSimulator& simulator, const std::vector<bool>& free,
                       std::vector<double>& initial) {
-  const std::vector<std::vector<double>> inputs = run_inputs(model, record, run);
   StartError error{&simulator, &run, &inputs, initial, {}, {}, {}, {}, 0};
   for (std::size_t j = 0; j < free.size(); ++j) {
     if (free[j]) error.unknown.push_back(j);
@@ -291,14 +292,14 @@ Replay replay_record(const Model& model, Record read, const ReplayOptions& optio
   }
   for (std::size_t r = 0; r < record.runs.size(); ++r) {
     const RecordRun& run = record.runs[r];
-    const std::size_t fitted = fit_start(model, record, run, simulator, derived, out.initial[r]);
+    const std::vector<std::vector<double>> inputs = run_inputs(model, record, run);
+    const std::size_t fitted = fit_start(record, run, inputs, simulator, derived, out.initial[r]);
     for (std::size_t j = 0; r == 0 && fitted > 0 && j < derived.size(); ++j) {
       if (derived[j]) {
         out.initial_how[j] += ", then fitted by least squares to the first " +
                               std::to_string(fitted) + " rows of the record";
       }
     }
-    const std::vector<std::vector<double>> inputs = run_inputs(model, record, run);
     out.simulated.push_back(
         simulator.run(inputs, out.initial[r], run_start(run), run_label(record, r), run.rows()));
     out.derivatives.push_back(simulator.derivatives(out.simulated.back(), inputs));
