@@ -146,15 +146,75 @@ MOMENTID_KERNEL double weighted_sum(const double* w, const std::uint32_t* factor
   return out;
 }
 
-// The largest |x[i]| over i < n.
-MOMENTID_KERNEL double largest_magnitude(const double* x, std::size_t n) {
+// x[r] = values[r * stride] - offset for r < n; returns the largest |values[r * stride]|.
+MOMENTID_KERNEL double fill_values(double* x, const double* values, std::size_t stride,
+                                   std::size_t n, double offset) {
   std::array<double, kLanes> top{};
+  std::size_t r = 0;
+  for (; r + kLanes <= n; r += kLanes) {
+    for (std::size_t j = 0; j < kLanes; ++j) {
+      const double v = values[(r + j) * stride];
+      top[j] = std::max(top[j], std::abs(v));
+      x[r + j] = v - offset;
+    }
+  }
+  for (; r < n; ++r) {
+    const double v = values[r * stride];
+    top[0] = std::max(top[0], std::abs(v));
+    x[r] = v - offset;
+  }
+  return *std::max_element(top.begin(), top.end());
+}
+
+// The sums of a block x[0, n) of one channel whose six values before it are the run's, in one
+// sweep: sum_own's, sum_products' at lags 1 .. Lags and sum_sixth_differences', each over the
+// lanes its own kernel keeps, so that they are the same numbers.
+constexpr std::size_t kSweptLags = 4;
+struct BlockSums {
+  PairSums own;
+  std::array<double, kSweptLags> lagged{};
+  double sixth = 0;
+};
+
+template <std::size_t Lags>
+[[gnu::always_inline]] inline BlockSums sweep(const double* x, std::size_t n) {
+  static_assert(Lags <= kNoiseDifference);
+  Eight products{}, lead{}, sixth{};
+  std::array<Eight, Lags> lagged{};
   std::size_t i = 0;
   for (; i + kLanes <= n; i += kLanes) {
-    for (std::size_t j = 0; j < kLanes; ++j) top[j] = std::max(top[j], std::abs(x[i + j]));
+    std::array<Eight, kNoiseDifference + 1> p;
+    for (std::size_t j = 0; j <= kNoiseDifference; ++j) p[j] = load_eight(x + i - j);
+    products += p[0] * p[0];
+    lead += p[0];
+    for (std::size_t l = 1; l <= Lags; ++l) lagged[l - 1] += p[0] * p[l];
+    const Eight d = p[0] - 6 * p[1] + 15 * p[2] - 20 * p[3] + 15 * p[4] - 6 * p[5] + p[6];
+    sixth += d * d;
   }
-  for (; i < n; ++i) top[0] = std::max(top[0], std::abs(x[i]));
-  return *std::max_element(top.begin(), top.end());
+  BlockSums out{{total(products), total(lead), total(lead)}, {}, total(sixth)};
+  for (std::size_t l = 1; l <= Lags; ++l) out.lagged[l - 1] = total(lagged[l - 1]);
+  for (; i < n; ++i) {
+    out.own.products += x[i] * x[i];
+    out.own.lead += x[i];
+    for (std::size_t l = 1; l <= Lags; ++l) out.lagged[l - 1] += x[i] * x[i - l];
+    const double d = sixth_difference(x + i);
+    out.sixth += d * d;
+  }
+  out.own.lagged = out.own.lead;
+  return out;
+}
+
+MOMENTID_KERNEL BlockSums sweep_block(const double* x, std::size_t n, std::size_t lags) {
+  switch (lags) {
+    case 1:
+      return sweep<1>(x, n);
+    case 2:
+      return sweep<2>(x, n);
+    case 3:
+      return sweep<3>(x, n);
+    default:
+      return sweep<kSweptLags>(x, n);
+  }
 }
 
 }  // namespace
@@ -202,7 +262,7 @@ LagSums::LagSums(std::size_t channels, std::size_t lags, const std::vector<Monom
 void LagSums::add_history(const double* rows, std::size_t count) {
   // Remembered as read: the offset is not known before the shard's first row.
   for (std::size_t c = 0; c < channels_; ++c) {
-    fill_column(c, rows, count);
+    fill_column(c, rows, count, 0.0);
     keep_history(c);
   }
   filled_ += count;
@@ -219,18 +279,20 @@ void LagSums::add(const double* rows, std::size_t count) {
   const auto first_paired = [&](std::size_t l) {
     return std::min(l > filled_ ? l - filled_ : 0, count);
   };
+  // Past the run's first rows every sum starts at the block's first row: one sweep (sweep_block)
+  // takes them all.
+  const bool swept = filled_ >= reach_ && lags_ <= kSweptLags && count >= 2 * lags_;
   for (std::size_t c = 0; c < channels_; ++c) {
-    fill_column(c, rows, count);
-    double* const x = column_.data() + reach_;  // the block's values
-    // The block's largest |value|, then the first row that has it.
-    const double top = largest_magnitude(x, count);
+    const double top = fill_column(c, rows, count, offset_[c]);
+    double* const x = column_.data() + reach_;  // the block's values less the offset
     if (top > largest_[c]) {
       largest_[c] = top;
-      const auto at = std::find_if(x, x + count, [&](double v) { return std::abs(v) == top; });
-      largest_row_[c] = count_ + static_cast<std::size_t>(at - x);
+      std::size_t r = 0;
+      while (std::abs(rows[r * channels_ + c]) != top) ++r;
+      largest_row_[c] = count_ + r;
     }
-    for (std::size_t r = 0; r < count; ++r) x[r] -= offset_[c];
-    const PairSums own = sum_own(x, count);
+    const BlockSums block = swept ? sweep_block(x, count, lags_) : BlockSums{sum_own(x, count)};
+    const PairSums& own = block.own;
     sum_[c] += own.lead;
     sum_squares_[c] += own.products;
     // Lag l pairs each row with the one l rows earlier in the run, history included. The sums
@@ -248,12 +310,13 @@ void LagSums::add(const double* rows, std::size_t count) {
       }
       const auto lag = static_cast<std::ptrdiff_t>(l), begin = static_cast<std::ptrdiff_t>(first),
                  end = static_cast<std::ptrdiff_t>(count);
-      products_[i] += sum_products(x + first, x + first - l, count - first);
+      products_[i] +=
+          swept ? block.lagged[l - 1] : sum_products(x + first, x + first - l, count - first);
       lead_[i] += own.lead - range_sum(x, 0, begin);
       lagged_[i] += own.lead - range_sum(x, end - lag, end) + range_sum(x, begin - lag, 0);
     }
     const std::size_t first = first_paired(kNoiseDifference);
-    differences_[c] += sum_sixth_differences(x + first, count - first);
+    differences_[c] += swept ? block.sixth : sum_sixth_differences(x + first, count - first);
     keep_history(c);
   }
   for (std::size_t l = 1; l <= lags_; ++l) pairs_[l - 1] += count - first_paired(l);
@@ -310,10 +373,10 @@ void LagSums::add_points(const double* rows, std::size_t count) {
   point_skip_ = r - count;
 }
 
-void LagSums::fill_column(std::size_t c, const double* rows, std::size_t count) {
+double LagSums::fill_column(std::size_t c, const double* rows, std::size_t count, double offset) {
   column_.resize(reach_ + count);
   std::copy_n(history_.begin() + static_cast<std::ptrdiff_t>(c * reach_), reach_, column_.begin());
-  for (std::size_t r = 0; r < count; ++r) column_[reach_ + r] = rows[r * channels_ + c];
+  return fill_values(column_.data() + reach_, rows + c, channels_, count, offset);
 }
 
 void LagSums::keep_history(std::size_t c) {

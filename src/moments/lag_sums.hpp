@@ -43,8 +43,9 @@ class LagSums {
   std::vector<double> point_means() const;
 
  private:
-  // Fills column_ with channel c: its history, then the block's values as they are.
-  void fill_column(std::size_t c, const double* rows, std::size_t count);
+  // Fills column_ with channel c: its history, then the block's values less `offset`; returns
+  // the largest |value| of the block as read.
+  double fill_column(std::size_t c, const double* rows, std::size_t count, double offset);
   // Keeps the column's last `reach_` values as channel c's history.
   void keep_history(std::size_t c);
   // Adds the rows sampled among `count` rows to the point sums.
