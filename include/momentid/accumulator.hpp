@@ -3,6 +3,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <span>
 #include <vector>
 
@@ -127,15 +128,62 @@ class MomentAccumulator {
   std::size_t max_lag() const { return max_lag_; }
   const std::vector<Moment>& moments() const { return moments_; }
 
-  // Per stretch of the record: sums of the interval averages and the number of intervals.
+  // A stretch of the record: the sums of its interval averages (a view of the accumulator's
+  // memory, valid until the accumulator changes) and the number of its intervals.
   struct Stretch {
-    std::vector<double> sums;
+    std::span<const double> sums;
     std::size_t intervals = 0;
   };
   // The stretches so far, in record order, of equal length but the last (unless merged).
-  const std::vector<Stretch>& stretches() const { return stretches_; }
+  std::vector<Stretch> stretches() const;
 
  private:
+  // The stretches in record order, the open one last. Their sums live in slots of `width`
+  // doubles carved from blocks that grow geometrically, a block of 2 MiB or more asked to be
+  // backed by large pages: a long pass keeps 2 to 4 times as many stretches as batches,
+  // megabytes of sums that would otherwise fault in a page at a time. Compacting and merging
+  // hand slots over rather than copy their sums (stretches.cpp).
+  class Stretches {
+   public:
+    explicit Stretches(std::size_t width) : width_(width) {}
+    Stretches(const Stretches& other);  // copies the stretches' sums into slots of its own
+    Stretches& operator=(const Stretches& other);
+    Stretches(Stretches&&) noexcept = default;
+    Stretches& operator=(Stretches&&) noexcept = default;
+    ~Stretches() = default;
+
+    std::size_t size() const { return slots_.size(); }
+    double* sums(std::size_t s) { return slots_[s].sums; }
+    const double* sums(std::size_t s) const { return slots_[s].sums; }
+    std::size_t& intervals(std::size_t s) { return slots_[s].intervals; }
+    std::size_t intervals(std::size_t s) const { return slots_[s].intervals; }
+    // Appends a stretch of `intervals` with a copy of `sums` (zeros when null).
+    void append(const double* sums, std::size_t intervals);
+    // Adds the sums and intervals of stretch `from` to those of stretch `into`.
+    void add(std::size_t into, std::size_t from);
+    void swap(std::size_t a, std::size_t b) { std::swap(slots_[a], slots_[b]); }
+    // Keeps the first `count` stretches; the others' slots serve the stretches to come.
+    void truncate(std::size_t count);
+    // Appends the stretches of `other` that hold intervals, taking over its memory.
+    void take(Stretches&& other);
+
+   private:
+    struct Slot {
+      double* sums;
+      std::size_t intervals;
+    };
+    struct Free {
+      void operator()(double* block) const noexcept;
+    };
+    double* spare_slot();  // a slot of no stretch, from a new block if none is left
+
+    std::size_t width_;
+    std::vector<Slot> slots_;
+    std::vector<double*> spare_;
+    std::vector<std::unique_ptr<double[], Free>> blocks_;
+    std::size_t capacity_ = 0;  // slots in the blocks
+  };
+
   // Laying out the work, before the first row (accumulator_layout.cpp).
   struct Layout;
   void size_history();
@@ -250,8 +298,7 @@ class MomentAccumulator {
   std::size_t seen_rows_ = 0, run_rows_ = 0;
   bool continued_ = false;  // the current run began before this shard (continue_run())
   std::size_t history_rows_ = 0, owned_rows_ = 0, lookahead_rows_ = 0;
-  std::vector<Stretch> stretches_;
-  std::vector<std::vector<double>> spare_sums_;  // of stretches compacted away, for reuse
+  Stretches stretches_;
   std::size_t max_stretches_;
   std::size_t stretch_length_ = 1;  // intervals per stretch, doubled when there are too many
   std::size_t intervals_ = 0;

@@ -22,6 +22,7 @@ MomentAccumulator::MomentAccumulator(std::vector<Moment> moments, std::size_t st
       hold_(hold),
       rule_(hold == InputHold::kZeroOrderHold ? rule : HeldRule::kCubic),
       batches_(batches),
+      stretches_(moments_.size()),
       max_stretches_(4 * std::max<std::size_t>(batches, 2)) {
   size_history();
   lay_out();
@@ -91,67 +92,59 @@ void MomentAccumulator::add_lookahead(const double* rows, std::size_t count) {
   push_rows(rows, count);
 }
 
-namespace {
-
-// Adds the sums and intervals of `from` to those of `into`.
-void add_stretch(MomentAccumulator::Stretch& into, const MomentAccumulator::Stretch& from) {
-  for (std::size_t j = 0; j < into.sums.size(); ++j) into.sums[j] += from.sums[j];
-  into.intervals += from.intervals;
+std::vector<MomentAccumulator::Stretch> MomentAccumulator::stretches() const {
+  std::vector<Stretch> out;
+  for (std::size_t s = 0; s < stretches_.size(); ++s) {
+    out.push_back({{stretches_.sums(s), moments_.size()}, stretches_.intervals(s)});
+  }
+  return out;
 }
-
-}  // namespace
 
 // Adds the sums of the open stretch, kept in working order, to its stretch.
 void MomentAccumulator::flush() {
-  std::vector<double>& sums = stretches_.back().sums;
+  double* const sums = stretches_.sums(stretches_.size() - 1);
   for (std::size_t i = 0; i < open_sums_.size(); ++i) {
     sums[order_[i]] += open_sums_[i];
     open_sums_[i] = 0;
   }
 }
 
-// Halves the number of stretches by adding neighbours; the open (last) stretch stays last.
+// Adds up every stretch into one, followed by an open one.
 void MomentAccumulator::collapse() {
   if (seen_rows_ > 0) {
     throw Error(
         "cannot collapse a moment accumulator in the middle of a run: call finish() on it "
         "first");
   }
-  Stretch whole{std::vector<double>(moments_.size(), 0.0), 0};
-  for (const Stretch& s : stretches_) add_stretch(whole, s);
-  stretches_.clear();
-  if (whole.intervals > 0) stretches_.push_back(std::move(whole));
+  std::vector<double> whole(moments_.size(), 0.0);
+  std::size_t intervals = 0;
+  for (std::size_t s = 0; s < stretches_.size(); ++s) {
+    for (std::size_t j = 0; j < whole.size(); ++j) whole[j] += stretches_.sums(s)[j];
+    intervals += stretches_.intervals(s);
+  }
+  stretches_.truncate(0);
+  if (intervals > 0) stretches_.append(whole.data(), intervals);
   open_stretch();
 }
 
-// Adds each pair of closed stretches into its first, in place; the emptied sums are kept for the
-// stretches to come, so that a long pass allocates none after its first compaction.
+// Halves the number of stretches by adding neighbours; the open (last) stretch stays last. The
+// emptied slots serve the stretches to come, so that a long pass takes no memory after its first
+// compaction.
 void MomentAccumulator::compact() {
   const std::size_t closed = stretches_.size() - 1;
   std::size_t kept = 0;
   for (std::size_t i = 0; i + 1 < closed; i += 2) {
-    add_stretch(stretches_[i], stretches_[i + 1]);
-    std::swap(stretches_[kept++], stretches_[i]);
+    stretches_.add(i, i + 1);
+    stretches_.swap(kept++, i);
   }
   // An odd one out starts the open stretch, which is then at most one old length long.
-  if (closed % 2 == 1) add_stretch(stretches_[closed - 1], stretches_.back());
-  std::swap(stretches_[kept++], stretches_[closed % 2 == 1 ? closed - 1 : closed]);
-  while (stretches_.size() > kept) {
-    spare_sums_.push_back(std::move(stretches_.back().sums));
-    stretches_.pop_back();
-  }
+  if (closed % 2 == 1) stretches_.add(closed - 1, closed);
+  stretches_.swap(kept++, closed % 2 == 1 ? closed - 1 : closed);
+  stretches_.truncate(kept);
   stretch_length_ *= 2;
 }
 
-void MomentAccumulator::open_stretch() {
-  if (spare_sums_.empty()) {
-    stretches_.push_back({std::vector<double>(moments_.size(), 0.0), 0});
-    return;
-  }
-  stretches_.push_back({std::move(spare_sums_.back()), 0});
-  spare_sums_.pop_back();
-  std::fill(stretches_.back().sums.begin(), stretches_.back().sums.end(), 0.0);
-}
+void MomentAccumulator::open_stretch() { stretches_.append(nullptr, 0); }
 
 namespace {
 
@@ -200,13 +193,8 @@ void MomentAccumulator::merge(MomentAccumulator&& other) {
     }
   }
   finish_run();
-  if (stretches_.back().intervals == 0) {
-    spare_sums_.push_back(std::move(stretches_.back().sums));
-    stretches_.pop_back();
-  }
-  for (Stretch& s : other.stretches_) {
-    if (s.intervals > 0) stretches_.push_back(std::move(s));
-  }
+  if (stretches_.intervals(stretches_.size() - 1) == 0) stretches_.truncate(stretches_.size() - 1);
+  stretches_.take(std::move(other.stretches_));
   intervals_ += other.intervals_;
   open_stretch();
   while (stretches_.size() > max_stretches_) compact();

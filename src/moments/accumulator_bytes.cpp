@@ -106,31 +106,6 @@ Moment read_moment(ByteReader& in, const std::string& name, std::size_t channels
   return m;
 }
 
-// The stretches of `k` moments, which must hold `intervals` intervals in all.
-std::vector<MomentAccumulator::Stretch> read_stretches(ByteReader& in, std::size_t k,
-                                                       std::uint64_t intervals) {
-  std::vector<MomentAccumulator::Stretch> stretches(in.count(8 * (k + 1), "stretches"));
-  if (stretches.empty()) {
-    throw Error("moment accumulator bytes: no stretches, expected at least the open one");
-  }
-  std::uint64_t counted = 0;
-  for (MomentAccumulator::Stretch& s : stretches) {
-    s.intervals = in.u64("the interval count of a stretch");
-    s.sums.resize(k);
-    for (double& x : s.sums) x = in.f64("a sum of a stretch");
-    if (s.intervals > intervals - counted) {
-      throw Error("moment accumulator bytes: the stretches hold more than the " +
-                  std::to_string(intervals) + " intervals counted");
-    }
-    counted += s.intervals;
-  }
-  if (counted != intervals) {
-    throw Error("moment accumulator bytes: " + std::to_string(intervals) +
-                " intervals counted, but the stretches hold " + std::to_string(counted));
-  }
-  return stretches;
-}
-
 }  // namespace
 
 std::vector<std::uint8_t> MomentAccumulator::serialize() const {
@@ -158,9 +133,9 @@ std::vector<std::uint8_t> MomentAccumulator::serialize() const {
   out.u64(stretch_length_);
   out.u64(intervals_);
   out.u64(stretches_.size());
-  for (const Stretch& s : stretches_) {
-    out.u64(s.intervals);
-    for (double x : s.sums) out.f64(x);
+  for (std::size_t s = 0; s < stretches_.size(); ++s) {
+    out.u64(stretches_.intervals(s));
+    for (std::size_t j = 0; j < moments_.size(); ++j) out.f64(stretches_.sums(s)[j]);
   }
   return out.take();
 }
@@ -186,7 +161,28 @@ MomentAccumulator MomentAccumulator::deserialize(std::span<const std::uint8_t> b
                 ", expected a power of two");
   }
   const std::uint64_t intervals = in.u64("the number of intervals");
-  out->stretches_ = read_stretches(in, out->moments_.size(), intervals);
+  // The stretches, which must hold `intervals` intervals in all.
+  const std::size_t stretches = in.count(8 * (out->moments_.size() + 1), "stretches");
+  if (stretches == 0) {
+    throw Error("moment accumulator bytes: no stretches, expected at least the open one");
+  }
+  out->stretches_.truncate(0);
+  std::vector<double> sums(out->moments_.size());
+  std::uint64_t counted = 0;
+  for (std::size_t s = 0; s < stretches; ++s) {
+    const std::uint64_t count = in.u64("the interval count of a stretch");
+    for (double& x : sums) x = in.f64("a sum of a stretch");
+    if (count > intervals - counted) {
+      throw Error("moment accumulator bytes: the stretches hold more than the " +
+                  std::to_string(intervals) + " intervals counted");
+    }
+    counted += count;
+    out->stretches_.append(sums.data(), count);
+  }
+  if (counted != intervals) {
+    throw Error("moment accumulator bytes: " + std::to_string(intervals) +
+                " intervals counted, but the stretches hold " + std::to_string(counted));
+  }
   if (in.position() != bytes.size()) {
     throw Error("moment accumulator bytes: " + data::plural(bytes.size() - in.position(), "byte") +
                 " after the end of the layout at byte " + std::to_string(in.position()));

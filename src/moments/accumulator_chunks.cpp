@@ -172,13 +172,13 @@ void MomentAccumulator::close_chunked(std::size_t first, std::size_t last) {
   while (first < last && !owns(first)) ++first;
   while (last > first && !owns(last - 1)) --last;
   for (std::size_t n = first; n < last;) {
-    Stretch& stretch = stretches_.back();
-    const std::size_t k = std::min(last - n, stretch_length_ - stretch.intervals);
+    std::size_t& stretch = stretches_.intervals(stretches_.size() - 1);
+    const std::size_t k = std::min(last - n, stretch_length_ - stretch);
     sum_intervals(n, n + k);
-    stretch.intervals += k;
+    stretch += k;
     intervals_ += k;
     n += k;
-    if (stretch.intervals >= stretch_length_) close_stretch();
+    if (stretch >= stretch_length_) close_stretch();
   }
 }
 

@@ -256,10 +256,8 @@ MOMENTID_KERNEL void MomentAccumulator::close_interval(std::size_t n) {
     }
   }
   for (std::size_t i = increments_begin_; i < ringed_count_; ++i) sums[i] += g1[i] - g0[i];
-  Stretch& stretch = stretches_.back();
-  ++stretch.intervals;
   ++intervals_;
-  if (stretch.intervals >= stretch_length_) close_stretch();
+  if (++stretches_.intervals(stretches_.size() - 1) >= stretch_length_) close_stretch();
 }
 
 // The open stretch is full: starts the next. The plain sums may hold the interval after the one

@@ -9,10 +9,8 @@ namespace momentid {
 
 MomentEstimates estimates(const MomentAccumulator& accumulator, std::size_t batches) {
   const std::size_t k = accumulator.moments().size();
-  std::vector<const MomentAccumulator::Stretch*> full;
-  for (const auto& s : accumulator.stretches()) {
-    if (s.intervals > 0) full.push_back(&s);
-  }
+  std::vector<MomentAccumulator::Stretch> full = accumulator.stretches();
+  std::erase_if(full, [](const MomentAccumulator::Stretch& s) { return s.intervals == 0; });
   MomentEstimates out;
   out.mean.assign(k, 0.0);
   out.intervals = accumulator.intervals();
@@ -23,15 +21,15 @@ MomentEstimates estimates(const MomentAccumulator& accumulator, std::size_t batc
   // of intervals.
   std::size_t before = 0;
   for (std::size_t i = 0; i < full.size(); ++i) {
-    const std::size_t middle = before + full[i]->intervals / 2;
-    before += full[i]->intervals;
+    const std::size_t middle = before + full[i].intervals / 2;
+    before += full[i].intervals;
     const std::size_t batch =
         std::min(b - 1, out.intervals > 0 ? middle * b / out.intervals : std::size_t{0});
     for (std::size_t j = 0; j < k; ++j) {
-      sums[batch][j] += full[i]->sums[j];
-      out.mean[j] += full[i]->sums[j];
+      sums[batch][j] += full[i].sums[j];
+      out.mean[j] += full[i].sums[j];
     }
-    counts[batch] += full[i]->intervals;
+    counts[batch] += full[i].intervals;
   }
   if (out.intervals > 0) {
     for (double& m : out.mean) m /= static_cast<double>(out.intervals);
