@@ -5,9 +5,13 @@
 #include <doctest/doctest.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdint>
+#include <filesystem>
+#include <fstream>
 #include <set>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -255,6 +259,44 @@ TEST_SUITE("accumulator") {
       check_same_moments(merged_shards(record, every_row, hold), want);
       check_same_moments(merged_shards(record, run_starts, hold), want);
     }
+  }
+
+  // 2048 moments (y at lags 0 .. 2047 times y) and 300 intervals of one stretch each: the
+  // blocks of slots grow by 16, 16, 32, 64, 128 and 256 stretches of 16 KiB, the last two of
+  // 2 MiB or more, advised as large pages (the kernel's flag `hg` on their mapping); the open
+  // stretch, the 301st, lies in the last.
+  TEST_CASE("the stretches of a long pass lie in memory advised as large pages") {
+    if (!std::filesystem::exists("/sys/kernel/mm/transparent_hugepage/enabled")) {
+      MESSAGE("this kernel has no transparent huge pages: not checked");
+      return;
+    }
+    std::vector<Moment> moments{Moment::from_monomial({2})};
+    for (int lag = 1; lag < 2048; ++lag) moments.push_back(Moment({{0, 1, 0}, {0, 1, lag}}));
+    MomentAccumulator acc(moments, 1, 0, InputHold::kSample, 100);
+    momentid::PortableRandom random(/*seed=*/3, /*stream=*/0);
+    std::vector<double> rows(2047 + 301);
+    for (double& x : rows) x = random.normal();
+    acc.add(rows.data(), rows.size());
+    acc.finish();
+    const std::vector<MomentAccumulator::Stretch> stretches = acc.stretches();
+    REQUIRE(stretches.size() > 256);
+    const auto address = reinterpret_cast<std::uintptr_t>(stretches.back().sums.data());
+    std::ifstream smaps("/proc/self/smaps");
+    bool inside = false;
+    std::string flags;
+    for (std::string line; std::getline(smaps, line);) {
+      std::uintptr_t begin = 0, end = 0;
+      char dash = 0;
+      // A mapping's first line: "begin-end perms ...", in lower-case hexadecimal.
+      if (std::isxdigit(static_cast<unsigned char>(line[0])) && !std::isupper(line[0])) {
+        std::istringstream(line) >> std::hex >> begin >> dash >> end;
+        inside = dash == '-' && begin <= address && address < end;
+      } else if (inside && line.rfind("VmFlags:", 0) == 0) {
+        flags = line + " ";
+      }
+    }
+    INFO("the mapping's flags: ", flags);
+    CHECK(flags.find(" hg ") != std::string::npos);
   }
 
   TEST_CASE("a serialised accumulator deserialises to the same stretches, bit for bit") {
