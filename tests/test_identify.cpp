@@ -520,24 +520,67 @@ TEST_SUITE("identify") {
       CHECK(std::abs(r.parameters()[p].estimate - truth) < 1e-4 * truth);
       CHECK(std::abs(r.parameters()[p].estimate - truth) < 4 * r.parameters()[p].std_error);
     }
-    // The default window, about five correlation times of y (period ~314 samples).
+    // The default window, five correlation times of y (period ~314 samples), within the first
+    // pass's lags 3..300.
     CHECK(r.lagged->system->first_lag == 3);
-    CHECK(r.lagged->system->last_lag == 300);
+    CHECK(r.lagged->system->last_lag == 5 * r.lagged->correlation_lags.at("y"));
+    CHECK(r.lagged->system->last_lag > 200);
   }
 
   TEST_CASE("the default lags follow the correlation time of the measured state") {
     // At dt = 0.05 the autocorrelation of y falls below 1/e within about 9 samples: the first
-    // pass over lags 3..300 shows it, and a second takes about five correlation times.
+    // pass over lags 3..300 shows it, and the equations take five correlation times of its lags,
+    // from the same pass (the intervals are those of lags 3..300: the record is read once).
     const Model model = model_file("duffing.mom");
     const momentid::IdentifyResult r = identify_from_displacement(model, 0, 0.05, 200000);
     REQUIRE(r.lagged.has_value());
     INFO("lags ", r.lagged->system->first_lag, "..", r.lagged->system->last_lag);
+    CHECK(r.lagged->system->last_lag == 5 * r.lagged->correlation_lags.at("y"));
     CHECK(r.lagged->system->last_lag > 30);
     CHECK(r.lagged->system->last_lag < 80);
+    momentid::IdentifyOptions wide;
+    wide.lags = {3, 300};
+    const momentid::IdentifyResult w = identify_from_displacement(model, 0, 0.05, 200000, wide);
+    CHECK(r.data.estimates.intervals == w.data.estimates.intervals);
+    momentid::IdentifyOptions own = wide;
+    own.lags->second = r.lagged->system->last_lag;
+    CHECK(identify_from_displacement(model, 0, 0.05, 200000, own).data.estimates.intervals >
+          r.data.estimates.intervals);
     for (std::size_t p = 0; p < 3; ++p) {
       INFO(r.parameters()[p].name, " = ", r.parameters()[p].estimate);
       CHECK(std::abs(r.parameters()[p].estimate - truth_of(model, p)) < 1e-3 * truth_of(model, p));
     }
+  }
+
+  TEST_CASE("every model of the same measured state gets the default window of the record") {
+    // At dt = 0.04 y's correlation times call for lags 3..60. A library of nine terms reads more
+    // moments a lag, and its first pass is cut to lags 3..101 by the budget: it takes the same
+    // window from that pass, so that a selection and the model it chooses read the same lags.
+    const Model duffing = model_file("duffing.mom");
+    const Model library = momentid::parse_model(
+        "model library\nstate y, v\ninput x\ny' = v\nv' = 0\n"
+        "library v': monomials(y, 5), v, y*v, y^2*v, x\n",
+        "library.mom");
+    momentid::SimulationOptions options;
+    options.inputs = {momentid::InputSpec::parse("ma:K=10,w=0.1,sigma=20", "test")};
+    options.samples = 200000;
+    options.dt = 0.04;
+    Columns columns(3);
+    momentid::simulate(duffing, options, columns);
+    const auto identified = [&](const Model& model) {
+      momentid::MemoryData data;
+      data.rows = options.samples;
+      data.columns = {{"y", columns.values[0].data()}, {"x", columns.values[2].data()}};
+      data.metadata.add_line({{"dt", "0.04"}, {"input-hold", "zoh"}});
+      return momentid::identify(model, momentid::DataSource::memory(std::move(data)));
+    };
+    const momentid::IdentifyResult a = identified(duffing), b = identified(library);
+    REQUIRE(a.lagged.has_value());
+    REQUIRE(b.lagged.has_value());
+    CHECK(a.lagged->system->last_lag == 5 * a.lagged->correlation_lags.at("y"));
+    CHECK(a.lagged->system->last_lag > 50);
+    CHECK(b.lagged->system->last_lag == a.lagged->system->last_lag);
+    CHECK(b.lagged->correlation_lags.at("y") == a.lagged->correlation_lags.at("y"));
   }
 
   TEST_CASE("a state correlated across the longest window the moments allow is warned about") {

@@ -16,7 +16,8 @@ that see the states' means, and no offset is named where there is none.
                 most 5% of them.
   multisine     the same oscillator driven by a multisine (lines at 1..40 Hz, a 1 s period,
                 random phases), whose cubic gives y a mean of its own (0.3-5% of its sd, tens
-                of standard errors): six records without an offset are `ok`, nothing named; with
+                of standard errors): six records without an offset, nothing named, within 3
+                standard errors, `ok` (one may be `doubtful` by the J test alone: its size); with
                 an offset of 0.02 sd (which that mean may hide from a test against zero) the
                 offset is named with its size and the amount to subtract (not --center), the
                 JSON report's response_means giving that amount, and the record with that
@@ -133,14 +134,22 @@ def no_offset(momentid, models, workdir, records):
 def multisine(momentid, models, workdir, records):
     model = f"{models}/duffing.mom"
     passed = True
+    doubtful = 0
     for seed in range(20271400, 20271406):
         path = f"{workdir}/record.csv"
         write(path, multisine_record(seed), ("y", "x"), 0.02, {}, seed)
         status, worst, report = identify(momentid, model, path)
-        good = status == "ok" and worst <= 3 and not any(
-            "offset?" in w for w in report["diagnostics"]["warnings"])
-        print(f"  no offset: {'as expected' if good else 'WRONG'}")
+        warnings = report["diagnostics"]["warnings"]
+        good = worst <= 3 and not any("offset?" in w for w in warnings)
+        # The J test rejects a true model on 1% of records: once in six is its size, not a fault
+        # (twice has a chance of 0.15%).
+        rejected = status == "doubtful" and any(w.startswith("the J test rejects") for w in warnings)
+        good &= status == "ok" or rejected
+        doubtful += status != "ok"
+        print(f"  no offset: {'as expected' if good else 'WRONG'}"
+              f"{' (the J test rejects it)' if status != 'ok' else ''}")
         passed &= good
+    passed &= doubtful <= 1
     clean = multisine_record(20271406)
     path = f"{workdir}/offset.csv"
     write(path, clean, ("y", "x"), 0.02, {"y": 0.02}, 20271406)

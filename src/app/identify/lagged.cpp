@@ -115,7 +115,7 @@ std::vector<std::string> noisy_function_warnings(const IdentifyResult& result,
 }
 
 // What the options and the record's survey decide before the pass, computed once and read by
-// every step (the window may still grow after the first pass: widen_window).
+// every step (the window may still change after the first pass: fit_window).
 struct LaggedPlan {
   LagOptions lags;              // the window and instruments, fitted to the moment budget
   std::string instruments_cut;  // "4 of the 10 instruments" when the budget cut them, or empty
@@ -418,19 +418,51 @@ MomentRows lagged_rows_of(const IdentifyResult& result, const LaggedSystem& syst
 
 namespace {
 
-// The default lags span about five correlation times of the measured states: when the first
-// pass shows them far from that (more than 1.5 times longer or 2 times shorter), a second pass
-// takes the lags the data call for, as far as the budget allows. Returns the window's cut
-// ("lags 3..300 (the correlation times call for ..600)") when the budget kept it short.
-std::string widen_window(IdentifyResult& result, LaggedPlan& plan, LaggedPass& pass,
-                         const DataSource& source, const IdentifyOptions& options) {
+// The equations of `plan`'s narrower window read the same instruments at fewer lags: a subset of
+// the moments the pass read, which are taken from it without reading the record again. Returns
+// false (and changes nothing) if the pass lacks one of them.
+bool narrow_window(IdentifyResult& result, const LaggedPlan& plan, LaggedPass& pass) {
+  auto system = std::make_shared<const LaggedSystem>(derive_lagged(*result.model, plan.lags));
+  LaggedChannels c = lagged_channels(*result.model, *system, result.integration);
+  if (c.states != pass.channels.states || c.inputs != pass.channels.inputs ||
+      c.derivatives != pass.channels.derivatives) {
+    return false;
+  }
+  const LaggedRows probe = lagged_rows(*system, 1.0, c.channel, {}, kStencilReach,
+                                       shared_noise(result, c, {}), c.products);
+  std::map<Moment, std::size_t> index;
+  for (std::size_t k = 0; k < result.lagged->moments.size(); ++k) {
+    index.emplace(result.lagged->moments[k], k);
+  }
+  std::vector<std::size_t> at;
+  for (const Moment& m : probe.moments) {
+    const auto it = index.find(m);
+    if (it == index.end()) return false;
+    at.push_back(it->second);
+  }
+  result.data.estimates = moments_at(result.data.estimates, at);
+  result.lagged->moments = probe.moments;
+  result.lagged->system = std::move(system);
+  pass.channels = std::move(c);
+  return true;
+}
+
+// The default lags span about five correlation times of the measured states, as far as the
+// budget allows: a window shorter than the first pass's is taken from its moments, one more than
+// 1.5 times longer by a second pass. Returns the window's cut ("lags 3..300 (the correlation
+// times call for ..600)") when the budget kept it short.
+std::string fit_window(IdentifyResult& result, LaggedPlan& plan, LaggedPass& pass,
+                       const DataSource& source, const IdentifyOptions& options) {
   const LaggedSystem& system = *result.lagged->system;
   const int wanted = lag_window(result);
   const int most =
       last_lag_within_budget(system.first_lag, system.last_lag, result.lagged->moments.size());
   const int last = system.last_lag;
   const int granted = std::max(std::min(wanted, most), system.first_lag + LagOptions::kMinSpan - 1);
-  if (2 * granted > 3 * last || 2 * granted < last) {
+  if (granted < last) {
+    plan.lags.last_lag = granted;
+    if (!narrow_window(result, plan, pass)) pass = read_lagged(result, plan, source, options);
+  } else if (2 * granted > 3 * last) {
     plan.lags.last_lag = granted;
     pass = read_lagged(result, plan, source, options);
   }
@@ -542,7 +574,7 @@ void identify_lagged(IdentifyResult& result, const DataSource& source,
   LaggedPlan plan = plan_lagged(*result.model, options, measured, result.integration);
   LaggedPass pass = read_lagged(result, plan, source, options);
   const std::string window_cut =
-      options.lags ? "" : widen_window(result, plan, pass, source, options);
+      options.lags ? "" : fit_window(result, plan, pass, source, options);
   if (!plan.instruments_cut.empty() || !window_cut.empty()) {
     result.lagged->cut = "cut to " + plan.instruments_cut +
                          (plan.instruments_cut.empty() || window_cut.empty() ? "" : " and ") +

@@ -13,7 +13,7 @@ namespace momentid {
 
 // The lagged identification into `result` (whose model is set): the equations for the lags
 // asked for, or for a window the data's correlation times call for, one pass (two when the
-// first shows the window far from that), the noise on each state channel, the solution.
+// first shows them much longer than its window), the noise on each state channel, the solution.
 // `measured`: per model variable, whether the data have its column.
 void identify_lagged(IdentifyResult& result, const DataSource& source,
                      const IdentifyOptions& options, const std::vector<bool>& measured);
