@@ -11,6 +11,11 @@ J test does not reject it at 1%, and that its estimates lie within 3 standard er
   duffing      the Duffing oscillator of lab.SDOF, 5% noise on y
   clean        the same without noise: the equations hold on the record up to the stencils'
                error, which the accuracy floor covers (docs/measured-data.md)
+  coarse       the Duffing oscillator with a damping ratio of 0.05 (c = 3.2), sampled at 9
+               samples a period (2% noise on y): the true terms at the default window, lags
+               3..42 (longer windows add y^5 or drop v); and at 80 samples a period, the library
+               and the chosen model on the same window, the one the record's correlation time
+               calls for (the library's budget allows lags to 101)
   asymmetric   the same with -300 y^2, 10% noise on y
   van_der_pol  v' = mu (1 - y^2) v - k y + x, mu = 2, k = 400, 5% noise on y
   damping      y, v and x measured, 2% noise, the library {y, y^3, v, v^2, v^3, |v| v, x}: the
@@ -322,7 +327,33 @@ def clear(momentid, workdir):
             and selection["runner_up"] is None)
 
 
-CASES = {"duffing": duffing, "clean": clean, "asymmetric": asymmetric,
+def coarse(momentid, workdir):
+    """A lightly damped resonance sampled coarsely, and one sampled at 80 samples a period."""
+    p = dict(lab.SDOF, c=2 * 0.05 * np.sqrt(lab.SDOF["k"]))  # damping ratio 0.05
+    truth = {"v_y": -p["k"], "v_y3": -p["eps"], "v_v": -p["c"], "v_x": 1.0}
+    rates = lab.sdof_rates(p)
+    passed = True
+    for per_period, fine in ((9, 8), (80, 2)):
+        fs = per_period * np.sqrt(p["k"]) / (2 * np.pi)
+        clean = lab.oscillator(np.random.default_rng(20271209), rates, ("y", "v"), fine * fs,
+                               fine * SAMPLES, (0.5, 0.4 * fs), 800.0 * np.sqrt(0.8), 10.0)
+        clean = {name: values[::fine] for name, values in clean.items()}
+        clean["t"] = np.arange(SAMPLES) / fs
+        path = f"{workdir}/coarse_{per_period}.csv"
+        write(20271209, clean, 0.02, path)
+        report = select(momentid, library(workdir), path)
+        if report is None:
+            return False
+        own = report["method"]["lags"]
+        window = report["selection"]["windows"][0]["lags"]
+        print(f"{per_period} samples a period: the library's lags {window}, the chosen model's {own}")
+        passed &= own == window
+        if per_period == 9:
+            passed &= judge(report, truth)
+    return passed
+
+
+CASES = {"duffing": duffing, "coarse": coarse, "clean": clean, "asymmetric": asymmetric,
          "van_der_pol": van_der_pol, "damping": damping, "offset": offset, "validated": validated,
          "blows_up": blows_up,
          "written": written, "no_candidates": no_candidates, "uncertain": uncertain,
