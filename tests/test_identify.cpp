@@ -583,6 +583,37 @@ TEST_SUITE("identify") {
     CHECK(b.lagged->correlation_lags.at("y") == a.lagged->correlation_lags.at("y"));
   }
 
+  TEST_CASE("a noise estimate that the signal's roughness makes is named with its range") {
+    // A record smooth at the sample scale: the fourth and sixth differences agree, no range.
+    const Model model = model_file("duffing.mom");
+    momentid::IdentifyResult r = identify_from_displacement(model, 0.05, 0.05, 200000);
+    REQUIRE(r.lagged.has_value());
+    CHECK(!r.lagged->rough_noise);
+    const auto said = [&](const std::string& text) {
+      const std::vector<std::string> w = momentid::warnings(r);
+      return std::find(w.begin(), w.end(), text) != w.end();
+    };
+    const auto noise_said = [&] {
+      const std::vector<std::string> w = momentid::warnings(r);
+      return std::any_of(w.begin(), w.end(), [](const std::string& s) {
+        return s.starts_with("'y' carries white noise of about");
+      });
+    };
+    CHECK(noise_said());
+    r.lagged->rough_noise = {"y", 0.00494, 0.0179, 1.0, "k", 1.7};
+    CHECK(said(
+        "the noise on 'y' cannot be told from the signal at this sampling: its sixth "
+        "differences give a noise variance of 0.00494, its fourth differences 0.0179 (a record "
+        "not smooth at the sample scale: a resonance sampled coarsely, or harmonics near the "
+        "Nyquist frequency), so up to 100% of the estimate may be signal. The estimates take the "
+        "middle of that range and their errors its spread (k moves by 1.7 standard errors across "
+        "it); the sensor's noise, if known (--noise y=VARIANCE), or a faster sampling removes "
+        "it"));
+    // The noise's size is said there, not as a noise of the channel's own.
+    CHECK(!noise_said());
+    CHECK(momentid::status(r) == momentid::Status::kOk);
+  }
+
   TEST_CASE("a state correlated across the longest window the moments allow is warned about") {
     // dt = 0.001: y stays above 1/e for some 600 lags, beyond the 502 lags that 3000 moments
     // allow with two instruments.

@@ -188,6 +188,21 @@ struct IdentifyResult {
     // Per measured state the equations read: the lag at which its autocorrelation first falls
     // below 1/e, 0 if it stays above across the lags, -1 if the pass did not read it.
     std::map<std::string, int> correlation_lags;
+    // A state channel whose noise could not be told from the signal's roughness at the sample
+    // scale (a coarsely sampled resonance, its harmonics): the noise estimate from its sixth
+    // differences, the same from its fourth (more than kRoughNoise times it), the share of the
+    // estimate that may be signal (their difference over the 0.46 by which the fourth's weight
+    // exceeds the sixth's at a third of the sample rate, at most 1), and the parameter whose
+    // estimate moves most, in standard errors, over that range of the noise. The estimate is
+    // solved at the middle of the range, its errors take the spread over it (lagged.cpp).
+    struct RoughNoise {
+      std::string channel;
+      double sixth = 0, fourth = 0, share = 0;
+      std::string parameter;
+      double shift = 0;
+    };
+    static constexpr double kRoughNoise = 1.25;
+    std::optional<RoughNoise> rough_noise;
     // What was cut from the default lags and instruments to stay within kMaxLaggedMoments, e.g.
     // "cut to 4 of the 10 instruments to stay within 3000 moments"; empty when nothing was.
     std::string cut;

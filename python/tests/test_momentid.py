@@ -695,7 +695,7 @@ def test_no_leak_over_1000_calls(duffing):
 # --- 9. the GIL ----------------------------------------------------------------------------------
 
 def test_gil_released_during_identify(duffing):
-    large = momentid.simulate(duffing, samples=2_000_000, seed=1, inputs={"x": INPUT})
+    large = momentid.simulate(duffing, samples=4_000_000, seed=1, inputs={"x": INPUT})
     started, times, results = threading.Event(), {}, []
 
     def work():

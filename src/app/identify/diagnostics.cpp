@@ -447,6 +447,8 @@ std::vector<std::string> warnings(const IdentifyResult& r) {
   for (const ChannelStatistics& c : r.data.channels) {
     const std::optional<double> fraction = c.noise_fraction();
     if (c.is_input || !fraction || *fraction < kNoiseWarning) continue;
+    // The warning on the noise's range says what the estimate holds.
+    if (r.lagged && r.lagged->rough_noise && r.lagged->rough_noise->channel == c.name) continue;
     rest.push_back("'" + c.name + "' carries white noise of about " +
                    number(100 * *fraction, "%.2g") +
                    "% of its standard deviation (the excess of its autocorrelation at lag 0): " +
@@ -464,6 +466,22 @@ std::vector<std::string> warnings(const IdentifyResult& r) {
         "drag oscillator under simulate's default input at dt = 0.01, 3.7 standard "
         "errors in k over 10^6 samples); a finer dt, or a band-limited force sampled "
         "rather than held, makes it smaller");
+  }
+  if (r.lagged && r.lagged->rough_noise) {
+    const IdentifyResult::Lagged::RoughNoise& n = *r.lagged->rough_noise;
+    rest.push_back("the noise on '" + n.channel +
+                   "' cannot be told from the signal at this sampling: its sixth differences "
+                   "give a noise variance of " +
+                   number(n.sixth, "%.3g") + ", its fourth differences " +
+                   number(n.fourth, "%.3g") +
+                   " (a record not smooth at the sample scale: a resonance sampled coarsely, or "
+                   "harmonics near the Nyquist frequency), so up to " +
+                   number(100 * n.share, "%.0f") +
+                   "% of the estimate may be signal. The estimates take the middle of that range "
+                   "and their errors its spread (" +
+                   n.parameter + " moves by " + number(n.shift, "%.2g") +
+                   " standard errors across it); the sensor's noise, if known (--noise " +
+                   n.channel + "=VARIANCE), or a faster sampling removes it");
   }
   if (r.lagged) {
     for (const auto& [name, tau] : r.lagged->correlation_lags) {

@@ -472,6 +472,93 @@ std::string fit_window(IdentifyResult& result, LaggedPlan& plan, LaggedPass& pas
          std::to_string(wanted) + ")";
 }
 
+// The noise on channel `c` that its fourth differences show, from the autocovariances at lags
+// 0..4 (ChannelStatistics::autocorrelation): their mean square over 70, the sum of the squares of
+// their weights. It weighs a signal's spectrum by (2 sin(w/2))^8 / 70, 1.5 to 4 times the sixth
+// difference's weight from a fifth of the sample rate to a third, and white noise alike.
+std::optional<double> fourth_difference_noise(const ChannelStatistics& c) {
+  if (c.autocorrelation.size() < 4 || !(c.variance > 0)) return std::nullopt;
+  const std::vector<double>& rho = c.autocorrelation;
+  return c.variance * (70 - 112 * rho[0] + 56 * rho[1] - 16 * rho[2] + 2 * rho[3]) / 70;
+}
+
+// `fit` with the spread of a parameter error uniform along `range` (the estimates' change over
+// it) added to its covariance: range range' / 12.
+void add_uniform_spread(Fit& fit, const std::vector<double>& range) {
+  const std::vector<std::vector<double>> covariance = fit.covariance();
+  const std::size_t n = fit.parameters.size();
+  std::vector<double> error(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    ParameterEstimate& e = fit.parameters[i];
+    if (e.fixed || !(e.std_error > 0)) continue;
+    const double t = (e.ci_high - e.estimate) / e.std_error;
+    e.std_error = std::sqrt(covariance[i][i] + range[i] * range[i] / 12);
+    e.ci_low = e.estimate - t * e.std_error;
+    e.ci_high = e.estimate + t * e.std_error;
+  }
+  for (std::size_t i = 0; i < n && !fit.correlation.empty(); ++i) {
+    for (std::size_t k = 0; k < n; ++k) {
+      const double si = fit.parameters[i].std_error, sk = fit.parameters[k].std_error;
+      if (i != k && si > 0 && sk > 0) {
+        fit.correlation[i][k] = (covariance[i][k] + range[i] * range[k] / 12) / (si * sk);
+      }
+    }
+  }
+}
+
+// Where a state channel's noise estimate (its sixth differences) and its fourth differences
+// disagree, the estimate holds signal the samples do not resolve: below a third of the sample
+// rate the fourth difference weighs a signal at least 1.46 times as much as the sixth, and noise
+// alike, which bounds the signal's share. The channel's noise then lies anywhere from the
+// estimate less that share to the estimate: the equations are solved at the middle of that
+// range, and the errors take the spread of the estimates over it. (A signal near 0.4 of the
+// sample rate weighs the same in both and is not seen.)
+void allow_rough_noise(IdentifyResult& result, const LaggedChannels& channels,
+                       const SolveOptions& solve_options, const std::vector<std::string>& names) {
+  std::vector<double> low = result.lagged->noise, middle = low;
+  std::optional<IdentifyResult::Lagged::RoughNoise> rough;
+  for (std::size_t c = 0; c < channels.states.size() && c < low.size(); ++c) {
+    const std::optional<double>& sixth = result.data.channels[c].noise_variance;
+    const std::optional<double> fourth = fourth_difference_noise(result.data.channels[c]);
+    if (!sixth || !fourth || !(low[c] > 0) || low[c] != *sixth ||
+        !(*fourth > IdentifyResult::Lagged::kRoughNoise * *sixth)) {
+      continue;
+    }
+    const double share = std::min(1.0, (*fourth - *sixth) / (0.46 * *sixth));
+    low[c] *= 1 - share;
+    middle[c] *= 1 - share / 2;
+    if (!rough || share > rough->share) rough = {channels.states[c], *sixth, *fourth, share, "", 0};
+  }
+  if (!rough) return;
+  const auto solved = [&](const std::vector<double>& noise) {
+    const LaggedRows rows =
+        lagged_rows(*result.lagged->system, *result.data.time_step, channels.channel, noise,
+                    result.lagged->stencil_reach, result.lagged->shared_noise, channels.products);
+    return solve_rows(rows.rows, names, result.data.estimates, solve_options);
+  };
+  const Estimate at_low = solved(low);
+  Estimate at_middle = solved(middle);
+  if (!at_low.usable() || !at_middle.usable()) return;
+  const auto add_spread = [&](Fit& fit, const Fit& from, const Fit& to) {
+    std::vector<double> range(fit.parameters.size(), 0.0);
+    for (std::size_t p = 0; p < range.size(); ++p) {
+      range[p] = to.parameters[p].estimate - from.parameters[p].estimate;
+      const ParameterEstimate& e = fit.parameters[p];
+      if (&fit != &at_middle.main() || e.fixed || !(e.std_error > 0)) continue;
+      const double shift = std::abs(range[p]) / e.std_error;
+      if (shift > rough->shift) rough->shift = shift, rough->parameter = e.name;
+    }
+    add_uniform_spread(fit, range);
+  };
+  add_spread(at_middle.least_squares, at_low.least_squares, result.estimate.least_squares);
+  if (at_middle.optimal && at_low.optimal && result.estimate.optimal) {
+    add_spread(*at_middle.optimal, *at_low.optimal, *result.estimate.optimal);
+  }
+  result.estimate = std::move(at_middle);
+  result.lagged->noise = middle;
+  result.lagged->rough_noise = rough;
+}
+
 // The equations at the pass's moments, with the noise on each channel, solved into
 // result.estimate.
 void solve_lagged(IdentifyResult& result, const LaggedPlan& plan, const LaggedChannels& channels,
@@ -494,12 +581,15 @@ void solve_lagged(IdentifyResult& result, const LaggedPlan& plan, const LaggedCh
   result.gmm = optimal_weighting(options, plan.fixed, rows.rows.a.size());
   result.lagged->moment_variance = accuracy_floor(
       result.lagged->moments, result.data.estimates.mean, noisy_channels(result, channels));
-  result.estimate = solve_rows(rows.rows, names, result.data.estimates,
-                               {.gmm = result.gmm,
-                                .fixed = plan.fixed,
-                                .normalise_rows = true,
-                                .iterate_weights = true,
-                                .moment_variance = result.lagged->moment_variance});
+  const SolveOptions solve_options{.gmm = result.gmm,
+                                   .fixed = plan.fixed,
+                                   .normalise_rows = true,
+                                   .iterate_weights = true,
+                                   .moment_variance = result.lagged->moment_variance};
+  result.estimate = solve_rows(rows.rows, names, result.data.estimates, solve_options);
+  if (!options.noise && result.estimate.usable()) {
+    allow_rough_noise(result, channels, solve_options, names);
+  }
 }
 
 // Whether state `name` is formed from a column.

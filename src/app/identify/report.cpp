@@ -281,6 +281,15 @@ Json method_json(const IdentifyResult& r) {
   for (std::size_t c = 0; c < r.lagged->noise.size(); ++c) {
     noise[r.lagged->channels[c]] = json_value(r.lagged->noise[c]);
   }
+  out["rough_noise"] = nullptr;
+  if (const auto& rough = r.lagged->rough_noise) {
+    out["rough_noise"] = {{"channel", rough->channel},
+                          {"sixth_difference", json_value(rough->sixth)},
+                          {"fourth_difference", json_value(rough->fourth)},
+                          {"share", json_value(rough->share)},
+                          {"parameter", rough->parameter},
+                          {"shift", json_value(rough->shift)}};
+  }
   return out;
 }
 
