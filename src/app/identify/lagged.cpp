@@ -487,7 +487,6 @@ std::optional<double> fourth_difference_noise(const ChannelStatistics& c) {
 void add_uniform_spread(Fit& fit, const std::vector<double>& range) {
   const std::vector<std::vector<double>> covariance = fit.covariance();
   const std::size_t n = fit.parameters.size();
-  std::vector<double> error(n);
   for (std::size_t i = 0; i < n; ++i) {
     ParameterEstimate& e = fit.parameters[i];
     if (e.fixed || !(e.std_error > 0)) continue;
