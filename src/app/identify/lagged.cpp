@@ -267,6 +267,14 @@ SharedNoise shared_noise(const IdentifyResult& result, const LaggedChannels& c,
   return out;
 }
 
+// The equations of `system` before the pass has given the sample interval and the noise: the
+// moments they read.
+LaggedRows rows_before_the_pass(const IdentifyResult& result, const LaggedSystem& system,
+                                const LaggedChannels& c) {
+  return lagged_rows(system, 1.0, c.channel, {}, kStencilReach, shared_noise(result, c, {}),
+                     c.products);
+}
+
 // Derives the equations for the plan's lags and makes the pass over the data into `result`,
 // reading the zero-lag check's moments as well when the plan has a check.
 LaggedPass read_lagged(IdentifyResult& result, const LaggedPlan& plan, const DataSource& source,
@@ -280,8 +288,7 @@ LaggedPass read_lagged(IdentifyResult& result, const LaggedPlan& plan, const Dat
   result.lagged->channels.insert(result.lagged->channels.end(), c.derivatives.begin(),
                                  c.derivatives.end());
   // The rows need the sample interval, which the data give: accumulate, then build rows.
-  const LaggedRows probe = lagged_rows(*result.lagged->system, 1.0, c.channel, {}, kStencilReach,
-                                       shared_noise(result, c, {}), c.products);
+  const LaggedRows probe = rows_before_the_pass(result, *result.lagged->system, c);
   result.lagged->moments = probe.moments;
   const PassMoments read = pass_moments(result, c, probe.moments, plan.check);
   const DataOptions data_options =
@@ -402,10 +409,7 @@ MomentRows lagged_rows_of(const IdentifyResult& result, const LaggedSystem& syst
   LaggedRows rows =
       lagged_rows(system, *result.data.time_step, channels.channel, result.lagged->noise,
                   result.lagged->stencil_reach, result.lagged->shared_noise, channels.products);
-  std::map<Moment, std::size_t> index;
-  for (std::size_t k = 0; k < result.lagged->moments.size(); ++k) {
-    index.emplace(result.lagged->moments[k], k);
-  }
+  const std::map<Moment, std::size_t> index = moment_index(result.lagged->moments);
   const auto reindex = [&](MomentRows::Entry& entry) {
     for (auto& [k, weight] : entry.moments) k = index.at(rows.moments[k]);
   };
@@ -428,12 +432,8 @@ bool narrow_window(IdentifyResult& result, const LaggedPlan& plan, LaggedPass& p
       c.derivatives != pass.channels.derivatives) {
     return false;
   }
-  const LaggedRows probe = lagged_rows(*system, 1.0, c.channel, {}, kStencilReach,
-                                       shared_noise(result, c, {}), c.products);
-  std::map<Moment, std::size_t> index;
-  for (std::size_t k = 0; k < result.lagged->moments.size(); ++k) {
-    index.emplace(result.lagged->moments[k], k);
-  }
+  const LaggedRows probe = rows_before_the_pass(result, *system, c);
+  const std::map<Moment, std::size_t> index = moment_index(result.lagged->moments);
   std::vector<std::size_t> at;
   for (const Moment& m : probe.moments) {
     const auto it = index.find(m);
@@ -511,9 +511,11 @@ void add_uniform_spread(Fit& fit, const std::vector<double>& range) {
 // alike, which bounds the signal's share. The channel's noise then lies anywhere from the
 // estimate less that share to the estimate: the equations are solved at the middle of that
 // range, and the errors take the spread of the estimates over it. (A signal near 0.4 of the
-// sample rate weighs the same in both and is not seen.)
+// sample rate weighs the same in both and is not seen.) Records whose inputs are sampled only.
 void allow_rough_noise(IdentifyResult& result, const LaggedChannels& channels,
                        const SolveOptions& solve_options, const std::vector<std::string>& names) {
+  // Under inputs held over each sample the noise is estimated otherwise (held_lag_zero).
+  if (result.data.hold != InputHold::kSample) return;
   std::vector<double> low = result.lagged->noise, middle = low;
   std::optional<IdentifyResult::Lagged::RoughNoise> rough;
   for (std::size_t c = 0; c < channels.states.size() && c < low.size(); ++c) {

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <numeric>
 
+#include "app/identify/moment_lists.hpp"
 #include "app/identify/pass.hpp"
 #include "momentid/estimate.hpp"
 #include "solve/rows.hpp"
@@ -145,8 +146,7 @@ std::map<std::string, int> correlation_lags(const IdentifyResult& r,
                                             const std::vector<int>& channel) {
   const LaggedSystem& system = *r.lagged->system;
   const Model& model = *r.model;
-  std::map<Moment, std::size_t> index;
-  for (std::size_t k = 0; k < r.lagged->moments.size(); ++k) index.emplace(r.lagged->moments[k], k);
+  const std::map<Moment, std::size_t> index = moment_index(r.lagged->moments);
   std::map<std::string, int> out;
   const std::vector<VariableReading> readings = variable_readings(model, system.measured);
   const auto formed_from = [&](const std::string& column) {

@@ -33,6 +33,12 @@ std::vector<Monomial> with_products(const std::vector<Monomial>& g) {
   return out;
 }
 
+std::map<Moment, std::size_t> moment_index(const std::vector<Moment>& moments) {
+  std::map<Moment, std::size_t> out;
+  for (std::size_t k = 0; k < moments.size(); ++k) out.emplace(moments[k], k);
+  return out;
+}
+
 MomentEstimates moments_at(const MomentEstimates& all, const std::vector<std::size_t>& index) {
   MomentEstimates out;
   out.batch_intervals = all.batch_intervals;

@@ -3,6 +3,7 @@
 // Lists of moments: what a pass reads for a list of monomials, and parts of its estimates.
 
 #include <cstddef>
+#include <map>
 #include <vector>
 
 #include "momentid/data_pass.hpp"
@@ -19,6 +20,9 @@ std::vector<Monomial> without_rates(std::vector<Monomial> moments);
 
 // The products g_i * g_j of the monomials `g` (i <= j), with the g themselves.
 std::vector<Monomial> with_products(const std::vector<Monomial>& g);
+
+// Each of `moments` with its position in the list.
+std::map<Moment, std::size_t> moment_index(const std::vector<Moment>& moments);
 
 // The moments of `all` at `index`, in that order, overall and per batch.
 MomentEstimates moments_at(const MomentEstimates& all, const std::vector<std::size_t>& index);
