@@ -264,9 +264,10 @@ struct IdentifyResult {
   // Where the record shows some states in no way (latent states, docs/latent-states.md): the
   // equations with them eliminated, whose coefficients the lagged pass estimated (lagged->system
   // reads coefficient_model), and the parameters found from the coefficients c by minimum
-  // distance: the p that brings the coefficients f(p) nearest c in the metric of c's covariance
-  // V. `distance`, Q = (c - f(p))' V^-1 (c - f(p)) at p, tests the restrictions that the model
-  // puts on the coefficients: chi-square on `dof` (coefficients less parameters).
+  // distance: the p that brings the coefficients f(p) nearest c in the metric of the inverse of
+  // c's errors' batch covariance. `distance`, Q = r' (M V M')^+ r for the residual r = c - f(p),
+  // V c's covariance and M V M' r's, tests the restrictions that the model puts on the
+  // coefficients: chi-square on `dof` (coefficients less parameters).
   struct Latent {
     std::vector<std::string> states;
     std::string equations;  // the elimination, as `momentid derive` prints it

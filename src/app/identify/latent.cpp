@@ -2,11 +2,12 @@
 // the parameters from the coefficients by minimum distance.
 //
 // With c the coefficients' estimates, V their covariance and f(p) the coefficients as functions
-// of the free parameters, the parameters minimise Q(p) = (c - f(p))' V^-1 (c - f(p))
-// (Levenberg-Marquardt from the model's nominal values, else from starts around them); their
-// covariance is (F' V^-1 F)^-1, F the Jacobian of f there (the delta method), and Q at the
-// minimum is chi-square on coefficients - parameters degrees of freedom when the model's
-// restrictions on the coefficients hold.
+// of the free parameters, the parameters minimise (c - f(p))' W (c - f(p)) for a weight W
+// (Coefficients: the inverse of the errors' batch covariance, not V^-1), by Levenberg-Marquardt
+// from the model's nominal values, else from starts around them; their covariance is L V L' for
+// L = (F' W F)^-1 F' W, F the Jacobian of f there (the delta method), and the residual's
+// statistic Q (minimum_distance) is chi-square on coefficients - parameters degrees of freedom
+// when the model's restrictions on the coefficients hold.
 
 #include "app/identify/latent.hpp"
 
@@ -24,6 +25,7 @@
 #include "momentid/lagged.hpp"
 #include "momentid/latent.hpp"
 #include "solve/distributions.hpp"
+#include "solve/long_run.hpp"
 
 namespace momentid {
 namespace {
@@ -124,41 +126,79 @@ struct Distance {
   VectorXd p;
   MatrixXd covariance;  // NaN when the coefficients' covariance is unknown
   double q = kNaN;
+  double cost = kNaN;  // (c - f(p))' W (c - f(p))
   bool converged = false;
+
+  // What compares the minima of one search: Q, or the cost where Q is unknown (infinite where
+  // the minimum does not determine the parameters).
+  double rank() const { return std::isfinite(q) ? q : cost; }
 };
 
-// V^-1 from the coefficients' covariance, its negligible directions dropped; empty when an
-// error is unknown.
-MatrixXd inverse_covariance(const Fit& coefficients) {
-  const std::vector<std::vector<double>> v = coefficients.covariance();
-  const auto n = static_cast<Index>(v.size());
-  MatrixXd out(n, n);
-  for (Index i = 0; i < n; ++i) {
-    for (Index j = 0; j < n; ++j) {
-      out(i, j) = v[static_cast<std::size_t>(i)][static_cast<std::size_t>(j)];
-      if (!std::isfinite(out(i, j))) return {};
-    }
-  }
-  const Eigen::SelfAdjointEigenSolver<MatrixXd> eigen(out);
-  const VectorXd& lambda = eigen.eigenvalues();
+// The inverse of a symmetric matrix on its directions above 1e-12 of its largest eigenvalue,
+// and the number of those kept from the largest down (all by default): empty when an element is
+// not finite.
+MatrixXd pseudo_inverse(const MatrixXd& m, Index keep = -1) {
+  if (!m.allFinite()) return {};
+  const Eigen::SelfAdjointEigenSolver<MatrixXd> eigen(m);
+  const VectorXd& lambda = eigen.eigenvalues();  // ascending
+  const Index n = m.rows(), from = keep < 0 ? 0 : std::max<Index>(0, n - keep);
   VectorXd inverse = VectorXd::Zero(n);
-  for (Index i = 0; i < n; ++i) {
+  for (Index i = from; i < n; ++i) {
     if (lambda(i) > 1e-12 * lambda.maxCoeff()) inverse(i) = 1 / lambda(i);
   }
   return eigen.eigenvectors() * inverse.asDiagonal() * eigen.eigenvectors().transpose();
 }
 
-Distance minimum_distance(const CoefficientMap& f, const Fit& coefficients, VectorXd start) {
-  Distance out;
-  VectorXd c(f.coefficients());
-  for (Index i = 0; i < c.size(); ++i) {
-    c(i) = coefficients.parameters[static_cast<std::size_t>(i)].estimate;
+MatrixXd matrix_of(const std::vector<std::vector<double>>& rows, Index columns) {
+  MatrixXd out(static_cast<Index>(rows.size()), columns);
+  for (Index i = 0; i < out.rows(); ++i) {
+    for (Index j = 0; j < columns; ++j) {
+      out(i, j) = rows[static_cast<std::size_t>(i)][static_cast<std::size_t>(j)];
+    }
   }
-  MatrixXd w = inverse_covariance(coefficients);
-  const bool weighted = w.size() > 0;
-  if (!weighted) w = MatrixXd::Identity(c.size(), c.size());
+  return out;
+}
+
+// The coefficients of one fit: their estimates, covariance V (its errors' long-run covariance,
+// with what the fit adds to it) and the weight W of the distance. W is not V^-1: V comes from
+// the errors' spectrum near frequency zero, a few tens of degrees of freedom, and the directions
+// in which it happens to be small would take the weight, and the parameters along them errors
+// several times too small (a two-mass chain sensed at mass 2, 40 records: k2 at z = +5.7 on one,
+// its standard error a third of the others'). W is the inverse of the batch covariance of the
+// same errors, known to as many degrees of freedom as there are batches (weights that are off by
+// a common factor weigh the same); the parameters' covariance is V's projection through the
+// fixed weights, which any weight makes right.
+struct Coefficients {
+  VectorXd value;
+  MatrixXd covariance;  // V; empty when an error is unknown
+  MatrixXd weight;      // W
+};
+
+Coefficients coefficients_of(const Fit& fit, const std::vector<std::vector<double>>& batches) {
+  Coefficients out;
+  const auto n = static_cast<Index>(fit.parameters.size());
+  out.value.resize(n);
+  for (Index i = 0; i < n; ++i) out.value(i) = fit.parameters[static_cast<std::size_t>(i)].estimate;
+  out.covariance = matrix_of(fit.covariance(), n);
+  if (!out.covariance.allFinite()) out.covariance.resize(0, 0);
+  // Fewer batches than coefficients leave the batch covariance singular: V^-1 then.
+  if (static_cast<Index>(batches.size()) > n + 1) {
+    out.weight = pseudo_inverse(batch_covariance(matrix_of(batches, n)));
+  }
+  if (out.weight.size() == 0) out.weight = pseudo_inverse(out.covariance);
+  if (out.weight.size() == 0) out.weight = MatrixXd::Identity(n, n);
+  return out;
+}
+
+// The parameters that minimise (c - f(p))' W (c - f(p)) from `start` (Levenberg-Marquardt),
+// their covariance L V L' for L = (F' W F)^-1 F' W, and Q = r' (M V M')^+ r for the residual
+// r = c - f(p) and M = I - F L, whose covariance M V M' has rank `dof`: chi-square on `dof`
+// degrees of freedom when the model's restrictions hold, whatever the weight.
+Distance minimum_distance(const CoefficientMap& f, const Coefficients& c, int dof, VectorXd start) {
+  Distance out;
+  const MatrixXd& w = c.weight;
   const auto cost = [&](const VectorXd& p) {
-    const VectorXd r = c - f.value(p);
+    const VectorXd r = c.value - f.value(p);
     return r.allFinite() ? r.dot(w * r) : std::numeric_limits<double>::infinity();
   };
   VectorXd p = std::move(start);
@@ -167,7 +207,7 @@ Distance minimum_distance(const CoefficientMap& f, const Fit& coefficients, Vect
   for (int iteration = 0; iteration < kIterations && std::isfinite(now); ++iteration) {
     const MatrixXd jac = f.jacobian(p);
     const MatrixXd normal = jac.transpose() * w * jac;
-    const VectorXd gradient = jac.transpose() * w * (c - f.value(p));
+    const VectorXd gradient = jac.transpose() * w * (c.value - f.value(p));
     bool stepped = false;
     while (damping < 1e12) {
       MatrixXd damped = normal;
@@ -191,12 +231,24 @@ Distance minimum_distance(const CoefficientMap& f, const Fit& coefficients, Vect
     }
   }
   out.p = p;
-  out.q = weighted ? now : kNaN;
+  out.cost = now;
+  out.covariance = MatrixXd::Constant(p.size(), p.size(), kNaN);
   const MatrixXd jac = f.jacobian(p);
-  const MatrixXd information = jac.transpose() * w * jac;
-  const Eigen::FullPivLU<MatrixXd> lu(information);
-  out.covariance = weighted && lu.isInvertible() ? MatrixXd(lu.inverse())
-                                                 : MatrixXd::Constant(p.size(), p.size(), kNaN);
+  const Eigen::FullPivLU<MatrixXd> lu(jac.transpose() * w * jac);
+  if (c.covariance.size() == 0) return out;
+  if (!lu.isInvertible()) {
+    // A minimum that does not determine the parameters (a chain's couplings all at 0) is no
+    // answer: the search goes on from other starts.
+    out.converged = false;
+    out.q = std::numeric_limits<double>::infinity();
+    return out;
+  }
+  const MatrixXd l = lu.inverse() * jac.transpose() * w;
+  out.covariance = l * c.covariance * l.transpose();
+  const VectorXd r = c.value - f.value(p);
+  const MatrixXd m = MatrixXd::Identity(r.size(), r.size()) - jac * l;
+  const MatrixXd q = pseudo_inverse(m * c.covariance * m.transpose(), dof);
+  if (q.size() > 0 && dof > 0) out.q = r.dot(q * r);
   return out;
 }
 
@@ -212,11 +264,11 @@ constexpr std::size_t kPolished = 8;
 // the truth stops (a three-mass chain sensed at mass 1, with nominal values twice or half the
 // truth: Q 112-1272 on 5 degrees of freedom on 7 of 12 records). Sets latent.starts and
 // latent.nominal_distance.
-Distance search_distance(const CoefficientMap& f, const Fit& coefficients, const VectorXd& nominal,
-                         IdentifyResult::Latent& latent) {
-  Distance best = minimum_distance(f, coefficients, nominal);
+Distance search_distance(const CoefficientMap& f, const Coefficients& coefficients,
+                         const VectorXd& nominal, IdentifyResult::Latent& latent) {
+  Distance best = minimum_distance(f, coefficients, latent.dof, nominal);
   const auto accepted = [&](const Distance& d) {
-    return d.converged && (!std::isfinite(d.q) || latent.dof <= 0 ||
+    return d.converged && (std::isnan(d.q) || latent.dof <= 0 ||
                            chi_square_upper_tail(d.q, latent.dof) >= Estimate::kJRejection);
   };
   if (accepted(best)) return best;
@@ -233,17 +285,17 @@ Distance search_distance(const CoefficientMap& f, const Fit& coefficients, const
     for (Index k = 0; k < start.size(); ++k) {
       start(k) = (nominal(k) == 0 ? 1.0 : nominal(k)) * std::pow(10.0, exponent(random));
     }
-    Distance d = minimum_distance(f, coefficients, start);
-    if (std::isfinite(d.q)) stopped.push_back(std::move(d));
+    Distance d = minimum_distance(f, coefficients, latent.dof, start);
+    if (std::isfinite(d.rank())) stopped.push_back(std::move(d));
   }
   std::sort(stopped.begin(), stopped.end(),
-            [](const Distance& a, const Distance& b) { return a.q < b.q; });
+            [](const Distance& a, const Distance& b) { return a.rank() < b.rank(); });
   stopped.resize(std::min<std::size_t>(stopped.size(), kPolished));
   for (Distance& d : stopped) {
     for (int round = 0; !d.converged && round < kPolish; ++round) {
-      d = minimum_distance(f, coefficients, d.p);
+      d = minimum_distance(f, coefficients, latent.dof, d.p);
     }
-    if (d.converged && (!best.converged || d.q < best.q)) best = d;
+    if (d.converged && (!best.converged || d.rank() < best.rank())) best = d;
   }
   return best;
 }
@@ -359,14 +411,16 @@ void identify_latent(IdentifyResult& result, const DataSource& source,
     result.latent = std::move(latent);
     return;
   }
-  const Distance main = search_distance(f, estimate.main(), start, latent);
+  const Distance main =
+      search_distance(f, coefficients_of(estimate.main(), estimate.error_batches), start, latent);
   latent.distance = main.q;
   latent.converged = main.converged;
   if (std::isfinite(main.q) && latent.dof > 0) {
     latent.pvalue = chi_square_upper_tail(main.q, latent.dof);
   }
   if (estimate.optimal) {
-    const Distance least = minimum_distance(f, estimate.least_squares, main.p);
+    const Distance least = minimum_distance(
+        f, coefficients_of(estimate.least_squares, estimate.error_batches), latent.dof, main.p);
     estimate.least_squares = physical_fit(*model, elimination, estimate.least_squares, least);
     *estimate.optimal = physical_fit(*model, elimination, *estimate.optimal, main);
   } else {
