@@ -116,6 +116,16 @@ std::vector<std::vector<double>> rows_of(const MatrixXd& matrix) {
   return out;
 }
 
+MatrixXd matrix_of(const std::vector<std::vector<double>>& rows, Index columns) {
+  MatrixXd out(static_cast<Index>(rows.size()), columns);
+  for (Index i = 0; i < out.rows(); ++i) {
+    for (Index j = 0; j < columns; ++j) {
+      out(i, j) = rows[static_cast<std::size_t>(i)][static_cast<std::size_t>(j)];
+    }
+  }
+  return out;
+}
+
 void set_error(ParameterEstimate& estimate, double std_error, double t975) {
   estimate.std_error = std_error;
   estimate.ci_low = estimate.estimate - t975 * std_error;

@@ -34,8 +34,9 @@ LongRunCovariance with_known(LongRunCovariance errors, const Eigen::MatrixXd& ad
 std::vector<std::vector<double>> correlation_of(const Eigen::MatrixXd& cov,
                                                 const std::vector<bool>& identifiable);
 
-// The rows of a matrix (Estimate::error_batches).
+// The rows of a matrix (Estimate::error_batches), and the matrix of `columns` columns they hold.
 std::vector<std::vector<double>> rows_of(const Eigen::MatrixXd& matrix);
+Eigen::MatrixXd matrix_of(const std::vector<std::vector<double>>& rows, Eigen::Index columns);
 
 // `estimate` with its standard error and the interval estimate -+ t975 standard errors.
 void set_error(ParameterEstimate& estimate, double std_error, double t975);

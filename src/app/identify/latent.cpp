@@ -24,6 +24,7 @@
 #include "momentid/algebra_lock.hpp"
 #include "momentid/lagged.hpp"
 #include "momentid/latent.hpp"
+#include "solve/delta_method.hpp"
 #include "solve/distributions.hpp"
 #include "solve/long_run.hpp"
 
@@ -131,7 +132,7 @@ struct Distance {
 
   // What compares the minima of one search: Q, or the cost where Q is unknown (infinite where
   // the minimum does not determine the parameters).
-  double rank() const { return std::isfinite(q) ? q : cost; }
+  double score() const { return std::isfinite(q) ? q : cost; }
 };
 
 // The inverse of a symmetric matrix on its directions above 1e-12 of its largest eigenvalue,
@@ -147,16 +148,6 @@ MatrixXd pseudo_inverse(const MatrixXd& m, Index keep = -1) {
     if (lambda(i) > 1e-12 * lambda.maxCoeff()) inverse(i) = 1 / lambda(i);
   }
   return eigen.eigenvectors() * inverse.asDiagonal() * eigen.eigenvectors().transpose();
-}
-
-MatrixXd matrix_of(const std::vector<std::vector<double>>& rows, Index columns) {
-  MatrixXd out(static_cast<Index>(rows.size()), columns);
-  for (Index i = 0; i < out.rows(); ++i) {
-    for (Index j = 0; j < columns; ++j) {
-      out(i, j) = rows[static_cast<std::size_t>(i)][static_cast<std::size_t>(j)];
-    }
-  }
-  return out;
 }
 
 // The coefficients of one fit: their estimates, covariance V (its errors' long-run covariance,
@@ -233,9 +224,9 @@ Distance minimum_distance(const CoefficientMap& f, const Coefficients& c, int do
   out.p = p;
   out.cost = now;
   out.covariance = MatrixXd::Constant(p.size(), p.size(), kNaN);
+  if (c.covariance.size() == 0) return out;
   const MatrixXd jac = f.jacobian(p);
   const Eigen::FullPivLU<MatrixXd> lu(jac.transpose() * w * jac);
-  if (c.covariance.size() == 0) return out;
   if (!lu.isInvertible()) {
     // A minimum that does not determine the parameters (a chain's couplings all at 0) is no
     // answer: the search goes on from other starts.
@@ -286,16 +277,16 @@ Distance search_distance(const CoefficientMap& f, const Coefficients& coefficien
       start(k) = (nominal(k) == 0 ? 1.0 : nominal(k)) * std::pow(10.0, exponent(random));
     }
     Distance d = minimum_distance(f, coefficients, latent.dof, start);
-    if (std::isfinite(d.rank())) stopped.push_back(std::move(d));
+    if (std::isfinite(d.score())) stopped.push_back(std::move(d));
   }
   std::sort(stopped.begin(), stopped.end(),
-            [](const Distance& a, const Distance& b) { return a.rank() < b.rank(); });
+            [](const Distance& a, const Distance& b) { return a.score() < b.score(); });
   stopped.resize(std::min<std::size_t>(stopped.size(), kPolished));
   for (Distance& d : stopped) {
     for (int round = 0; !d.converged && round < kPolish; ++round) {
       d = minimum_distance(f, coefficients, latent.dof, d.p);
     }
-    if (d.converged && (!best.converged || d.rank() < best.rank())) best = d;
+    if (d.converged && (!best.converged || d.score() < best.score())) best = d;
   }
   return best;
 }
