@@ -224,6 +224,9 @@ struct IdentifyResult {
       bool rejects() const { return pvalue && *pvalue < 0.01; }
     };
     std::optional<ZeroLagCheck> zero_lag_check;
+    // Per equation: the misfit taken out of its right-hand side (Integration::Misfit); empty
+    // where none was.
+    std::vector<double> misfit;
   };
 
   std::shared_ptr<const Model> model;
@@ -252,6 +255,21 @@ struct IdentifyResult {
       bool cut = false;
     };
     std::vector<Formed> formed;
+    // Where the equations hold a filtered state nonlinearly (a formed one, or a measured one in a
+    // product with a formed one), the filter leaves a misfit: H(y^3) is not H(y)^3. It is read
+    // off the same equations on the identified model's response to the recorded inputs, which
+    // hold the estimates exactly and carry no noise, and taken out of the record's equations,
+    // which are then solved again (lagged.cpp; docs/model-language.md, "Forming a state from its
+    // acceleration"). `rows`: the response's rows (the record's, up to a million); `parameter`
+    // and `shift`: the estimate that moved most, by how many of its standard errors; `failure`:
+    // why the response could not be had, the misfit then left in.
+    struct Misfit {
+      std::size_t rows = 0;
+      std::string parameter;
+      double shift = 0;
+      std::string failure;
+    };
+    std::optional<Misfit> misfit;
     double corner = 0;  // Hz
     double dt = 0;      // the sample interval the filter is designed for
     bool corner_chosen = false;

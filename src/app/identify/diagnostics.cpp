@@ -264,9 +264,10 @@ std::vector<std::string> doubts(const IdentifyResult& r) {
         seen += " (see below)";
       }
     }
-    // A state formed from an acceleration in a nonlinear term is a misfit of the model's own.
+    // A state formed from an acceleration in a nonlinear term is a misfit of the model's own,
+    // where it could not be taken out.
     std::string cut;
-    if (r.integration) {
+    if (r.integration && !(r.integration->misfit && r.integration->misfit->failure.empty())) {
       for (const IdentifyResult::Integration::Formed& f : r.integration->formed) {
         if (f.cut) cut += (cut.empty() ? "'" : ", '") + f.state + "'";
       }

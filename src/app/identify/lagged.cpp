@@ -15,6 +15,7 @@
 #include "app/identify/moment_lists.hpp"
 #include "app/identify/pass.hpp"
 #include "app/identify/plan.hpp"
+#include "app/identify/response_record.hpp"
 #include "app/identify/zero_lag_check.hpp"
 #include "common/number.hpp"
 #include "moments/integration.hpp"
@@ -199,18 +200,21 @@ PassMoments pass_moments(const IdentifyResult& result, const LaggedChannels& c,
   return out;
 }
 
-// The options of the lagged pass: the derivative columns, the integration filter of the formed
-// states, the batches the optimal weighting needs for `equations` equations, the offsets.
-DataOptions lagged_pass_options(IdentifyResult& result, const LaggedChannels& c,
-                                std::size_t equations, const DataSource& source,
-                                const IdentifyOptions& options) {
+// The options of a lagged pass but for the offsets: the derivative columns, the integration
+// filter of the formed states (each read from its column), the batches the optimal weighting
+// needs for `equations` equations, the computed channels.
+DataOptions lagged_options(const IdentifyResult& result, const LaggedChannels& c,
+                           std::size_t equations, const IdentifyOptions& options) {
   DataOptions data_options = pass_options(*result.model, options);
   data_options.derivatives = c.derivatives;
   if (const auto& integration = result.integration) {
     data_options.integration = DataOptions::Integration{
         .corner = integration->corner, .dt = integration->dt, .integrals = {}};
     DataOptions::Integration& f = *data_options.integration;
-    for (const std::string& name : result.lagged->channels) {
+    std::vector<std::string> names = c.states;
+    names.insert(names.end(), c.inputs.begin(), c.inputs.end());
+    names.insert(names.end(), c.derivatives.begin(), c.derivatives.end());
+    for (const std::string& name : names) {
       int integrals = 0;
       for (const auto& formed : integration->formed) {
         if (formed.state == name) {
@@ -223,9 +227,17 @@ DataOptions lagged_pass_options(IdentifyResult& result, const LaggedChannels& c,
   }
   // The optimal weighting estimates the equations' covariance from the batches.
   data_options.min_batches = kBatchesPerEquation * equations;
+  data_options.computed = c.computed;
+  return data_options;
+}
+
+// The options of the record's lagged pass: lagged_options and the channels' offsets.
+DataOptions lagged_pass_options(IdentifyResult& result, const LaggedChannels& c,
+                                std::size_t equations, const DataSource& source,
+                                const IdentifyOptions& options) {
+  DataOptions data_options = lagged_options(result, c, equations, options);
   data_options.offsets =
       channel_offsets(source, c.states, c.inputs, data_options, options.center, result.centered);
-  data_options.computed = c.computed;
   return data_options;
 }
 
@@ -401,14 +413,27 @@ std::vector<double> accuracy_floor(const std::vector<Moment>& moments,
   return variance;
 }
 
+// The equations of `system` at the pass's channels with the noise `noise` on each, less the
+// misfit taken out of the result's own (Lagged::misfit).
+LaggedRows equations_of(const IdentifyResult& result, const LaggedSystem& system,
+                        const LaggedChannels& channels, const std::vector<double>& noise) {
+  LaggedRows rows =
+      lagged_rows(system, *result.data.time_step, channels.channel, noise,
+                  result.lagged->stencil_reach, result.lagged->shared_noise, channels.products);
+  if (&system == result.lagged->system.get()) {
+    for (std::size_t r = 0; r < result.lagged->misfit.size(); ++r) {
+      rows.rows.b[r].constant += result.lagged->misfit[r];
+    }
+  }
+  return rows;
+}
+
 }  // namespace
 
 MomentRows lagged_rows_of(const IdentifyResult& result, const LaggedSystem& system) {
   const LaggedChannels channels =
       lagged_channels(*result.model, *result.lagged->system, result.integration);
-  LaggedRows rows =
-      lagged_rows(system, *result.data.time_step, channels.channel, result.lagged->noise,
-                  result.lagged->stencil_reach, result.lagged->shared_noise, channels.products);
+  LaggedRows rows = equations_of(result, system, channels, result.lagged->noise);
   const std::map<Moment, std::size_t> index = moment_index(result.lagged->moments);
   const auto reindex = [&](MomentRows::Entry& entry) {
     for (auto& [k, weight] : entry.moments) k = index.at(rows.moments[k]);
@@ -532,9 +557,7 @@ void allow_rough_noise(IdentifyResult& result, const LaggedChannels& channels,
   }
   if (!rough) return;
   const auto solved = [&](const std::vector<double>& noise) {
-    const LaggedRows rows =
-        lagged_rows(*result.lagged->system, *result.data.time_step, channels.channel, noise,
-                    result.lagged->stencil_reach, result.lagged->shared_noise, channels.products);
+    const LaggedRows rows = equations_of(result, *result.lagged->system, channels, noise);
     return solve_rows(rows.rows, names, result.data.estimates, solve_options);
   };
   const Estimate at_low = solved(low);
@@ -560,11 +583,10 @@ void allow_rough_noise(IdentifyResult& result, const LaggedChannels& channels,
   result.lagged->rough_noise = rough;
 }
 
-// The equations at the pass's moments, with the noise on each channel, solved into
-// result.estimate.
-void solve_lagged(IdentifyResult& result, const LaggedPlan& plan, const LaggedChannels& channels,
-                  const IdentifyOptions& options) {
-  const Model& model = *result.model;
+// The noise on each channel and what the equations take from it and from the pass: the noise
+// the formed states share with their columns, the stencils, the moments' accuracy floor.
+void prepare_lagged(IdentifyResult& result, const LaggedChannels& channels,
+                    const IdentifyOptions& options) {
   result.lagged->noise = noise_variances(result, channels, options);
   result.lagged->shared_noise = shared_noise(result, channels, result.lagged->noise);
   // The moments name the computed channels after the channels read (lagged_moment_text).
@@ -574,14 +596,19 @@ void solve_lagged(IdentifyResult& result, const LaggedPlan& plan, const LaggedCh
   // five-point stencils match; band-limited records take the wide ones.
   result.lagged->stencil_reach =
       result.data.hold == InputHold::kSample ? kWideStencilReach : kStencilReach;
-  const LaggedRows rows = lagged_rows(
-      *result.lagged->system, *result.data.time_step, channels.channel, result.lagged->noise,
-      result.lagged->stencil_reach, result.lagged->shared_noise, channels.products);
-  std::vector<std::string> names;
-  for (const Declaration& p : model.parameters()) names.push_back(p.name);
-  result.gmm = optimal_weighting(options, plan.fixed, rows.rows.a.size());
   result.lagged->moment_variance = accuracy_floor(
       result.lagged->moments, result.data.estimates.mean, noisy_channels(result, channels));
+}
+
+// The equations at the pass's moments with the noise `noise` on each channel (less the misfit
+// taken out of them, Lagged::misfit), solved into result.estimate.
+void solve_lagged(IdentifyResult& result, const LaggedPlan& plan, const LaggedChannels& channels,
+                  const IdentifyOptions& options, const std::vector<double>& noise) {
+  result.lagged->noise = noise;
+  const LaggedRows rows = equations_of(result, *result.lagged->system, channels, noise);
+  std::vector<std::string> names;
+  for (const Declaration& p : result.model->parameters()) names.push_back(p.name);
+  result.gmm = optimal_weighting(options, plan.fixed, rows.rows.a.size());
   const SolveOptions solve_options{.gmm = result.gmm,
                                    .fixed = plan.fixed,
                                    .normalise_rows = true,
@@ -622,39 +649,170 @@ bool taken_apart(const Model& model, const LaggedChannels& channels,
   return false;
 }
 
-// The warnings of the lagged path: functions of noisy channels, states formed by integration.
+// The measured states that go through the filter forming states with every channel and that the
+// equations hold nonlinearly with a formed state: what their terms lose is what the filter cuts.
+std::vector<std::string> filtered_measured_states(const IdentifyResult& result,
+                                                  const LaggedChannels& channels) {
+  std::vector<std::string> out;
+  if (!result.integration) return out;
+  const Model& model = *result.model;
+  const auto apart = [&](const Monomial& m) {
+    return taken_apart(model, channels, *result.integration, m);
+  };
+  for (std::size_t v = 0; v < model.states().size(); ++v) {
+    const std::string& name = model.states()[v].name;
+    if (!is_formed(*result.integration, name) && channels.channel[v] >= 0 &&
+        nonlinear_in(model, *result.lagged->system, v, apart)) {
+      out.push_back(name);
+    }
+  }
+  return out;
+}
+
+// Whether the filter forming states leaves a misfit in the equations: they hold a formed state,
+// or a measured one with it, nonlinearly.
+bool filter_leaves_misfit(const IdentifyResult& result, const LaggedChannels& channels) {
+  if (!result.integration) return false;
+  const auto& formed = result.integration->formed;
+  return std::any_of(formed.begin(), formed.end(), [](const auto& f) { return f.cut; }) ||
+         !filtered_measured_states(result, channels).empty();
+}
+
+// The misfit belongs to the response at the record's amplitudes: a response whose channels' spread
+// is not within this factor of the record's (less its noise) is not the record's.
+constexpr double kResponseSpread = 1.5;
+
+// Throws Error unless each state and derivative channel of the response `clean` spreads as the
+// record's does (within kResponseSpread in standard deviation, less the record's noise): a
+// wrong model's response, damped, stiffened or running away from the record, holds another
+// misfit than the record's equations.
+void follows_the_record(const IdentifyResult& result, const DataMoments& clean,
+                        const LaggedChannels& channels) {
+  for (std::size_t c = 0; c < clean.channels.size() && c < result.data.channels.size(); ++c) {
+    const ChannelStatistics& record = result.data.channels[c];
+    if (record.is_input ||
+        (c >= channels.states.size() && c < channels.states.size() + channels.inputs.size())) {
+      continue;
+    }
+    const double noise = c < result.lagged->noise.size() ? result.lagged->noise[c] : 0.0;
+    const double ratio = std::sqrt(clean.channels[c].variance /
+                                   std::max(record.variance - noise, 0.01 * record.variance));
+    if (!(ratio <= kResponseSpread && ratio >= 1 / kResponseSpread)) {
+      throw Error("the identified model's response does not follow the record: its '" +
+                  record.name + "' spreads " + number(ratio, "%.3g") +
+                  " times as far as the record's");
+    }
+  }
+}
+
+// The misfit is read off the first million rows of the response: beyond, its average would
+// change little, and the response's record is held in memory.
+constexpr std::size_t kMisfitRows = std::size_t{1} << 20;
+
+// Takes the misfit that the filter forming states leaves out of the equations
+// (IdentifyResult::Integration::Misfit) and solves them again, from the channels' noise
+// `noise`. The equations of the response read the moments of the record's at the same lags and
+// instruments, without noise; their residual at the estimates the response holds is the
+// misfit.
+void take_out_filter_misfit(IdentifyResult& result, const LaggedPlan& plan,
+                            const LaggedChannels& channels, const DataSource& source,
+                            const IdentifyOptions& options, const std::vector<double>& noise) {
+  if (!result.estimate.usable()) return;
+  IdentifyResult::Integration::Misfit& misfit = result.integration->misfit.emplace();
+  if (options.input_shift != 0) {
+    misfit.failure = "the response is not simulated under an input shift";
+    return;
+  }
+  std::vector<double> theta;
+  for (const ParameterEstimate& p : result.parameters()) theta.push_back(p.estimate);
+  std::vector<double> residual;
+  try {
+    const ResponseRecord response(result, source, options, kMisfitRows);
+    const LaggedRows rows = lagged_rows(*result.lagged->system, *result.data.time_step,
+                                        channels.channel, {}, result.lagged->stencil_reach,
+                                        shared_noise(result, channels, {}), channels.products);
+    DataOptions data_options = lagged_options(result, channels, rows.rows.a.size(), options);
+    // The response's columns are named after the model's variables, and it carries no offset.
+    RecordOptions record;
+    record.dt = result.data.time_step;
+    record.hold = options.record.hold;
+    record.control = options.record.control;
+    for (const auto& formed : result.integration->formed) {
+      record.columns[formed.state] = formed.variable;
+    }
+    data_options.record = std::move(record);
+    const DataMoments clean = moments_from_data(response.source(), channels.states, channels.inputs,
+                                                result.lagged->moments, data_options);
+    misfit.rows = clean.rows;
+    follows_the_record(result, clean, channels);
+    const std::map<Moment, std::size_t> index = moment_index(result.lagged->moments);
+    const auto value = [&](const MomentRows::Entry& entry) {
+      double sum = entry.constant;
+      for (const auto& [k, weight] : entry.moments) {
+        sum += weight * clean.estimates.mean[index.at(rows.moments[k])];
+      }
+      return sum;
+    };
+    for (std::size_t r = 0; r < rows.rows.b.size(); ++r) {
+      double g = -value(rows.rows.b[r]);
+      for (std::size_t p = 0; p < theta.size(); ++p) g += theta[p] * value(rows.rows.a[r][p]);
+      residual.push_back(g);
+    }
+  } catch (const Interrupted&) {
+    throw;
+  } catch (const Error& e) {
+    misfit.failure = e.what();
+    return;
+  }
+  const Estimate before = result.estimate;
+  result.lagged->misfit = std::move(residual);
+  solve_lagged(result, plan, channels, options, noise);
+  if (!result.estimate.usable()) {
+    misfit.failure =
+        "the equations without the misfit have no usable solution: " + result.estimate.message;
+    result.estimate = before;
+    result.lagged->misfit.clear();
+    return;
+  }
+  const std::vector<ParameterEstimate>& after = result.parameters();
+  const std::vector<ParameterEstimate>& was =
+      before.optimal ? before.optimal->parameters : before.least_squares.parameters;
+  for (std::size_t p = 0; p < after.size() && p < was.size(); ++p) {
+    if (after[p].fixed || !(after[p].std_error > 0)) continue;
+    const double shift = std::abs(after[p].estimate - was[p].estimate) / after[p].std_error;
+    if (shift > misfit.shift) misfit.shift = shift, misfit.parameter = after[p].name;
+  }
+}
+
+// The warnings of the lagged path: functions of noisy channels, states formed by integration
+// whose misfit stayed in the equations.
 void add_lagged_warnings(IdentifyResult& result, const LaggedChannels& channels) {
   const std::vector<std::string> noisy = noisy_function_warnings(result, channels);
   result.estimate.warnings.insert(result.estimate.warnings.end(), noisy.begin(), noisy.end());
-  if (const auto& integration = result.integration) {
-    const Model& model = *result.model;
-    const std::string corner = number(integration->corner, "%.3g");
-    // A measured state goes through the same filter, so that the formed states' equations hold.
-    const auto apart = [&](const Monomial& m) {
-      return taken_apart(model, channels, *integration, m);
-    };
-    for (std::size_t v = 0; v < model.states().size(); ++v) {
-      const std::string& name = model.states()[v].name;
-      if (is_formed(*integration, name) || channels.channel[v] < 0 ||
-          !nonlinear_in(model, *result.lagged->system, v, apart)) {
-        continue;
-      }
-      result.estimate.warnings.push_back(
-          "'" + name + "' goes through the high-pass at " + corner +
-          " Hz with every channel, so that the equations of the states formed (--integrate) "
-          "hold: the terms that hold it with a formed state lose the low frequencies the filter "
-          "cuts, a bias the intervals do not include, and which the J test can see on a precise "
-          "record (docs/model-language.md, \"Forming a state from its acceleration\")");
-    }
-    for (const auto& formed : integration->formed) {
-      if (!formed.cut) continue;
-      result.estimate.warnings.push_back(
-          "'" + formed.state + "' was formed from '" + formed.column + "' inside a high-pass at " +
-          corner +
-          " Hz: the terms nonlinear in it lose the low frequencies the filter cuts, a bias "
-          "the intervals do not include, small where the force has no power below the corner "
-          "(docs/model-language.md, \"Forming a state from its acceleration\")");
-    }
+  const auto& integration = result.integration;
+  if (!integration || (integration->misfit && integration->misfit->failure.empty())) return;
+  const std::string corner = number(integration->corner, "%.3g");
+  const std::string why =
+      integration->misfit
+          ? " (its misfit could not be taken out: " + integration->misfit->failure + ")"
+          : "";
+  for (const std::string& name : filtered_measured_states(result, channels)) {
+    result.estimate.warnings.push_back(
+        "'" + name + "' goes through the high-pass at " + corner +
+        " Hz with every channel, so that the equations of the states formed (--integrate) "
+        "hold: the terms that hold it with a formed state lose the low frequencies the filter "
+        "cuts, a bias the intervals do not include, and which the J test can see on a precise "
+        "record" +
+        why + " (docs/model-language.md, \"Forming a state from its acceleration\")");
+  }
+  for (const auto& formed : integration->formed) {
+    if (!formed.cut) continue;
+    result.estimate.warnings.push_back(
+        "'" + formed.state + "' was formed from '" + formed.column + "' inside a high-pass at " +
+        corner +
+        " Hz: the terms nonlinear in it lose the low frequencies the filter cuts, a bias "
+        "the intervals do not include, small where the force has no power below the corner" +
+        why + " (docs/model-language.md, \"Forming a state from its acceleration\")");
   }
 }
 
@@ -679,7 +837,12 @@ void identify_lagged(IdentifyResult& result, const DataSource& source,
                        static_cast<std::size_t>(result.model->variable_index(formed.state)));
     }
   }
-  solve_lagged(result, plan, pass.channels, options);
+  prepare_lagged(result, pass.channels, options);
+  const std::vector<double> noise = result.lagged->noise;
+  solve_lagged(result, plan, pass.channels, options, noise);
+  if (filter_leaves_misfit(result, pass.channels)) {
+    take_out_filter_misfit(result, plan, pass.channels, source, options, noise);
+  }
   if (plan.check && pass.check_moments && result.estimate.j_pvalue) {
     check_with_zero_lag(result, *plan.check, *pass.check_moments, pass.channels.channel,
                         plan.fixed);

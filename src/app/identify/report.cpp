@@ -445,6 +445,14 @@ std::string integration_text(const IdentifyResult::Integration& f) {
          " Hz (linear phase, a fourth-order Butterworth filter's magnitude" +
          (f.corner_chosen ? ", " + f.band : std::string()) + "), the first " +
          std::to_string(f.settle) + " rows of each run filling it";
+  if (f.misfit && f.misfit->failure.empty()) {
+    out +=
+        "\n  the misfit the filter leaves in the nonlinear terms taken out: read off the same "
+        "equations on the identified model's response to the recorded inputs (" +
+        std::to_string(f.misfit->rows) + " rows, without noise); the estimates moved by up to " +
+        number(f.misfit->shift, "%.2g") + " standard errors" +
+        (f.misfit->parameter.empty() ? std::string() : " (" + f.misfit->parameter + ")");
+  }
   return out;
 }
 
@@ -543,6 +551,12 @@ nlohmann::ordered_json json_value(const IdentifyResult& r) {
                           {"band", f->band},
                           {"settle_rows", f->settle},
                           {"by_default", f->by_default}};
+    if (const auto& m = f->misfit) {
+      out["integration"]["misfit"] = {{"rows", m->rows},
+                                      {"parameter", m->parameter},
+                                      {"shift", json_value(m->shift)},
+                                      {"failure", m->failure}};
+    }
   }
   if (const auto& l = r.latent) {
     out["latent"] = {

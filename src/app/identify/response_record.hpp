@@ -1,0 +1,37 @@
+#pragma once
+// The identified model's response to the recorded inputs as a record of its own: the misfit that
+// the filter forming states leaves in the lagged equations is read off its noise-free
+// equations (lagged.cpp, "take_out_filter_misfit").
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "momentid/identify.hpp"
+#include "momentid/reader.hpp"
+
+namespace momentid {
+
+// The model at the result's estimates simulated through the inputs of the first `most_rows`
+// rows of `source` (less the means the pass removed, as validate reads them): a record of the
+// same rows and runs with a column per model variable the source has, named after the variable
+// (a state as simulated, an input as recorded, a measured derivative from the equations along
+// the simulation), without noise. Throws Error where the response cannot be had (an input
+// without a column, a simulation that blows up).
+class ResponseRecord {
+ public:
+  ResponseRecord(const IdentifyResult& result, const DataSource& source,
+                 const IdentifyOptions& options, std::size_t most_rows);
+  ResponseRecord(const ResponseRecord&) = delete;
+  ResponseRecord& operator=(const ResponseRecord&) = delete;
+
+  // Reads the arrays held here: valid while this lives.
+  DataSource source() const;
+  std::size_t rows() const { return data_.rows; }
+
+ private:
+  std::vector<std::vector<double>> columns_;
+  MemoryData data_;
+};
+
+}  // namespace momentid
