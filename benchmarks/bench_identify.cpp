@@ -3,7 +3,8 @@
 // on as many threads as the pass (the CSV: every field parsed by std::from_chars and summed; the
 // binary file: every double read and summed), and the CSV against a numpy baseline that loads
 // it and computes the same moments, in the same run. Also the peak memory of the pass for N/10
-// and N rows, and the lagged pass against the zero-lag one.
+// and N rows, the lagged pass against the zero-lag one, a latent state and its refinement, and a
+// state formed from its acceleration against the same run's measured displacement.
 //
 // Usage: bench_identify [rows=10000000] [directory=/tmp] [--no-baseline]
 //        bench_identify --pass FILE   (one pass; prints seconds and peak RSS; used internally)
@@ -53,18 +54,31 @@ v' = -c*v - k*y - eps*y^3 + g*z
 z' = -a*z + b*x
 )";
 
+// The Duffing oscillator seen through an accelerometer (models/duffing_accelerometer.mom): from a
+// record of a and x, identify forms y inside a high-pass and takes out the misfit the filter
+// leaves in y^3, from a simulation of the identified model and a second pass over it.
+const char* kAccelerometer = R"(model duffing_accelerometer
+state y, v
+input x
+measured a = v'
+param c = 0.5, k = 4, eps = 1
+y' = v
+v' = -c*v - k*y - eps*y^3 + x
+)";
+
 std::vector<momentid::Monomial> moments(const momentid::Model& model) {
   momentid::DeriveOptions options;
   options.degree = 3;
   return momentid::moments_to_estimate(momentid::derive(model, options));
 }
 
-// `observe`: the columns to write (empty: all).
+// `observe`: the columns to write (empty: all); `input`: the force's process.
 void write_data(const momentid::Model& model, const std::string& path, std::size_t rows,
                 std::vector<std::string> observe = {},
-                momentid::FileFormat format = momentid::FileFormat::kCsv) {
+                momentid::FileFormat format = momentid::FileFormat::kCsv,
+                const std::string& input = "ma:K=10,w=0.1,sigma=20") {
   momentid::SimulationOptions options;
-  options.inputs = {momentid::InputSpec::parse("ma:K=10,w=0.1,sigma=20", "bench")};
+  options.inputs = {momentid::InputSpec::parse(input, "bench")};
   options.samples = rows;
   options.observe = std::move(observe);
   momentid::simulate_to_file(model, options, path, format);
@@ -144,16 +158,20 @@ std::size_t csv_header_bytes(const std::string& path) {
   return bytes;
 }
 
-enum class PassKind { kZeroLag, kLagged, kLatent, kDefaults, kRefine };
+enum class PassKind { kZeroLag, kLagged, kLatent, kDefaults, kRefine, kFormed };
 
 // kLagged: the lagged equations at lags 3..42 (40 lags) with the instruments y, y^2, y^3 and x,
 // on a file without the velocity; kZeroLag: the zero-lag equations of degree 3; kLatent: the
 // filtered oscillator with z latent (kRefine: and its refinement by simulation error, --refine),
-// and kDefaults the Duffing model, with no options, on a file of y and x.
+// kDefaults the Duffing model, with no options, on a file of y and x; kFormed the Duffing model
+// seen through an accelerometer, with no options, on a file of a and x.
 int one_pass(const std::string& path, PassKind kind) {
   const bool filtered = kind == PassKind::kLatent || kind == PassKind::kRefine;
-  const momentid::Model model = filtered ? momentid::parse_model(kFiltered, "filtered_duffing.mom")
-                                         : momentid::parse_model(kModel, "duffing.mom");
+  const momentid::Model model =
+      filtered ? momentid::parse_model(kFiltered, "filtered_duffing.mom")
+      : kind == PassKind::kFormed
+          ? momentid::parse_model(kAccelerometer, "duffing_accelerometer.mom")
+          : momentid::parse_model(kModel, "duffing.mom");
   momentid::IdentifyOptions options;
   options.refine = kind == PassKind::kRefine;
   if (kind == PassKind::kLagged) {
@@ -189,6 +207,8 @@ const char* pass_flag(PassKind kind) {
       return "--defaults-pass";
     case PassKind::kRefine:
       return "--refine-pass";
+    case PassKind::kFormed:
+      return "--formed-pass";
     case PassKind::kZeroLag:
       break;
   }
@@ -225,7 +245,7 @@ int main(int argc, char** argv) {
                      "usage: bench_identify [rows=10000000] [directory=/tmp] [--no-baseline]"))
     return 0;
   for (const PassKind kind : {PassKind::kZeroLag, PassKind::kLagged, PassKind::kLatent,
-                              PassKind::kDefaults, PassKind::kRefine}) {
+                              PassKind::kDefaults, PassKind::kRefine, PassKind::kFormed}) {
     if (argc == 3 && std::string(argv[1]) == pass_flag(kind)) return one_pass(argv[2], kind);
   }
   const std::size_t rows = argc > 1 ? std::strtoull(argv[1], nullptr, 10) : 10000000;
@@ -279,6 +299,20 @@ int main(int argc, char** argv) {
   const Pass refined = best_pass(argv[0], short_filtered, PassKind::kRefine);
   const Pass unrefined = best_pass(argv[0], short_filtered, PassKind::kLatent);
   std::filesystem::remove(short_filtered);
+  // The Duffing oscillator under a multisine force (the acceleration needs a smooth force) from
+  // its acceleration and force (y formed, the filter's misfit taken out), against the same run's
+  // displacement and force (one pass); the reading floor of the acceleration's file.
+  const std::string multisine = "multisine:f1=0.05,f2=1,lines=200,rms=20";
+  const std::string accelerations = (dir / "bench_identify_accelerations.csv").string();
+  const std::string displacements = (dir / "bench_identify_displacements.csv").string();
+  write_data(momentid::parse_model(kAccelerometer, "duffing_accelerometer.mom"), accelerations,
+             rows, {"a", "x"}, momentid::FileFormat::kCsv, multisine);
+  write_data(model, displacements, rows, {"y", "x"}, momentid::FileFormat::kCsv, multisine);
+  const Pass formed = best_pass(argv[0], accelerations, PassKind::kFormed);
+  const Pass measured = best_pass(argv[0], displacements, PassKind::kDefaults);
+  const double accelerations_floor = floor_of(accelerations, true, csv_header_bytes(accelerations));
+  std::filesystem::remove(accelerations);
+  std::filesystem::remove(displacements);
 
   std::string numpy = "/usr/bin/python3 '" MOMENTID_SOURCE_DIR "/benchmarks/numpy_moments.py' '";
   numpy.append(big).append("' y,v x");
@@ -349,5 +383,13 @@ int main(int argc, char** argv) {
       "the refinement by simulation error (--refine) of that model, best of 2\n  %zu rows: "
       "identify --refine %.2f s, identify alone %.2f s, ratio %.2f\n",
       refined.rows, refined.seconds, unrefined.seconds, refined.seconds / unrefined.seconds);
+  std::printf(
+      "a state formed from its acceleration: the Duffing model from a and x (y formed, the "
+      "filter's misfit taken out), defaults, best of 2\n");
+  std::printf(
+      "  %zu rows: %.2f s; from y and x of the same run: %.2f s, ratio %.2f; reading floor of "
+      "the a and x file: %.3f s (%.0f%%)\n",
+      formed.rows, formed.seconds, measured.seconds, formed.seconds / measured.seconds,
+      accelerations_floor, 100 * accelerations_floor / formed.seconds);
   return 0;
 }

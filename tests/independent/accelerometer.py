@@ -52,9 +52,11 @@ at each sample, computed from the exact states and force.
                       and one on the mass, 2% noise and an offset of 1% of each channel's
                       standard deviation: with the relative acceleration given as the sum
                       acc_mass-acc_table and z formed by --integrate, `ok`, c, k and k3 within 3
-                      standard errors, and the same report without --integrate (z formed by
-                      default); the absolute acceleration taken for the relative one
-                      (z''=acc_mass) is not `ok`.
+                      standard errors, the filter's misfit taken out, and the same report
+                      without --integrate (z formed by default); the absolute acceleration
+                      taken for the relative one (z''=acc_mass) is not `ok`, and its misfit is
+                      not taken out (its model's response does not follow the record), which
+                      a warning says.
   validate            validate on the force and a alone of the one-mass chain, with the
                       estimates: it compares a (the record's only output) with the acceleration
                       of the simulation, fit above 95%, and judges the model consistent.
@@ -284,7 +286,14 @@ def base_excitation(momentid, models, workdir):
     absolute = lab.identify(momentid, model, path, "--columns", "z''=acc_mass,a=acc_table",
                             "--integrate", "z")
     lab.describe(absolute, p)
-    return passed and absolute.get("diagnostics", {}).get("status") != "ok"
+    passed &= misfit_taken_out(report)
+    # The wrong model's response does not follow the record: its misfit is not the record's.
+    misfit = absolute.get("integration", {}).get("misfit", {})
+    print(f"  the absolute acceleration's misfit: {misfit}")
+    return (passed and absolute.get("diagnostics", {}).get("status") != "ok"
+            and "response does not follow the record" in misfit.get("failure", "")
+            and any("its misfit could not be taken out" in w
+                    for w in absolute["diagnostics"]["warnings"]))
 
 
 def validate(momentid, models, workdir):
