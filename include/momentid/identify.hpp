@@ -262,12 +262,17 @@ struct IdentifyResult {
     // which are then solved again (lagged.cpp; docs/model-language.md, "Forming a state from its
     // acceleration"). `rows`: the response's rows (the record's, up to a million); `parameter`
     // and `shift`: the estimate that moved most, by how many of its standard errors; `failure`:
-    // why the response could not be had, the misfit then left in.
+    // why the response could not be had, the misfit then left in. Where the response's spread
+    // is not the record's (a channel's standard deviation beyond 1.5 times the record's less its
+    // noise, or below it divided by 1.5), the model does not reproduce the record, a doubt:
+    // `channel` is the channel furthest off, `spread` its ratio.
     struct Misfit {
       std::size_t rows = 0;
       std::string parameter;
       double shift = 0;
       std::string failure;
+      std::string channel;
+      double spread = 1;
     };
     std::optional<Misfit> misfit;
     double corner = 0;  // Hz

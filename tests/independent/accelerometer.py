@@ -54,9 +54,9 @@ at each sample, computed from the exact states and force.
                       acc_mass-acc_table and z formed by --integrate, `ok`, c, k and k3 within 3
                       standard errors, the filter's misfit taken out, and the same report
                       without --integrate (z formed by default); the absolute acceleration
-                      taken for the relative one (z''=acc_mass) is not `ok`, and its misfit is
-                      not taken out (its model's response does not follow the record), which
-                      a warning says.
+                      taken for the relative one (z''=acc_mass) is not `ok`: its model's
+                      response to the recorded inputs does not follow the record, a doubt, and
+                      its misfit is not taken out.
   validate            validate on the force and a alone of the one-mass chain, with the
                       estimates: it compares a (the record's only output) with the acceleration
                       of the simulation, fit above 95%, and judges the model consistent.
@@ -292,7 +292,7 @@ def base_excitation(momentid, models, workdir):
     print(f"  the absolute acceleration's misfit: {misfit}")
     return (passed and absolute.get("diagnostics", {}).get("status") != "ok"
             and "response does not follow the record" in misfit.get("failure", "")
-            and any("its misfit could not be taken out" in w
+            and any("response to the recorded inputs does not follow the record" in w
                     for w in absolute["diagnostics"]["warnings"]))
 
 

@@ -312,6 +312,15 @@ std::vector<std::string> doubts(const IdentifyResult& r) {
                   "sees the wrong one weakly; docs/measured-data.md, \"The law check\"). Compare "
                   "the two with 'momentid select'");
   }
+  if (const auto& i = r.integration; i && i->misfit && !i->misfit->channel.empty()) {
+    out.push_back(
+        "the identified model's response to the recorded inputs does not follow the "
+        "record: its '" +
+        i->misfit->channel + "' spreads " + number(i->misfit->spread, "%.3g") +
+        " times as far as the record's (less its noise). A term may be missing or "
+        "have the wrong form, or a column not be what the model says it is; 'momentid "
+        "validate' shows the response against the record");
+  }
   const std::vector<std::string> orders = undetermined_orders(r);
   out.insert(out.end(), orders.begin(), orders.end());
   if (r.runaway) out.push_back(runaway_text(*r.runaway));

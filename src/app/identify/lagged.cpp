@@ -8,6 +8,7 @@
 #include <functional>
 #include <map>
 #include <numeric>
+#include <optional>
 #include <tuple>
 
 #include "app/identify/channel_means.hpp"
@@ -682,27 +683,29 @@ bool filter_leaves_misfit(const IdentifyResult& result, const LaggedChannels& ch
 // is not within this factor of the record's (less its noise) is not the record's.
 constexpr double kResponseSpread = 1.5;
 
-// Throws Error unless each state and derivative channel of the response `clean` spreads as the
-// record's does (within kResponseSpread in standard deviation, less the record's noise): a
-// wrong model's response, damped, stiffened or running away from the record, holds another
-// misfit than the record's equations.
-void follows_the_record(const IdentifyResult& result, const DataMoments& clean,
-                        const LaggedChannels& channels) {
+// The state or derivative channel of the response `clean` that spreads furthest from the
+// record's (its standard deviation against the record's less its noise), and by what factor,
+// where one lies beyond kResponseSpread either way: a wrong model's response, damped, stiffened
+// or running away from the record, holds another misfit than the record's equations.
+std::optional<std::pair<std::string, double>> stray_channel(const IdentifyResult& result,
+                                                            const DataMoments& clean,
+                                                            const LaggedChannels& channels) {
+  std::optional<std::pair<std::string, double>> out;
   for (std::size_t c = 0; c < clean.channels.size() && c < result.data.channels.size(); ++c) {
     const ChannelStatistics& record = result.data.channels[c];
-    if (record.is_input ||
-        (c >= channels.states.size() && c < channels.states.size() + channels.inputs.size())) {
+    if (c >= channels.states.size() && c < channels.states.size() + channels.inputs.size()) {
       continue;
     }
     const double noise = c < result.lagged->noise.size() ? result.lagged->noise[c] : 0.0;
     const double ratio = std::sqrt(clean.channels[c].variance /
                                    std::max(record.variance - noise, 0.01 * record.variance));
-    if (!(ratio <= kResponseSpread && ratio >= 1 / kResponseSpread)) {
-      throw Error("the identified model's response does not follow the record: its '" +
-                  record.name + "' spreads " + number(ratio, "%.3g") +
-                  " times as far as the record's");
+    const double off = std::abs(std::log(ratio));
+    if ((off > std::log(kResponseSpread) || !std::isfinite(off)) &&
+        (!out || !(off <= std::abs(std::log(out->second))))) {
+      out = {record.name, ratio};
     }
   }
+  return out;
 }
 
 // The misfit is read off the first million rows of the response: beyond, its average would
@@ -744,7 +747,11 @@ void take_out_filter_misfit(IdentifyResult& result, const LaggedPlan& plan,
     const DataMoments clean = moments_from_data(response.source(), channels.states, channels.inputs,
                                                 result.lagged->moments, data_options);
     misfit.rows = clean.rows;
-    follows_the_record(result, clean, channels);
+    if (const auto stray = stray_channel(result, clean, channels)) {
+      std::tie(misfit.channel, misfit.spread) = *stray;
+      misfit.failure = "the identified model's response does not follow the record";
+      return;
+    }
     const std::map<Moment, std::size_t> index = moment_index(result.lagged->moments);
     const auto value = [&](const MomentRows::Entry& entry) {
       double sum = entry.constant;

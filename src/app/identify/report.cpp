@@ -552,10 +552,9 @@ nlohmann::ordered_json json_value(const IdentifyResult& r) {
                           {"settle_rows", f->settle},
                           {"by_default", f->by_default}};
     if (const auto& m = f->misfit) {
-      out["integration"]["misfit"] = {{"rows", m->rows},
-                                      {"parameter", m->parameter},
-                                      {"shift", json_value(m->shift)},
-                                      {"failure", m->failure}};
+      out["integration"]["misfit"] = {
+          {"rows", m->rows},       {"parameter", m->parameter}, {"shift", json_value(m->shift)},
+          {"failure", m->failure}, {"channel", m->channel},     {"spread", json_value(m->spread)}};
     }
   }
   if (const auto& l = r.latent) {
