@@ -322,32 +322,36 @@ LaggedPass read_lagged(IdentifyResult& result, const LaggedPlan& plan, const Dat
   return pass;
 }
 
-// The noise on each channel of a state or a derivative: given, or estimated from its
-// autocorrelation (inputs are taken as measured without noise).
+// The noise on each channel read (states, inputs, derivatives) of a pass whose channels have the
+// statistics `statistics`: given (`given`: every channel not named has none), or estimated from
+// its autocorrelation (inputs are taken as measured without noise).
 std::vector<double> noise_variances(const IdentifyResult& result, const LaggedChannels& channels,
-                                    const IdentifyOptions& options) {
-  std::vector<double> noise(result.lagged->channels.size(), 0.0);
+                                    const std::optional<std::map<std::string, double>>& given,
+                                    const std::vector<ChannelStatistics>& statistics) {
+  std::vector<std::string> names = channels.states;
+  names.insert(names.end(), channels.inputs.begin(), channels.inputs.end());
+  names.insert(names.end(), channels.derivatives.begin(), channels.derivatives.end());
+  std::vector<double> noise(names.size(), 0.0);
   const std::size_t states = channels.states.size(), inputs = channels.inputs.size();
   for (std::size_t c = 0; c < noise.size(); ++c) {
     if (c >= states && c < states + inputs) continue;
-    if (options.noise) {
-      const auto given = options.noise->find(result.lagged->channels[c]);
-      if (given != options.noise->end()) noise[c] = given->second;
-    } else if (const auto& v = result.data.channels[c].noise_variance) {
+    if (given) {
+      const auto value = given->find(names[c]);
+      if (value != given->end()) noise[c] = value->second;
+    } else if (const auto& v = statistics[c].noise_variance) {
       noise[c] = std::max(0.0, *v);
     }
   }
   // A formed state's noise is its column's, through the filter: colored, so that its
   // autocorrelation does not show it.
   if (const auto& integration = result.integration) {
-    const std::vector<std::string>& names = result.lagged->channels;
     const auto at = [&](const std::string& name) {
       return static_cast<std::size_t>(std::find(names.begin(), names.end(), name) - names.begin());
     };
     for (const auto& formed : integration->formed) {
       const std::size_t state = at(formed.state), column = at(formed.variable);
       if (state >= noise.size() || column >= noise.size()) continue;
-      if (options.noise && options.noise->count(formed.state)) continue;
+      if (given && given->count(formed.state)) continue;
       noise[state] = noise[column] * formed.noise_gain;
     }
   }
@@ -588,7 +592,7 @@ void allow_rough_noise(IdentifyResult& result, const LaggedChannels& channels,
 // the formed states share with their columns, the stencils, the moments' accuracy floor.
 void prepare_lagged(IdentifyResult& result, const LaggedChannels& channels,
                     const IdentifyOptions& options) {
-  result.lagged->noise = noise_variances(result, channels, options);
+  result.lagged->noise = noise_variances(result, channels, options.noise, result.data.channels);
   result.lagged->shared_noise = shared_noise(result, channels, result.lagged->noise);
   // The moments name the computed channels after the channels read (lagged_moment_text).
   result.lagged->channels.insert(result.lagged->channels.end(), channels.computed_names.begin(),
@@ -731,10 +735,7 @@ void take_out_filter_misfit(IdentifyResult& result, const LaggedPlan& plan,
   std::vector<double> residual;
   try {
     const ResponseRecord response(result, source, options, kMisfitRows);
-    const LaggedRows rows = lagged_rows(*result.lagged->system, *result.data.time_step,
-                                        channels.channel, {}, result.lagged->stencil_reach,
-                                        shared_noise(result, channels, {}), channels.products);
-    DataOptions data_options = lagged_options(result, channels, rows.rows.a.size(), options);
+    DataOptions data_options = lagged_options(result, channels, result.estimate.rows, options);
     // The response's columns are named after the model's variables, and it carries no offset.
     RecordOptions record;
     record.dt = result.data.time_step;
@@ -752,6 +753,16 @@ void take_out_filter_misfit(IdentifyResult& result, const LaggedPlan& plan,
       misfit.failure = "the identified model's response does not follow the record";
       return;
     }
+    // The response's equations with the noise its own channels show (none where the noise was
+    // given): what the estimator does to a record without noise, such as a noise estimate that
+    // holds the signal's roughness, it does to the record's signal too.
+    const std::vector<double> response_noise =
+        options.noise ? std::vector<double>{}
+                      : noise_variances(result, channels, std::nullopt, clean.channels);
+    const LaggedRows rows =
+        lagged_rows(*result.lagged->system, *result.data.time_step, channels.channel,
+                    response_noise, result.lagged->stencil_reach,
+                    shared_noise(result, channels, response_noise), channels.products);
     const std::map<Moment, std::size_t> index = moment_index(result.lagged->moments);
     const auto value = [&](const MomentRows::Entry& entry) {
       double sum = entry.constant;
