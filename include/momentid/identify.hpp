@@ -258,13 +258,13 @@ struct IdentifyResult {
     // Where the equations hold a filtered state nonlinearly (a formed one, or a measured one in a
     // product with a formed one), the filter leaves a misfit: H(y^3) is not H(y)^3. It is read
     // off the same equations on the identified model's response to the recorded inputs, which
-    // hold the estimates exactly and carry no noise, and taken out of the record's equations,
-    // which are then solved again (lagged.cpp; docs/model-language.md, "Forming a state from its
-    // acceleration"). `rows`: the response's rows (the record's, up to a million); `parameter`
-    // and `shift`: the estimate that moved most, by how many of its standard errors; `failure`:
-    // why the response could not be had, the misfit then left in. Where the response's spread
-    // is not the record's (a channel's standard deviation beyond 1.5 times the record's less its
-    // noise, or below it divided by 1.5), the model does not reproduce the record, a doubt:
+    // hold the estimates exactly and carry no sensor noise, and taken out of the record's
+    // equations, which are then solved again (lagged.cpp; docs/model-language.md, "Forming a state
+    // from its acceleration"). `rows`: the response's rows (the record's, up to a million);
+    // `parameter` and `shift`: the estimate that moved most, by how many of its standard errors;
+    // `failure`: why the response could not be had, the misfit then left in. Where the response's
+    // spread is not the record's (a channel's standard deviation beyond 1.5 times the record's less
+    // its noise, or below it divided by 1.5), the model does not reproduce the record, a doubt:
     // `channel` is the channel furthest off, `spread` its ratio.
     struct Misfit {
       std::size_t rows = 0;

@@ -719,8 +719,8 @@ constexpr std::size_t kMisfitRows = std::size_t{1} << 20;
 // Takes the misfit that the filter forming states leaves out of the equations
 // (IdentifyResult::Integration::Misfit) and solves them again, from the channels' noise
 // `noise`. The equations of the response read the moments of the record's at the same lags and
-// instruments, without noise; their residual at the estimates the response holds is the
-// misfit.
+// instruments, and its own channels' noise; their residual at the estimates the response holds
+// is the misfit.
 void take_out_filter_misfit(IdentifyResult& result, const LaggedPlan& plan,
                             const LaggedChannels& channels, const DataSource& source,
                             const IdentifyOptions& options, const std::vector<double>& noise) {

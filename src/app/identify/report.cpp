@@ -449,7 +449,8 @@ std::string integration_text(const IdentifyResult::Integration& f) {
     out +=
         "\n  the misfit the filter leaves in the nonlinear terms taken out: read off the same "
         "equations on the identified model's response to the recorded inputs (" +
-        std::to_string(f.misfit->rows) + " rows, without noise); the estimates moved by up to " +
+        std::to_string(f.misfit->rows) +
+        " rows, without sensor noise); the estimates moved by up to " +
         number(f.misfit->shift, "%.2g") + " standard errors" +
         (f.misfit->parameter.empty() ? std::string() : " (" + f.misfit->parameter + ")");
   }
