@@ -322,12 +322,11 @@ LaggedPass read_lagged(IdentifyResult& result, const LaggedPlan& plan, const Dat
   return pass;
 }
 
-// The noise on each channel read (states, inputs, derivatives) of a pass whose channels have the
-// statistics `statistics`: given (`given`: every channel not named has none), or estimated from
-// its autocorrelation (inputs are taken as measured without noise).
+// The noise on each channel of a state or a derivative: given, or estimated from its
+// autocorrelation (inputs are taken as measured without noise).
 std::vector<double> noise_variances(const IdentifyResult& result, const LaggedChannels& channels,
-                                    const std::optional<std::map<std::string, double>>& given,
-                                    const std::vector<ChannelStatistics>& statistics) {
+                                    const IdentifyOptions& options) {
+  const std::optional<std::map<std::string, double>>& given = options.noise;
   std::vector<std::string> names = channels.states;
   names.insert(names.end(), channels.inputs.begin(), channels.inputs.end());
   names.insert(names.end(), channels.derivatives.begin(), channels.derivatives.end());
@@ -338,7 +337,7 @@ std::vector<double> noise_variances(const IdentifyResult& result, const LaggedCh
     if (given) {
       const auto value = given->find(names[c]);
       if (value != given->end()) noise[c] = value->second;
-    } else if (const auto& v = statistics[c].noise_variance) {
+    } else if (const auto& v = result.data.channels[c].noise_variance) {
       noise[c] = std::max(0.0, *v);
     }
   }
@@ -592,7 +591,7 @@ void allow_rough_noise(IdentifyResult& result, const LaggedChannels& channels,
 // the formed states share with their columns, the stencils, the moments' accuracy floor.
 void prepare_lagged(IdentifyResult& result, const LaggedChannels& channels,
                     const IdentifyOptions& options) {
-  result.lagged->noise = noise_variances(result, channels, options.noise, result.data.channels);
+  result.lagged->noise = noise_variances(result, channels, options);
   result.lagged->shared_noise = shared_noise(result, channels, result.lagged->noise);
   // The moments name the computed channels after the channels read (lagged_moment_text).
   result.lagged->channels.insert(result.lagged->channels.end(), channels.computed_names.begin(),
@@ -719,8 +718,7 @@ constexpr std::size_t kMisfitRows = std::size_t{1} << 20;
 // Takes the misfit that the filter forming states leaves out of the equations
 // (IdentifyResult::Integration::Misfit) and solves them again, from the channels' noise
 // `noise`. The equations of the response read the moments of the record's at the same lags and
-// instruments, and its own channels' noise; their residual at the estimates the response holds
-// is the misfit.
+// instruments, without noise; their residual at the estimates the response holds is the misfit.
 void take_out_filter_misfit(IdentifyResult& result, const LaggedPlan& plan,
                             const LaggedChannels& channels, const DataSource& source,
                             const IdentifyOptions& options, const std::vector<double>& noise) {
@@ -753,16 +751,12 @@ void take_out_filter_misfit(IdentifyResult& result, const LaggedPlan& plan,
       misfit.failure = "the identified model's response does not follow the record";
       return;
     }
-    // The response's equations with the noise its own channels show (none where the noise was
-    // given): what the estimator does to a record without noise, such as a noise estimate that
-    // holds the signal's roughness, it does to the record's signal too.
-    const std::vector<double> response_noise =
-        options.noise ? std::vector<double>{}
-                      : noise_variances(result, channels, std::nullopt, clean.channels);
-    const LaggedRows rows =
-        lagged_rows(*result.lagged->system, *result.data.time_step, channels.channel,
-                    response_noise, result.lagged->stencil_reach,
-                    shared_noise(result, channels, response_noise), channels.products);
+    // The response's equations without noise: its derivative columns carry the recorded
+    // inputs' noise, which drives it and is no sensor's (read as sensor noise, it moved k of a
+    // hardening oscillator half a standard error the wrong way).
+    const LaggedRows rows = lagged_rows(*result.lagged->system, *result.data.time_step,
+                                        channels.channel, {}, result.lagged->stencil_reach,
+                                        shared_noise(result, channels, {}), channels.products);
     const std::map<Moment, std::size_t> index = moment_index(result.lagged->moments);
     const auto value = [&](const MomentRows::Entry& entry) {
       double sum = entry.constant;

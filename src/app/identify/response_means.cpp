@@ -7,6 +7,7 @@
 #include <cmath>
 #include <numeric>
 
+#include "app/identify/response_record.hpp"
 #include "app/validate/record.hpp"
 #include "app/validate/replay.hpp"
 #include "common/number.hpp"
@@ -75,22 +76,12 @@ void simulate_response_means(IdentifyResult& result, const DataSource& source,
                              const IdentifyOptions& options) {
   if (!result.estimate.usable() || !offset_in_doubt(result)) return;
   const Model& model = *result.model;
-  ReplayOptions replay_options;
-  replay_options.record = options.record;
-  for (const ParameterEstimate& p : result.parameters()) {
-    replay_options.parameters[p.name] = p.estimate;
-  }
+  const ReplayOptions replay_options = replay_at_estimates(result, options);
   std::vector<IdentifyResult::ResponseMean> out;
   try {
     Record record = read_record(model, source, replay_options, kMostRows);
     // The means the pass removed (--center), as it removed them.
-    for (std::size_t c = 0; c < record.variables.size(); ++c) {
-      const auto centered = result.centered.find(model.variables()[record.variables[c]].name);
-      if (centered == result.centered.end()) continue;
-      for (RecordRun& run : record.runs) {
-        for (double& value : run.columns[c]) value -= centered->second;
-      }
-    }
+    remove_means(model, record, result.centered);
     const Replay replay = replay_record(model, std::move(record), replay_options);
     const RecordSimulator simulator(model, replay_options.parameters, replay.interpolation,
                                     replay.record.dt, replay.substeps);

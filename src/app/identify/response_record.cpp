@@ -5,22 +5,19 @@
 
 namespace momentid {
 
+ReplayOptions replay_at_estimates(const IdentifyResult& result, const IdentifyOptions& options) {
+  ReplayOptions out;
+  out.record = options.record;
+  for (const ParameterEstimate& p : result.parameters()) out.parameters[p.name] = p.estimate;
+  return out;
+}
+
 ResponseRecord::ResponseRecord(const IdentifyResult& result, const DataSource& source,
                                const IdentifyOptions& options, std::size_t most_rows) {
   const Model& model = *result.model;
-  ReplayOptions replay_options;
-  replay_options.record = options.record;
-  for (const ParameterEstimate& p : result.parameters()) {
-    replay_options.parameters[p.name] = p.estimate;
-  }
+  const ReplayOptions replay_options = replay_at_estimates(result, options);
   Record record = read_record(model, source, replay_options, most_rows);
-  for (std::size_t c = 0; c < record.variables.size(); ++c) {
-    const auto centered = result.centered.find(model.variables()[record.variables[c]].name);
-    if (centered == result.centered.end()) continue;
-    for (RecordRun& run : record.runs) {
-      for (double& value : run.columns[c]) value -= centered->second;
-    }
-  }
+  remove_means(model, record, result.centered);
   const Replay replay = replay_record(model, std::move(record), replay_options);
   const Record& read = replay.record;
   std::vector<std::string> names;

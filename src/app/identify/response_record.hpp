@@ -9,8 +9,12 @@
 
 #include "momentid/identify.hpp"
 #include "momentid/reader.hpp"
+#include "momentid/validate.hpp"
 
 namespace momentid {
+
+// How the model at the result's estimates replays the record identify read.
+ReplayOptions replay_at_estimates(const IdentifyResult& result, const IdentifyOptions& options);
 
 // The model at the result's estimates simulated through the inputs of the first `most_rows`
 // rows of `source` (less the means the pass removed, as validate reads them): a record of the

@@ -140,6 +140,16 @@ std::map<std::string, double> center_record(const Model& model, Record& record,
   return centered;
 }
 
+void remove_means(const Model& model, Record& record, const std::map<std::string, double>& means) {
+  for (std::size_t c = 0; c < record.variables.size(); ++c) {
+    const auto mean = means.find(model.variables()[record.variables[c]].name);
+    if (mean == means.end()) continue;
+    for (RecordRun& run : record.runs) {
+      for (double& x : run.columns[c]) x -= mean->second;
+    }
+  }
+}
+
 std::vector<std::vector<double>> run_inputs(const Model& model, const Record& record,
                                             const RecordRun& run) {
   std::vector<std::vector<double>> out;

@@ -27,6 +27,10 @@ Record read_record(const Model& model, const DataSource& source, const ReplayOpt
 std::map<std::string, double> center_record(const Model& model, Record& record,
                                             const std::vector<std::string>& center);
 
+// Subtracts from the column of each variable named in `means` that value (the means a pass
+// removed, IdentifyResult::centered); a variable without a column is left alone.
+void remove_means(const Model& model, Record& record, const std::map<std::string, double>& means);
+
 // The input columns of a run, in model order.
 std::vector<std::vector<double>> run_inputs(const Model& model, const Record& record,
                                             const RecordRun& run);
