@@ -682,39 +682,6 @@ bool filter_leaves_misfit(const IdentifyResult& result, const LaggedChannels& ch
          !filtered_measured_states(result, channels).empty();
 }
 
-// The misfit belongs to the response at the record's amplitudes: a response whose channels' spread
-// is not within this factor of the record's (less its noise) is not the record's.
-constexpr double kResponseSpread = 1.5;
-
-// The state or derivative channel of the response `clean` that spreads furthest from the
-// record's (its standard deviation against the record's less its noise), and by what factor,
-// where one lies beyond kResponseSpread either way: a wrong model's response, damped, stiffened
-// or running away from the record, holds another misfit than the record's equations.
-std::optional<std::pair<std::string, double>> stray_channel(const IdentifyResult& result,
-                                                            const DataMoments& clean,
-                                                            const LaggedChannels& channels) {
-  std::optional<std::pair<std::string, double>> out;
-  for (std::size_t c = 0; c < clean.channels.size() && c < result.data.channels.size(); ++c) {
-    const ChannelStatistics& record = result.data.channels[c];
-    if (c >= channels.states.size() && c < channels.states.size() + channels.inputs.size()) {
-      continue;
-    }
-    const double noise = c < result.lagged->noise.size() ? result.lagged->noise[c] : 0.0;
-    const double ratio = std::sqrt(clean.channels[c].variance /
-                                   std::max(record.variance - noise, 0.01 * record.variance));
-    const double off = std::abs(std::log(ratio));
-    if ((off > std::log(kResponseSpread) || !std::isfinite(off)) &&
-        (!out || !(off <= std::abs(std::log(out->second))))) {
-      out = {record.name, ratio};
-    }
-  }
-  return out;
-}
-
-// The misfit is read off the first million rows of the response: beyond, its average would
-// change little, and the response's record is held in memory.
-constexpr std::size_t kMisfitRows = std::size_t{1} << 20;
-
 // Takes the misfit that the filter forming states leaves out of the equations
 // (IdentifyResult::Integration::Misfit) and solves them again, from the channels' noise
 // `noise`. The equations of the response read the moments of the record's at the same lags and
@@ -728,48 +695,18 @@ void take_out_filter_misfit(IdentifyResult& result, const LaggedPlan& plan,
     misfit.failure = "the response is not simulated under an input shift";
     return;
   }
-  std::vector<double> theta;
-  for (const ParameterEstimate& p : result.parameters()) theta.push_back(p.estimate);
   std::vector<double> residual;
   try {
-    const ResponseRecord response(result, source, options, kMisfitRows);
-    DataOptions data_options = lagged_options(result, channels, result.estimate.rows, options);
-    // The response's columns are named after the model's variables, and it carries no offset.
-    RecordOptions record;
-    record.dt = result.data.time_step;
-    record.hold = options.record.hold;
-    record.control = options.record.control;
-    for (const auto& formed : result.integration->formed) {
-      record.columns[formed.state] = formed.variable;
-    }
-    data_options.record = std::move(record);
-    const DataMoments clean = moments_from_data(response.source(), channels.states, channels.inputs,
-                                                result.lagged->moments, data_options);
-    misfit.rows = clean.rows;
-    if (const auto stray = stray_channel(result, clean, channels)) {
-      std::tie(misfit.channel, misfit.spread) = *stray;
-      misfit.failure = "the identified model's response does not follow the record";
-      return;
-    }
     // The response's equations without noise: its derivative columns carry the recorded
     // inputs' noise, which drives it and is no sensor's (read as sensor noise, it moved k of a
     // hardening oscillator half a standard error the wrong way).
     const LaggedRows rows = lagged_rows(*result.lagged->system, *result.data.time_step,
                                         channels.channel, {}, result.lagged->stencil_reach,
                                         shared_noise(result, channels, {}), channels.products);
-    const std::map<Moment, std::size_t> index = moment_index(result.lagged->moments);
-    const auto value = [&](const MomentRows::Entry& entry) {
-      double sum = entry.constant;
-      for (const auto& [k, weight] : entry.moments) {
-        sum += weight * clean.estimates.mean[index.at(rows.moments[k])];
-      }
-      return sum;
-    };
-    for (std::size_t r = 0; r < rows.rows.b.size(); ++r) {
-      double g = -value(rows.rows.b[r]);
-      for (std::size_t p = 0; p < theta.size(); ++p) g += theta[p] * value(rows.rows.a[r][p]);
-      residual.push_back(g);
-    }
+    residual = response_residual(result, rows, source, options,
+                                 lagged_options(result, channels, result.estimate.rows, options),
+                                 channels.states, channels.inputs, misfit);
+    if (residual.empty()) return;
   } catch (const Interrupted&) {
     throw;
   } catch (const Error& e) {

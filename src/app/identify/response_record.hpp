@@ -1,12 +1,14 @@
 #pragma once
-// The identified model's response to the recorded inputs as a record of its own: the misfit that
-// the filter forming states leaves in the lagged equations is read off its noise-free
+// The identified model's response to the recorded inputs as a record of its own, and the misfit
+// that the filter forming states leaves in the lagged equations, read off the response's
 // equations (lagged.cpp, "take_out_filter_misfit").
 
 #include <cstddef>
 #include <string>
 #include <vector>
 
+#include "momentid/data_pass.hpp"
+#include "momentid/estimate.hpp"
 #include "momentid/identify.hpp"
 #include "momentid/reader.hpp"
 #include "momentid/validate.hpp"
@@ -37,5 +39,20 @@ class ResponseRecord {
   std::vector<std::vector<double>> columns_;
   MemoryData data_;
 };
+
+// The residual of the equations `rows` (noise-free, over the moments result.lagged->moments) on
+// the response to the first million rows of `source`, read by a pass with `data_options` (its
+// record and offsets replaced: the response's columns are named after the model's variables) over
+// the channels `states` and `inputs`, at the estimates the response holds: one value per row.
+// Empty where the response does not follow the record (a state or derivative channel whose
+// standard deviation lies beyond 1.5 times the record's less its noise, or below it divided by
+// 1.5): then misfit.channel, misfit.spread and misfit.failure say so. Sets misfit.rows. Throws
+// Error where the response cannot be had.
+std::vector<double> response_residual(const IdentifyResult& result, const LaggedRows& rows,
+                                      const DataSource& source, const IdentifyOptions& options,
+                                      DataOptions data_options,
+                                      const std::vector<std::string>& states,
+                                      const std::vector<std::string>& inputs,
+                                      IdentifyResult::Integration::Misfit& misfit);
 
 }  // namespace momentid
