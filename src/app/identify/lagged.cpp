@@ -690,7 +690,10 @@ void take_out_filter_misfit(IdentifyResult& result, const LaggedPlan& plan,
                             const LaggedChannels& channels, const DataSource& source,
                             const IdentifyOptions& options, const std::vector<double>& noise) {
   if (!result.estimate.usable()) return;
-  IdentifyResult::Integration::Misfit& misfit = result.integration->misfit.emplace();
+  // Assigned, not emplaced: clang takes a nested struct with member initialisers as not
+  // default-constructible inside its enclosing class.
+  result.integration->misfit = IdentifyResult::Integration::Misfit{};
+  IdentifyResult::Integration::Misfit& misfit = *result.integration->misfit;
   if (options.input_shift != 0) {
     misfit.failure = "the response is not simulated under an input shift";
     return;
