@@ -201,6 +201,14 @@ PassMoments pass_moments(const IdentifyResult& result, const LaggedChannels& c,
   return out;
 }
 
+// The channels a lagged pass reads, by name: the states, the inputs, the derivatives.
+std::vector<std::string> read_channel_names(const LaggedChannels& c) {
+  std::vector<std::string> out = c.states;
+  out.insert(out.end(), c.inputs.begin(), c.inputs.end());
+  out.insert(out.end(), c.derivatives.begin(), c.derivatives.end());
+  return out;
+}
+
 // The options of a lagged pass but for the offsets: the derivative columns, the integration
 // filter of the formed states (each read from its column), the batches the optimal weighting
 // needs for `equations` equations, the computed channels.
@@ -212,10 +220,7 @@ DataOptions lagged_options(const IdentifyResult& result, const LaggedChannels& c
     data_options.integration = DataOptions::Integration{
         .corner = integration->corner, .dt = integration->dt, .integrals = {}};
     DataOptions::Integration& f = *data_options.integration;
-    std::vector<std::string> names = c.states;
-    names.insert(names.end(), c.inputs.begin(), c.inputs.end());
-    names.insert(names.end(), c.derivatives.begin(), c.derivatives.end());
-    for (const std::string& name : names) {
+    for (const std::string& name : read_channel_names(c)) {
       int integrals = 0;
       for (const auto& formed : integration->formed) {
         if (formed.state == name) {
@@ -296,10 +301,7 @@ LaggedPass read_lagged(IdentifyResult& result, const LaggedPlan& plan, const Dat
   result.lagged->system =
       std::make_shared<const LaggedSystem>(derive_lagged(*result.model, plan.lags));
   LaggedChannels c = lagged_channels(*result.model, *result.lagged->system, result.integration);
-  result.lagged->channels = c.states;
-  result.lagged->channels.insert(result.lagged->channels.end(), c.inputs.begin(), c.inputs.end());
-  result.lagged->channels.insert(result.lagged->channels.end(), c.derivatives.begin(),
-                                 c.derivatives.end());
+  result.lagged->channels = read_channel_names(c);
   // The rows need the sample interval, which the data give: accumulate, then build rows.
   const LaggedRows probe = rows_before_the_pass(result, *result.lagged->system, c);
   result.lagged->moments = probe.moments;
@@ -326,17 +328,13 @@ LaggedPass read_lagged(IdentifyResult& result, const LaggedPlan& plan, const Dat
 // autocorrelation (inputs are taken as measured without noise).
 std::vector<double> noise_variances(const IdentifyResult& result, const LaggedChannels& channels,
                                     const IdentifyOptions& options) {
-  const std::optional<std::map<std::string, double>>& given = options.noise;
-  std::vector<std::string> names = channels.states;
-  names.insert(names.end(), channels.inputs.begin(), channels.inputs.end());
-  names.insert(names.end(), channels.derivatives.begin(), channels.derivatives.end());
-  std::vector<double> noise(names.size(), 0.0);
+  std::vector<double> noise(result.lagged->channels.size(), 0.0);
   const std::size_t states = channels.states.size(), inputs = channels.inputs.size();
   for (std::size_t c = 0; c < noise.size(); ++c) {
     if (c >= states && c < states + inputs) continue;
-    if (given) {
-      const auto value = given->find(names[c]);
-      if (value != given->end()) noise[c] = value->second;
+    if (options.noise) {
+      const auto given = options.noise->find(result.lagged->channels[c]);
+      if (given != options.noise->end()) noise[c] = given->second;
     } else if (const auto& v = result.data.channels[c].noise_variance) {
       noise[c] = std::max(0.0, *v);
     }
@@ -344,13 +342,14 @@ std::vector<double> noise_variances(const IdentifyResult& result, const LaggedCh
   // A formed state's noise is its column's, through the filter: colored, so that its
   // autocorrelation does not show it.
   if (const auto& integration = result.integration) {
+    const std::vector<std::string>& names = result.lagged->channels;
     const auto at = [&](const std::string& name) {
       return static_cast<std::size_t>(std::find(names.begin(), names.end(), name) - names.begin());
     };
     for (const auto& formed : integration->formed) {
       const std::size_t state = at(formed.state), column = at(formed.variable);
       if (state >= noise.size() || column >= noise.size()) continue;
-      if (given && given->count(formed.state)) continue;
+      if (options.noise && options.noise->count(formed.state)) continue;
       noise[state] = noise[column] * formed.noise_gain;
     }
   }
