@@ -31,9 +31,10 @@ import nonsmooth_records as nonsmooth
 
 FS = 1024
 SAMPLES = 100000
-# The friction records' integration tolerance: their error about 1e-6 of each state's standard
-# deviation, far below the 2% sensor noise, in 60% of the time of the module's default.
-RTOL = 1e-7
+# The friction records' integration tolerance: their error up to 4e-5 of each state's standard
+# deviation (measured against 1e-7 on one record), 500 times below the 2% sensor noise, in 45%
+# of the time of the module's default.
+RTOL = 1e-6
 MODELS = {
     "duffing": {"true": ("c, k, eps, b", "-c*v - k*y - eps*y^3 + b*x"),
                 "linear": ("c, k, b", "-c*v - k*y + b*x"),

@@ -107,18 +107,30 @@ def sdofs(rngs, fs, samples, rms=800.0, p=SDOF):
     return oscillators(rngs, sdof_rates(p), ("y", "v"), fs, samples, (1.0, 40.0), rms, 10.0)
 
 
+def hardening_rates(s, x):
+    """The rates of the hardening oscillator of HARDENING (see hardening)."""
+    p = HARDENING
+    return (s[1], x - p["c"] * s[1] - p["k"] * s[0] - p["k3"] * s[0]**3)
+
+
+def with_acceleration(clean):
+    """`clean` with the acceleration `a` of the hardening oscillator."""
+    clean["a"] = hardening_rates((clean["y"], clean["v"]), clean["x"])[1]
+    return clean
+
+
 def hardening(rng, fs, samples):
     """A shaker test of a hardening oscillator in physical units: m = 1, c = 10, k = 4e4 (31.8 Hz),
     k3 = 4e9 (k3 y^2 about 0.6 k at one standard deviation of y), the force band-limited to
     5-150 Hz with RMS 60; the record holds y, v, the acceleration a and the force x."""
-    p = HARDENING
+    return with_acceleration(oscillator(rng, hardening_rates, ("y", "v"), fs, samples,
+                                        (5.0, 150.0), 60.0, 2.0))
 
-    def rates(s, x):
-        y, v = s
-        return (v, x - p["c"] * v - p["k"] * y - p["k3"] * y**3)
-    clean = oscillator(rng, rates, ("y", "v"), fs, samples, (5.0, 150.0), 60.0, 2.0)
-    clean["a"] = clean["x"] - p["c"] * clean["v"] - p["k"] * clean["y"] - p["k3"] * clean["y"]**3
-    return clean
+
+def hardenings(rngs, fs, samples):
+    """hardening for each generator of `rngs`, side by side."""
+    return [with_acceleration(clean) for clean in
+            oscillators(rngs, hardening_rates, ("y", "v"), fs, samples, (5.0, 150.0), 60.0, 2.0)]
 
 
 def two_mass(rng, fs, samples, rms, p=TWO_MASS):
