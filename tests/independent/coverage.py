@@ -17,7 +17,7 @@ weighted), over many seeds of one case.
              alone (2048 Hz, 10^5 samples, 2% noise on both), y formed with --integrate y. 20
              seeds gave coverage 100/95/90% and z sd 0.87/1.03/0.98 for c, k, k3 (k was 3.4%
              low, 83% coverage, while the accelerometer's noise was under-estimated).
-  integrate6 the same with 10^6 samples, the records integrated side by side (about 20 s each);
+  integrate6 the same with 10^6 samples, eight records integrated side by side at a time;
              24 seeds gave coverage 92/96/92% and z sd 0.98/0.93/0.94, every record ok.
 
 Printed: how many records read `ok` and the largest |z| among all and among those; then, over
