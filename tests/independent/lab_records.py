@@ -107,6 +107,10 @@ def sdofs(rngs, fs, samples, rms=800.0, p=SDOF):
     return oscillators(rngs, sdof_rates(p), ("y", "v"), fs, samples, (1.0, 40.0), rms, 10.0)
 
 
+# The hardening oscillator's force band (Hz), its RMS and the burn-in (s).
+HARDENING_DRIVE = ((5.0, 150.0), 60.0, 2.0)
+
+
 def hardening_rates(s, x):
     """The rates of the hardening oscillator of HARDENING (see hardening)."""
     p = HARDENING
@@ -124,13 +128,13 @@ def hardening(rng, fs, samples):
     k3 = 4e9 (k3 y^2 about 0.6 k at one standard deviation of y), the force band-limited to
     5-150 Hz with RMS 60; the record holds y, v, the acceleration a and the force x."""
     return with_acceleration(oscillator(rng, hardening_rates, ("y", "v"), fs, samples,
-                                        (5.0, 150.0), 60.0, 2.0))
+                                        *HARDENING_DRIVE))
 
 
 def hardenings(rngs, fs, samples):
     """hardening for each generator of `rngs`, side by side."""
     return [with_acceleration(clean) for clean in
-            oscillators(rngs, hardening_rates, ("y", "v"), fs, samples, (5.0, 150.0), 60.0, 2.0)]
+            oscillators(rngs, hardening_rates, ("y", "v"), fs, samples, *HARDENING_DRIVE)]
 
 
 def two_mass(rng, fs, samples, rms, p=TWO_MASS):
