@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 """Refines the moment estimates of latent-state models by the simulation error, on records that
-numpy and scipy made (latent_identify.py's generator: the filtered Duffing oscillator and the
+numpy made (latent_identify.py's generator: the filtered Duffing oscillator and the
 two-mass chain sensed at mass 2, 10^5 samples at 0.01 s, 2% noise on the displacement and 1% on
 the force, a continuous force sampled, not held).
 
@@ -20,7 +20,7 @@ import sys
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from latent_identify import CASES, record, write  # noqa: E402
+from latent_identify import CASES, records_of, write  # noqa: E402
 
 
 def identify(momentid, model, path):
@@ -34,10 +34,10 @@ def main():
     records = int(sys.argv[5]) if len(sys.argv) > 5 else 2
     system, truth, name = CASES[case]
     model = f"{models}/" + {"filtered": "filtered_duffing.mom", "chain": "chain_sensed.mom"}[case]
-    rng = np.random.default_rng({"filtered": 20261202, "chain": 20261203}[case])
+    seed = {"filtered": 20261202, "chain": 20261203}[case]
+    rngs = [np.random.default_rng([seed, n]) for n in range(records)]
     failed = False
-    for n in range(records):
-        t, y, x = record(rng, system, truth, 100000, 0.01)
+    for n, (t, y, x) in enumerate(records_of(rngs, system, truth, 100000, 0.01, 60, 4.0, 1)):
         path, plain_path = f"{workdir}/refine_{case}_{n}.csv", f"{workdir}/refine_{case}_plain.csv"
         write(path, name, t, y, x)
         write(plain_path, "y", t, y, x)
