@@ -72,7 +72,7 @@ def record(duffing):
 def sines(rng, count, band, amplitude):
     """A smooth random force: `count` sines at frequencies uniform on `band` (Hz), normal
     amplitudes of scale `amplitude` and uniform phases, as a function of time (array or
-    scalar)."""
+    scalar); its `lines` are the frequencies, amplitudes and phases."""
     frequencies = rng.uniform(band[0], band[1], count)
     amplitudes = rng.normal(0, amplitude, count)
     phases = rng.uniform(0, 2 * np.pi, count)
@@ -80,6 +80,7 @@ def sines(rng, count, band, amplitude):
     def force(t):
         return np.sum(amplitudes * np.sin(2 * np.pi * frequencies * np.asarray(t)[..., None]
                                           + phases), axis=-1)
+    force.lines = frequencies, amplitudes, phases
     return force
 
 
