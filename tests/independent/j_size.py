@@ -34,13 +34,15 @@ v' = -c*v - k*y - eps*y^3 + b*x
 """
 
 
-def record(workdir, seed):
-    rng = np.random.default_rng(20271300 + seed)
-    clean = lab.sdof(rng, FS, SAMPLES)
-    path = os.path.join(workdir, f"record{seed}.csv")
-    lab.write_csv(path, {"t": clean["t"], "y": lab.measured(rng, clean["y"], NOISE),
-                         "x": clean["x"]})
-    return path
+def records(workdir, seeds):
+    """The records of seeds 0.. seeds - 1, integrated side by side (lab.sdofs)."""
+    rngs = [np.random.default_rng(20271300 + seed) for seed in range(seeds)]
+    paths = []
+    for seed, rng, clean in zip(range(seeds), rngs, lab.sdofs(rngs, FS, SAMPLES)):
+        paths.append(os.path.join(workdir, f"record{seed}.csv"))
+        lab.write_csv(paths[-1], {"t": clean["t"], "y": lab.measured(rng, clean["y"], NOISE),
+                                  "x": clean["x"]})
+    return paths
 
 
 def j_test(momentid, model, path):
@@ -57,7 +59,7 @@ def main():
     model = os.path.join(workdir, "duffing.mom")
     with open(model, "w") as out:
         out.write(MODEL)
-    paths = [record(workdir, seed) for seed in range(seeds)]
+    paths = records(workdir, seeds)
     with ThreadPoolExecutor(2) as pool:
         results = np.array(list(pool.map(lambda path: j_test(momentid, model, path), paths)))
     ratio, pvalue = results[:, 0], results[:, 1]

