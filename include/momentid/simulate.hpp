@@ -325,7 +325,6 @@ class StepCheck : public SampleSink {
   static constexpr std::size_t kPoints = 256;
 
  private:
-  const Model& model_;
   CompiledModel f_;
   SampleSink& next_;
   double dt_;

@@ -648,8 +648,7 @@ std::vector<std::string> simulate_to_file(const Model& model, const SimulationOp
 }
 
 StepCheck::StepCheck(const Model& model, const SimulationOptions& options, SampleSink& next)
-    : model_(model),
-      f_(model, parameter_vector(model, options.parameters)),
+    : f_(model, parameter_vector(model, options.parameters)),
       next_(next),
       dt_(options.dt),
       stride_(std::max<std::size_t>(1, options.samples * options.runs / kPoints)) {}

@@ -2,13 +2,14 @@
 """The J test's size at the true model, on records numpy makes (lab_records.py), not momentid.
 
 The Duffing oscillator of lab.SDOF driven by a shaker force, y and x recorded at 1024 Hz,
-10^5 samples, 5% white noise on y; 40 seeds, each identified with the true model and no
-options (the lagged equations, whose batch means are negatively correlated: docs/uncertainty.md,
-"Optimal weighting and the J test"). Under the true model the p-values are uniform: their mean must lie within three
-standard errors of 1/2 (sqrt(1/12/40) = 0.046) and the mean of J over its degrees of freedom within
-three standard errors of 1 (the spread of the 40 values), and the 5% test must reject at most
-six (two expected: three binomial standard errors above). The test's size used to be 0 of 57 on
-such records, the mean p-value 0.85. CTest runs the first 20 seeds, with the bounds of 20.
+10^5 samples, 5% white noise on y; 40 seeds (integrated side by side), each identified with the
+true model and no options (the lagged equations, whose batch means are negatively correlated:
+docs/uncertainty.md, "Optimal weighting and the J test"). Under the true model the p-values are
+uniform: their mean must lie within three standard errors of 1/2 (sqrt(1/12/40) = 0.046) and the
+mean of J over its degrees of freedom within three standard errors of 1 (the spread of the 40
+values), and the 5% test must reject at most six (two expected: three binomial standard errors
+above). The test's size used to be 0 of 57 on such records, the mean p-value 0.85. CTest runs
+the first 20 seeds, with the bounds of 20.
 
 Usage: j_size.py MOMENTID WORKDIR [SEEDS]
 """

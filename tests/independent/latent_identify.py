@@ -28,9 +28,9 @@ cosines, RMS 2.6), summed exactly at each stage of classical Runge-Kutta, a step
 (chain3: 0.025 s), the records of a case side by side (numpy over the records; the displacement
 within 1e-5 of its standard deviation of scipy's DOP853 at a tolerance of 1e-10); the record holds
 the measured displacement and the force at 0.01 s (chain3: 0.05 s) with 2% and 1% white noise (of
-their RMS), 10^5 samples (chain3: 2*10^5), each record from a seed of its own. Each parameter must lie within 4 of its standard errors, status ok,
-on every record; the plain Duffing model (no filter, one mass) on the same displacement and force
-must not read ok: the check has power.
+their RMS), 10^5 samples (chain3: 2*10^5), each record from a seed of its own. Each parameter
+must lie within 4 of its standard errors, status ok, on every record; the plain Duffing model (no
+filter, one mass) on the same displacement and force must not read ok: the check has power.
 
 Usage: latent_identify.py MOMENTID MODELS_DIR WORKDIR CASE [RECORDS]
 """
